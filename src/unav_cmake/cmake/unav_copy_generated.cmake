@@ -1,0 +1,12 @@
+# Copies this package's fastddsgen outputs from the flat scratch folder to GEN/<pkg>/msg/.
+foreach(_base IN LISTS BASES)
+  get_filename_component(_dir "${_base}" DIRECTORY)
+  get_filename_component(_name "${_base}" NAME)
+  file(MAKE_DIRECTORY "${GEN}/${_dir}")
+  foreach(_suffix .h .cxx PubSubTypes.h PubSubTypes.cxx)
+    if(NOT EXISTS "${SCRATCH}/${_name}${_suffix}")
+      message(FATAL_ERROR "fastddsgen did not produce ${_name}${_suffix} for ${_base}.idl")
+    endif()
+    file(COPY_FILE "${SCRATCH}/${_name}${_suffix}" "${GEN}/${_dir}/${_name}${_suffix}" ONLY_IF_DIFFERENT)
+  endforeach()
+endforeach()

@@ -1,0 +1,63 @@
+# unav_package(): call right after project() in every C++ package of the workspace.
+# - C++17, no compiler extensions, position-independent code
+# - warnings as the project wants them (-Wall -Wextra -Wpedantic ...), -Werror with UNAV_WERROR=ON
+# - installed executables find workspace libraries (RPATH from link path)
+# - ccache when present
+# - BUILD_TESTING (default ON) and GoogleTest found once
+macro(unav_package)
+  if(NOT CMAKE_CXX_STANDARD)
+    set(CMAKE_CXX_STANDARD 17)
+  endif()
+  set(CMAKE_CXX_STANDARD_REQUIRED ON)
+  set(CMAKE_CXX_EXTENSIONS OFF)
+  set(CMAKE_POSITION_INDEPENDENT_CODE ON)
+  if(NOT CMAKE_BUILD_TYPE AND NOT CMAKE_CONFIGURATION_TYPES)
+    set(CMAKE_BUILD_TYPE RelWithDebInfo)
+  endif()
+  set(CMAKE_INSTALL_RPATH_USE_LINK_PATH ON)
+  set(CMAKE_INSTALL_RPATH "${CMAKE_INSTALL_PREFIX}/lib")
+  set(CMAKE_EXPORT_COMPILE_COMMANDS ON)
+  find_program(UNAV_CCACHE ccache)
+  if(UNAV_CCACHE AND NOT CMAKE_CXX_COMPILER_LAUNCHER)
+    set(CMAKE_CXX_COMPILER_LAUNCHER ${UNAV_CCACHE})
+  endif()
+  option(UNAV_WERROR "Treat warnings as errors" OFF)
+  add_compile_options(-Wall -Wextra -Wpedantic -Wshadow=local -Wnon-virtual-dtor)
+  if(UNAV_WERROR)
+    add_compile_options(-Werror)
+  endif()
+  include(GNUInstallDirs)
+  option(BUILD_TESTING "Build the tests" ON)
+  if(BUILD_TESTING)
+    enable_testing()
+    find_package(GTest REQUIRED)
+    include(GoogleTest)
+  endif()
+endmacro()
+
+# unav_add_gtest(NAME SOURCES... LIBS ...): a GoogleTest executable registered with CTest.
+# Each test case becomes its own CTest test (gtest_discover_tests), with a timeout.
+function(unav_add_gtest name)
+  cmake_parse_arguments(ARG "" "TIMEOUT" "SOURCES;LIBS;ENV" ${ARGN})
+  if(NOT ARG_TIMEOUT)
+    set(ARG_TIMEOUT 120)
+  endif()
+  add_executable(${name} ${ARG_SOURCES})
+  target_link_libraries(${name} PRIVATE ${ARG_LIBS} GTest::gtest GTest::gtest_main)
+  gtest_discover_tests(${name}
+    DISCOVERY_TIMEOUT 60
+    PROPERTIES TIMEOUT ${ARG_TIMEOUT} ENVIRONMENT "${ARG_ENV}")
+endfunction()
+
+# unav_forbid_dds(target): fail the configure step if a core library links Fast DDS.
+# Algorithms stay free of middleware (DESIGN.md section 1).
+function(unav_forbid_dds target)
+  get_target_property(_libs ${target} LINK_LIBRARIES)
+  if(_libs)
+    foreach(_l IN LISTS _libs)
+      if(_l MATCHES "fastrtps|fastcdr|fastdds|_msgs|unav_runtime")
+        message(FATAL_ERROR "${target} is a core library and must not link ${_l} (DESIGN.md section 1)")
+      endif()
+    endforeach()
+  endif()
+endfunction()
