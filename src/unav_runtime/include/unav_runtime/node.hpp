@@ -1,0 +1,121 @@
+// Node: a named participant of the ROS graph. Components derive from it and declare their ports
+// (publishers, subscriptions, timers) and parameters in the constructor.
+#pragma once
+
+#include <chrono>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "unav_runtime/context.hpp"
+#include "unav_runtime/errors.hpp"
+#include "unav_runtime/logging.hpp"
+#include "unav_runtime/parameters.hpp"
+#include "unav_runtime/publisher.hpp"
+
+namespace unav {
+
+struct NodeOptions {
+  Context* context = nullptr;
+};
+
+class Node {
+ public:
+  /// `default_name`/`default_namespace` may be overridden with `-r __node:=` / `-r __ns:=`.
+  /// Throws NameError/ParameterError for a bad name or unreadable params files.
+  Node(const std::string& default_name, const NodeOptions& options, const std::string& default_namespace = "");
+  virtual ~Node();
+  Node(const Node&) = delete;
+  Node& operator=(const Node&) = delete;
+
+  const std::string& name() const { return name_; }
+  const std::string& get_namespace() const { return namespace_; }
+  std::string fully_qualified_name() const;
+  const Logger& logger() const { return logger_; }
+  Context& context() { return ctx_; }
+  Time now() const { return ctx_.clock().now(); }
+
+  /// Resolves a topic name relative to this node and applies the command-line remaps.
+  std::string resolve_topic(const std::string& name) const;
+
+  template <typename Msg>
+  std::shared_ptr<Publisher<Msg>> create_publisher(const std::string& topic, const QoS& qos) {
+    auto pub = std::make_shared<Publisher<Msg>>(ctx_, to_dds_topic(resolve_topic(topic)), qos);
+    publishers_.push_back(pub);
+    ctx_.publish_graph();
+    return pub;
+  }
+
+  template <typename Msg>
+  std::shared_ptr<Subscription<Msg>> create_subscription(const std::string& topic, const QoS& qos,
+                                                         std::function<void(const Msg&)> callback) {
+    auto sub = std::make_shared<Subscription<Msg>>(ctx_, to_dds_topic(resolve_topic(topic)), qos, std::move(callback));
+    sub->start(qos);
+    subscriptions_.push_back(sub);
+    ctx_.publish_graph();
+    return sub;
+  }
+
+  /// Steady-clock timer.
+  std::shared_ptr<Timer> create_wall_timer(std::chrono::nanoseconds period, std::function<void()> callback);
+  /// Timer on the node clock: follows simulated time when use_sim_time is true.
+  std::shared_ptr<Timer> create_timer(std::chrono::nanoseconds period, std::function<void()> callback);
+
+  /// Declares a parameter and returns its value: the override from a params file or `-p`, else
+  /// `default_value`. Throws ParameterError naming the source, parameter, value and rule.
+  template <typename T>
+  T declare_parameter(const std::string& name, const T& default_value, const ParameterDescriptor& desc = {});
+  /// Value of a declared parameter as YAML (for tools and logs).
+  const std::map<std::string, YAML::Node>& parameters() const { return values_; }
+  /// Throws ParameterError listing overrides no declare_parameter() asked for (typos in YAML).
+  void check_undeclared_parameters() const;
+
+  // Graph introspection for ros_discovery_info.
+  std::vector<const PublisherBase*> publishers() const;
+  std::vector<const SubscriptionBase*> subscriptions() const;
+
+ private:
+  Context& ctx_;
+  std::string name_;
+  std::string namespace_;
+  Logger logger_;
+  ParameterOverrides overrides_;
+  std::map<std::string, YAML::Node> values_;
+  std::vector<std::shared_ptr<PublisherBase>> publishers_;
+  std::vector<std::shared_ptr<SubscriptionBase>> subscriptions_;
+};
+
+template <typename T>
+T Node::declare_parameter(const std::string& name, const T& default_value, const ParameterDescriptor& desc) {
+  if (values_.count(name)) throw ParameterError("node '" + name_ + "': parameter '" + name + "' declared twice");
+  T value = default_value;
+  if (const ParameterOverride* o = overrides_.find(name)) {
+    overrides_.mark_used(name);
+    value = parameter_as<T>(o->value, desc, o->source + ": node '" + name_ + "' parameter '" + name + "'");
+  } else {
+    // Defaults are checked too: a wrong default is a bug worth hearing about at start-up.
+    YAML::Node d;
+    d = default_value;
+    (void)parameter_as<T>(d, desc, "node '" + name_ + "' default of parameter '" + name + "'");
+  }
+  YAML::Node stored;
+  stored = value;
+  values_[name] = stored;
+  return value;
+}
+
+/// Runs one component as a process: parses arguments, constructs NodeT, spins until SIGINT or
+/// SIGTERM, destroys the node (flushing its outputs) and returns the exit code. Configuration
+/// errors print one line "<exe>: error: <message>" and return 2.
+template <typename NodeT>
+int run_node(int argc, char** argv);
+
+int run_node_impl(int argc, char** argv, const std::function<std::unique_ptr<Node>(const NodeOptions&)>& make);
+
+template <typename NodeT>
+int run_node(int argc, char** argv) {
+  return run_node_impl(argc, argv, [](const NodeOptions& o) { return std::make_unique<NodeT>(o); });
+}
+
+}  // namespace unav

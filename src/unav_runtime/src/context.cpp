@@ -1,0 +1,261 @@
+#include "unav_runtime/context.hpp"
+
+#include <pthread.h>
+#include <signal.h>
+#include <unistd.h>
+
+#include <cstdlib>
+#include <cstring>
+
+#include <fastdds/dds/domain/DomainParticipant.hpp>
+#include <fastdds/dds/domain/DomainParticipantFactory.hpp>
+#include <fastdds/dds/publisher/DataWriter.hpp>
+#include <fastdds/dds/publisher/Publisher.hpp>
+#include <fastdds/dds/subscriber/DataReader.hpp>
+#include <fastdds/dds/subscriber/DataReaderListener.hpp>
+#include <fastdds/dds/subscriber/Subscriber.hpp>
+#include <fastdds/dds/topic/Topic.hpp>
+#include <fastdds/dds/topic/TypeSupport.hpp>
+#include <fastdds/rtps/transport/UDPv4TransportDescriptor.h>
+#include <fastdds/rtps/transport/shared_mem/SharedMemTransportDescriptor.h>
+
+#include "rmw_dds_common/msg/gid.hpp"
+#include "rmw_dds_common/msg/participant_entities_info.hpp"
+#include "rosgraph_msgs/msg/clock.hpp"
+#include "unav_runtime/errors.hpp"
+#include "unav_runtime/logging.hpp"
+#include "unav_runtime/node.hpp"
+#include "unav_runtime/publisher.hpp"
+
+namespace fdds = eprosima::fastdds::dds;
+
+namespace unav {
+namespace {
+
+int domain_from_env() {
+  const char* env = std::getenv("ROS_DOMAIN_ID");
+  if (!env || !*env) return 0;
+  char* end = nullptr;
+  const long id = std::strtol(env, &end, 10);
+  if (*end != '\0' || id < 0 || id > 232)
+    throw ConfigError(std::string("environment ROS_DOMAIN_ID='") + env + "': expected an integer in [0, 232]");
+  return static_cast<int>(id);
+}
+
+sigset_t handled_signals() {
+  sigset_t set;
+  sigemptyset(&set);
+  sigaddset(&set, SIGINT);
+  sigaddset(&set, SIGTERM);
+  sigaddset(&set, SIGUSR2);  // internal: wakes the signal thread at exit
+  return set;
+}
+
+void fill_gid(const eprosima::fastrtps::rtps::GUID_t& guid, rmw_dds_common::msg::Gid& gid) {
+  std::array<char, 24> data{};
+  std::memcpy(data.data(), guid.guidPrefix.value, 12);
+  std::memcpy(data.data() + 12, guid.entityId.value, 4);
+  gid.data(data);
+}
+
+void apply_qos(const QoS& q, fdds::ReliabilityQosPolicy& rel, fdds::DurabilityQosPolicy& dur, fdds::HistoryQosPolicy& hist) {
+  rel.kind = q.reliability == QoS::Reliability::kReliable ? fdds::RELIABLE_RELIABILITY_QOS
+                                                          : fdds::BEST_EFFORT_RELIABILITY_QOS;
+  dur.kind = q.durability == QoS::Durability::kTransientLocal ? fdds::TRANSIENT_LOCAL_DURABILITY_QOS
+                                                              : fdds::VOLATILE_DURABILITY_QOS;
+  hist.kind = fdds::KEEP_LAST_HISTORY_QOS;
+  hist.depth = q.depth;
+}
+
+}  // namespace
+
+QoS QoS::from_name(const std::string& name) {
+  if (name == "sensor_data") return sensor_data();
+  if (name == "default" || name == "reliable") return reliable();
+  if (name == "static" || name == "latched") return static_latched();
+  throw ConfigError("QoS profile '" + name + "' is unknown (known: sensor_data, default, static)");
+}
+
+Context::Context(int argc, const char* const* argv, ContextOptions options) {
+  if (argc > 0) args_ = parse_ros_args(argc, argv);
+  if (!args_.log_level.empty()) set_log_level(args_.log_level);
+  domain_id_ = options.domain_id >= 0 ? options.domain_id : domain_from_env();
+
+  handle_signals_ = options.handle_signals;
+  if (handle_signals_) {
+    // Block before DDS starts its threads so they inherit the mask and only our thread sees them.
+    sigset_t set = handled_signals();
+    pthread_sigmask(SIG_BLOCK, &set, nullptr);
+    signal_thread_ = std::thread([this] { signal_loop(); });
+  }
+
+  fdds::DomainParticipantQos pqos;
+  std::string pname = options.participant_name;
+  if (pname.empty() && argc > 0 && argv && argv[0]) {
+    pname = argv[0];
+    pname = pname.substr(pname.find_last_of('/') + 1);
+  }
+  pqos.name(pname.empty() ? "unav" : pname);
+  // ROS 2 participants announce their security enclave in USER_DATA.
+  const std::string enclave = "enclave=/;";
+  pqos.user_data().data_vec(std::vector<eprosima::fastrtps::rtps::octet>(enclave.begin(), enclave.end()));
+  pqos.transport().use_builtin_transports = false;
+  auto shm = std::make_shared<eprosima::fastdds::rtps::SharedMemTransportDescriptor>();
+  shm->segment_size(options.shm_segment_bytes);
+  pqos.transport().user_transports.push_back(shm);
+  auto udp = std::make_shared<eprosima::fastdds::rtps::UDPv4TransportDescriptor>();
+  if (const char* lo = std::getenv("ROS_LOCALHOST_ONLY"); lo && std::string(lo) == "1")
+    udp->interfaceWhiteList.emplace_back("127.0.0.1");
+  pqos.transport().user_transports.push_back(udp);
+
+  participant_ = fdds::DomainParticipantFactory::get_instance()->create_participant(domain_id_, pqos);
+  if (!participant_) throw MiddlewareError("Fast DDS could not create a participant on domain " + std::to_string(domain_id_));
+  publisher_ = participant_->create_publisher(fdds::PUBLISHER_QOS_DEFAULT);
+  subscriber_ = participant_->create_subscriber(fdds::SUBSCRIBER_QOS_DEFAULT);
+  if (!publisher_ || !subscriber_) throw MiddlewareError("Fast DDS could not create a publisher/subscriber");
+
+  // ros_discovery_info is not prefixed with rt/: it is the rmw's own topic.
+  auto* graph_topic = topic("ros_discovery_info", new rmw_dds_common::msg::dds_::ParticipantEntitiesInfo_PubSubType());
+  graph_writer_ = create_writer(graph_topic, QoS::static_latched());
+}
+
+Context::~Context() {
+  for (auto it = shutdown_hooks_.rbegin(); it != shutdown_hooks_.rend(); ++it) (*it)();
+  executor_.shutdown();
+  clock_subscription_.reset();
+  if (participant_) {
+    participant_->delete_contained_entities();
+    fdds::DomainParticipantFactory::get_instance()->delete_participant(participant_);
+  }
+  if (handle_signals_) {
+    exiting_ = true;
+    pthread_kill(signal_thread_.native_handle(), SIGUSR2);
+    signal_thread_.join();
+  }
+}
+
+void Context::signal_loop() {
+  const sigset_t set = handled_signals();
+  int count = 0;
+  while (!exiting_) {
+    int sig = 0;
+    if (sigwait(&set, &sig) != 0) continue;
+    if (sig == SIGUSR2) continue;  // exit request: loop condition decides
+    if (++count == 1) {
+      executor_.shutdown();
+    } else {
+      const char msg[] = "second signal: exiting without cleanup\n";
+      (void)!write(STDERR_FILENO, msg, sizeof(msg) - 1);
+      _exit(130);
+    }
+  }
+}
+
+fdds::Topic* Context::topic(const std::string& dds_topic, fdds::TopicDataType* type) {
+  std::unique_ptr<fdds::TopicDataType> owned(type);
+  std::lock_guard<std::mutex> lock(mutex_);
+  const std::string type_name = owned->getName();
+  auto it = topics_.find(dds_topic);
+  if (it != topics_.end()) {
+    if (it->second->get_type_name() != type_name)
+      throw ConfigError("topic '" + dds_topic + "' is already used in this process with type '" +
+                        it->second->get_type_name() + "', not '" + type_name + "'");
+    return it->second;
+  }
+  if (!participant_->find_type(type_name).empty()) {
+    // already registered: the new instance is not needed
+  } else {
+    fdds::TypeSupport ts(owned.release());
+    if (ts.register_type(participant_) != ReturnCode_t::RETCODE_OK)
+      throw MiddlewareError("Fast DDS refused to register type '" + type_name + "'");
+  }
+  fdds::Topic* t = participant_->create_topic(dds_topic, type_name, fdds::TOPIC_QOS_DEFAULT);
+  if (!t) throw MiddlewareError("Fast DDS could not create topic '" + dds_topic + "' of type '" + type_name + "'");
+  topics_[dds_topic] = t;
+  return t;
+}
+
+fdds::DataWriter* Context::create_writer(fdds::Topic* t, const QoS& q) {
+  fdds::DataWriterQos wqos = publisher_->get_default_datawriter_qos();
+  apply_qos(q, wqos.reliability(), wqos.durability(), wqos.history());
+  wqos.endpoint().history_memory_policy = eprosima::fastrtps::rtps::PREALLOCATED_WITH_REALLOC_MEMORY_MODE;
+  // Unbounded ROS types cannot use data-sharing; shared memory transport carries them instead.
+  wqos.data_sharing().off();
+  fdds::DataWriter* w = publisher_->create_datawriter(t, wqos);
+  if (!w) throw MiddlewareError("Fast DDS could not create a writer on '" + t->get_name() + "'");
+  return w;
+}
+
+fdds::DataReader* Context::create_reader(fdds::Topic* t, const QoS& q, void* listener) {
+  fdds::DataReaderQos rqos = subscriber_->get_default_datareader_qos();
+  apply_qos(q, rqos.reliability(), rqos.durability(), rqos.history());
+  rqos.endpoint().history_memory_policy = eprosima::fastrtps::rtps::PREALLOCATED_WITH_REALLOC_MEMORY_MODE;
+  rqos.data_sharing().off();
+  fdds::DataReader* r = subscriber_->create_datareader(t, rqos, static_cast<fdds::DataReaderListener*>(listener),
+                                                      fdds::StatusMask::data_available());
+  if (!r) throw MiddlewareError("Fast DDS could not create a reader on '" + t->get_name() + "'");
+  return r;
+}
+
+void Context::delete_writer(fdds::DataWriter* w) {
+  if (w && participant_) publisher_->delete_datawriter(w);
+}
+
+void Context::delete_reader(fdds::DataReader* r) {
+  if (r && participant_) subscriber_->delete_datareader(r);
+}
+
+void Context::add_node(Node* node) {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    nodes_.push_back(node);
+  }
+  publish_graph();
+}
+
+void Context::remove_node(Node* node) {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    nodes_.erase(std::remove(nodes_.begin(), nodes_.end(), node), nodes_.end());
+  }
+  publish_graph();
+}
+
+void Context::publish_graph() {
+  rmw_dds_common::msg::ParticipantEntitiesInfo info;
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (!graph_writer_) return;
+  fill_gid(participant_->guid(), info.gid());
+  for (const Node* n : nodes_) {
+    rmw_dds_common::msg::dds_::NodeEntitiesInfo_ ne;
+    ne.node_namespace(n->get_namespace());
+    ne.node_name(n->name());
+    for (const auto* p : n->publishers()) {
+      rmw_dds_common::msg::Gid g;
+      fill_gid(p->writer()->guid(), g);
+      ne.writer_gid_seq().push_back(g);
+    }
+    for (const auto* s : n->subscriptions()) {
+      rmw_dds_common::msg::Gid g;
+      fill_gid(s->reader()->guid(), g);
+      ne.reader_gid_seq().push_back(g);
+    }
+    info.node_entities_info_seq().push_back(ne);
+  }
+  graph_writer_->write(&info);
+}
+
+void Context::enable_sim_time() {
+  if (clock_subscription_) return;
+  clock_.set_sim_time_active(true);
+  // ROS 2's ClockQoS: best effort, keep last 1 (matches reliable and best-effort publishers).
+  auto sub = std::make_shared<Subscription<rosgraph_msgs::msg::Clock>>(
+      *this, "rt/clock", QoS{QoS::Reliability::kBestEffort, QoS::Durability::kVolatile, 1},
+      [this](const rosgraph_msgs::msg::Clock& c) {
+        clock_.set_sim_time(Time::from_msg(c.clock().sec(), c.clock().nanosec()));
+      });
+  sub->start(QoS{QoS::Reliability::kBestEffort, QoS::Durability::kVolatile, 1});
+  clock_subscription_ = sub;
+}
+
+}  // namespace unav

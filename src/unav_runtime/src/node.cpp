@@ -1,0 +1,104 @@
+#include "unav_runtime/node.hpp"
+
+#include <iostream>
+
+#include "unav_runtime/names.hpp"
+
+namespace unav {
+namespace {
+
+Context& require_context(const NodeOptions& o) {
+  if (!o.context) throw ConfigError("NodeOptions.context is null: create a unav::Context first");
+  return *o.context;
+}
+
+}  // namespace
+
+Node::Node(const std::string& default_name, const NodeOptions& options, const std::string& default_namespace)
+    : ctx_(require_context(options)) {
+  const RosArgs& args = ctx_.args();
+  name_ = args.node_name.empty() ? default_name : args.node_name;
+  validate_node_name(name_);
+  namespace_ = normalize_namespace(args.node_namespace.empty() ? default_namespace : args.node_namespace);
+  logger_ = make_logger(fully_qualified_name());
+  overrides_ = ParameterOverrides(args, namespace_, name_);
+  if (declare_parameter<bool>("use_sim_time", false, {"follow /clock instead of the system clock", {}, {}, false}))
+    ctx_.enable_sim_time();
+  ctx_.add_node(this);
+}
+
+Node::~Node() {
+  ctx_.remove_node(this);
+  subscriptions_.clear();
+  publishers_.clear();
+}
+
+std::string Node::fully_qualified_name() const { return (namespace_ == "/" ? "" : namespace_) + "/" + name_; }
+
+std::string Node::resolve_topic(const std::string& name) const {
+  return apply_remaps(resolve_topic_name(name, namespace_, name_), ctx_.args().remaps, namespace_, name_);
+}
+
+std::shared_ptr<Timer> Node::create_wall_timer(std::chrono::nanoseconds period, std::function<void()> callback) {
+  if (period.count() <= 0) throw ConfigError("node '" + name_ + "': timer period must be > 0");
+  auto t = std::make_shared<Timer>(period, std::move(callback), false);
+  ctx_.executor().add_timer(t);
+  return t;
+}
+
+std::shared_ptr<Timer> Node::create_timer(std::chrono::nanoseconds period, std::function<void()> callback) {
+  if (period.count() <= 0) throw ConfigError("node '" + name_ + "': timer period must be > 0");
+  auto t = std::make_shared<Timer>(period, std::move(callback), true);
+  ctx_.executor().add_timer(t);
+  return t;
+}
+
+void Node::check_undeclared_parameters() const {
+  const auto unused = overrides_.unused();
+  if (unused.empty()) return;
+  std::string declared;
+  for (const auto& kv : values_) declared += (declared.empty() ? "" : ", ") + kv.first;
+  const auto* o = overrides_.find(unused.front());
+  throw ParameterError(o->source + ": node '" + name_ + "' has no parameter '" + unused.front() +
+                       "' (declared: " + declared + ")");
+}
+
+std::vector<const PublisherBase*> Node::publishers() const {
+  std::vector<const PublisherBase*> out;
+  for (const auto& p : publishers_) out.push_back(p.get());
+  return out;
+}
+
+std::vector<const SubscriptionBase*> Node::subscriptions() const {
+  std::vector<const SubscriptionBase*> out;
+  for (const auto& s : subscriptions_) out.push_back(s.get());
+  return out;
+}
+
+int run_node_impl(int argc, char** argv, const std::function<std::unique_ptr<Node>(const NodeOptions&)>& make) {
+  std::string exe = argc > 0 ? argv[0] : "node";
+  exe = exe.substr(exe.find_last_of('/') + 1);
+  try {
+    Context ctx(argc, argv);
+    std::unique_ptr<Node> node;
+    try {
+      node = make(NodeOptions{&ctx});
+      node->check_undeclared_parameters();
+    } catch (const ConfigError& e) {
+      std::cerr << exe << ": error: " << e.what() << std::endl;
+      return 2;
+    }
+    ctx.spin();
+    node->logger()->debug("shutting down");
+    node.reset();  // destructors flush outputs before the participant goes away
+    return 0;
+  } catch (const ConfigError& e) {
+    std::cerr << exe << ": error: " << e.what() << std::endl;
+    return 2;
+  } catch (const std::exception& e) {
+    std::cerr << exe << ": fatal: " << e.what() << std::endl;
+    return 1;
+  }
+}
+
+}  // namespace unav

@@ -1,0 +1,83 @@
+#include "unav_runtime/publisher.hpp"
+
+#include <fastdds/dds/core/status/PublicationMatchedStatus.hpp>
+#include <fastdds/dds/core/status/SubscriptionMatchedStatus.hpp>
+#include <fastdds/dds/publisher/DataWriter.hpp>
+#include <fastdds/dds/subscriber/DataReader.hpp>
+#include <fastdds/dds/subscriber/DataReaderListener.hpp>
+#include <fastdds/dds/subscriber/SampleInfo.hpp>
+#include <fastdds/dds/topic/Topic.hpp>
+
+namespace fdds = eprosima::fastdds::dds;
+
+namespace unav {
+namespace {
+
+// Runs on a DDS thread: only hands the subscription to the executor.
+class ReaderListener : public fdds::DataReaderListener {
+ public:
+  explicit ReaderListener(std::weak_ptr<SubscriptionBase> sub) : sub_(std::move(sub)) {}
+  void on_data_available(fdds::DataReader*) override {
+    if (auto s = sub_.lock()) s->on_data();
+  }
+
+ private:
+  std::weak_ptr<SubscriptionBase> sub_;
+};
+
+}  // namespace
+
+PublisherBase::PublisherBase(Context& ctx, const std::string& topic, fdds::TopicDataType* type, const QoS& qos)
+    : ctx_(ctx), topic_(topic) {
+  writer_ = ctx_.create_writer(ctx_.topic(topic, type), qos);
+}
+
+PublisherBase::~PublisherBase() { ctx_.delete_writer(writer_); }
+
+int PublisherBase::subscription_count() const {
+  fdds::PublicationMatchedStatus status;
+  writer_->get_publication_matched_status(status);
+  return status.current_count;
+}
+
+bool PublisherBase::write(const void* sample) {
+  return writer_->write(const_cast<void*>(sample));
+}
+
+SubscriptionBase::SubscriptionBase(Context& ctx, const std::string& topic, fdds::TopicDataType* type, const QoS&)
+    : ctx_(ctx), topic_(topic) {
+  dds_topic_ = ctx_.topic(topic, type);
+}
+
+void SubscriptionBase::start(const QoS& qos) {
+  auto* listener = new ReaderListener(weak_from_this());
+  listener_ = std::unique_ptr<void, void (*)(void*)>(listener, [](void* p) { delete static_cast<ReaderListener*>(p); });
+  reader_ = ctx_.create_reader(dds_topic_, qos, static_cast<fdds::DataReaderListener*>(listener));
+  // Samples that arrived before the listener was attached (transient local) are picked up here.
+  ctx_.executor().notify(shared_from_this());
+}
+
+SubscriptionBase::~SubscriptionBase() {
+  if (reader_) {
+    reader_->set_listener(nullptr);
+    ctx_.delete_reader(reader_);
+  }
+}
+
+int SubscriptionBase::publisher_count() const {
+  fdds::SubscriptionMatchedStatus status;
+  reader_->get_subscription_matched_status(status);
+  return status.current_count;
+}
+
+void SubscriptionBase::on_data() { ctx_.executor().notify(shared_from_this()); }
+
+bool SubscriptionBase::take(void* sample) {
+  fdds::SampleInfo info;
+  while (reader_->take_next_sample(sample, &info) == ReturnCode_t::RETCODE_OK) {
+    if (info.valid_data) return true;
+  }
+  return false;
+}
+
+}  // namespace unav

@@ -1,0 +1,156 @@
+// Runtime over real Fast DDS: two participants in one process on a domain of the test's own.
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <fstream>
+
+#include "rosgraph_msgs/msg/clock.hpp"
+#include "sensor_msgs/msg/image.hpp"
+#include "std_msgs/msg/string.hpp"
+#include "unav_msgs/msg/thruster_command.hpp"
+#include "unav_runtime/runtime.hpp"
+
+using namespace std::chrono_literals;
+using namespace unav;
+
+namespace {
+
+int test_domain() { return 100 + static_cast<int>(getpid() % 100); }
+
+ContextOptions opts() {
+  ContextOptions o;
+  o.domain_id = test_domain();
+  o.handle_signals = false;
+  return o;
+}
+
+}  // namespace
+
+TEST(PubSub, MessagesArriveWithTheirContent) {
+  Context ctx_a(opts()), ctx_b(opts());
+  Node talker("talker", {&ctx_a}, "rov");
+  Node listener("listener", {&ctx_b}, "rov");
+  auto pub = talker.create_publisher<unav_msgs::msg::ThrusterCommand>("thrusters/command", QoS::reliable());
+  std::vector<double> got;
+  int count = 0;
+  auto sub = listener.create_subscription<unav_msgs::msg::ThrusterCommand>(
+      "/rov/thrusters/command", QoS::reliable(), [&](const unav_msgs::msg::ThrusterCommand& m) {
+        got = m.u();
+        ++count;
+      });
+  EXPECT_EQ(pub->topic_name(), "rt/rov/thrusters/command");
+  ASSERT_TRUE(ctx_a.spin_until([&] { return pub->subscription_count() == 1; }, 10s)) << "no discovery";
+  unav_msgs::msg::ThrusterCommand cmd;
+  for (int i = 0; i < 5; ++i) {
+    cmd.u({0.1 * i, -0.5});
+    pub->publish(cmd);
+  }
+  ASSERT_TRUE(ctx_b.spin_until([&] { return count == 5; }, 10s)) << "got " << count;
+  EXPECT_EQ(got, (std::vector<double>{0.4, -0.5}));
+}
+
+TEST(PubSub, LargeImageTravelsIntact) {
+  Context ctx_a(opts()), ctx_b(opts());
+  Node cam("camera", {&ctx_a});
+  Node viewer("viewer", {&ctx_b});
+  auto pub = cam.create_publisher<sensor_msgs::msg::Image>("image_raw", QoS::reliable(2));
+  sensor_msgs::msg::Image last;
+  int count = 0;
+  auto sub = viewer.create_subscription<sensor_msgs::msg::Image>("/image_raw", QoS::reliable(2),
+                                                                 [&](const sensor_msgs::msg::Image& m) {
+                                                                   last = m;
+                                                                   ++count;
+                                                                 });
+  ASSERT_TRUE(ctx_a.spin_until([&] { return pub->subscription_count() == 1; }, 10s));
+  sensor_msgs::msg::Image img;
+  img.height(480);
+  img.width(640);
+  img.encoding("rgb8");
+  img.step(1920);
+  img.data().resize(921600);
+  for (size_t i = 0; i < img.data().size(); ++i) img.data()[i] = static_cast<uint8_t>((i * 7u) >> 3);
+  pub->publish(img);
+  ASSERT_TRUE(ctx_b.spin_until([&] { return count == 1; }, 10s));
+  EXPECT_EQ(last.data(), img.data());
+  EXPECT_EQ(last.encoding(), "rgb8");
+}
+
+TEST(PubSub, StaticQosReachesLateJoiners) {
+  Context ctx_a(opts()), ctx_b(opts());
+  Node pub_node("info_pub", {&ctx_a});
+  auto pub = pub_node.create_publisher<std_msgs::msg::String>("camera_info_like", QoS::static_latched());
+  std_msgs::msg::String s;
+  s.data("latched");
+  pub->publish(s);
+  Node late("late", {&ctx_b});
+  std::string got;
+  auto sub = late.create_subscription<std_msgs::msg::String>("/camera_info_like", QoS::static_latched(),
+                                                             [&](const std_msgs::msg::String& m) { got = m.data(); });
+  ASSERT_TRUE(ctx_b.spin_until([&] { return !got.empty(); }, 10s));
+  EXPECT_EQ(got, "latched");
+}
+
+TEST(PubSub, SimTimeFollowsClockAndDrivesTimers) {
+  const char* argv[] = {"test", "--ros-args", "-p", "use_sim_time:=true"};
+  ContextOptions o = opts();
+  Context ctx_sim(4, argv, o);
+  Context ctx_phys(o);
+  Node sim_node("controller", {&ctx_sim});
+  EXPECT_TRUE(ctx_sim.clock().sim_time_active());
+  EXPECT_EQ(sim_node.now().ns, 0);  // no /clock yet
+  int ticks = 0;
+  auto timer = sim_node.create_timer(100ms, [&] { ++ticks; });
+  Node phys("physics", {&ctx_phys});
+  auto clock_pub = phys.create_publisher<rosgraph_msgs::msg::Clock>("/clock", QoS::reliable(1));
+  ASSERT_TRUE(ctx_phys.spin_until([&] { return clock_pub->subscription_count() == 1; }, 10s));
+  rosgraph_msgs::msg::Clock c;
+  // Simulated time advances 1 s in 10 steps: the 100 ms timer must fire about 10 times,
+  // whatever the wall clock does (tolerance 1: the first period starts at the first /clock).
+  for (int i = 1; i <= 10; ++i) {
+    c.clock().sec(0);
+    c.clock().nanosec(static_cast<uint32_t>(i * 100000000));
+    clock_pub->publish(c);
+    ctx_sim.spin_until([&] { return sim_node.now().ns >= i * 100000000LL; }, 5s);
+  }
+  EXPECT_EQ(sim_node.now().ns, 1000000000LL);
+  EXPECT_GE(ticks, 9);
+  EXPECT_LE(ticks, 10);
+}
+
+TEST(PubSub, NodeParametersFromFileAndCommandLine) {
+  const std::string path = ::testing::TempDir() + "node_params.yaml";
+  std::ofstream(path) << "talker:\n  ros__parameters:\n    rate: 5.0\n    name: abc\n    typo_key: 1\n";
+  const std::string pf = path;
+  const char* argv[] = {"t", "--ros-args", "--params-file", pf.c_str(), "-p", "name:=cli", "-r", "__ns:=/rov"};
+  Context ctx(8, argv, opts());
+  Node n("talker", {&ctx});
+  EXPECT_EQ(n.fully_qualified_name(), "/rov/talker");
+  EXPECT_EQ(n.declare_parameter<double>("rate", 1.0, {"Hz", 0.0, 100.0}), 5.0);
+  EXPECT_EQ(n.declare_parameter<std::string>("name", "x"), "cli");
+  EXPECT_EQ(n.declare_parameter<int64_t>("missing", 7), 7);
+  try {
+    n.check_undeclared_parameters();
+    FAIL() << "typo_key should be reported";
+  } catch (const ParameterError& e) {
+    EXPECT_NE(std::string(e.what()).find("typo_key"), std::string::npos);
+    EXPECT_NE(std::string(e.what()).find("node_params.yaml"), std::string::npos);
+  }
+  EXPECT_THROW(n.declare_parameter<double>("rate", 1.0), ParameterError);  // declared twice
+}
+
+TEST(PubSub, WrongParameterTypeNamesFileKeyAndValue) {
+  const std::string path = ::testing::TempDir() + "bad_type.yaml";
+  std::ofstream(path) << "talker:\n  ros__parameters:\n    rate: fast\n";
+  const char* argv[] = {"t", "--ros-args", "--params-file", path.c_str()};
+  Context ctx(4, argv, opts());
+  Node n("talker", {&ctx});
+  try {
+    n.declare_parameter<double>("rate", 1.0);
+    FAIL();
+  } catch (const ParameterError& e) {
+    const std::string msg = e.what();
+    EXPECT_NE(msg.find("bad_type.yaml"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("'rate'"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("'fast'"), std::string::npos) << msg;
+  }
+}
