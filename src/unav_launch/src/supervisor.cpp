@@ -236,7 +236,7 @@ class Supervisor {
     }
     any_failed_ = any_failed_ || code != 0;
     if (process.node->required) {
-      result_ = code > 0 ? code : 1;
+      result_ = code >= 0 ? code : 1;  // a clean exit of a required node ends the launch cleanly
       begin_shutdown("required process [" + process.label + "] has exited");
     } else if (process.node->respawn) {
       process.respawn_pending = true;

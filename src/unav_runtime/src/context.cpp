@@ -108,7 +108,9 @@ Context::Context(int argc, const char* const* argv, ContextOptions options) {
     udp->interfaceWhiteList.emplace_back("127.0.0.1");
   pqos.transport().user_transports.push_back(udp);
 
-  participant_ = fdds::DomainParticipantFactory::get_instance()->create_participant(domain_id_, pqos);
+  participant_ = fdds::DomainParticipantFactory::get_instance()->create_participant(
+      domain_id_, pqos, options.participant_listener,
+      options.participant_listener ? fdds::StatusMask::none() : fdds::StatusMask::all());
   if (!participant_) throw MiddlewareError("Fast DDS could not create a participant on domain " + std::to_string(domain_id_));
   publisher_ = participant_->create_publisher(fdds::PUBLISHER_QOS_DEFAULT);
   subscriber_ = participant_->create_subscriber(fdds::SUBSCRIBER_QOS_DEFAULT);
@@ -181,6 +183,11 @@ fdds::DataWriter* Context::create_writer(fdds::Topic* t, const QoS& q) {
   wqos.endpoint().history_memory_policy = eprosima::fastrtps::rtps::PREALLOCATED_WITH_REALLOC_MEMORY_MODE;
   // Unbounded ROS types cannot use data-sharing; shared memory transport carries them instead.
   wqos.data_sharing().off();
+  if (q.durability == QoS::Durability::kTransientLocal) {
+    // Late joiners of latched topics (camera_info, ros_discovery_info) get the sample within a
+    // heartbeat: 200 ms instead of Fast DDS' 3 s default.
+    wqos.reliable_writer_qos().times.heartbeatPeriod = eprosima::fastrtps::Duration_t(0, 200000000);
+  }
   fdds::DataWriter* w = publisher_->create_datawriter(t, wqos);
   if (!w) throw MiddlewareError("Fast DDS could not create a writer on '" + t->get_name() + "'");
   return w;

@@ -31,7 +31,8 @@ struct SupervisorOptions {
 /// Returns:
 ///  - 0 when every node exited on its own with code 0 (also for an empty description);
 ///  - 1 when every node exited on its own and one of them failed;
-///  - the exit code of a required node that exited, or 1 if it exited with 0 or by a signal;
+///  - the exit code of a required node that exited (0 when it finished cleanly), or 1 if a signal
+///    killed it;
 ///  - 128 + signal number when SIGINT/SIGTERM stopped the launch.
 /// Exits during shutdown do not count. Respawning nodes restart after respawn_delay_s
 /// unless a shutdown is under way.

@@ -27,6 +27,7 @@ class DataWriter;
 class DataReader;
 class DataWriterQos;
 class DataReaderQos;
+class DomainParticipantListener;
 }  // namespace eprosima::fastdds::dds
 
 namespace unav {
@@ -43,6 +44,8 @@ struct ContextOptions {
   uint32_t shm_segment_bytes = 32u * 1024u * 1024u;
   /// Participant name shown by DDS tools; defaults to argv[0]'s base name.
   std::string participant_name;
+  /// Attached at creation so no discovery event is missed (tools listing the graph).
+  eprosima::fastdds::dds::DomainParticipantListener* participant_listener = nullptr;
 };
 
 class Context {

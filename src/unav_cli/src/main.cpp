@@ -1,0 +1,359 @@
+// unav: the command-line tool, modelled on ros2 (topic, node, launch).
+#include <CLI/CLI.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <iostream>
+#include <numeric>
+#include <unistd.h>
+
+#include <fastdds/dds/publisher/DataWriter.hpp>
+
+#include "graph.hpp"
+#include "raw_type.hpp"
+#include "unav_introspection/cdr_codec.hpp"
+#include "unav_introspection/type_registry.hpp"
+#include "unav_launch/launch_description.hpp"
+#include "unav_launch/supervisor.hpp"
+
+using namespace std::chrono_literals;
+namespace intro = unav_introspection;
+
+namespace unav_cli {
+namespace {
+
+/// A user-facing error: printed as one line, exit code 2.
+struct UsageError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+class RawSubscription : public unav::SubscriptionBase {
+ public:
+  RawSubscription(unav::Context& ctx, const std::string& dds_topic, const std::string& dds_type, const unav::QoS& qos,
+                  std::function<void(const RawSample&)> cb)
+      : SubscriptionBase(ctx, dds_topic, new RawType(dds_type), qos), cb_(std::move(cb)) {}
+  bool execute() override {
+    for (int i = 0; i < 64; ++i) {
+      if (!take(&sample_)) return false;
+      cb_(sample_);
+    }
+    return true;
+  }
+
+ private:
+  std::function<void(const RawSample&)> cb_;
+  RawSample sample_;
+};
+
+class RawPublisher : public unav::PublisherBase {
+ public:
+  RawPublisher(unav::Context& ctx, const std::string& dds_topic, const std::string& dds_type, const unav::QoS& qos)
+      : PublisherBase(ctx, dds_topic, new RawType(dds_type), qos) {}
+  bool publish(const RawSample& s) { return write(&s); }
+};
+
+// IDL roots: every <prefix>/share/<pkg>/idl of the workspace install, found from the environment
+// and from this executable's own install prefix (so it works before sourcing setup.bash).
+intro::TypeRegistry make_registry() {
+  intro::TypeRegistry reg;
+  std::set<std::string> prefixes;
+  for (const char* var : {"UNAV_IDL_PREFIXES", "AMENT_PREFIX_PATH", "CMAKE_PREFIX_PATH"}) {
+    const char* v = std::getenv(var);
+    if (!v) continue;
+    std::stringstream ss(v);
+    std::string p;
+    while (std::getline(ss, p, ':'))
+      if (!p.empty()) prefixes.insert(p);
+  }
+  char exe[4096] = {};
+  if (readlink("/proc/self/exe", exe, sizeof(exe) - 1) > 0) {
+    std::string root(exe);  // <install>/unav_cli/bin/unav
+    for (int i = 0; i < 3; ++i) root = root.substr(0, root.find_last_of('/'));
+    prefixes.insert(root + "/ros2_msgs");
+    prefixes.insert(root + "/unav_msgs");
+    prefixes.insert(root);
+  }
+  for (const auto& p : prefixes) reg.add_install_prefix(p);
+  return reg;
+}
+
+std::string normalize_topic(const std::string& t) {
+  return unav::resolve_topic_name(t, "/", "unav_cli");
+}
+
+int topic_list(bool show_types) {
+  Graph g;
+  g.context().spin_until([] { return false; }, default_spin_time());
+  for (const auto& [topic, types] : g.topics()) {
+    std::cout << topic;
+    if (show_types) {
+      std::cout << " [";
+      bool first = true;
+      for (const auto& t : types) {
+        std::cout << (first ? "" : ", ") << unav::ros_type_from_dds(t);
+        first = false;
+      }
+      std::cout << "]";
+    }
+    std::cout << "\n";
+  }
+  return 0;
+}
+
+// Subscribes to `topic` with the publishers' type and QoS; waits (with ros2's warning) until
+// one appears.
+std::shared_ptr<RawSubscription> subscribe_any(Graph& g, const std::string& topic, std::string& dds_type,
+                                               std::function<void(const RawSample&)> cb) {
+  dds_type = g.wait_for_type(topic, default_spin_time());
+  if (dds_type.empty()) {
+    std::cerr << "WARNING: topic [" << topic << "] does not appear to be published yet" << std::endl;
+    while (dds_type.empty() && g.context().ok()) dds_type = g.wait_for_type(topic, 500ms);
+    if (dds_type.empty()) return nullptr;
+  }
+  auto sub = std::make_shared<RawSubscription>(g.context(), unav::to_dds_topic(topic), dds_type,
+                                               g.matching_qos(topic), std::move(cb));
+  sub->start(g.matching_qos(topic));
+  return sub;
+}
+
+int topic_echo(const std::string& topic_in, bool once, const intro::EchoOptions& opts) {
+  const std::string topic = normalize_topic(topic_in);
+  auto reg = make_registry();
+  Graph g;
+  std::string dds_type;
+  const intro::StructType* type = nullptr;
+  bool done = false;
+  auto sub = subscribe_any(g, topic, dds_type, [&](const RawSample& s) {
+    try {
+      std::cout << intro::to_echo_yaml(*type, s.bytes.data(), s.bytes.size(), opts) << "---" << std::endl;
+    } catch (const std::exception& e) {
+      std::cerr << "cannot decode a sample of " << unav::ros_type_from_dds(dds_type) << ": " << e.what() << std::endl;
+    }
+    if (once) done = true;
+  });
+  if (!sub) return 0;
+  try {
+    type = &reg.load(dds_type);
+  } catch (const std::exception& e) {
+    throw UsageError("topic '" + topic + "' has type '" + unav::ros_type_from_dds(dds_type) +
+                     "', which this installation has no IDL for: " + e.what());
+  }
+  while (!done && g.context().ok()) g.context().spin_until([&] { return done; }, 1s);
+  return 0;
+}
+
+int topic_hz(const std::string& topic_in, size_t window) {
+  const std::string topic = normalize_topic(topic_in);
+  Graph g;
+  std::string dds_type;
+  std::deque<double> stamps;
+  auto sub = subscribe_any(g, topic, dds_type, [&](const RawSample&) {
+    stamps.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count());
+    if (stamps.size() > window + 1) stamps.pop_front();
+  });
+  if (!sub) return 0;
+  auto timer = std::make_shared<unav::Timer>(1s, [&] {
+    if (stamps.size() < 2) {
+      std::cout << "no new messages" << std::endl;
+      return;
+    }
+    std::vector<double> d;
+    for (size_t i = 1; i < stamps.size(); ++i) d.push_back(stamps[i] - stamps[i - 1]);
+    const double mean = std::accumulate(d.begin(), d.end(), 0.0) / static_cast<double>(d.size());
+    double var = 0;
+    for (double x : d) var += (x - mean) * (x - mean);
+    const double sd = std::sqrt(var / static_cast<double>(d.size()));
+    std::printf("average rate: %.3f\n\tmin: %.3fs max: %.3fs std dev: %.5fs window: %zu\n", 1.0 / mean,
+                *std::min_element(d.begin(), d.end()), *std::max_element(d.begin(), d.end()), sd, stamps.size());
+    std::fflush(stdout);
+  }, false);
+  g.context().executor().add_timer(timer);
+  g.context().spin();
+  return 0;
+}
+
+std::string human_bytes(double b, const char* suffix) {
+  char buf[64];
+  if (b >= 1e6)
+    std::snprintf(buf, sizeof(buf), "%.2f M%s", b / 1e6, suffix);
+  else if (b >= 1e3)
+    std::snprintf(buf, sizeof(buf), "%.2f K%s", b / 1e3, suffix);
+  else
+    std::snprintf(buf, sizeof(buf), "%.0f %s", b, suffix);
+  return buf;
+}
+
+int topic_bw(const std::string& topic_in, size_t window) {
+  const std::string topic = normalize_topic(topic_in);
+  Graph g;
+  std::string dds_type;
+  std::deque<std::pair<double, size_t>> samples;
+  auto sub = subscribe_any(g, topic, dds_type, [&](const RawSample& s) {
+    samples.emplace_back(std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count(),
+                         s.bytes.size());
+    if (samples.size() > window) samples.pop_front();
+  });
+  if (!sub) return 0;
+  std::cout << "Subscribed to [" << topic << "]" << std::endl;
+  auto timer = std::make_shared<unav::Timer>(1s, [&] {
+    if (samples.size() < 2) return;
+    const double dt = std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count() -
+                      samples.front().first;
+    size_t total = 0, mn = SIZE_MAX, mx = 0;
+    for (const auto& s : samples) {
+      total += s.second;
+      mn = std::min(mn, s.second);
+      mx = std::max(mx, s.second);
+    }
+    std::cout << human_bytes(static_cast<double>(total) / dt, "B/s") << " from " << samples.size() << " messages\n"
+              << "\tMessage size mean: " << human_bytes(static_cast<double>(total) / samples.size(), "B")
+              << " min: " << human_bytes(static_cast<double>(mn), "B") << " max: " << human_bytes(static_cast<double>(mx), "B")
+              << std::endl;
+  }, false);
+  g.context().executor().add_timer(timer);
+  g.context().spin();
+  return 0;
+}
+
+int topic_pub(const std::string& topic_in, const std::string& type_name, const std::string& yaml_text, double rate,
+              bool once, int times, int wait_matching) {
+  const std::string topic = normalize_topic(topic_in);
+  auto reg = make_registry();
+  const intro::StructType* type = nullptr;
+  try {
+    type = &reg.load(type_name);
+  } catch (const std::exception& e) {
+    throw UsageError("unknown message type '" + type_name + "': " + e.what());
+  }
+  YAML::Node value;
+  try {
+    value = YAML::Load(yaml_text.empty() ? "{}" : yaml_text);
+  } catch (const YAML::Exception& e) {
+    throw UsageError("message values '" + yaml_text + "': malformed YAML: " + e.msg);
+  }
+  RawSample sample;
+  try {
+    sample.bytes = intro::encode(*type, value);
+  } catch (const std::exception& e) {
+    throw UsageError("message values for '" + type_name + "': " + e.what());
+  }
+  if (!(rate > 0.0) || !std::isfinite(rate)) throw UsageError("--rate " + std::to_string(rate) + ": must be > 0");
+  Graph g;
+  RawPublisher pub(g.context(), unav::to_dds_topic(topic), unav::dds_type_from_ros(type_name), unav::QoS::reliable());
+  if (wait_matching > 0 || once || times > 0)
+    g.context().spin_until([&] { return pub.subscription_count() >= std::max(1, wait_matching); },
+                           wait_matching > 0 ? std::chrono::milliseconds(3600000) : default_spin_time());
+  std::cout << "publisher: beginning loop" << std::endl;
+  YAML::Emitter flow;
+  flow << YAML::Flow << intro::decode(*type, sample.bytes.data(), sample.bytes.size());
+  int count = 0;
+  const int limit = once ? 1 : times;
+  while (g.context().ok()) {
+    pub.publish(sample);
+    std::cout << "publishing #" << ++count << ": " << unav::ros_type_from_dds(unav::dds_type_from_ros(type_name))
+              << "(" << flow.c_str() << ")\n" << std::endl;
+    if (limit > 0 && count >= limit) break;
+    g.context().spin_until([] { return false; }, std::chrono::nanoseconds(static_cast<int64_t>(1e9 / rate)));
+  }
+  // Reliable delivery before exit, as `ros2 topic pub --once` keeps the publisher alive briefly.
+  eprosima::fastrtps::Duration_t wait(2, 0);
+  pub.writer()->wait_for_acknowledgments(wait);
+  return 0;
+}
+
+int node_list() {
+  Graph g;
+  for (const auto& n : g.nodes()) std::cout << n << "\n";
+  return 0;
+}
+
+int launch(const std::string& file, const std::vector<std::string>& args) {
+  unav::launch::LaunchDescription desc;
+  try {
+    desc = unav::launch::load_launch_file(file, unav::launch::parse_launch_arguments(args));
+  } catch (const std::exception& e) {
+    throw UsageError(e.what());
+  }
+  return unav::launch::run(desc);
+}
+
+}  // namespace
+}  // namespace unav_cli
+
+int main(int argc, char** argv) {
+  using namespace unav_cli;
+  CLI::App app{"unav: command-line tool of UNav-Sim (like ros2)", "unav"};
+  app.require_subcommand(1);
+
+  auto* topic = app.add_subcommand("topic", "inspect and publish topics");
+  topic->require_subcommand(1);
+  bool show_types = false;
+  auto* list = topic->add_subcommand("list", "list topics seen through DDS discovery");
+  list->add_flag("-t,--show-types", show_types, "show the ROS 2 type of each topic");
+
+  std::string topic_name, type_name, values;
+  bool once = false;
+  intro::EchoOptions echo_opts;
+  bool full_length = false;
+  auto* echo = topic->add_subcommand("echo", "print messages of a topic as YAML");
+  echo->add_option("topic", topic_name, "topic name, e.g. /rov/imu")->required();
+  echo->add_flag("--once", once, "print one message and exit");
+  echo->add_flag("--no-arr", echo_opts.no_arr, "do not print arrays and sequences");
+  echo->add_flag("--no-str", echo_opts.no_str, "do not print strings");
+  echo->add_flag("-f,--full-length", full_length, "do not truncate long arrays and strings");
+  echo->add_option("-l,--truncate-length", echo_opts.truncate_length, "truncate arrays/strings longer than this");
+
+  size_t window = 10000;
+  auto* hz = topic->add_subcommand("hz", "print the average publishing rate");
+  hz->add_option("topic", topic_name)->required();
+  hz->add_option("-w,--window", window, "number of messages in the window");
+  auto* bw = topic->add_subcommand("bw", "print the bandwidth used by a topic");
+  bw->add_option("topic", topic_name)->required();
+  size_t bw_window = 100;
+  bw->add_option("-w,--window", bw_window, "number of messages in the window");
+
+  double rate = 1.0;
+  int times = 0, wait_matching = 0;
+  auto* pub = topic->add_subcommand("pub", "publish a message (values as YAML)");
+  pub->add_option("topic", topic_name)->required();
+  pub->add_option("type", type_name, "e.g. geometry_msgs/msg/Twist")->required();
+  pub->add_option("values", values, "YAML, e.g. '{linear: {x: 1.0}}'");
+  pub->add_option("-r,--rate", rate, "publishing rate [Hz] (default 1)");
+  pub->add_flag("-1,--once", once, "publish one message and exit");
+  pub->add_option("-t,--times", times, "publish this many messages and exit");
+  pub->add_option("-w,--wait-matching-subscriptions", wait_matching, "wait for this many subscriptions first");
+
+  auto* node = app.add_subcommand("node", "inspect nodes");
+  node->require_subcommand(1);
+  auto* node_list_cmd = node->add_subcommand("list", "list nodes (from ros_discovery_info)");
+
+  std::string launch_file;
+  std::vector<std::string> launch_args;
+  auto* launch_cmd = app.add_subcommand("launch", "start the nodes of a *.launch.yaml file, one process each");
+  launch_cmd->add_option("file", launch_file, "launch file")->required();
+  launch_cmd->add_option("args", launch_args, "launch arguments name:=value");
+
+  CLI11_PARSE(app, argc, argv);
+  if (full_length) echo_opts.truncate_length = intro::EchoOptions::kFullLength;
+  try {
+    if (list->parsed()) return topic_list(show_types);
+    if (echo->parsed()) return topic_echo(topic_name, once, echo_opts);
+    if (hz->parsed()) return topic_hz(topic_name, window);
+    if (bw->parsed()) return topic_bw(topic_name, bw_window);
+    if (pub->parsed()) return topic_pub(topic_name, type_name, values, rate, once, times, wait_matching);
+    if (node_list_cmd->parsed()) return node_list();
+    if (launch_cmd->parsed()) return launch(launch_file, launch_args);
+  } catch (const UsageError& e) {
+    std::cerr << "unav: error: " << e.what() << std::endl;
+    return 2;
+  } catch (const unav::ConfigError& e) {
+    std::cerr << "unav: error: " << e.what() << std::endl;
+    return 2;
+  } catch (const std::exception& e) {
+    std::cerr << "unav: fatal: " << e.what() << std::endl;
+    return 1;
+  }
+  return 0;
+}

@@ -1,0 +1,128 @@
+// The unav CLI against live DDS traffic from this test process (domain of its own).
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <array>
+#include <cstdio>
+#include <fstream>
+#include <future>
+
+#include "unav_msgs/msg/thruster_command.hpp"
+#include "unav_runtime/runtime.hpp"
+
+using namespace std::chrono_literals;
+
+namespace {
+
+int domain() { return 100 + static_cast<int>(getpid() % 100); }
+
+struct Result {
+  int code = -1;
+  std::string out;
+  std::string err;
+};
+
+// Runs `unav ARGS` with this test's domain; stdout and stderr captured separately.
+Result run_unav(const std::string& args, const std::string& spin_time = "1.5") {
+  const std::string err_file = ::testing::TempDir() + "unav_err_" + std::to_string(getpid());
+  const std::string cmd = "ROS_DOMAIN_ID=" + std::to_string(domain()) + " UNAV_SPIN_TIME=" + spin_time + " timeout -s INT 30 " +
+                          UNAV_EXE + " " + args + " 2>" + err_file;
+  Result r;
+  FILE* p = popen(cmd.c_str(), "r");
+  std::array<char, 4096> buf;
+  size_t n;
+  while ((n = fread(buf.data(), 1, buf.size(), p)) > 0) r.out.append(buf.data(), n);
+  const int status = pclose(p);
+  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  std::ifstream in(err_file);
+  r.err.assign(std::istreambuf_iterator<char>(in), {});
+  return r;
+}
+
+// Runs `unav` in the background while spinning `ctx`, so this process keeps answering DDS.
+Result run_unav_while_spinning(unav::Context& ctx, const std::string& args, const std::string& spin_time = "1.5") {
+  auto fut = std::async(std::launch::async, [&] { return run_unav(args, spin_time); });
+  while (fut.wait_for(10ms) != std::future_status::ready) ctx.spin_some(5ms);
+  return fut.get();
+}
+
+class CliTest : public ::testing::Test {
+ protected:
+  CliTest() {
+    unav::ContextOptions o;
+    o.domain_id = domain();
+    o.handle_signals = false;
+    ctx_ = std::make_unique<unav::Context>(o);
+    node_ = std::make_unique<unav::Node>("talker", unav::NodeOptions{ctx_.get()}, "cli_test");
+    pub_ = node_->create_publisher<unav_msgs::msg::ThrusterCommand>("cmd", unav::QoS::reliable());
+    timer_ = node_->create_wall_timer(50ms, [this] {
+      unav_msgs::msg::ThrusterCommand c;
+      c.header().frame_id("base_link_frd");
+      c.u({0.5, -1.0});
+      pub_->publish(c);
+    });
+  }
+  ~CliTest() override {
+    timer_.reset();
+    pub_.reset();
+    node_.reset();
+    ctx_.reset();
+  }
+  std::unique_ptr<unav::Context> ctx_;
+  std::unique_ptr<unav::Node> node_;
+  std::shared_ptr<unav::Publisher<unav_msgs::msg::ThrusterCommand>> pub_;
+  std::shared_ptr<unav::Timer> timer_;
+};
+
+}  // namespace
+
+TEST_F(CliTest, TopicListShowsRos2TypeNames) {
+  const Result r = run_unav_while_spinning(*ctx_, "topic list -t");
+  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find("/cli_test/cmd [unav_msgs/msg/ThrusterCommand]"), std::string::npos) << r.out;
+}
+
+TEST_F(CliTest, EchoOncePrintsYamlLikeRos2) {
+  const Result r = run_unav_while_spinning(*ctx_, "topic echo /cli_test/cmd --once");
+  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find("  frame_id: base_link_frd\nu:\n- 0.5\n- -1.0\n---\n"), std::string::npos) << r.out;
+}
+
+TEST_F(CliTest, PubOnceIsReceived) {
+  std::vector<double> got;
+  auto sub = node_->create_subscription<unav_msgs::msg::ThrusterCommand>(
+      "/cli_test/in", unav::QoS::reliable(), [&](const unav_msgs::msg::ThrusterCommand& m) { got = m.u(); });
+  const Result r = run_unav_while_spinning(*ctx_, "topic pub /cli_test/in unav_msgs/msg/ThrusterCommand '{u: [0.25, 1]}' --once");
+  EXPECT_EQ(r.code, 0) << r.err;
+  ctx_->spin_until([&] { return !got.empty(); }, 5s);
+  EXPECT_EQ(got, (std::vector<double>{0.25, 1.0}));
+}
+
+TEST_F(CliTest, NodeListShowsNodes) {
+  const Result r = run_unav_while_spinning(*ctx_, "node list", "3");  // latched graph data: discovery + a heartbeat
+  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find("/cli_test/talker\n"), std::string::npos) << "out: " << r.out << " err: " << r.err;
+}
+
+TEST(CliErrors, BadInputGivesOneLineAndExit2) {
+  const std::string launch = ::testing::TempDir() + "bad_exec.launch.yaml";
+  std::ofstream(launch) << "launch:\n  - node: {pkg: unav_cli_no_such_pkg, exec: nothing}\n";
+  struct Case {
+    std::string args;
+    std::string must_mention;
+  };
+  const std::vector<Case> cases = {
+      {"topic pub /x foo_msgs/msg/Nope '{}' --once", "foo_msgs/msg/Nope"},
+      {"topic pub /x unav_msgs/msg/ThrusterCommand '{u: [1, 2' --once", "malformed YAML"},
+      {"topic pub /x unav_msgs/msg/ThrusterCommand '{v: 1}' --once", "v"},
+      {"launch /no/such/file.launch.yaml", "/no/such/file.launch.yaml"},
+      {"launch " + launch, "unav_cli_no_such_pkg"},
+  };
+  for (const auto& c : cases) {
+    const Result r = run_unav(c.args);
+    EXPECT_EQ(r.code, 2) << c.args << "\n" << r.err;
+    EXPECT_NE(r.err.find(c.must_mention), std::string::npos) << r.err;
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  }
+}
