@@ -207,12 +207,21 @@ Stats measure(bool raw, bool big, size_t n, double period_s, int domain) {
     run_sub(raw, domain, n, period_s, fds[1]);
     _exit(0);
   }
+  // The publisher runs in a child too: Fast DDS must never be initialised in a process that
+  // forks afterwards (its threads and locks do not survive fork).
+  const pid_t pub = fork();
+  if (pub == 0) {
+    close(fds[0]);
+    close(fds[1]);
+    run_pub(raw, domain, big, n, period_s);
+    _exit(0);
+  }
   close(fds[1]);
-  run_pub(raw, domain, big, n, period_s);
   Stats s{};
   (void)!read(fds[0], &s, sizeof(s));
   close(fds[0]);
   waitpid(child, nullptr, 0);
+  waitpid(pub, nullptr, 0);
   return s;
 }
 
