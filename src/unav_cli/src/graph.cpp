@@ -1,5 +1,6 @@
 #include "graph.hpp"
 
+#include <cstdio>
 #include <cstdlib>
 
 #include <fastdds/dds/domain/DomainParticipantListener.hpp>
@@ -45,7 +46,7 @@ struct Graph::Listener : fdds::DomainParticipantListener {
 
 std::chrono::milliseconds default_spin_time() {
   if (const char* s = std::getenv("UNAV_SPIN_TIME")) return std::chrono::milliseconds(static_cast<int64_t>(std::atof(s) * 1000));
-  return std::chrono::milliseconds(1500);
+  return std::chrono::milliseconds(2000);
 }
 
 Graph::Graph() : listener_(std::make_unique<Listener>()) {
@@ -107,7 +108,10 @@ std::vector<std::string> Graph::nodes() {
   // Raw typed reader of ros_discovery_info (not prefixed), transient local: every live
   // participant's latest graph arrives on subscription.
   auto* topic = ctx_->topic("ros_discovery_info", new rmw_dds_common::msg::dds_::ParticipantEntitiesInfo_PubSubType());
-  auto* reader = ctx_->create_reader(topic, unav::QoS::static_latched(), nullptr);
+  // Depth 100, not 1: the topic is keyless, so with depth 1 a sample from one participant would
+  // overwrite another's before it is taken.
+  auto* reader = ctx_->create_reader(
+      topic, unav::QoS{unav::QoS::Reliability::kReliable, unav::QoS::Durability::kTransientLocal, 100}, nullptr);
   // Listen for the spin time, then longer (up to twice) while a participant that writes
   // ros_discovery_info has not delivered its graph yet.
   const auto start = std::chrono::steady_clock::now();
@@ -137,6 +141,12 @@ std::vector<std::string> Graph::nodes() {
       }
     }
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  if (std::getenv("UNAV_DEBUG")) {
+    fdds::SubscriptionMatchedStatus st;
+    reader->get_subscription_matched_status(st);
+    std::fprintf(stderr, "node list: %d matched graph writers, %zu participants reported\n", st.current_count,
+                 by_participant.size());
   }
   ctx_->delete_reader(reader);
   std::set<std::string> all;

@@ -47,7 +47,7 @@ class Graph {
   std::unique_ptr<unav::Context> ctx_;
 };
 
-/// Milliseconds to wait for discovery: UNAV_SPIN_TIME (seconds) or 1.5 s.
+/// Milliseconds to wait for discovery: UNAV_SPIN_TIME (seconds) or 2 s.
 std::chrono::milliseconds default_spin_time();
 
 }  // namespace unav_cli

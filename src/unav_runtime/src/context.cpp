@@ -100,9 +100,13 @@ Context::Context(int argc, const char* const* argv, ContextOptions options) {
   const std::string enclave = "enclave=/;";
   pqos.user_data().data_vec(std::vector<eprosima::fastrtps::rtps::octet>(enclave.begin(), enclave.end()));
   pqos.transport().use_builtin_transports = false;
-  auto shm = std::make_shared<eprosima::fastdds::rtps::SharedMemTransportDescriptor>();
-  shm->segment_size(options.shm_segment_bytes);
-  pqos.transport().user_transports.push_back(shm);
+  // UNAV_TRANSPORT=udp turns shared memory off (debugging, containers without /dev/shm).
+  const char* transport = std::getenv("UNAV_TRANSPORT");
+  if (!transport || std::string(transport) != "udp") {
+    auto shm = std::make_shared<eprosima::fastdds::rtps::SharedMemTransportDescriptor>();
+    shm->segment_size(options.shm_segment_bytes);
+    pqos.transport().user_transports.push_back(shm);
+  }
   auto udp = std::make_shared<eprosima::fastdds::rtps::UDPv4TransportDescriptor>();
   if (const char* lo = std::getenv("ROS_LOCALHOST_ONLY"); lo && std::string(lo) == "1")
     udp->interfaceWhiteList.emplace_back("127.0.0.1");
