@@ -1,0 +1,170 @@
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <fstream>
+#include <random>
+
+#include "unav_evaluation/metrics.hpp"
+
+using namespace unav_evaluation;
+
+namespace {
+
+// A 3D figure-eight with changing attitude, 10 Hz for 20 s.
+Trajectory ground_truth() {
+  Trajectory t;
+  for (int i = 0; i < 200; ++i) {
+    const double s = 0.1 * i;
+    Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+    T.translation() = Eigen::Vector3d(5 * std::sin(0.3 * s), 3 * std::sin(0.6 * s), 10 + 0.5 * std::cos(0.2 * s));
+    T.linear() = (Eigen::AngleAxisd(0.3 * s, Eigen::Vector3d::UnitZ()) * Eigen::AngleAxisd(0.1 * std::sin(s), Eigen::Vector3d::UnitX()))
+                     .toRotationMatrix();
+    t.push_back(100.0 + s, T);
+  }
+  return t;
+}
+
+Eigen::Isometry3d transform(const Sim3& S, const Eigen::Isometry3d& P) {
+  Eigen::Isometry3d out = P;
+  out.translation() = S.R * (S.s * P.translation()) + S.t;
+  out.linear() = S.R * P.linear();
+  return out;
+}
+
+std::string write_temp(const std::string& name, const std::string& text) {
+  const std::string p = ::testing::TempDir() + name;
+  std::ofstream(p) << text;
+  return p;
+}
+
+std::string error_of(const std::function<void()>& f) {
+  try {
+    f();
+  } catch (const TrajectoryError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+}  // namespace
+
+TEST(Umeyama, RecoversKnownSim3Exactly) {
+  Sim3 truth;
+  truth.R = Eigen::AngleAxisd(0.7, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix();
+  truth.t = Eigen::Vector3d(4, -2, 9);
+  truth.s = 2.5;
+  std::mt19937 rng(1);
+  std::normal_distribution<double> n(0, 3);
+  Eigen::Matrix3Xd src(3, 50), dst(3, 50);
+  for (int i = 0; i < 50; ++i) {
+    src.col(i) = Eigen::Vector3d(n(rng), n(rng), n(rng));
+    dst.col(i) = truth.s * truth.R * src.col(i) + truth.t;
+  }
+  const Sim3 est = umeyama(src, dst, true);
+  // Noise-free correspondences: the closed form is exact up to round-off (~1e-12).
+  EXPECT_NEAR((est.R - truth.R).norm(), 0.0, 1e-10);
+  EXPECT_NEAR((est.t - truth.t).norm(), 0.0, 1e-9);
+  EXPECT_NEAR(est.s, truth.s, 1e-10);
+  const Sim3 rigid = umeyama(src, dst, false);
+  EXPECT_DOUBLE_EQ(rigid.s, 1.0);
+  EXPECT_NEAR((rigid.R - truth.R).norm(), 0.0, 1e-10);  // scale does not change the best rotation
+}
+
+TEST(Ape, ZeroAfterAligningARigidlyTransformedCopy) {
+  const Trajectory gt = ground_truth();
+  Sim3 S;
+  S.R = Eigen::AngleAxisd(-1.2, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  S.t = Eigen::Vector3d(30, 1, -4);
+  S.s = 0.37;  // monocular SLAM: arbitrary scale
+  Trajectory est = gt;
+  for (auto& P : est.poses) P = transform(S, P);
+  Trajectory se3 = est;
+  align(se3, gt, Alignment::kSE3);
+  EXPECT_GT(statistics(ape(gt, se3, PoseRelation::kTranslation)).rmse, 1.0);  // scale not corrected
+  align(est, gt, Alignment::kSim3);
+  EXPECT_LT(statistics(ape(gt, est, PoseRelation::kTranslation)).max, 1e-9);
+  EXPECT_LT(statistics(ape(gt, est, PoseRelation::kRotationAngleRad)).max, 1e-7);
+}
+
+TEST(Rpe, ConstantDriftEqualsTheDrift) {
+  // The estimate over-shoots every 1-frame step by the same body-frame offset d: the relative
+  // motion error of each pair is exactly d, while APE grows.
+  const Trajectory gt = ground_truth();
+  const Eigen::Vector3d d(0.02, -0.01, 0.005);
+  Trajectory est;
+  est.push_back(gt.stamps[0], gt.poses[0]);
+  for (size_t i = 1; i < gt.size(); ++i) {
+    Eigen::Isometry3d step = gt.poses[i - 1].inverse() * gt.poses[i];
+    Eigen::Isometry3d drift = Eigen::Isometry3d::Identity();
+    drift.translation() = d;
+    est.push_back(gt.stamps[i], est.poses.back() * step * drift);
+  }
+  const Statistics r = statistics(rpe(gt, est, PoseRelation::kTranslation));
+  EXPECT_NEAR(r.mean, d.norm(), 1e-12);
+  EXPECT_NEAR(r.std, 0.0, 1e-12);
+  EXPECT_EQ(r.count, gt.size() - 1);
+  EXPECT_NEAR(statistics(rpe(gt, est, PoseRelation::kRotationAngleRad)).max, 0.0, 1e-7);
+  EXPECT_GT(statistics(ape(gt, est, PoseRelation::kTranslation)).max, 10 * d.norm());
+}
+
+TEST(Rpe, PairsFollowEvo) {
+  const Trajectory gt = ground_truth();
+  const auto frames = rpe_pairs(gt, {10.0, DeltaUnit::kFrames, false, 0.1});
+  ASSERT_EQ(frames.size(), 19u);  // ids 0, 10, ..., 190 -> 19 consecutive pairs
+  EXPECT_EQ(frames[1], (std::pair<size_t, size_t>{10, 20}));
+  const auto all = rpe_pairs(gt, {10.0, DeltaUnit::kFrames, true, 0.1});
+  EXPECT_EQ(all.size(), 190u);
+  // Straight line at 0.1 m per pose: 1 m of path is every 10 poses, the first segment end is
+  // the first pose whose accumulated path reaches 1 m (index 10).
+  Trajectory line;
+  for (int i = 0; i < 101; ++i) {
+    Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+    T.translation().x() = 0.1 * i + 1e-9 * i;
+    line.push_back(i, T);
+  }
+  const auto meters = rpe_pairs(line, {1.0, DeltaUnit::kMeters, false, 0.1});
+  ASSERT_FALSE(meters.empty());
+  EXPECT_EQ(meters.front(), (std::pair<size_t, size_t>{10, 20}));
+  EXPECT_THROW(rpe_pairs(line, {1000.0, DeltaUnit::kMeters, false, 0.1}), TrajectoryError);
+}
+
+TEST(Statistics, MatchNumpy) {
+  // numpy: rmse=sqrt(mean(e^2)), std with ddof=0, median of an even count averages the middle.
+  const Statistics s = statistics({1.0, 2.0, 3.0, 4.0});
+  EXPECT_DOUBLE_EQ(s.mean, 2.5);
+  EXPECT_DOUBLE_EQ(s.median, 2.5);
+  EXPECT_DOUBLE_EQ(s.rmse, std::sqrt(7.5));
+  EXPECT_DOUBLE_EQ(s.std, std::sqrt(1.25));
+  EXPECT_DOUBLE_EQ(s.sse, 30.0);
+  EXPECT_DOUBLE_EQ(s.min, 1.0);
+  EXPECT_DOUBLE_EQ(s.max, 4.0);
+}
+
+TEST(Tum, RoundTripAndAssociation) {
+  const Trajectory gt = ground_truth();
+  const std::string path = ::testing::TempDir() + "gt.tum";
+  write_tum(path, gt);
+  const Trajectory back = read_tum(path);
+  ASSERT_EQ(back.size(), gt.size());
+  EXPECT_NEAR((back.poses[57].matrix() - gt.poses[57].matrix()).norm(), 0.0, 1e-8);
+  // An estimate at 5 Hz, stamps 3 ms late: associates to every other pose within 10 ms.
+  Trajectory est;
+  for (size_t i = 0; i < gt.size(); i += 2) est.push_back(gt.stamps[i] + 0.003, gt.poses[i]);
+  const auto [ref_a, est_a] = associate(gt, est, 0.01);
+  EXPECT_EQ(ref_a.size(), est.size());
+  EXPECT_DOUBLE_EQ(ref_a.stamps[3], gt.stamps[6]);
+  EXPECT_THROW(associate(gt, est, 0.001), TrajectoryError);  // nothing within 1 ms
+}
+
+TEST(Tum, BadFilesGiveLineNumberedErrors) {
+  EXPECT_NE(error_of([&] { read_tum(write_temp("cols.tum", "# x\n1 0 0 0 0 0 0 1\n2 0 0 0 0 0 1\n")); }).find("cols.tum:3: expected 8 columns"),
+            std::string::npos);
+  EXPECT_NE(error_of([&] { read_tum(write_temp("time.tum", "2 0 0 0 0 0 0 1\n1 0 0 0 0 0 0 1\n")); }).find("time.tum:2"),
+            std::string::npos);
+  EXPECT_NE(error_of([&] { read_tum(write_temp("nan.tum", "1 nan 0 0 0 0 0 1\n")); }).find("nan.tum:1"), std::string::npos);
+  EXPECT_NE(error_of([&] { read_tum(write_temp("quat.tum", "1 0 0 0 0 0 0 2\n")); }).find("quaternion"), std::string::npos);
+  Trajectory a, b;
+  a.push_back(0, Eigen::Isometry3d::Identity());
+  b.push_back(50, Eigen::Isometry3d::Identity());
+  EXPECT_NE(error_of([&] { associate(a, b); }).find("do not overlap"), std::string::npos);
+}
