@@ -4,6 +4,7 @@
 #include <unistd.h>
 
 #include <array>
+#include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <future>
@@ -125,4 +126,35 @@ TEST(CliErrors, BadInputGivesOneLineAndExit2) {
     EXPECT_NE(r.err.find(c.must_mention), std::string::npos) << r.err;
     EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
   }
+}
+
+TEST(CliEval, ApeAndRpeOnTumFiles) {
+  // Reference: a circle of radius 2 m at 10 Hz; estimate: the same path scaled by 0.5 and
+  // shifted (a monocular result), so Sim(3)-aligned APE is ~0 and unaligned APE is not.
+  const std::string ref = ::testing::TempDir() + "ref.tum", est = ::testing::TempDir() + "est.tum";
+  std::ofstream r(ref), e(est);
+  r.precision(12);
+  e.precision(12);
+  for (int i = 0; i < 100; ++i) {
+    const double a = 0.06 * i, x = 2 * std::cos(a), y = 2 * std::sin(a);
+    r << 10 + 0.1 * i << " " << x << " " << y << " 0 0 0 0 1\n";
+    e << 10 + 0.1 * i + 0.002 << " " << 0.5 * x + 3 << " " << 0.5 * y << " 1 0 0 0 1\n";
+  }
+  r.close();
+  e.close();
+  const Result aligned = run_unav("eval ape " + ref + " " + est);
+  EXPECT_EQ(aligned.code, 0) << aligned.err;
+  EXPECT_NE(aligned.out.find("(with Sim(3) Umeyama alignment)"), std::string::npos) << aligned.out;
+  EXPECT_NE(aligned.out.find("      rmse\t0.000000"), std::string::npos) << aligned.out;
+  const Result raw = run_unav("eval ape " + ref + " " + est + " --align none");
+  EXPECT_EQ(raw.code, 0) << raw.err;
+  EXPECT_EQ(raw.out.find("      rmse\t0.000000"), std::string::npos) << raw.out;
+  const Result rpe = run_unav("eval rpe " + ref + " " + est + " --delta 1 --delta_unit m");
+  EXPECT_EQ(rpe.code, 0) << rpe.err;
+  EXPECT_NE(rpe.out.find("RPE w.r.t. translation part (m) for delta = 1 (m)"), std::string::npos) << rpe.out;
+  const std::string bad = ::testing::TempDir() + "bad.tum";
+  std::ofstream(bad) << "1 0 0 0 0 0 0 1\n2 0 0 0\n";
+  const Result err = run_unav("eval ape " + ref + " " + bad);
+  EXPECT_EQ(err.code, 2);
+  EXPECT_NE(err.err.find("bad.tum:2: expected 8 columns"), std::string::npos) << err.err;
 }
