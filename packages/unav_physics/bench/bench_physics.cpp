@@ -1,0 +1,63 @@
+// Model steps per second on one core (target >= 2,000,000 steps/s for the dynamics step).
+// Run: bench_physics [--benchmark_filter=...]; items_per_second = steps per second.
+#include <benchmark/benchmark.h>
+
+#include "unav_physics/simulator.hpp"
+
+namespace up = unav::physics;
+
+namespace {
+
+up::DynamicsInputs busy_inputs() {
+  up::DynamicsInputs in;
+  in.tau_B << 20.0, 5.0, -3.0, 0.5, -0.4, 1.0;  // a thrusting, turning vehicle
+  in.v_c_W = Eigen::Vector3d(0.2, 0.1, 0.0);   // and a current, so every term is exercised
+  return in;
+}
+
+up::RigidBodyState moving_state() {
+  up::RigidBodyState x;
+  x.p_WB_W = Eigen::Vector3d(0.0, 0.0, 10.0);
+  x.q_WB = up::quaternion_from_rpy(0.1, -0.05, 0.3);
+  x.v_WB_B = Eigen::Vector3d(0.5, 0.1, 0.05);
+  x.w_WB_B = Eigen::Vector3d(0.05, 0.02, 0.2);
+  return x;
+}
+
+void BM_DynamicsStep(benchmark::State& state, up::Integrator integrator) {
+  const up::VehicleDynamics dyn(up::bluerov2_heavy_params());
+  const up::DynamicsInputs in = busy_inputs();
+  up::RigidBodyState x = moving_state();
+  for (auto _ : state) {
+    dyn.step(x, 1e-3, in, integrator);
+    benchmark::DoNotOptimize(x);
+  }
+  state.SetItemsProcessed(state.iterations());
+}
+
+// Full facade step: failsafe, 8 thruster lags, dynamics, current, seabed contact check, sensors.
+void BM_SimulatorStep(benchmark::State& state, up::Integrator integrator) {
+  up::VehicleParams v = up::bluerov2_heavy_params();
+  v.sensors.imu.enabled = v.sensors.pressure.enabled = v.sensors.dvl.enabled = true;
+  v.sensors.altimeter.enabled = v.sensors.magnetometer.enabled = v.sensors.gps.enabled = true;
+  v.sensors.imu.accel.noise_stddev = 0.02;
+  up::SimulatorOptions o;
+  o.integrator = integrator;
+  o.command_timeout = 0.0;
+  up::Simulator sim(v, o, std::make_unique<up::SinusoidalCurrent>(Eigen::Vector3d(0.1, 0, 0), Eigen::Vector3d(0.1, 0.05, 0), 0.05),
+                    std::make_unique<up::FlatSeabed>(30.0), moving_state());
+  sim.set_command(0.0, std::vector<double>{0.3, 0.3, -0.3, -0.3, 0.1, 0.1, 0.1, 0.1});
+  for (auto _ : state) {
+    sim.step();
+    benchmark::DoNotOptimize(sim.state());
+  }
+  state.SetItemsProcessed(state.iterations());
+}
+
+}  // namespace
+
+BENCHMARK_CAPTURE(BM_DynamicsStep, velocity_verlet, up::Integrator::kVelocityVerlet);
+BENCHMARK_CAPTURE(BM_DynamicsStep, rk4, up::Integrator::kRk4);
+BENCHMARK_CAPTURE(BM_SimulatorStep, velocity_verlet, up::Integrator::kVelocityVerlet);
+BENCHMARK_CAPTURE(BM_SimulatorStep, rk4, up::Integrator::kRk4);
+BENCHMARK_MAIN();

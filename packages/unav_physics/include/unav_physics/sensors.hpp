@@ -1,0 +1,165 @@
+// Sensor models sampled from the physics state: each sensor has a rate, white noise and a bias
+// random walk (seeded, deterministic). Outputs are plain structs with a `valid` flag and a
+// timestamp; `seq` increments on every new sample so a node can publish only fresh ones.
+// All sensors sit at the body origin (no lever arms yet).
+#pragma once
+
+#include <cstdint>
+#include <random>
+#include <string>
+
+#include "unav_physics/types.hpp"
+
+namespace unav::physics {
+
+class Seabed;
+
+/// Per-channel noise: reading = truth + bias + N(0, noise_stddev^2); the bias starts at
+/// initial_bias and walks: bias += bias_random_walk * sqrt(dt) * N(0, 1) at each sample.
+struct NoiseParams {
+  double noise_stddev = 0.0;      ///< unit of the reading
+  double bias_random_walk = 0.0;  ///< unit of the reading per sqrt(s)
+  double initial_bias = 0.0;      ///< unit of the reading
+};
+
+struct ImuParams {
+  bool enabled = false;
+  double rate_hz = 200.0;
+  NoiseParams accel;  ///< specific force, m/s^2
+  NoiseParams gyro;   ///< angular rate, rad/s
+};
+struct PressureParams {
+  bool enabled = false;
+  double rate_hz = 50.0;
+  NoiseParams pressure;  ///< Pa
+};
+struct DvlParams {
+  bool enabled = false;
+  double rate_hz = 10.0;
+  NoiseParams velocity;        ///< m/s
+  double min_altitude = 0.3;   ///< m; below it (or above max) the reading is invalid
+  double max_altitude = 50.0;  ///< m
+};
+struct AltimeterParams {
+  bool enabled = false;
+  double rate_hz = 10.0;
+  NoiseParams range;         ///< m
+  double min_range = 0.3;    ///< m
+  double max_range = 100.0;  ///< m
+};
+struct MagnetometerParams {
+  bool enabled = false;
+  double rate_hz = 50.0;
+  NoiseParams field;  ///< T
+};
+struct GpsParams {
+  bool enabled = false;
+  double rate_hz = 5.0;
+  NoiseParams horizontal;    ///< m, north and east
+  NoiseParams vertical;      ///< m, down
+  double max_depth = 0.1;    ///< m; a fix only while the antenna is within this of the surface
+};
+struct SensorSuiteParams {
+  std::uint64_t seed = 0;  ///< each sensor draws from its own generator seeded from this
+  ImuParams imu;
+  PressureParams pressure;
+  DvlParams dvl;
+  AltimeterParams altimeter;
+  MagnetometerParams magnetometer;
+  GpsParams gps;
+};
+
+struct ImuReading {
+  bool valid = false;
+  double stamp = 0.0;  ///< s, simulated time
+  std::uint64_t seq = 0;
+  Eigen::Vector3d specific_force_B = Eigen::Vector3d::Zero();  ///< m/s^2, FRD ((0,0,-g) at rest, level)
+  Eigen::Vector3d angular_rate_B = Eigen::Vector3d::Zero();    ///< rad/s, FRD
+  Eigen::Quaterniond q_WB = Eigen::Quaterniond::Identity();    ///< true attitude (for an AHRS output)
+};
+struct PressureReading {
+  bool valid = false;
+  double stamp = 0.0;
+  std::uint64_t seq = 0;
+  double pressure_pa = 0.0;  ///< absolute, Pa: p_atm + rho g z under water
+  double depth_m = 0.0;      ///< (pressure - p_atm) / (rho g), m
+};
+struct DvlReading {
+  bool valid = false;  ///< altitude within [min_altitude, max_altitude] and a seabed exists
+  double stamp = 0.0;
+  std::uint64_t seq = 0;
+  Eigen::Vector3d velocity_B = Eigen::Vector3d::Zero();  ///< seabed-relative velocity, FRD, m/s
+  double altitude_m = 0.0;                               ///< vertical distance to the seabed, m
+};
+struct RangeReading {
+  bool valid = false;
+  double stamp = 0.0;
+  std::uint64_t seq = 0;
+  double range_m = 0.0;  ///< along body +z (down) to the seabed, m
+};
+struct MagnetometerReading {
+  bool valid = false;
+  double stamp = 0.0;
+  std::uint64_t seq = 0;
+  Eigen::Vector3d field_B = Eigen::Vector3d::Zero();  ///< T, FRD
+};
+struct GpsReading {
+  bool valid = false;  ///< only within max_depth of the surface
+  double stamp = 0.0;
+  std::uint64_t seq = 0;
+  Eigen::Vector3d p_W = Eigen::Vector3d::Zero();  ///< NED position fix, m
+  double latitude_deg = 0.0, longitude_deg = 0.0, altitude_m = 0.0;
+};
+struct SensorReadings {
+  ImuReading imu;
+  PressureReading pressure;
+  DvlReading dvl;
+  RangeReading altimeter;
+  MagnetometerReading magnetometer;
+  GpsReading gps;
+};
+
+/// Updates every enabled sensor at its own rate from the physics state. Allocation-free.
+class SensorSuite {
+ public:
+  SensorSuite(const SensorSuiteParams& params, const EnvironmentParams& env);
+  /// Samples the sensors due at time t (s). nu_dot = [v_dot; w_dot] in body axes (for the IMU);
+  /// seabed may be null (no seabed: DVL and altimeter invalid).
+  void update(double t, const RigidBodyState& x, const Vector6d& nu_dot, const Seabed* seabed);
+  const SensorReadings& readings() const { return readings_; }
+  /// True when update(t, ...) will sample the IMU (the only sensor that needs nu_dot).
+  bool imu_due(double t) const { return s_imu_.due(t); }
+  const SensorSuiteParams& params() const { return params_; }
+
+ private:
+  struct Channel {  // noise state of one scalar channel
+    NoiseParams p;
+    double bias = 0.0;
+  };
+  struct Schedule {
+    double period = 0.0;
+    double next = 0.0;
+    bool due(double t) const { return period > 0.0 && t >= next - 1e-9; }
+    void advance(double t) {
+      while (next <= t + 1e-9) next += period;
+    }
+  };
+  struct Gaussian {  // one seeded N(0, 1) stream per sensor
+    std::mt19937_64 gen;
+    std::normal_distribution<double> dist{0.0, 1.0};
+    double operator()() { return dist(gen); }
+  };
+  static double noisy(Channel& c, Gaussian& g, double truth, double dt);
+
+  SensorSuiteParams params_;
+  EnvironmentParams env_;
+  SensorReadings readings_;
+  Gaussian g_imu_, g_pressure_, g_dvl_, g_alt_, g_mag_, g_gps_;
+  Schedule s_imu_, s_pressure_, s_dvl_, s_alt_, s_mag_, s_gps_;
+  Channel accel_[3], gyro_[3], pressure_, dvl_[3], range_, mag_[3], gps_[3];
+};
+
+/// Throws ConfigError ("<source>: sensors.imu.rate must be > 0 (got -1)") on a bad value.
+void validate_sensors(const SensorSuiteParams& params, const std::string& source);
+
+}  // namespace unav::physics

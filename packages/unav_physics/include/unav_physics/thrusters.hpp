@@ -1,0 +1,36 @@
+// N thrusters: first-order lag on the command, thrust per paper eq. 3, summed into a body wrench.
+#pragma once
+
+#include <vector>
+
+#include "unav_physics/types.hpp"
+#include "unav_physics/vehicle.hpp"
+
+namespace unav::physics {
+
+class ThrusterBank {
+ public:
+  explicit ThrusterBank(const std::vector<ThrusterParams>& thrusters);
+
+  int size() const { return static_cast<int>(gain_fwd_.size()); }
+  /// Advances each filter by dt (exact discretisation of u_f_dot = (u - u_f)/t_c, so a step
+  /// command reaches 1 - e^-1 = 63.2% after t_c). u must have size() entries in [-1, 1].
+  void step(double dt, const ThrusterVector& u);
+  void reset();
+
+  const ThrusterVector& filtered_command() const { return u_f_; }  ///< u_f, -
+  const ThrusterVector& thrust() const { return thrust_; }         ///< T_i, N
+  /// Body wrench [sum n_i T_i; sum r_i x n_i T_i], N / N m.
+  Vector6d wrench_B() const { return B_ * thrust_; }
+  /// Columns [n_i; r_i x n_i]: wrench per newton of thrust (6xN), for allocation.
+  const ThrusterMatrix& thruster_matrix() const { return B_; }
+  /// Thrust at u = +1 per thruster, N.
+  const ThrusterVector& max_forward_thrust() const { return gain_fwd_; }
+
+ private:
+  ThrusterMatrix B_;
+  ThrusterVector gain_fwd_, gain_rev_, tc_, u_f_, thrust_, alpha_;
+  double alpha_dt_ = -1.0;
+};
+
+}  // namespace unav::physics

@@ -1,0 +1,150 @@
+// Simulator facade: command validation, failsafe and the fixed-step loop.
+#include "unav_physics/simulator.hpp"
+
+#include <cmath>
+#include <sstream>
+
+namespace unav::physics {
+
+const char* to_string(CommandStatus status) {
+  switch (status) {
+    case CommandStatus::kAccepted:
+      return "accepted";
+    case CommandStatus::kClamped:
+      return "clamped";
+    case CommandStatus::kRejectedWrongLength:
+      return "rejected: wrong length";
+    case CommandStatus::kRejectedNonFinite:
+      return "rejected: NaN or Inf";
+  }
+  return "unknown";
+}
+
+bool SimulatorOptions::IsValid(std::string* msg) const {
+  auto fail = [&](const std::string& m) {
+    if (msg) *msg = m;
+    return false;
+  };
+  if (!(std::isfinite(dt) && dt > 0.0 && dt <= 0.1)) {
+    std::ostringstream os;
+    os << "dt must be in (0, 0.1] s (got " << dt << ")";
+    return fail(os.str());
+  }
+  if (!std::isfinite(command_timeout)) return fail("command_timeout must be finite (<= 0 disables it)");
+  std::string env_msg;
+  if (!environment.IsValid(&env_msg)) return fail("environment." + env_msg);
+  return true;
+}
+
+namespace {
+const SimulatorOptions& checked(const SimulatorOptions& o) {
+  std::string msg;
+  if (!o.IsValid(&msg)) throw ConfigError("simulator options: " + msg);
+  return o;
+}
+}  // namespace
+
+Simulator::Simulator(const VehicleParams& vehicle, const SimulatorOptions& options,
+                     std::unique_ptr<CurrentModel> current, std::unique_ptr<Seabed> seabed,
+                     const RigidBodyState& initial)
+    : options_(checked(options)),
+      dynamics_(vehicle, options.environment),
+      thrusters_(vehicle.thrusters),
+      sensors_(vehicle.sensors, options.environment),
+      current_(current ? std::move(current) : std::make_unique<ConstantCurrent>()),
+      seabed_(std::move(seabed)),
+      timeout_(options.command_timeout) {
+  if (vehicle.thrusters.empty()) throw ConfigError("vehicle '" + vehicle.name + "': thrusters must not be empty");
+  reset(initial);
+}
+
+void Simulator::reset(const RigidBodyState& x) {
+  if (!(x.p_WB_W.allFinite() && x.q_WB.coeffs().allFinite() && x.v_WB_B.allFinite() && x.w_WB_B.allFinite() &&
+        x.q_WB.norm() > 1e-9)) {
+    throw ConfigError("initial state must be finite with a non-zero quaternion");
+  }
+  x_ = x;
+  x_.q_WB.normalize();
+  steps_ = 0;
+  thrusters_.reset();
+  u_cmd_.setZero(thrusters_.size());
+  u_zero_.setZero(thrusters_.size());
+  timeout_ = CommandTimeout(options_.command_timeout);
+  timed_out_ = false;
+  nu_dot_fresh_ = false;
+  sensors_ = SensorSuite(sensors_.params(), options_.environment);
+  sensors_.update(0.0, x_, acceleration(), seabed_.get());
+}
+
+DynamicsInputs Simulator::inputs_at(double t) const {
+  DynamicsInputs in;
+  in.tau_B = thrusters_.wrench_B() + external_tau_B_;
+  in.v_c_W = current_->velocity_W(t);
+  in.a_c_W = current_->acceleration_W(t);
+  in.seabed = seabed_.get();
+  return in;
+}
+
+const Vector6d& Simulator::acceleration() const {
+  if (!nu_dot_fresh_) {
+    nu_dot_ = dynamics_.acceleration(x_, inputs_at(time()));
+    nu_dot_fresh_ = true;
+  }
+  return nu_dot_;
+}
+
+CommandStatus Simulator::set_command(double t, const double* u, std::size_t n) {
+  if (n != static_cast<std::size_t>(thrusters_.size())) {
+    ++stats_.rejected_wrong_length;
+    return CommandStatus::kRejectedWrongLength;
+  }
+  for (std::size_t i = 0; i < n; ++i) {
+    if (!std::isfinite(u[i])) {
+      ++stats_.rejected_non_finite;
+      return CommandStatus::kRejectedNonFinite;
+    }
+  }
+  bool clamped = false;
+  for (std::size_t i = 0; i < n; ++i) {
+    double v = u[i];
+    if (v > 1.0 || v < -1.0) {
+      v = v > 1.0 ? 1.0 : -1.0;
+      clamped = true;
+    }
+    u_cmd_(static_cast<Eigen::Index>(i)) = v;
+  }
+  timeout_.on_command(t);
+  ++stats_.accepted;
+  if (clamped) ++stats_.clamped;
+  return clamped ? CommandStatus::kClamped : CommandStatus::kAccepted;
+}
+
+void Simulator::step() {
+  const double dt = options_.dt;
+  const double t0 = time();
+  const bool expired = timeout_.expired(t0);
+  if (expired && !timed_out_) ++stats_.timeouts;
+  timed_out_ = expired;
+  // The lag filter advances first; the thrust at the end of the interval is held over it.
+  thrusters_.step(dt, expired ? u_zero_ : u_cmd_);
+
+  dynamics_.step(x_, dt, inputs_at(t0), options_.integrator);
+  current_->step(t0, dt);
+  ++steps_;
+  nu_dot_fresh_ = false;
+
+  const double t1 = time();
+  // nu_dot only when the IMU samples (it costs one more model evaluation).
+  sensors_.update(t1, x_, sensors_.imu_due(t1) ? acceleration() : nu_dot_, seabed_.get());
+}
+
+void Simulator::set_external_wrench_B(const Vector6d& tau_B) {
+  external_tau_B_ = tau_B;
+  nu_dot_fresh_ = false;
+}
+
+void Simulator::advance_to(double t_end) {
+  while (time() < t_end - 1e-9) step();
+}
+
+}  // namespace unav::physics

@@ -1,0 +1,182 @@
+// Sensors read what physics predicts; seabed and surface behaviour.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "unav_physics/simulator.hpp"
+
+namespace up = unav::physics;
+
+namespace {
+
+constexpr double kPi = 3.141592653589793;
+
+up::VehicleParams with_all_sensors(double sigma_scale = 1.0) {
+  up::VehicleParams v = up::bluerov2_heavy_params();
+  auto& s = v.sensors;
+  s.seed = 5;
+  s.imu.enabled = s.pressure.enabled = s.dvl.enabled = s.altimeter.enabled = true;
+  s.magnetometer.enabled = s.gps.enabled = true;
+  s.imu.accel.noise_stddev = 0.02 * sigma_scale;  // bias walks off: "at rest" means truth + white noise
+  s.imu.gyro.noise_stddev = 0.002 * sigma_scale;
+  s.pressure.pressure.noise_stddev = 20.0 * sigma_scale;
+  s.dvl.velocity.noise_stddev = 0.01 * sigma_scale;
+  s.altimeter.range.noise_stddev = 0.02 * sigma_scale;
+  s.magnetometer.field.noise_stddev = 2e-7 * sigma_scale;
+  s.gps.horizontal.noise_stddev = 1.5 * sigma_scale;
+  s.gps.vertical.noise_stddev = 3.0 * sigma_scale;
+  return v;
+}
+
+up::RigidBodyState at(double z, double roll = 0, double pitch = 0, double yaw = 0) {
+  up::RigidBodyState x;
+  x.p_WB_W = Eigen::Vector3d(0, 0, z);
+  x.q_WB = up::quaternion_from_rpy(roll, pitch, yaw);
+  return x;
+}
+
+up::SimulatorOptions opts() {
+  up::SimulatorOptions o;
+  o.command_timeout = 0.0;
+  return o;
+}
+
+TEST(Sensors, AtRestImuAndPressureReadWhatPhysicsPredicts) {
+  // Neutral, level, at rest at 10 m: specific force = -g in body FRD = (0, 0, -9.81), zero rate,
+  // p = p_atm + rho g z. Means over N samples must lie within 5 sigma / sqrt(N) (white noise only).
+  up::Simulator sim(with_all_sensors(), opts(), nullptr, nullptr, at(10.0));
+  Eigen::Vector3d f_sum = Eigen::Vector3d::Zero(), w_sum = Eigen::Vector3d::Zero();
+  double p_sum = 0, d_sum = 0;
+  int n_imu = 0, n_p = 0;
+  std::uint64_t imu_seq = sim.sensors().imu.seq, p_seq = sim.sensors().pressure.seq;
+  while (sim.time() < 5.0) {
+    sim.step();
+    const auto& r = sim.sensors();
+    if (r.imu.seq != imu_seq) {
+      imu_seq = r.imu.seq;
+      ASSERT_TRUE(r.imu.valid);
+      f_sum += r.imu.specific_force_B;
+      w_sum += r.imu.angular_rate_B;
+      ++n_imu;
+    }
+    if (r.pressure.seq != p_seq) {
+      p_seq = r.pressure.seq;
+      p_sum += r.pressure.pressure_pa;
+      d_sum += r.pressure.depth_m;
+      ++n_p;
+    }
+  }
+  EXPECT_EQ(n_imu, 1000);  // 200 Hz for 5 s
+  EXPECT_EQ(n_p, 250);     // 50 Hz
+  EXPECT_LT((f_sum / n_imu - Eigen::Vector3d(0, 0, -9.81)).cwiseAbs().maxCoeff(), 5 * 0.02 / std::sqrt(n_imu));
+  EXPECT_LT((w_sum / n_imu).cwiseAbs().maxCoeff(), 5 * 0.002 / std::sqrt(n_imu));
+  const double p_expected = 101325.0 + 1025.0 * 9.81 * 10.0;
+  EXPECT_NEAR(p_sum / n_p, p_expected, 5 * 20.0 / std::sqrt(n_p));
+  EXPECT_NEAR(d_sum / n_p, 10.0, 5 * 20.0 / (1025.0 * 9.81) / std::sqrt(n_p));
+}
+
+TEST(Sensors, ImuAndMagnetometerRotateWithTheBody) {
+  // Noise-free SensorSuite on hand-made states: f_B = -R^T g_W, m_B = R^T m_W.
+  up::VehicleParams v = with_all_sensors(0.0);
+  const up::EnvironmentParams env;
+  up::SensorSuite s(v.sensors, env);
+  const up::RigidBodyState x = at(5.0, 0.0, 30.0 * kPi / 180.0, 90.0 * kPi / 180.0);
+  s.update(0.0, x, up::Vector6d::Zero(), nullptr);
+  const Eigen::Matrix3d R = x.q_WB.toRotationMatrix();
+  EXPECT_LT((s.readings().imu.specific_force_B - R.transpose() * Eigen::Vector3d(0, 0, -9.81)).norm(), 1e-12);
+  // pitch 30 deg nose up: gravity has a forward component in body axes: f_x = +g sin 30.
+  EXPECT_NEAR(s.readings().imu.specific_force_B.x(), 9.81 * 0.5, 1e-12);
+  EXPECT_LT((s.readings().magnetometer.field_B - R.transpose() * env.magnetic_field_W).norm(), 1e-18);
+  const up::RigidBodyState east = at(5.0, 0.0, 0.0, kPi / 2);  // nose east: north is to the left (-y)
+  s.update(1.0, east, up::Vector6d::Zero(), nullptr);
+  EXPECT_NEAR(s.readings().magnetometer.field_B.y(), -env.magnetic_field_W.x(), 1e-12);
+}
+
+TEST(Sensors, DvlAndAltimeterValidOnlyWithinRange) {
+  up::VehicleParams v = with_all_sensors(0.0);
+  v.sensors.dvl.max_altitude = 50.0;
+  v.sensors.altimeter.max_range = 50.0;
+  up::SensorSuite s(v.sensors, up::EnvironmentParams{});
+  const up::FlatSeabed floor(100.0);
+  up::RigidBodyState x = at(10.0);  // 90 m above the floor: out of range
+  x.v_WB_B = Eigen::Vector3d(0.3, -0.1, 0.05);
+  s.update(0.0, x, up::Vector6d::Zero(), &floor);
+  EXPECT_FALSE(s.readings().dvl.valid);
+  EXPECT_FALSE(s.readings().altimeter.valid);
+  x = at(80.0, 20.0 * kPi / 180.0);  // 20 m above, rolled 20 deg
+  x.v_WB_B = Eigen::Vector3d(0.3, -0.1, 0.05);
+  s.update(1.0, x, up::Vector6d::Zero(), &floor);
+  EXPECT_TRUE(s.readings().dvl.valid);
+  EXPECT_LT((s.readings().dvl.velocity_B - x.v_WB_B).norm(), 1e-12);
+  EXPECT_NEAR(s.readings().dvl.altitude_m, 20.0, 1e-12);
+  ASSERT_TRUE(s.readings().altimeter.valid);
+  EXPECT_NEAR(s.readings().altimeter.range_m, 20.0 / std::cos(20.0 * kPi / 180.0), 1e-9);
+  s.update(2.0, x, up::Vector6d::Zero(), nullptr);  // no seabed: nothing to measure
+  EXPECT_FALSE(s.readings().dvl.valid);
+}
+
+TEST(Sensors, GpsValidOnlyAtTheSurface) {
+  up::SensorSuite s(with_all_sensors(0.0).sensors, up::EnvironmentParams{});
+  s.update(0.0, at(0.05), up::Vector6d::Zero(), nullptr);
+  EXPECT_TRUE(s.readings().gps.valid);
+  s.update(1.0, at(1.0), up::Vector6d::Zero(), nullptr);
+  EXPECT_FALSE(s.readings().gps.valid);
+  s.update(2.0, at(0.1 + 1e-6), up::Vector6d::Zero(), nullptr);
+  EXPECT_FALSE(s.readings().gps.valid);
+}
+
+TEST(Sensors, BuoyantVehicleSurfacesFloatsAndGetsAFix) {
+  // B = 1.5 W: it rises, then floats where the submerged fraction is 2/3 of the 0.254 m height:
+  // z = 0.254 * 2/3 - 0.127 = 0.0423 m, within GPS range; below 1 m the GPS must be invalid.
+  up::VehicleParams v = with_all_sensors();
+  v.buoyancy = 1.5 * v.mass * 9.81;
+  up::Simulator sim(v, opts(), nullptr, nullptr, at(3.0));
+  sim.advance_to(1.0);
+  EXPECT_FALSE(sim.sensors().gps.valid);
+  sim.advance_to(40.0);
+  EXPECT_NEAR(sim.state().p_WB_W.z(), 0.254 * 2.0 / 3.0 - 0.127, 1e-3);
+  EXPECT_TRUE(sim.sensors().gps.valid);
+  EXPECT_NEAR(sim.sensors().gps.latitude_deg, 0.0, 1e-3);
+}
+
+TEST(Sensors, SeabedContactStopsASinkingVehicle) {
+  // W - B = 132.4 - 120 = 12.4 N down. Free fall toward a flat floor at 20 m; the penalty spring
+  // (2000 N/m) then holds the bottom point (z + 0.127) at 12.4 / 2000 = 6.2 mm penetration.
+  up::VehicleParams v = with_all_sensors();
+  v.buoyancy = 120.0;
+  v.sensors.dvl.min_altitude = 0.05;  // the DVL (at the origin) rests 0.12 m above the floor
+  up::Simulator sim(v, opts(), nullptr, std::make_unique<up::FlatSeabed>(20.0), at(18.0));
+  sim.advance_to(3.0);
+  EXPECT_GT(sim.state().v_WB_B.z(), 0.05);  // sinking
+  sim.advance_to(40.0);
+  const double penetration = sim.state().p_WB_W.z() + 0.127 - 20.0;
+  EXPECT_NEAR(penetration, (v.mass * 9.81 - 120.0) / 2000.0, 1e-4);
+  EXPECT_LT(sim.state().nu().norm(), 1e-4);
+  ASSERT_TRUE(sim.sensors().dvl.valid);
+  EXPECT_NEAR(sim.sensors().dvl.altitude_m, 0.127 - penetration, 0.01);
+}
+
+TEST(Sensors, GridSeabedInterpolatesBilinearly) {
+  const up::GridSeabed g(10.0, -5.0, 2.0, {{20.0, 22.0}, {24.0, 30.0}});
+  EXPECT_DOUBLE_EQ(g.depth_at(10.0, -5.0), 20.0);
+  EXPECT_DOUBLE_EQ(g.depth_at(12.0, -3.0), 30.0);
+  EXPECT_DOUBLE_EQ(g.depth_at(11.0, -4.0), 24.0);  // centre: mean of the four corners
+  EXPECT_DOUBLE_EQ(g.depth_at(11.0, -5.0), 22.0);
+  EXPECT_DOUBLE_EQ(g.depth_at(-100.0, 100.0), 22.0);  // outside: nearest edge
+  EXPECT_THROW(up::GridSeabed(0, 0, 1.0, {{1.0, 2.0}, {3.0}}), up::ConfigError);
+}
+
+TEST(Sensors, SameSeedSameNoiseDifferentSeedDifferentNoise) {
+  auto run = [](std::uint64_t seed) {
+    up::VehicleParams v = with_all_sensors();
+    v.sensors.seed = seed;
+    v.sensors.imu.accel.bias_random_walk = 0.01;
+    up::Simulator sim(v, opts(), nullptr, std::make_unique<up::FlatSeabed>(30.0), at(10.0));
+    sim.advance_to(1.0);
+    return sim.sensors().imu.specific_force_B;
+  };
+  EXPECT_EQ(run(1), run(1));
+  EXPECT_NE(run(1), run(2));
+}
+
+}  // namespace
