@@ -142,13 +142,19 @@ Context::~Context() {
 
 void Context::signal_loop() {
   const sigset_t set = handled_signals();
-  int count = 0;
+  std::chrono::steady_clock::time_point first{};
+  bool shutting_down = false;
   while (!exiting_) {
     int sig = 0;
     if (sigwait(&set, &sig) != 0) continue;
     if (sig == SIGUSR2) continue;  // exit request: loop condition decides
-    if (++count == 1) {
+    if (!shutting_down) {
+      shutting_down = true;
+      first = std::chrono::steady_clock::now();
       executor_.shutdown();
+    } else if (std::chrono::steady_clock::now() - first < std::chrono::seconds(2)) {
+      // `timeout` and terminals often deliver the same Ctrl-C twice (to the process and its
+      // group): a repeat within 2 s is the same request, not an insistence.
     } else {
       const char msg[] = "second signal: exiting without cleanup\n";
       (void)!write(STDERR_FILENO, msg, sizeof(msg) - 1);

@@ -206,6 +206,7 @@ template <> double parameter_as<double>(const YAML::Node& v, const ParameterDesc
 }
 template <>
 std::string parameter_as<std::string>(const YAML::Node& v, const ParameterDescriptor&, const std::string& ctx) {
+  if (v.IsNull()) return "";  // `-p name:=` (empty) is the empty string, as in ROS 2
   if (!v.IsScalar()) type_error(ctx, "string", v);
   return v.Scalar();
 }

@@ -58,6 +58,7 @@ TEST(Parameters, TypedConversionAndRules) {
   EXPECT_EQ(parameter_as<double>(YAML::Load("5"), range, "c"), 5.0);  // integers are valid doubles
   EXPECT_EQ(parameter_as<std::vector<double>>(YAML::Load("[1, 2.5]"), {}, "c"), (std::vector<double>{1.0, 2.5}));
   EXPECT_TRUE(parameter_as<bool>(YAML::Load("true"), {}, "c"));
+  EXPECT_EQ(parameter_as<std::string>(YAML::Load(""), {}, "c"), "");  // `-p name:=`
   const std::string wrong_type = error_of([&] { parameter_as<double>(YAML::Load("fast"), range, "file 'a.yaml': 'rate'"); });
   EXPECT_NE(wrong_type.find("expected double, got 'fast'"), std::string::npos) << wrong_type;
   EXPECT_NE(wrong_type.find("a.yaml"), std::string::npos);

@@ -92,6 +92,8 @@ class Simulator {
   const Vector6d& acceleration() const;
   const SensorReadings& sensors() const { return sensors_.readings(); }
   const ThrusterBank& thrusters() const { return thrusters_; }
+  /// Last accepted (clamped) command u_i in [-1, 1]; zeros before the first one.
+  const ThrusterVector& command() const { return u_cmd_; }
   const VehicleDynamics& dynamics() const { return dynamics_; }
   const CommandStats& command_stats() const { return stats_; }
   bool command_timed_out() const { return timed_out_; }

@@ -37,7 +37,8 @@ class Node;
 struct ContextOptions {
   /// DDS domain; -1 reads ROS_DOMAIN_ID (default 0).
   int domain_id = -1;
-  /// Block SIGINT/SIGTERM and turn them into shutdown() (the first) and _exit(130) (the second).
+  /// Block SIGINT/SIGTERM and turn them into shutdown() (the first) and _exit(130) (another one
+  /// more than 2 s later, when a clean shutdown hangs).
   bool handle_signals = true;
   /// Shared-memory segment per participant: larger than the biggest sample (a 640x480 rgb8
   /// image is 0.9 MB), so same-host images travel through shared memory in one piece.

@@ -1,0 +1,363 @@
+#include "physics_server_node.hpp"
+
+#include <chrono>
+#include <cmath>
+#include <limits>
+
+#include "unav_launch/package_index.hpp"
+
+namespace unav::physics {
+namespace {
+
+double wall_now_s() {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
+}
+
+// Number of physics steps in `period`; the period must be a whole number of steps.
+int64_t steps_in(double period, double dt, const std::string& name) {
+  const double n = period / dt;
+  const int64_t rounded = std::max<int64_t>(1, std::llround(n));
+  if (std::abs(n - static_cast<double>(rounded)) > 1e-6 * n)
+    throw unav::ParameterError("parameter '" + name + "': period " + std::to_string(period) +
+                               " s is not a whole number of physics steps (dt = " + std::to_string(dt) + " s)");
+  return rounded;
+}
+
+
+}  // namespace
+
+PhysicsServer::PhysicsServer(const unav::NodeOptions& options) : Node("physics_server", options, "rov") {
+  const auto share = unav::launch::find_package_share("unav_resources");
+  const std::string default_vehicle = share ? *share + "/config/vehicles/bluerov2_heavy.yaml" : "";
+  const std::string vehicle_path = declare_parameter<std::string>(
+      "vehicle_config", default_vehicle, {"vehicle YAML (config/vehicles/*.yaml)", {}, {}, false});
+  if (vehicle_path.empty())
+    throw unav::ParameterError("node '" + name() + "': parameter 'vehicle_config' is empty and the package "
+                               "unav_resources is not installed: give the vehicle YAML path");
+  const std::string current_path =
+      declare_parameter<std::string>("current_config", "", {"water current YAML; empty = still water", {}, {}, false});
+  const double seabed_depth =
+      declare_parameter<double>("seabed_depth", 10.0, {"flat seabed depth [m]; <= 0 = no seabed", {}, {}, false});
+  const std::string seabed_path =
+      declare_parameter<std::string>("seabed_config", "", {"seabed YAML (flat/grid/PGM); overrides seabed_depth", {}, {}, false});
+  const auto p0 = declare_parameter<std::vector<double>>("initial_position", {0.0, 0.0, 5.0},
+                                                        {"initial position NED [m]", {}, {}, false});
+  const auto rpy0 = declare_parameter<std::vector<double>>("initial_rpy", {0.0, 0.0, 0.0},
+                                                          {"initial roll, pitch, yaw [rad]", {}, {}, false});
+  SimulatorOptions so;
+  so.dt = declare_parameter<double>("dt", 0.001, {"physics step [s] (1 kHz default)", 1e-5, 0.1, false});
+  const std::string integrator =
+      declare_parameter<std::string>("integrator", "velocity_verlet", {"velocity_verlet (the paper's) or rk4", {}, {}, false});
+  if (!parse_integrator(integrator, &so.integrator))
+    throw unav::ParameterError("node '" + name() + "': parameter 'integrator' = '" + integrator +
+                               "': expected velocity_verlet or rk4");
+  so.command_timeout = declare_parameter<double>(
+      "command_timeout", 0.5, {"zero thrust after this long without a command [s]; <= 0 disables", {}, {}, false});
+  const std::string mode = declare_parameter<std::string>("mode", "realtime", {"realtime or lockstep", {}, {}, false});
+  if (mode != "realtime" && mode != "lockstep")
+    throw unav::ParameterError("node '" + name() + "': parameter 'mode' = '" + mode + "': expected realtime or lockstep");
+  lockstep_ = mode == "lockstep";
+  real_time_factor_ =
+      declare_parameter<double>("real_time_factor", 1.0, {"simulated / wall time in realtime mode", 1e-3, 1e4, false});
+  const double publish_rate =
+      declare_parameter<double>("publish_rate", 200.0, {"odometry and /clock rate [Hz]", 0.1, 1e4, false});
+  const double thruster_rate =
+      declare_parameter<double>("thruster_state_rate", 100.0, {"thruster state rate [Hz]", 0.1, 1e4, false});
+  lockstep_period_ = declare_parameter<double>("lockstep_period", 0.05, {"barrier period [s]", 1e-4, 10.0, false});
+  participants_ = declare_parameter<std::vector<std::string>>("lockstep_participants", {},
+                                                             {"names that ack every barrier", {}, {}, false});
+  wait_for_command_ = declare_parameter<bool>("lockstep_wait_for_command", false,
+                                              {"hold each barrier until a command stamped at it arrives", {}, {}, false});
+  world_frame_ = declare_parameter<std::string>("world_frame", "world_ned", {"odometry frame", {}, {}, false});
+  body_frame_ = declare_parameter<std::string>("body_frame", "base_link_frd", {"vehicle body frame", {}, {}, false});
+  if (p0.size() != 3 || rpy0.size() != 3)
+    throw unav::ParameterError("node '" + name() + "': initial_position and initial_rpy need 3 values each");
+
+  steps_per_publish_ = steps_in(1.0 / publish_rate, so.dt, "publish_rate");
+  steps_per_thruster_state_ = steps_in(1.0 / thruster_rate, so.dt, "thruster_state_rate");
+  steps_per_barrier_ = steps_in(lockstep_period_, so.dt, "lockstep_period");
+
+  const VehicleParams vehicle = load_vehicle(vehicle_path);
+  std::unique_ptr<CurrentModel> current = current_path.empty() ? nullptr : load_current(current_path);
+  std::unique_ptr<Seabed> seabed;
+  if (!seabed_path.empty())
+    seabed = load_seabed(seabed_path);
+  else if (seabed_depth > 0.0)
+    seabed = std::make_unique<FlatSeabed>(seabed_depth);
+  RigidBodyState x0;
+  x0.p_WB_W = Eigen::Vector3d(p0[0], p0[1], p0[2]);
+  x0.q_WB = quaternion_from_rpy(rpy0[0], rpy0[1], rpy0[2]);
+  sim_ = std::make_unique<Simulator>(vehicle, so, std::move(current), std::move(seabed), x0);
+  const SensorSuiteParams& sp = vehicle.sensors;
+
+  // Ports.
+  clock_pub_ = create_publisher<rosgraph_msgs::msg::Clock>("/clock", unav::QoS::reliable(1));
+  odom_pub_ = create_publisher<nav_msgs::msg::Odometry>("ground_truth/odom", unav::QoS::reliable());
+  thruster_pub_ = create_publisher<unav_msgs::msg::ThrusterState>("thrusters/state", unav::QoS::reliable());
+  if (sp.imu.enabled) imu_pub_ = create_publisher<sensor_msgs::msg::Imu>("imu", unav::QoS::sensor_data());
+  if (sp.pressure.enabled) {
+    pressure_pub_ = create_publisher<sensor_msgs::msg::FluidPressure>("pressure", unav::QoS::sensor_data());
+    depth_pub_ = create_publisher<geometry_msgs::msg::PointStamped>("depth", unav::QoS::sensor_data());
+  }
+  if (sp.dvl.enabled) dvl_pub_ = create_publisher<unav_msgs::msg::Dvl>("dvl", unav::QoS::sensor_data());
+  if (sp.altimeter.enabled) range_pub_ = create_publisher<sensor_msgs::msg::Range>("range", unav::QoS::sensor_data());
+  if (sp.magnetometer.enabled)
+    mag_pub_ = create_publisher<sensor_msgs::msg::MagneticField>("mag", unav::QoS::sensor_data());
+  if (sp.gps.enabled) gps_pub_ = create_publisher<sensor_msgs::msg::NavSatFix>("gps", unav::QoS::sensor_data());
+  command_sub_ = create_subscription<unav_msgs::msg::ThrusterCommand>(
+      "thrusters/command", unav::QoS::reliable(), [this](const unav_msgs::msg::ThrusterCommand& m) { on_command(m); });
+  if (lockstep_)
+    ack_sub_ = create_subscription<unav_msgs::msg::LockstepAck>(
+        "/lockstep/ack", unav::QoS::reliable(100), [this](const unav_msgs::msg::LockstepAck& m) { on_ack(m); });
+
+  odom_.header().frame_id(world_frame_);
+  odom_.child_frame_id(body_frame_);
+  thruster_state_.header().frame_id(body_frame_);
+
+  publish_state();
+  if (lockstep_) {
+    barrier_t_ = 0.0;  // participants produce their outputs for t = 0 first
+    timer_ = create_wall_timer(std::chrono::milliseconds(1), [this] { run_steps(); });
+  } else {
+    wall_start_ = wall_now_s();
+    timer_ = create_wall_timer(std::chrono::nanoseconds(static_cast<int64_t>(1e9 / publish_rate)),
+                               [this] { run_steps(); });
+  }
+  logger()->info("{} ({} thrusters), {} at {:.0f} Hz ({}), {}{}", vehicle.name, vehicle.thrusters.size(), mode,
+                 1.0 / so.dt, to_string(so.integrator), lockstep_ ? "barrier every " : "real_time_factor ",
+                 lockstep_ ? lockstep_period_ : real_time_factor_);
+}
+
+void PhysicsServer::fill_header(std_msgs::msg::dds_::Header_& h, double t, const std::string& frame) const {
+  const unav::Time stamp{std::llround(t * 1e9)};
+  h.stamp().sec(stamp.sec());
+  h.stamp().nanosec(stamp.nanosec());
+  h.frame_id(frame);
+}
+
+bool PhysicsServer::barrier_open() const {
+  if (barrier_t_ < 0.0) return true;
+  const double eps = 0.5 * sim_->options().dt;  // stamps are rounded to ns
+  for (const auto& p : participants_) {
+    const auto it = last_ack_.find(p);
+    if (it == last_ack_.end() || it->second < barrier_t_ - eps) return false;
+  }
+  return !wait_for_command_ || last_command_stamp_ >= barrier_t_ - eps;
+}
+
+void PhysicsServer::run_steps() {
+  if (lockstep_) {
+    // Step until a barrier holds or this call's wall budget is spent (keeps the executor
+    // responsive to acks and commands).
+    const double budget_end = wall_now_s() + 0.002;
+    while (context().ok()) {
+      if (barrier_t_ >= 0.0) {
+        if (!barrier_open()) {
+          hold_at_barrier();
+          return;
+        }
+        barrier_t_ = -1.0;
+        held_since_ = -1.0;
+      }
+      step_once();
+      if (sim_->steps() % steps_per_barrier_ == 0) {
+        barrier_t_ = sim_->time();
+        if (sim_->steps() % steps_per_publish_ != 0) publish_state();  // the barrier's state is always published
+      }
+      if (wall_now_s() > budget_end) return;
+    }
+    return;
+  }
+  const double target = (wall_now_s() - wall_start_) * real_time_factor_;
+  if (target - sim_->time() > 1.0) {
+    logger()->warn("simulation is {:.2f} s behind the wall clock (x{} too fast for this machine): skipping ahead",
+                   target - sim_->time(), real_time_factor_);
+    wall_start_ = wall_now_s() - sim_->time() / real_time_factor_;
+    return;
+  }
+  while (sim_->time() + 0.5 * sim_->options().dt < target && context().ok()) step_once();
+}
+
+void PhysicsServer::hold_at_barrier() {
+  // Participants that joined late missed the barrier's state: send it again every second.
+  const double now = wall_now_s();
+  if (held_since_ < 0.0) {
+    held_since_ = now;
+    last_republish_ = now;
+    return;
+  }
+  if (now - last_republish_ >= 1.0) {
+    last_republish_ = now;
+    publish_state();
+  }
+  if (now - held_since_ >= 5.0 && now - last_wait_log_ >= 5.0) {
+    last_wait_log_ = now;
+    std::string missing;
+    for (const auto& p : participants_) {
+      const auto it = last_ack_.find(p);
+      if (it == last_ack_.end() || it->second < barrier_t_ - 0.5 * sim_->options().dt) missing += " " + p;
+    }
+    if (wait_for_command_ && last_command_stamp_ < barrier_t_ - 0.5 * sim_->options().dt) missing += " (thruster command)";
+    logger()->warn("lockstep: holding at t = {:.3f} s for {:.0f} s, waiting for:{}", barrier_t_, now - held_since_,
+                   missing);
+  }
+}
+
+void PhysicsServer::step_once() {
+  sim_->step();
+  if (sim_->command_timed_out() && !timeout_logged_) {
+    logger()->warn("no thruster command for {:.2f} s: thrust set to zero (failsafe)", sim_->options().command_timeout);
+    timeout_logged_ = true;
+  }
+  publish_sensors();
+  const int64_t n = static_cast<int64_t>(sim_->steps());
+  if (n % steps_per_publish_ == 0) publish_state();
+  if (n % steps_per_thruster_state_ == 0) publish_thruster_state();
+}
+
+void PhysicsServer::publish_state() {
+  const double t = sim_->time();
+  const unav::Time stamp{std::llround(t * 1e9)};
+  clock_.clock().sec(stamp.sec());
+  clock_.clock().nanosec(stamp.nanosec());
+  clock_pub_->publish(clock_);
+  const RigidBodyState& x = sim_->state();
+  fill_header(odom_.header(), t, world_frame_);
+  auto& pose = odom_.pose().pose();
+  pose.position().x(x.p_WB_W.x());
+  pose.position().y(x.p_WB_W.y());
+  pose.position().z(x.p_WB_W.z());
+  pose.orientation().x(x.q_WB.x());
+  pose.orientation().y(x.q_WB.y());
+  pose.orientation().z(x.q_WB.z());
+  pose.orientation().w(x.q_WB.w());
+  auto& tw = odom_.twist().twist();
+  tw.linear().x(x.v_WB_B.x());
+  tw.linear().y(x.v_WB_B.y());
+  tw.linear().z(x.v_WB_B.z());
+  tw.angular().x(x.w_WB_B.x());
+  tw.angular().y(x.w_WB_B.y());
+  tw.angular().z(x.w_WB_B.z());
+  odom_pub_->publish(odom_);
+}
+
+void PhysicsServer::publish_thruster_state() {
+  const auto& bank = sim_->thrusters();
+  const int n = bank.size();
+  thruster_state_.commanded().resize(static_cast<size_t>(n));
+  thruster_state_.filtered().resize(static_cast<size_t>(n));
+  thruster_state_.thrust().resize(static_cast<size_t>(n));
+  for (int i = 0; i < n; ++i) {
+    thruster_state_.commanded()[static_cast<size_t>(i)] = sim_->command()[i];
+    thruster_state_.filtered()[static_cast<size_t>(i)] = bank.filtered_command()[i];
+    thruster_state_.thrust()[static_cast<size_t>(i)] = bank.thrust()[i];
+  }
+  fill_header(thruster_state_.header(), sim_->time(), body_frame_);
+  thruster_pub_->publish(thruster_state_);
+}
+
+void PhysicsServer::publish_sensors() {
+  const SensorReadings& r = sim_->sensors();
+  if (imu_pub_ && r.imu.valid && r.imu.seq != last_seq_[0]) {
+    last_seq_[0] = r.imu.seq;
+    sensor_msgs::msg::Imu m;
+    fill_header(m.header(), r.imu.stamp, body_frame_);
+    m.orientation().x(r.imu.q_WB.x());
+    m.orientation().y(r.imu.q_WB.y());
+    m.orientation().z(r.imu.q_WB.z());
+    m.orientation().w(r.imu.q_WB.w());
+    m.angular_velocity().x(r.imu.angular_rate_B.x());
+    m.angular_velocity().y(r.imu.angular_rate_B.y());
+    m.angular_velocity().z(r.imu.angular_rate_B.z());
+    m.linear_acceleration().x(r.imu.specific_force_B.x());
+    m.linear_acceleration().y(r.imu.specific_force_B.y());
+    m.linear_acceleration().z(r.imu.specific_force_B.z());
+    imu_pub_->publish(m);
+  }
+  if (pressure_pub_ && r.pressure.valid && r.pressure.seq != last_seq_[1]) {
+    last_seq_[1] = r.pressure.seq;
+    sensor_msgs::msg::FluidPressure p;
+    fill_header(p.header(), r.pressure.stamp, body_frame_);
+    p.fluid_pressure(r.pressure.pressure_pa);
+    pressure_pub_->publish(p);
+    geometry_msgs::msg::PointStamped d;
+    fill_header(d.header(), r.pressure.stamp, world_frame_);
+    d.point().z(r.pressure.depth_m);
+    depth_pub_->publish(d);
+  }
+  if (dvl_pub_ && r.dvl.seq != last_seq_[2] && r.dvl.seq > 0) {
+    last_seq_[2] = r.dvl.seq;
+    unav_msgs::msg::Dvl d;
+    fill_header(d.header(), r.dvl.stamp, body_frame_);
+    d.velocity().x(r.dvl.velocity_B.x());
+    d.velocity().y(r.dvl.velocity_B.y());
+    d.velocity().z(r.dvl.velocity_B.z());
+    d.altitude(r.dvl.altitude_m);
+    d.valid(r.dvl.valid);
+    dvl_pub_->publish(d);
+  }
+  if (range_pub_ && r.altimeter.seq != last_seq_[3] && r.altimeter.seq > 0) {
+    last_seq_[3] = r.altimeter.seq;
+    sensor_msgs::msg::Range m;
+    fill_header(m.header(), r.altimeter.stamp, body_frame_);
+    m.radiation_type(0);  // ULTRASOUND
+    m.field_of_view(0.1f);
+    m.range(r.altimeter.valid ? static_cast<float>(r.altimeter.range_m) : std::numeric_limits<float>::infinity());
+    range_pub_->publish(m);
+  }
+  if (mag_pub_ && r.magnetometer.valid && r.magnetometer.seq != last_seq_[4]) {
+    last_seq_[4] = r.magnetometer.seq;
+    sensor_msgs::msg::MagneticField m;
+    fill_header(m.header(), r.magnetometer.stamp, body_frame_);
+    m.magnetic_field().x(r.magnetometer.field_B.x());
+    m.magnetic_field().y(r.magnetometer.field_B.y());
+    m.magnetic_field().z(r.magnetometer.field_B.z());
+    mag_pub_->publish(m);
+  }
+  if (gps_pub_ && r.gps.seq != last_seq_[5] && r.gps.seq > 0) {
+    last_seq_[5] = r.gps.seq;
+    sensor_msgs::msg::NavSatFix m;
+    fill_header(m.header(), r.gps.stamp, "gps");
+    m.status().status(r.gps.valid ? 0 : -1);  // STATUS_FIX / STATUS_NO_FIX
+    m.status().service(1);                     // SERVICE_GPS
+    m.latitude(r.gps.latitude_deg);
+    m.longitude(r.gps.longitude_deg);
+    m.altitude(r.gps.altitude_m);
+    gps_pub_->publish(m);
+  }
+}
+
+void PhysicsServer::on_command(const unav_msgs::msg::ThrusterCommand& msg) {
+  const CommandStatus status = sim_->set_command(sim_->time(), msg.u());
+  if (status == CommandStatus::kRejectedWrongLength || status == CommandStatus::kRejectedNonFinite) {
+    const auto& st = sim_->command_stats();
+    const std::uint64_t rejected = st.rejected_wrong_length + st.rejected_non_finite;
+    if (rejected == 1 || rejected >= 2 * rejected_logged_) {  // log the 1st, 2nd, 4th, 8th ...
+      logger()->warn("thruster command rejected ({}): {} values for {} thrusters; {} rejected so far",
+                     to_string(status), msg.u().size(), sim_->thrusters().size(), rejected);
+      rejected_logged_ = rejected;
+    }
+    return;
+  }
+  if (timeout_logged_) {
+    logger()->info("thruster commands resumed");
+    timeout_logged_ = false;
+  }
+  last_command_stamp_ = std::max(last_command_stamp_, unav::Time::from_msg(msg.header().stamp().sec(),
+                                                                           msg.header().stamp().nanosec())
+                                                          .seconds());
+  if (lockstep_ && barrier_t_ >= 0.0 && barrier_open()) run_steps();
+}
+
+void PhysicsServer::on_ack(const unav_msgs::msg::LockstepAck& msg) {
+  const std::string who = msg.participant();
+  if (std::find(participants_.begin(), participants_.end(), who) == participants_.end()) {
+    if (!last_ack_.count(who)) logger()->warn("lockstep ack from '{}', which is not in lockstep_participants", who);
+  }
+  const double t = unav::Time::from_msg(msg.header().stamp().sec(), msg.header().stamp().nanosec()).seconds();
+  auto it = last_ack_.find(who);
+  if (it == last_ack_.end() || t > it->second) last_ack_[who] = t;
+  if (barrier_t_ >= 0.0 && barrier_open()) run_steps();
+}
+
+}  // namespace unav::physics

@@ -1,0 +1,112 @@
+// physics_server: the simulated vehicle as a node. Owns simulated time and publishes /clock.
+//
+// Ports (names relative to the node namespace, default /rov; frames world_ned / base_link_frd):
+//   sub  thrusters/command     unav_msgs/ThrusterCommand          reliable     u_i in [-1, 1]
+//   sub  /lockstep/ack         unav_msgs/LockstepAck              reliable     (lockstep mode)
+//   pub  /clock                rosgraph_msgs/Clock                reliable     every publish tick
+//   pub  ground_truth/odom     nav_msgs/Odometry                  reliable     publish_rate
+//   pub  thrusters/state       unav_msgs/ThrusterState            reliable     thruster_state_rate
+//   pub  imu                   sensor_msgs/Imu                    sensor_data  per vehicle config
+//   pub  pressure              sensor_msgs/FluidPressure          sensor_data
+//   pub  depth                 geometry_msgs/PointStamped         sensor_data  z = depth [m]
+//   pub  dvl                   unav_msgs/Dvl                      sensor_data
+//   pub  range                 sensor_msgs/Range                  sensor_data  altimeter
+//   pub  mag                   sensor_msgs/MagneticField          sensor_data
+//   pub  gps                   sensor_msgs/NavSatFix              sensor_data  NO_FIX below 0.1 m
+//
+// Time modes:
+//   realtime  simulated time follows the wall clock times real_time_factor.
+//   lockstep  simulated time advances as fast as the participants allow. Every lockstep_period
+//             seconds of simulated time is a barrier t_k: the server publishes /clock and the
+//             odometry stamped t_k, then does not step past t_k until (a) every name in
+//             lockstep_participants has published a LockstepAck stamped >= t_k (each participant
+//             acks every barrier, after publishing whatever it had due at t_k) and (b), when
+//             lockstep_wait_for_command is true, a ThrusterCommand stamped >= t_k has arrived
+//             (the controller chain stamps its command with the state's time).
+//             With no participants and no command wait, it runs as fast as it can. While it
+//             holds, the barrier's state is published again every wall second (late joiners)
+//             and a warning names the missing participants every 5 s.
+// Failsafe: no command for command_timeout seconds of simulated time -> zero thrust, logged once.
+#pragma once
+
+#include <memory>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "geometry_msgs/msg/point_stamped.hpp"
+#include "nav_msgs/msg/odometry.hpp"
+#include "rosgraph_msgs/msg/clock.hpp"
+#include "sensor_msgs/msg/fluid_pressure.hpp"
+#include "sensor_msgs/msg/imu.hpp"
+#include "sensor_msgs/msg/magnetic_field.hpp"
+#include "sensor_msgs/msg/nav_sat_fix.hpp"
+#include "sensor_msgs/msg/range.hpp"
+#include "unav_msgs/msg/dvl.hpp"
+#include "unav_msgs/msg/lockstep_ack.hpp"
+#include "unav_msgs/msg/thruster_command.hpp"
+#include "unav_msgs/msg/thruster_state.hpp"
+#include "unav_physics/simulator.hpp"
+#include "unav_runtime/runtime.hpp"
+
+namespace unav::physics {
+
+class PhysicsServer : public unav::Node {
+ public:
+  explicit PhysicsServer(const unav::NodeOptions& options);
+
+  const Simulator& simulator() const { return *sim_; }
+  /// Runs simulation steps now (normally driven by the timer and by acks).
+  void run_steps();
+
+ private:
+  void on_command(const unav_msgs::msg::ThrusterCommand& msg);
+  void on_ack(const unav_msgs::msg::LockstepAck& msg);
+  bool barrier_open() const;
+  void hold_at_barrier();
+  void step_once();
+  void publish_state();
+  void publish_sensors();
+  void publish_thruster_state();
+  void fill_header(std_msgs::msg::dds_::Header_& h, double t, const std::string& frame) const;
+
+  std::unique_ptr<Simulator> sim_;
+  std::string world_frame_, body_frame_;
+  bool lockstep_ = false;
+  double real_time_factor_ = 1.0;
+  double publish_period_ = 0.005, thruster_state_period_ = 0.01, lockstep_period_ = 0.05;
+  bool wait_for_command_ = false;
+  std::vector<std::string> participants_;
+  int64_t steps_per_publish_ = 5, steps_per_thruster_state_ = 10, steps_per_barrier_ = 50;
+
+  // Lockstep bookkeeping (simulated seconds).
+  double barrier_t_ = -1.0;  ///< barrier the server is holding at, < 0 when running
+  std::map<std::string, double> last_ack_;
+  double last_command_stamp_ = -1.0;
+  double held_since_ = -1.0, last_republish_ = 0.0, last_wait_log_ = 0.0;  ///< wall s
+  double wall_start_ = 0.0;  ///< realtime: wall time [s] that maps to simulated time 0
+  bool timeout_logged_ = false;
+  std::uint64_t rejected_logged_ = 0;
+  std::uint64_t last_seq_[6] = {0, 0, 0, 0, 0, 0};
+
+  std::shared_ptr<unav::Publisher<rosgraph_msgs::msg::Clock>> clock_pub_;
+  std::shared_ptr<unav::Publisher<nav_msgs::msg::Odometry>> odom_pub_;
+  std::shared_ptr<unav::Publisher<unav_msgs::msg::ThrusterState>> thruster_pub_;
+  std::shared_ptr<unav::Publisher<sensor_msgs::msg::Imu>> imu_pub_;
+  std::shared_ptr<unav::Publisher<sensor_msgs::msg::FluidPressure>> pressure_pub_;
+  std::shared_ptr<unav::Publisher<geometry_msgs::msg::PointStamped>> depth_pub_;
+  std::shared_ptr<unav::Publisher<unav_msgs::msg::Dvl>> dvl_pub_;
+  std::shared_ptr<unav::Publisher<sensor_msgs::msg::Range>> range_pub_;
+  std::shared_ptr<unav::Publisher<sensor_msgs::msg::MagneticField>> mag_pub_;
+  std::shared_ptr<unav::Publisher<sensor_msgs::msg::NavSatFix>> gps_pub_;
+  std::shared_ptr<unav::Subscription<unav_msgs::msg::ThrusterCommand>> command_sub_;
+  std::shared_ptr<unav::Subscription<unav_msgs::msg::LockstepAck>> ack_sub_;
+  std::shared_ptr<unav::Timer> timer_;
+
+  // Reused messages (no allocation per publish after the first).
+  nav_msgs::msg::Odometry odom_;
+  rosgraph_msgs::msg::Clock clock_;
+  unav_msgs::msg::ThrusterState thruster_state_;
+};
+
+}  // namespace unav::physics

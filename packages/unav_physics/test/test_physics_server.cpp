@@ -1,0 +1,140 @@
+// physics_server over DDS: a server context and a test context in one process, on a domain of
+// the test's own, spun alternately from this thread.
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include "physics_server_node.hpp"
+
+using namespace std::chrono_literals;
+using unav::physics::PhysicsServer;
+
+namespace {
+
+int domain() { return 100 + static_cast<int>(getpid() % 100); }
+
+std::unique_ptr<unav::Context> make_context(std::vector<std::string> args) {
+  unav::ContextOptions o;
+  o.domain_id = domain();
+  o.handle_signals = false;
+  args.insert(args.begin(), {"physics_server", "--ros-args", "-p",
+                             std::string("vehicle_config:=") + UNAV_CONFIG_DIR + "/vehicles/bluerov2_heavy.yaml"});
+  std::vector<const char*> argv;
+  for (const auto& a : args) argv.push_back(a.c_str());
+  return std::make_unique<unav::Context>(static_cast<int>(argv.size()), argv.data(), o);
+}
+
+double stamp_s(const std_msgs::msg::dds_::Header_& h) {
+  return unav::Time::from_msg(h.stamp().sec(), h.stamp().nanosec()).seconds();
+}
+
+struct Harness {
+  std::unique_ptr<unav::Context> server_ctx, test_ctx;
+  std::unique_ptr<PhysicsServer> server;
+  std::unique_ptr<unav::Node> probe;
+  std::vector<nav_msgs::msg::Odometry> odoms;
+  std::vector<double> clocks;
+  std::shared_ptr<unav::Subscription<nav_msgs::msg::Odometry>> odom_sub;
+  std::shared_ptr<unav::Subscription<rosgraph_msgs::msg::Clock>> clock_sub;
+  std::shared_ptr<unav::Publisher<unav_msgs::msg::ThrusterCommand>> cmd_pub;
+  std::shared_ptr<unav::Publisher<unav_msgs::msg::LockstepAck>> ack_pub;
+
+  explicit Harness(const std::vector<std::string>& params) {
+    server_ctx = make_context(params);
+    server = std::make_unique<PhysicsServer>(unav::NodeOptions{server_ctx.get()});
+    unav::ContextOptions o;
+    o.domain_id = domain();
+    o.handle_signals = false;
+    test_ctx = std::make_unique<unav::Context>(o);
+    probe = std::make_unique<unav::Node>("probe", unav::NodeOptions{test_ctx.get()});
+    odom_sub = probe->create_subscription<nav_msgs::msg::Odometry>(
+        "/rov/ground_truth/odom", unav::QoS::reliable(100), [this](const nav_msgs::msg::Odometry& m) { odoms.push_back(m); });
+    clock_sub = probe->create_subscription<rosgraph_msgs::msg::Clock>(
+        "/clock", unav::QoS::reliable(100), [this](const rosgraph_msgs::msg::Clock& c) {
+          clocks.push_back(unav::Time::from_msg(c.clock().sec(), c.clock().nanosec()).seconds());
+        });
+    cmd_pub = probe->create_publisher<unav_msgs::msg::ThrusterCommand>("/rov/thrusters/command", unav::QoS::reliable());
+    ack_pub = probe->create_publisher<unav_msgs::msg::LockstepAck>("/lockstep/ack", unav::QoS::reliable(100));
+    EXPECT_TRUE(spin_until([&] { return cmd_pub->subscription_count() > 0 && odom_sub->publisher_count() > 0; }, 10s));
+  }
+  ~Harness() {
+    odom_sub.reset();
+    clock_sub.reset();
+    cmd_pub.reset();
+    ack_pub.reset();
+    probe.reset();
+    server.reset();
+    test_ctx.reset();
+    server_ctx.reset();
+  }
+  bool spin_until(const std::function<bool()>& done, std::chrono::milliseconds timeout) {
+    const auto end = std::chrono::steady_clock::now() + timeout;
+    while (!done() && std::chrono::steady_clock::now() < end) {
+      server_ctx->spin_some(1ms);
+      test_ctx->spin_some(1ms);
+    }
+    return done();
+  }
+  void command(double t, const std::vector<double>& u) {
+    unav_msgs::msg::ThrusterCommand c;
+    const unav::Time s{std::llround(t * 1e9)};
+    c.header().stamp().sec(s.sec());
+    c.header().stamp().nanosec(s.nanosec());
+    c.u(u);
+    cmd_pub->publish(c);
+  }
+};
+
+// Forward thrust from the four horizontal thrusters of the Heavy (REFERENCE.md directions).
+const std::vector<double> kSurge = {0.5, 0.5, -0.5, -0.5, 0, 0, 0, 0};
+
+}  // namespace
+
+TEST(PhysicsServer, LockstepHoldsEachBarrierUntilTheCommandArrives) {
+  Harness h({"-p", "mode:=lockstep", "-p", "lockstep_wait_for_command:=true", "-p", "lockstep_period:=0.05",
+             "-p", "publish_rate:=20.0"});
+  // Closed loop over DDS: answer each barrier's odometry with a command stamped at its time.
+  double answered = -1.0;
+  for (int k = 0; k <= 20; ++k) {
+    ASSERT_TRUE(h.spin_until([&] { return !h.odoms.empty() && stamp_s(h.odoms.back().header()) > answered; }, 10s))
+        << "no odometry after barrier " << answered;
+    answered = stamp_s(h.odoms.back().header());
+    EXPECT_NEAR(answered, 0.05 * k, 1e-9);  // exactly one state per barrier, stamped at it
+    h.command(answered, kSurge);
+  }
+  // The server never ran ahead of the loop: it holds at barrier 1.05 until answered.
+  h.spin_until([] { return false; }, 200ms);
+  EXPECT_NEAR(h.server->simulator().time(), 1.05, 1e-9);
+  EXPECT_NEAR(h.clocks.back(), 1.05, 1e-9);
+  const auto& p = h.odoms.back().pose().pose().position();
+  EXPECT_GT(p.x(), 0.05) << "surge thrust must move the vehicle forward (north)";
+  EXPECT_EQ(h.odoms.back().header().frame_id(), "world_ned");
+  EXPECT_EQ(h.odoms.back().child_frame_id(), "base_link_frd");
+}
+
+TEST(PhysicsServer, LockstepWaitsForEveryParticipantAck) {
+  Harness h({"-p", "mode:=lockstep", "-p", "lockstep_participants:=[renderer]", "-p", "lockstep_period:=0.1"});
+  h.spin_until([] { return false; }, 300ms);
+  EXPECT_EQ(h.server->simulator().time(), 0.0) << "no ack yet: must hold at t = 0";
+  unav_msgs::msg::LockstepAck ack;
+  ack.participant("renderer");
+  h.ack_pub->publish(ack);  // stamped 0
+  ASSERT_TRUE(h.spin_until([&] { return h.server->simulator().time() >= 0.1 - 1e-9; }, 10s));
+  h.spin_until([] { return false; }, 200ms);
+  EXPECT_NEAR(h.server->simulator().time(), 0.1, 1e-9) << "must hold at the next barrier";
+}
+
+TEST(PhysicsServer, RealtimeFailsafeAndBadCommands) {
+  Harness h({"-p", "command_timeout:=0.2", "-p", "real_time_factor:=1.0"});
+  h.command(0.0, kSurge);
+  h.command(0.0, {0.1, 0.2});                          // wrong length: rejected
+  h.command(0.0, {NAN, 0, 0, 0, 0, 0, 0, 0});          // NaN: rejected
+  ASSERT_TRUE(h.spin_until([&] { return h.server->simulator().command_stats().rejected_non_finite == 1; }, 5s));
+  EXPECT_EQ(h.server->simulator().command_stats().rejected_wrong_length, 1u);
+  EXPECT_EQ(h.server->simulator().command_stats().accepted, 1u);
+  // Simulated time follows the wall clock; after > 0.2 s without a command, thrust goes to zero.
+  ASSERT_TRUE(h.spin_until([&] { return h.server->simulator().time() > 1.0; }, 10s));
+  EXPECT_TRUE(h.server->simulator().command_timed_out());
+  // Thrust decays with the 0.1 s lag after the timeout at 0.2 s: e^-8 of ~40 N by t = 1 s.
+  EXPECT_LT(h.server->simulator().thrusters().thrust().cwiseAbs().maxCoeff(), 0.1);
+  EXPECT_FALSE(h.odoms.empty());
+}
