@@ -1,0 +1,118 @@
+// Frames per second of the underwater renderer on worlds/pipe_inspection, RGB + depth +
+// segmentation with readback, at 320x180 and 640x480, synchronous and pipelined (PBO ring).
+// Prints a table; also a breakdown by switching effects off, to show what dominates.
+//   bench_unav_renderer [frames=40] [world.yaml]
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <string>
+#include <vector>
+
+#include "unav_renderer/renderer.hpp"
+
+using namespace unav_renderer;
+using Clock = std::chrono::steady_clock;
+
+namespace {
+
+Pose pose_at(int i) {
+  // Fly along the first leg of the pipe at 2 m altitude, 0.05 m per frame.
+  return pose_from_xyz_rpy({-1.0 + 0.05 * i, 0.3, 8.0}, {0.0, 0.0, 0.05});
+}
+
+struct Result {
+  double fps_sync, fps_pipelined, median_ms;
+};
+
+Result measure(Renderer& r, const std::string& cam, int frames) {
+  for (int i = 0; i < 3; ++i) r.render(pose_at(i), cam, 0.0);   // warm-up (shader JIT)
+  std::vector<double> ms;
+  const auto t0 = Clock::now();
+  for (int i = 0; i < frames; ++i) {
+    const auto a = Clock::now();
+    const Frame f = r.render(pose_at(i), cam, 0.1 * i);
+    ms.push_back(std::chrono::duration<double, std::milli>(Clock::now() - a).count());
+    if (f.rgb.empty()) std::abort();
+  }
+  const double sync_s = std::chrono::duration<double>(Clock::now() - t0).count();
+  const auto t1 = Clock::now();
+  int got = 0;
+  for (int i = 0; i < frames; ++i) {
+    r.submit(pose_at(i), cam, 0.1 * i);
+    if (r.in_flight() >= 2)
+      if (auto f = r.collect()) ++got;
+  }
+  while (auto f = r.collect()) ++got;
+  const double pipe_s = std::chrono::duration<double>(Clock::now() - t1).count();
+  std::sort(ms.begin(), ms.end());
+  return {frames / sync_s, got / pipe_s, ms[ms.size() / 2]};
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  const int frames = argc > 1 ? std::atoi(argv[1]) : 40;
+  const std::string world_path =
+      argc > 2 ? argv[2] : std::string(UNAV_REPO_ROOT) + "/worlds/pipe_inspection/world.yaml";
+  World world = load_world(world_path);
+  CameraModel small = CameraModel::from_hfov("w320x180", 320, 180, 90.0 * M_PI / 180.0);
+  small.X_BC.linear() = rotation_from_rpy(0, -M_PI / 2, 0) * R_camera_body_to_optical();
+  CameraModel vga = CameraModel::from_hfov("w640x480", 640, 480, 80.0 * M_PI / 180.0);
+  vga.X_BC.linear() = R_camera_body_to_optical();
+  CameraModel vga_dist = vga;
+  vga_dist.name = "w640x480_distorted";
+  vga_dist.distortion << -0.05, 0.01, 0, 0, 0;
+  RenderOptions opt;
+  Renderer r(world, {small, vga, vga_dist}, opt);
+  std::printf("unav_renderer bench: %s via %s, GL %s, %zu triangles, %d frames each\n",
+              r.context().gl_renderer().c_str(), r.context().platform().c_str(),
+              r.context().gl_version().c_str(), r.triangle_count(), frames);
+  std::printf("%-34s %-20s %10s %10s %12s\n", "configuration", "camera", "fps sync", "fps pipe", "median ms");
+  struct Config {
+    const char* name;
+    RenderOptions o;
+  };
+  std::vector<Config> configs;
+  configs.push_back({"full (default options)", opt});
+  RenderOptions o = opt;
+  o.lamp_scatter_samples = 0;
+  configs.push_back({"no lamp in-scatter", o});
+  o.forward_scatter = false;
+  configs.push_back({"+ no forward scatter", o});
+  o.marine_snow = false;
+  o.noise = false;
+  configs.push_back({"+ no snow, no noise", o});
+  for (const auto& c : configs) {
+    r.set_options(c.o);
+    for (const char* cam : {"w320x180", "w640x480", "w640x480_distorted"}) {
+      if (c.name != configs.front().name && std::string(cam) == "w640x480_distorted") continue;
+      const Result res = measure(r, cam, frames);
+      std::printf("%-34s %-20s %10.1f %10.1f %12.2f\n", c.name, cam, res.fps_sync, res.fps_pipelined,
+                  res.median_ms);
+    }
+  }
+  // Where the time goes (glFinish after each pass; default options).
+  RenderOptions prof = opt;
+  prof.profile_passes = true;
+  r.set_options(prof);
+  std::printf("\nper-pass time, median of %d frames [ms] (glFinish after each pass):\n", frames);
+  std::printf("%-20s %8s %8s %10s %8s %10s\n", "camera", "scene", "snow", "inscatter", "post", "readback");
+  for (const char* cam : {"w320x180", "w640x480"}) {
+    std::vector<RenderTimings> t;
+    for (int i = 0; i < frames; ++i) {
+      r.render(pose_at(i), cam, 0.1 * i);
+      t.push_back(r.last_timings());
+    }
+    auto med = [&](double RenderTimings::*m) {
+      std::vector<double> v;
+      for (const auto& x : t) v.push_back(x.*m);
+      std::sort(v.begin(), v.end());
+      return v[v.size() / 2];
+    };
+    std::printf("%-20s %8.2f %8.2f %10.2f %8.2f %10.2f\n", cam, med(&RenderTimings::scene_pass_ms),
+                med(&RenderTimings::snow_pass_ms), med(&RenderTimings::inscatter_pass_ms),
+                med(&RenderTimings::post_pass_ms), med(&RenderTimings::readback_ms));
+  }
+  return 0;
+}

@@ -1,0 +1,115 @@
+// Underwater camera renderer (no DDS): renders RGB, depth and segmentation of a World for a
+// vehicle pose and a camera, with the image formation of REFERENCE.md section 3:
+//   I = D + F + B + L_s
+//   D = J exp(-beta_D z)                     direct signal (per pixel, per channel)
+//   F = range-dependent blur of D            forward scattering (post pass)
+//   B = B_inf (1 - exp(-beta_B z))           backscatter of ambient light, B_inf decays with depth
+//   L_s = single-scattered lamp light        ray-marched, Schlick phase function (post pass)
+// J: albedo x (sunlight E0 exp(-K_d d) + lamp light attenuated lamp -> surface), then marine
+// snow particles, plumb_bob distortion, sensor noise, sRGB encoding.
+//
+// Threading: a Renderer owns its EGL context; call it from one thread.
+#pragma once
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "unav_renderer/camera.hpp"
+#include "unav_renderer/egl_context.hpp"
+#include "unav_renderer/frames.hpp"
+#include "unav_renderer/water.hpp"
+#include "unav_renderer/world.hpp"
+
+namespace unav_renderer {
+
+struct RenderOptions {
+  bool forward_scatter = true;
+  bool marine_snow = true;
+  bool noise = true;
+  bool lamps = true;
+  int lamp_scatter_samples = 8;   ///< ray-march steps for lamp in-scattering; 0 disables
+  int lamp_scatter_downsample = 4;   ///< in-scattering is computed at 1/N resolution (smooth)
+  bool srgb_output = true;        ///< encode rgb8 as sRGB (false: linear 0..1 -> 0..255)
+  /// Deterministic metering of the ambient light at the camera depth: gain =
+  /// clamp(0.45 / luminance(E0 exp(-K_d d)), 0.25, 5), times CameraModel::exposure.
+  bool auto_exposure = true;
+  int texture_size = 512;         ///< procedural texture edge [px]
+  int readback_slots = 2;         ///< PBO ring depth for submit()/collect()
+  std::uint64_t seed = 1;         ///< noise seed (frame noise = f(seed, sequence))
+  /// glFinish after each pass to time them (RenderTimings::*_pass_ms); serialises the GPU.
+  bool profile_passes = false;
+  EglOptions egl;
+};
+
+/// One rendered image set. Images are row-major, top row first (as sensor_msgs/Image).
+struct Frame {
+  std::string camera;
+  double stamp_s = 0.0;
+  std::uint64_t sequence = 0;
+  int width = 0, height = 0;
+  std::vector<std::uint8_t> rgb;   ///< rgb8, width*height*3
+  std::vector<float> depth;        ///< 32FC1, metres along the optical axis; +inf: water only
+  std::vector<std::uint8_t> seg;   ///< SegClass id per pixel (mono8)
+  Eigen::Matrix3d K = Eigen::Matrix3d::Identity();
+  Eigen::Matrix<double, 5, 1> D = Eigen::Matrix<double, 5, 1>::Zero();   ///< plumb_bob
+  Pose X_WC = Pose::Identity();    ///< optical frame in world_ned
+};
+
+struct RenderTimings {
+  double render_ms = 0;     ///< submit(): issuing the passes and the readback
+  double readback_ms = 0;   ///< collect(): waiting for the fence, PBO map, copy, split rgb/seg
+  // Only with RenderOptions::profile_passes:
+  double scene_pass_ms = 0, snow_pass_ms = 0, inscatter_pass_ms = 0, post_pass_ms = 0;
+};
+
+class Renderer {
+ public:
+  /// Creates the EGL context, compiles shaders, builds and uploads the scene geometry and
+  /// procedural textures. Throws EglError / GlError / ConfigError with the cause.
+  Renderer(World world, std::vector<CameraModel> cameras, RenderOptions options = {});
+  ~Renderer();
+  Renderer(const Renderer&) = delete;
+  Renderer& operator=(const Renderer&) = delete;
+
+  /// Render synchronously. X_WB: body (FRD) pose in world_ned. Throws std::invalid_argument
+  /// for an unknown camera name.
+  Frame render(const Pose& X_WB, const std::string& camera, double stamp_s = 0.0);
+
+  /// Asynchronous pipeline: submit() renders and starts a PBO readback, collect() returns the
+  /// oldest submitted frame. With readback_slots = N, up to N frames are in flight; submit()
+  /// on a full ring first completes the oldest (retrieve it with collect()).
+  void submit(const Pose& X_WB, const std::string& camera, double stamp_s = 0.0);
+  std::optional<Frame> collect();
+  std::size_t in_flight() const;
+
+  /// Change the water (domain randomisation, test sweeps) without rebuilding the scene.
+  void set_water(const WaterModel& water);
+  const WaterModel& water() const;
+  void set_options(const RenderOptions& options);   ///< egl/texture fields are ignored
+  const RenderOptions& options() const;
+
+  const World& world() const;
+  const CameraModel& camera(const std::string& name) const;
+  std::vector<std::string> camera_names() const;
+  const EglContext& context() const;
+  RenderTimings last_timings() const;
+  std::size_t triangle_count() const;
+
+  /// Pose of the optical frame in the world for a body pose.
+  Pose camera_pose(const Pose& X_WB, const std::string& camera) const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+/// Write frame.rgb as PNG (OpenCV). Throws ConfigError when writing fails.
+void write_png_rgb(const Frame& frame, const std::string& path);
+/// Read a PNG as rgb8 (width, height out). Throws ConfigError naming the file.
+std::vector<std::uint8_t> read_png_rgb(const std::string& path, int* width, int* height);
+
+}  // namespace unav_renderer

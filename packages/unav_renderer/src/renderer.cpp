@@ -1,0 +1,803 @@
+#include "unav_renderer/renderer.hpp"
+
+#include <epoxy/gl.h>
+
+#include <opencv2/calib3d.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include <chrono>
+#include <cmath>
+#include <deque>
+#include <limits>
+#include <map>
+#include <stdexcept>
+#include <unordered_map>
+
+#include "noise.hpp"
+#include "shaders.hpp"
+#include "textures.hpp"
+#include "unav_renderer/errors.hpp"
+#include "unav_renderer/scene_geometry.hpp"
+
+namespace unav_renderer {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double ms_since(Clock::time_point t0) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+}
+
+void check_gl(const char* where) {
+  const GLenum e = glGetError();
+  if (e != GL_NO_ERROR) throw GlError(std::string("OpenGL error 0x") + std::to_string(e) + " in " + where);
+}
+
+GLuint compile(GLenum type, const char* src, const char* name) {
+  GLuint s = glCreateShader(type);
+  glShaderSource(s, 1, &src, nullptr);
+  glCompileShader(s);
+  GLint ok = 0;
+  glGetShaderiv(s, GL_COMPILE_STATUS, &ok);
+  if (!ok) {
+    char log[4096];
+    glGetShaderInfoLog(s, sizeof(log), nullptr, log);
+    glDeleteShader(s);
+    throw GlError(std::string("shader '") + name + "' does not compile: " + log);
+  }
+  return s;
+}
+
+class Program {
+ public:
+  Program() = default;
+  Program(const char* vs, const char* fs, const char* name) {
+    const GLuint v = compile(GL_VERTEX_SHADER, vs, name), f = compile(GL_FRAGMENT_SHADER, fs, name);
+    id_ = glCreateProgram();
+    glAttachShader(id_, v);
+    glAttachShader(id_, f);
+    glLinkProgram(id_);
+    glDeleteShader(v);
+    glDeleteShader(f);
+    GLint ok = 0;
+    glGetProgramiv(id_, GL_LINK_STATUS, &ok);
+    if (!ok) {
+      char log[4096];
+      glGetProgramInfoLog(id_, sizeof(log), nullptr, log);
+      throw GlError(std::string("program '") + name + "' does not link: " + log);
+    }
+  }
+  GLint operator[](const std::string& n) {
+    auto it = loc_.find(n);
+    if (it != loc_.end()) return it->second;
+    return loc_[n] = glGetUniformLocation(id_, n.c_str());
+  }
+  GLuint id() const { return id_; }
+  void use() const { glUseProgram(id_); }
+
+ private:
+  GLuint id_ = 0;
+  std::unordered_map<std::string, GLint> loc_;
+};
+
+void set3(GLint loc, const Eigen::Vector3d& v) {
+  glUniform3f(loc, static_cast<float>(v.x()), static_cast<float>(v.y()), static_cast<float>(v.z()));
+}
+
+Eigen::Matrix4f projection_from_K(const CameraModel& c) {
+  const double w = c.width, h = c.height, n = c.near_m, f = c.far_m;
+  Eigen::Matrix4d P = Eigen::Matrix4d::Zero();
+  // Optical frame (x right, y down, z forward) straight to clip space; image row 0 lands in
+  // framebuffer row 0, so glReadPixels returns the image top row first.
+  P(0, 0) = 2.0 * c.fx / w;
+  P(0, 2) = 2.0 * (c.cx + 0.5) / w - 1.0;
+  P(1, 1) = 2.0 * c.fy / h;
+  P(1, 2) = 2.0 * (c.cy + 0.5) / h - 1.0;
+  P(2, 2) = (f + n) / (f - n);
+  P(2, 3) = -2.0 * f * n / (f - n);
+  P(3, 2) = 1.0;
+  return P.cast<float>();
+}
+
+struct GpuMesh {
+  GLuint vao = 0, vbo[3] = {0, 0, 0}, ebo = 0;
+  GLsizei index_count = 0;
+  SegClass seg_class = SegClass::kOther;
+  Material material;
+  bool triplanar = false;
+  bool macro = false;
+  GLuint texture = 0;
+};
+
+struct Targets {
+  // The scene is rendered with an "internal" pinhole camera: the output camera's K, enlarged
+  // by a margin when distortion pulls in pixels from outside the undistorted field.
+  CameraModel internal;
+  int margin_x = 0, margin_y = 0;
+  int width = 0, height = 0;     // internal size
+  int out_width = 0, out_height = 0;
+  int is_width = 0, is_height = 0, is_scale = 1;
+  GLuint is_fbo = 0, is_tex = 0;
+  GLuint scene_fbo = 0, scene_color = 0, scene_zc = 0, scene_depth = 0;
+  GLuint post_fbo = 0, post_rgba = 0, post_zc = 0;
+  GLuint distmap = 0;
+};
+
+struct Slot {
+  GLuint pbo_rgba = 0, pbo_depth = 0;
+  std::size_t capacity_px = 0;
+  GLsync fence = nullptr;
+  Frame meta;   // everything but the pixels
+};
+
+GLuint make_tex(GLenum internal, int w, int h, GLenum format, GLenum type, GLenum filter) {
+  GLuint t = 0;
+  glGenTextures(1, &t);
+  glBindTexture(GL_TEXTURE_2D, t);
+  glTexImage2D(GL_TEXTURE_2D, 0, static_cast<GLint>(internal), w, h, 0, format, type, nullptr);
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, static_cast<GLint>(filter));
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, static_cast<GLint>(filter));
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+  return t;
+}
+
+void check_fbo(const char* what) {
+  const GLenum st = glCheckFramebufferStatus(GL_FRAMEBUFFER);
+  if (st != GL_FRAMEBUFFER_COMPLETE)
+    throw GlError(std::string(what) + " framebuffer incomplete (status 0x" + std::to_string(st) + ")");
+}
+
+double luminance(const Eigen::Vector3d& c) { return 0.2126 * c.x() + 0.7152 * c.y() + 0.0722 * c.z(); }
+
+}  // namespace
+
+struct Renderer::Impl {
+  std::unique_ptr<EglContext> ctx;
+  World world;
+  std::vector<CameraModel> cameras;
+  RenderOptions options;
+  WaterModel water;
+  std::vector<GpuMesh> meshes;
+  std::map<std::string, GLuint> textures;
+  Program scene, snow, post, inscatter;
+  GLuint snow_vao = 0, snow_vbo = 0;
+  GLsizei snow_count = 0;
+  GLuint empty_vao = 0;
+  std::map<std::string, Targets> targets;
+  std::vector<Slot> slots;
+  std::deque<std::size_t> in_flight;   // slot indices, oldest first
+  std::size_t next_slot = 0;
+  std::deque<Frame> done;
+  std::uint64_t sequence = 0;
+  RenderTimings timings;
+  std::size_t triangles = 0;
+
+  const CameraModel& cam(const std::string& name) const {
+    for (const auto& c : cameras)
+      if (c.name == name) return c;
+    std::string list;
+    for (const auto& c : cameras) list += (list.empty() ? "" : ", ") + c.name;
+    throw std::invalid_argument("unknown camera '" + name + "' (cameras: " + list + ")");
+  }
+
+  void self_test();
+  void upload_scene(const SceneGeometry& geo);
+  void upload_snow();
+  GLuint texture(const std::string& name);
+  Targets& targets_for(const CameraModel& c);
+  void draw(const Pose& X_WB, const CameraModel& c, double stamp_s, std::uint64_t seq);
+  void start_readback(Slot& s, const Targets& t);
+  Frame finish_readback(Slot& s);
+  void collect_oldest();
+};
+
+void Renderer::Impl::self_test() {
+  // Throwaway tiny frame: catches a context that renders nothing (no silent black images),
+  // and avoids llvmpipe's "first framebuffer stays slow" oddity (TOOLCHAIN.md).
+  Program p(detail::kPostVS, detail::kConstFS, "self-test");
+  GLuint fbo = 0;
+  glGenFramebuffers(1, &fbo);
+  glBindFramebuffer(GL_FRAMEBUFFER, fbo);
+  GLuint tex = make_tex(GL_RGBA8, 8, 8, GL_RGBA, GL_UNSIGNED_BYTE, GL_NEAREST);
+  glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, tex, 0);
+  check_fbo("self-test");
+  glViewport(0, 0, 8, 8);
+  glClearColor(0, 0, 0, 0);
+  glClear(GL_COLOR_BUFFER_BIT);
+  p.use();
+  glBindVertexArray(empty_vao);
+  glDrawArrays(GL_TRIANGLES, 0, 3);
+  std::uint8_t px[8 * 8 * 4] = {};
+  glPixelStorei(GL_PACK_ALIGNMENT, 1);
+  glReadPixels(0, 0, 8, 8, GL_RGBA, GL_UNSIGNED_BYTE, px);
+  glBindFramebuffer(GL_FRAMEBUFFER, 0);
+  glDeleteFramebuffers(1, &fbo);
+  glDeleteTextures(1, &tex);
+  glDeleteProgram(p.id());
+  const int r = px[4 * 27], g = px[4 * 27 + 1], b = px[4 * 27 + 2];
+  if (std::abs(r - 64) > 2 || std::abs(g - 128) > 2 || std::abs(b - 191) > 2)
+    throw GlError("OpenGL context on '" + ctx->gl_renderer() + "' (" + ctx->platform() +
+                  ") renders nothing usable: read back (" + std::to_string(r) + ", " +
+                  std::to_string(g) + ", " + std::to_string(b) + ") instead of (64, 128, 191)");
+}
+
+GLuint Renderer::Impl::texture(const std::string& name) {
+  auto it = textures.find(name);
+  if (it != textures.end()) return it->second;
+  const int size = name == "none" ? 1 : std::max(16, options.texture_size);
+  const auto px = detail::make_texture(name, size);
+  GLuint t = 0;
+  glGenTextures(1, &t);
+  glBindTexture(GL_TEXTURE_2D, t);
+  glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
+  glTexImage2D(GL_TEXTURE_2D, 0, GL_SRGB8, size, size, 0, GL_RGB, GL_UNSIGNED_BYTE, px.data());
+  glGenerateMipmap(GL_TEXTURE_2D);
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR_MIPMAP_LINEAR);
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_REPEAT);
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_REPEAT);
+  textures[name] = t;
+  return t;
+}
+
+void Renderer::Impl::upload_scene(const SceneGeometry& geo) {
+  triangles = geo.triangle_count();
+  for (const auto& sm : geo.meshes) {
+    GpuMesh g;
+    g.seg_class = sm.seg_class;
+    g.material = sm.material;
+    g.triplanar = sm.triplanar;
+    g.macro = (sm.name == "seabed" || sm.name == "seabed_far") && sm.material.texture != "none";
+    g.texture = texture(sm.material.texture);
+    glGenVertexArrays(1, &g.vao);
+    glBindVertexArray(g.vao);
+    glGenBuffers(3, g.vbo);
+    const std::vector<float>* attr[3] = {&sm.mesh.positions, &sm.mesh.normals, &sm.mesh.uvs};
+    const int comps[3] = {3, 3, 2};
+    for (int a = 0; a < 3; ++a) {
+      glBindBuffer(GL_ARRAY_BUFFER, g.vbo[a]);
+      glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(attr[a]->size() * sizeof(float)),
+                   attr[a]->data(), GL_STATIC_DRAW);
+      glEnableVertexAttribArray(static_cast<GLuint>(a));
+      glVertexAttribPointer(static_cast<GLuint>(a), comps[a], GL_FLOAT, GL_FALSE, 0, nullptr);
+    }
+    glGenBuffers(1, &g.ebo);
+    glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, g.ebo);
+    glBufferData(GL_ELEMENT_ARRAY_BUFFER,
+                 static_cast<GLsizeiptr>(sm.mesh.indices.size() * sizeof(std::uint32_t)),
+                 sm.mesh.indices.data(), GL_STATIC_DRAW);
+    g.index_count = static_cast<GLsizei>(sm.mesh.indices.size());
+    glBindVertexArray(0);
+    meshes.push_back(g);
+  }
+  check_gl("scene upload");
+}
+
+void Renderer::Impl::upload_snow() {
+  const auto& ms = world.marine_snow;
+  const double n = ms.density_per_m3 * ms.box_m * ms.box_m * ms.box_m;
+  snow_count = static_cast<GLsizei>(std::min(200000.0, std::max(0.0, n)));
+  if (snow_count == 0) return;
+  std::vector<float> seeds(static_cast<std::size_t>(snow_count) * 3);
+  for (GLsizei i = 0; i < snow_count; ++i)
+    for (int k = 0; k < 3; ++k) seeds[3 * i + k] = static_cast<float>(detail::lattice(i, k, 3, ms.seed));
+  glGenVertexArrays(1, &snow_vao);
+  glBindVertexArray(snow_vao);
+  glGenBuffers(1, &snow_vbo);
+  glBindBuffer(GL_ARRAY_BUFFER, snow_vbo);
+  glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(seeds.size() * sizeof(float)), seeds.data(), GL_STATIC_DRAW);
+  glEnableVertexAttribArray(0);
+  glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, 0, nullptr);
+  glBindVertexArray(0);
+}
+
+Targets& Renderer::Impl::targets_for(const CameraModel& c) {
+  auto it = targets.find(c.name);
+  if (it != targets.end()) return it->second;
+  Targets t;
+  t.out_width = c.width;
+  t.out_height = c.height;
+  std::vector<cv::Point2f> dst;
+  if (c.has_distortion()) {
+    // For every output (distorted) pixel, the undistorted pixel it sees.
+    std::vector<cv::Point2f> src(static_cast<std::size_t>(c.width) * c.height);
+    for (int v = 0; v < c.height; ++v)
+      for (int u = 0; u < c.width; ++u) src[static_cast<std::size_t>(v) * c.width + u] = cv::Point2f(u, v);
+    cv::Mat K(3, 3, CV_64F), D(1, 5, CV_64F);
+    for (int r = 0; r < 3; ++r)
+      for (int q = 0; q < 3; ++q) K.at<double>(r, q) = c.K()(r, q);
+    for (int k = 0; k < 5; ++k) D.at<double>(0, k) = c.distortion[k];
+    cv::undistortPoints(src, dst, K, D, cv::noArray(), K,
+                        cv::TermCriteria(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, 30, 1e-6));
+    float minx = 0, maxx = 0, miny = 0, maxy = 0;
+    for (const auto& p : dst) {
+      if (!std::isfinite(p.x) || !std::isfinite(p.y)) continue;
+      minx = std::min(minx, p.x);
+      maxx = std::max(maxx, p.x - (c.width - 1));
+      miny = std::min(miny, p.y);
+      maxy = std::max(maxy, p.y - (c.height - 1));
+    }
+    t.margin_x = std::min(c.width / 2, static_cast<int>(std::ceil(std::max(-minx, maxx))) + 2);
+    t.margin_y = std::min(c.height / 2, static_cast<int>(std::ceil(std::max(-miny, maxy))) + 2);
+    for (auto& p : dst) p += cv::Point2f(static_cast<float>(t.margin_x), static_cast<float>(t.margin_y));
+  }
+  t.internal = c;
+  t.internal.width = c.width + 2 * t.margin_x;
+  t.internal.height = c.height + 2 * t.margin_y;
+  t.internal.cx += t.margin_x;
+  t.internal.cy += t.margin_y;
+  t.width = t.internal.width;
+  t.height = t.internal.height;
+
+  const GLenum bufs[2] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1};
+  glGenFramebuffers(1, &t.scene_fbo);
+  glBindFramebuffer(GL_FRAMEBUFFER, t.scene_fbo);
+  t.scene_color = make_tex(GL_RGBA16F, t.width, t.height, GL_RGBA, GL_FLOAT, GL_LINEAR);
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR_MIPMAP_LINEAR);
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAX_LEVEL, 5);   // blur radius <= 16 px
+  glGenerateMipmap(GL_TEXTURE_2D);   // allocate the chain (forward-scatter blur)
+  t.scene_zc = make_tex(GL_R32F, t.width, t.height, GL_RED, GL_FLOAT, GL_NEAREST);
+  t.scene_depth = make_tex(GL_DEPTH_COMPONENT32F, t.width, t.height, GL_DEPTH_COMPONENT, GL_FLOAT, GL_NEAREST);
+  glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, t.scene_color, 0);
+  glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT1, GL_TEXTURE_2D, t.scene_zc, 0);
+  glFramebufferTexture2D(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_TEXTURE_2D, t.scene_depth, 0);
+  glDrawBuffers(2, bufs);
+  check_fbo("scene");
+
+  t.is_scale = std::max(1, options.lamp_scatter_downsample);
+  t.is_width = (t.width + t.is_scale - 1) / t.is_scale;
+  t.is_height = (t.height + t.is_scale - 1) / t.is_scale;
+  glGenFramebuffers(1, &t.is_fbo);
+  glBindFramebuffer(GL_FRAMEBUFFER, t.is_fbo);
+  t.is_tex = make_tex(GL_RGBA16F, t.is_width, t.is_height, GL_RGBA, GL_FLOAT, GL_LINEAR);
+  glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, t.is_tex, 0);
+  glDrawBuffers(1, bufs);
+  check_fbo("in-scatter");
+
+  glGenFramebuffers(1, &t.post_fbo);
+  glBindFramebuffer(GL_FRAMEBUFFER, t.post_fbo);
+  t.post_rgba = make_tex(GL_RGBA8, c.width, c.height, GL_RGBA, GL_UNSIGNED_BYTE, GL_NEAREST);
+  t.post_zc = make_tex(GL_R32F, c.width, c.height, GL_RED, GL_FLOAT, GL_NEAREST);
+  glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, t.post_rgba, 0);
+  glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT1, GL_TEXTURE_2D, t.post_zc, 0);
+  glDrawBuffers(2, bufs);
+  check_fbo("post");
+  if (!dst.empty()) {
+    t.distmap = make_tex(GL_RG32F, c.width, c.height, GL_RG, GL_FLOAT, GL_NEAREST);
+    glTexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, c.width, c.height, GL_RG, GL_FLOAT, dst.data());
+  }
+  glBindFramebuffer(GL_FRAMEBUFFER, 0);
+  check_gl("render targets");
+  return targets.emplace(c.name, t).first->second;
+}
+
+void Renderer::Impl::draw(const Pose& X_WB, const CameraModel& out_cam, double stamp_s, std::uint64_t seq) {
+  Targets& t = targets_for(out_cam);
+  const CameraModel& c = t.internal;
+  const Pose X_WC = X_WB * c.X_BC;
+  const Pose X_CW = X_WC.inverse();
+  const Eigen::Matrix4f view = X_CW.matrix().cast<float>();
+  const Eigen::Matrix4f proj = projection_from_K(c);
+  const Eigen::Vector3d cam_W = X_WC.translation();
+  auto tp = Clock::now();
+  auto lap = [&](double* out) {
+    if (!options.profile_passes) return;
+    glFinish();
+    *out = ms_since(tp);
+    tp = Clock::now();
+  };
+
+  // Lamps in world and camera frames.
+  const int nl = options.lamps ? static_cast<int>(std::min<std::size_t>(4, world.lamps.size())) : 0;
+  float lamp_pos_W[12], lamp_dir_W[12], lamp_pos_C[12], lamp_dir_C[12], lamp_I[12], lamp_cos[8];
+  for (int i = 0; i < nl; ++i) {
+    const Lamp& L = world.lamps[i];
+    const Pose X_WL = X_WB * L.X_BL;
+    const Eigen::Vector3d pW = X_WL.translation(), dW = X_WL.linear().col(0).normalized();
+    const Eigen::Vector3d pC = X_CW * pW, dC = X_CW.linear() * dW;
+    for (int k = 0; k < 3; ++k) {
+      lamp_pos_W[3 * i + k] = static_cast<float>(pW[k]);
+      lamp_dir_W[3 * i + k] = static_cast<float>(dW[k]);
+      lamp_pos_C[3 * i + k] = static_cast<float>(pC[k]);
+      lamp_dir_C[3 * i + k] = static_cast<float>(dC[k]);
+      lamp_I[3 * i + k] = static_cast<float>(L.intensity[k]);
+    }
+    lamp_cos[2 * i] = static_cast<float>(std::cos(L.cone_half_angle_rad));
+    lamp_cos[2 * i + 1] = static_cast<float>(std::cos(0.55 * L.cone_half_angle_rad));
+  }
+
+  // ---- scene pass
+  glBindFramebuffer(GL_FRAMEBUFFER, t.scene_fbo);
+  glViewport(0, 0, t.width, t.height);
+  const float zero[4] = {0, 0, 0, 0};
+  const float inf = std::numeric_limits<float>::infinity();
+  const float inf4[4] = {inf, inf, inf, inf};
+  const float one = 1.0f;
+  glColorMaski(0, GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
+  glColorMaski(1, GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
+  glDepthMask(GL_TRUE);
+  glClearBufferfv(GL_COLOR, 0, zero);
+  glClearBufferfv(GL_COLOR, 1, inf4);
+  glClearBufferfv(GL_DEPTH, 0, &one);
+  glEnable(GL_DEPTH_TEST);
+  glDepthFunc(GL_LESS);
+  glDisable(GL_CULL_FACE);
+  glDisable(GL_BLEND);
+  scene.use();
+  glUniformMatrix4fv(scene["u_view"], 1, GL_FALSE, view.data());
+  glUniformMatrix4fv(scene["u_proj"], 1, GL_FALSE, proj.data());
+  set3(scene["u_cam_W"], cam_W);
+  set3(scene["u_sun_dir_W"], world.sun.direction_W);
+  set3(scene["u_E0"], world.sun.surface_irradiance);
+  glUniform1f(scene["u_ambient"], static_cast<float>(world.sun.ambient_fraction));
+  set3(scene["u_Kd"], water.K_d);
+  set3(scene["u_betaD"], water.beta_D);
+  glUniform1i(scene["u_nlamps"], nl);
+  if (nl > 0) {
+    glUniform3fv(scene["u_lamp_pos_W[0]"], nl, lamp_pos_W);
+    glUniform3fv(scene["u_lamp_dir_W[0]"], nl, lamp_dir_W);
+    glUniform3fv(scene["u_lamp_I[0]"], nl, lamp_I);
+    glUniform2fv(scene["u_lamp_cos[0]"], nl, lamp_cos);
+  }
+  glUniform1i(scene["u_tex"], 0);
+  glActiveTexture(GL_TEXTURE0);
+  for (const GpuMesh& m : meshes) {
+    set3(scene["u_albedo"], m.material.albedo);
+    glUniform1f(scene["u_uv_scale"], static_cast<float>(m.material.uv_scale_m));
+    glUniform1i(scene["u_triplanar"], m.triplanar ? 1 : 0);
+    glUniform1i(scene["u_macro"], m.macro ? 1 : 0);
+    glUniform1f(scene["u_seg"], static_cast<float>(m.seg_class));
+    glBindTexture(GL_TEXTURE_2D, m.texture);
+    glBindVertexArray(m.vao);
+    glDrawElements(GL_TRIANGLES, m.index_count, GL_UNSIGNED_INT, nullptr);
+  }
+
+  lap(&timings.scene_pass_ms);
+  // ---- marine snow: additive into the colour only (depth and segmentation untouched)
+  if (options.marine_snow && snow_count > 0) {
+    snow.use();
+    glUniformMatrix4fv(snow["u_view"], 1, GL_FALSE, view.data());
+    glUniformMatrix4fv(snow["u_proj"], 1, GL_FALSE, proj.data());
+    set3(snow["u_cam_W"], cam_W);
+    glUniform1f(snow["u_box"], static_cast<float>(world.marine_snow.box_m));
+    glUniform1f(snow["u_time"], static_cast<float>(std::fmod(stamp_s, 1.0e4)));
+    glUniform1f(snow["u_size_m"], static_cast<float>(world.marine_snow.size_m));
+    glUniform1f(snow["u_fx"], static_cast<float>(c.fx));
+    set3(snow["u_E0"], world.sun.surface_irradiance);
+    set3(snow["u_Kd"], water.K_d);
+    set3(snow["u_betaD"], water.beta_D);
+    glUniform1i(snow["u_nlamps"], nl);
+    if (nl > 0) {
+      glUniform3fv(snow["u_lamp_pos_W[0]"], nl, lamp_pos_W);
+      glUniform3fv(snow["u_lamp_dir_W[0]"], nl, lamp_dir_W);
+      glUniform3fv(snow["u_lamp_I[0]"], nl, lamp_I);
+      glUniform2fv(snow["u_lamp_cos[0]"], nl, lamp_cos);
+    }
+    glEnable(GL_PROGRAM_POINT_SIZE);
+    glDepthMask(GL_FALSE);
+    glEnablei(GL_BLEND, 0);
+    glBlendFunc(GL_ONE, GL_ONE);
+    glColorMaski(0, GL_TRUE, GL_TRUE, GL_TRUE, GL_FALSE);
+    glColorMaski(1, GL_FALSE, GL_FALSE, GL_FALSE, GL_FALSE);
+    glBindVertexArray(snow_vao);
+    glDrawArrays(GL_POINTS, 0, snow_count);
+    glDisablei(GL_BLEND, 0);
+    glColorMaski(0, GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
+    glColorMaski(1, GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
+    glDepthMask(GL_TRUE);
+  }
+
+  lap(&timings.snow_pass_ms);
+  // ---- lamp in-scattering at low resolution
+  const int nsamples = std::max(0, options.lamp_scatter_samples);
+  const bool do_inscatter = nl > 0 && nsamples > 0;
+  // March until the lamp light has dropped to ~3% (3.5 attenuation lengths).
+  const auto march_max_m = static_cast<float>(std::min(30.0, 3.5 / std::max(1e-3, water.beta_D.minCoeff())));
+  glDisable(GL_DEPTH_TEST);
+  if (do_inscatter) {
+    glBindFramebuffer(GL_FRAMEBUFFER, t.is_fbo);
+    glViewport(0, 0, t.is_width, t.is_height);
+    inscatter.use();
+    glActiveTexture(GL_TEXTURE0);
+    glBindTexture(GL_TEXTURE_2D, t.scene_color);
+    glActiveTexture(GL_TEXTURE1);
+    glBindTexture(GL_TEXTURE_2D, t.scene_zc);
+    glActiveTexture(GL_TEXTURE0);
+    glUniform1i(inscatter["u_color"], 0);
+    glUniform1i(inscatter["u_depth"], 1);
+    glUniform4f(inscatter["u_K"], static_cast<float>(c.fx), static_cast<float>(c.fy),
+                static_cast<float>(c.cx), static_cast<float>(c.cy));
+    glUniform2i(inscatter["u_size"], t.width, t.height);
+    glUniform1f(inscatter["u_scale"], static_cast<float>(t.is_scale));
+    set3(inscatter["u_betaD"], water.beta_D);
+    glUniform1i(inscatter["u_nlamps"], nl);
+    glUniform3fv(inscatter["u_lamp_pos_C[0]"], nl, lamp_pos_C);
+    glUniform3fv(inscatter["u_lamp_dir_C[0]"], nl, lamp_dir_C);
+    glUniform3fv(inscatter["u_lamp_I[0]"], nl, lamp_I);
+    glUniform2fv(inscatter["u_lamp_cos[0]"], nl, lamp_cos);
+    set3(inscatter["u_b_scatter"], water.b_scatter);
+    glUniform1f(inscatter["u_schlick_k"], static_cast<float>(water.schlick_k()));
+    glUniform1f(inscatter["u_back_frac"], static_cast<float>(water.phase_backscatter_fraction));
+    glUniform1i(inscatter["u_nsamples"], nsamples);
+    glUniform1f(inscatter["u_march_max_m"], march_max_m);
+    glBindVertexArray(empty_vao);
+    glDrawArrays(GL_TRIANGLES, 0, 3);
+  }
+
+  if (options.forward_scatter) {
+    glBindTexture(GL_TEXTURE_2D, t.scene_color);
+    glGenerateMipmap(GL_TEXTURE_2D);
+  }
+  lap(&timings.inscatter_pass_ms);
+  // ---- post pass: forward scatter, backscatter, + in-scatter, distortion, noise, encoding
+  glBindFramebuffer(GL_FRAMEBUFFER, t.post_fbo);
+  glViewport(0, 0, t.out_width, t.out_height);
+  post.use();
+  glActiveTexture(GL_TEXTURE0);
+  glBindTexture(GL_TEXTURE_2D, t.scene_color);
+  glActiveTexture(GL_TEXTURE1);
+  glBindTexture(GL_TEXTURE_2D, t.scene_zc);
+  glActiveTexture(GL_TEXTURE2);
+  glBindTexture(GL_TEXTURE_2D, t.distmap);
+  glActiveTexture(GL_TEXTURE3);
+  glBindTexture(GL_TEXTURE_2D, t.is_tex);
+  glActiveTexture(GL_TEXTURE0);
+  glUniform1i(post["u_color"], 0);
+  glUniform1i(post["u_depth"], 1);
+  glUniform1i(post["u_distmap"], 2);
+  glUniform1i(post["u_inscatter"], 3);
+  glUniform1i(post["u_nlamps_scatter"], do_inscatter ? nl : 0);
+  glUniform1f(post["u_march_max_m"], march_max_m);
+  glUniform1i(post["u_use_distmap"], t.distmap ? 1 : 0);
+  glUniform4f(post["u_K"], static_cast<float>(c.fx), static_cast<float>(c.fy), static_cast<float>(c.cx),
+              static_cast<float>(c.cy));
+  glUniform2i(post["u_size"], t.width, t.height);
+  set3(post["u_betaD"], water.beta_D);
+  set3(post["u_betaB"], water.beta_B);
+  set3(post["u_Binf"], water.veiling_light_at(cam_W.z(), world.sun.surface_irradiance));
+  glUniform1f(post["u_veil_gradient"], static_cast<float>(water.veiling_light_gradient));
+  const Eigen::Matrix3f R_WC = X_WC.linear().cast<float>();
+  glUniformMatrix3fv(post["u_R_WC"], 1, GL_FALSE, R_WC.data());
+  glUniform1i(post["u_fwd"], options.forward_scatter ? 1 : 0);
+  glUniform1f(post["u_fwd_per_m"], static_cast<float>(water.forward_scatter_per_m));
+  glUniform1f(post["u_blur_px_per_m"], static_cast<float>(water.forward_blur_rad_per_m * c.fx));
+  double gain = c.exposure;
+  if (options.auto_exposure) {
+    const Eigen::Vector3d Ed = (world.sun.surface_irradiance.array() * (-water.K_d.array() * std::max(0.0, cam_W.z())).exp()).matrix();
+    gain *= std::clamp(0.45 / std::max(luminance(Ed), 1e-6), 0.25, 5.0);
+  }
+  glUniform1f(post["u_gain"], static_cast<float>(gain));
+  glUniform1f(post["u_noise_std"], options.noise ? static_cast<float>(c.noise_stddev) : 0.0f);
+  glUniform1ui(post["u_seed"], static_cast<GLuint>(detail::hash32(static_cast<std::uint32_t>(options.seed) ^
+                                                                  static_cast<std::uint32_t>(seq * 2654435761ULL))));
+  glUniform1i(post["u_srgb"], options.srgb_output ? 1 : 0);
+  glBindVertexArray(empty_vao);
+  glDrawArrays(GL_TRIANGLES, 0, 3);
+  lap(&timings.post_pass_ms);
+}
+
+void Renderer::Impl::start_readback(Slot& s, const Targets& t) {
+  const std::size_t px = static_cast<std::size_t>(t.out_width) * t.out_height;
+  if (s.pbo_rgba == 0) {
+    glGenBuffers(1, &s.pbo_rgba);
+    glGenBuffers(1, &s.pbo_depth);
+  }
+  if (s.capacity_px < px) {
+    glBindBuffer(GL_PIXEL_PACK_BUFFER, s.pbo_rgba);
+    glBufferData(GL_PIXEL_PACK_BUFFER, static_cast<GLsizeiptr>(px * 4), nullptr, GL_STREAM_READ);
+    glBindBuffer(GL_PIXEL_PACK_BUFFER, s.pbo_depth);
+    glBufferData(GL_PIXEL_PACK_BUFFER, static_cast<GLsizeiptr>(px * 4), nullptr, GL_STREAM_READ);
+    s.capacity_px = px;
+  }
+  glBindFramebuffer(GL_READ_FRAMEBUFFER, t.post_fbo);
+  glPixelStorei(GL_PACK_ALIGNMENT, 1);
+  glReadBuffer(GL_COLOR_ATTACHMENT0);
+  glBindBuffer(GL_PIXEL_PACK_BUFFER, s.pbo_rgba);
+  glReadPixels(0, 0, t.out_width, t.out_height, GL_RGBA, GL_UNSIGNED_BYTE, nullptr);
+  glReadBuffer(GL_COLOR_ATTACHMENT1);
+  glBindBuffer(GL_PIXEL_PACK_BUFFER, s.pbo_depth);
+  glReadPixels(0, 0, t.out_width, t.out_height, GL_RED, GL_FLOAT, nullptr);
+  glBindBuffer(GL_PIXEL_PACK_BUFFER, 0);
+  s.fence = glFenceSync(GL_SYNC_GPU_COMMANDS_COMPLETE, 0);
+  glFlush();
+  check_gl("readback");
+}
+
+Frame Renderer::Impl::finish_readback(Slot& s) {
+  Frame f = s.meta;
+  const std::size_t px = static_cast<std::size_t>(f.width) * f.height;
+  if (s.fence) {
+    glClientWaitSync(s.fence, GL_SYNC_FLUSH_COMMANDS_BIT, 10'000'000'000ULL);
+    glDeleteSync(s.fence);
+    s.fence = nullptr;
+  }
+  f.rgb.resize(px * 3);
+  f.seg.resize(px);
+  f.depth.resize(px);
+  glBindBuffer(GL_PIXEL_PACK_BUFFER, s.pbo_rgba);
+  const auto* rgba = static_cast<const std::uint8_t*>(
+      glMapBufferRange(GL_PIXEL_PACK_BUFFER, 0, static_cast<GLsizeiptr>(px * 4), GL_MAP_READ_BIT));
+  if (!rgba) throw GlError("glMapBufferRange failed for the colour readback");
+  for (std::size_t i = 0; i < px; ++i) {
+    f.rgb[3 * i] = rgba[4 * i];
+    f.rgb[3 * i + 1] = rgba[4 * i + 1];
+    f.rgb[3 * i + 2] = rgba[4 * i + 2];
+    f.seg[i] = rgba[4 * i + 3];
+  }
+  glUnmapBuffer(GL_PIXEL_PACK_BUFFER);
+  glBindBuffer(GL_PIXEL_PACK_BUFFER, s.pbo_depth);
+  const auto* dz = static_cast<const float*>(
+      glMapBufferRange(GL_PIXEL_PACK_BUFFER, 0, static_cast<GLsizeiptr>(px * 4), GL_MAP_READ_BIT));
+  if (!dz) throw GlError("glMapBufferRange failed for the depth readback");
+  std::copy(dz, dz + px, f.depth.begin());
+  glUnmapBuffer(GL_PIXEL_PACK_BUFFER);
+  glBindBuffer(GL_PIXEL_PACK_BUFFER, 0);
+  return f;
+}
+
+void Renderer::Impl::collect_oldest() {
+  const auto t0 = Clock::now();
+  const std::size_t idx = in_flight.front();
+  in_flight.pop_front();
+  done.push_back(finish_readback(slots[idx]));
+  timings.readback_ms = ms_since(t0);
+}
+
+Renderer::Renderer(World world, std::vector<CameraModel> cameras, RenderOptions options)
+    : impl_(std::make_unique<Impl>()) {
+  impl_->world = std::move(world);
+  impl_->cameras = std::move(cameras);
+  impl_->options = options;
+  impl_->water = impl_->world.water;
+  for (const auto& c : impl_->cameras) c.validate("Renderer");
+  for (std::size_t i = 0; i < impl_->cameras.size(); ++i)
+    for (std::size_t j = i + 1; j < impl_->cameras.size(); ++j)
+      if (impl_->cameras[i].name == impl_->cameras[j].name)
+        throw ConfigError("Renderer: duplicate camera name '" + impl_->cameras[i].name + "'");
+  // Geometry first: a bad mesh file is reported before any GL work.
+  const SceneGeometry geo = build_scene_geometry(impl_->world);
+  impl_->ctx = EglContext::create(options.egl);
+  impl_->ctx->make_current();
+  glGenVertexArrays(1, &impl_->empty_vao);
+  impl_->self_test();
+  impl_->scene = Program(detail::kSceneVS, detail::kSceneFS, "scene");
+  impl_->snow = Program(detail::kSnowVS, detail::kSnowFS, "marine_snow");
+  impl_->post = Program(detail::kPostVS, detail::kPostFS, "post");
+  impl_->inscatter = Program(detail::kPostVS, detail::kInscatterFS, "lamp_inscatter");
+  impl_->upload_scene(geo);
+  impl_->upload_snow();
+  impl_->slots.resize(static_cast<std::size_t>(std::max(1, options.readback_slots)));
+  check_gl("Renderer setup");
+}
+
+Renderer::~Renderer() {
+  if (!impl_ || !impl_->ctx) return;
+  try {
+    impl_->ctx->make_current();
+  } catch (...) {
+    return;
+  }
+  for (auto& s : impl_->slots) {
+    if (s.fence) glDeleteSync(s.fence);
+    if (s.pbo_rgba) glDeleteBuffers(1, &s.pbo_rgba);
+    if (s.pbo_depth) glDeleteBuffers(1, &s.pbo_depth);
+  }
+  for (auto& [name, t] : impl_->targets) {
+    GLuint fbos[3] = {t.scene_fbo, t.post_fbo, t.is_fbo};
+    glDeleteFramebuffers(3, fbos);
+    GLuint texs[7] = {t.scene_color, t.scene_zc, t.scene_depth, t.post_rgba, t.post_zc, t.distmap, t.is_tex};
+    glDeleteTextures(7, texs);
+  }
+  for (auto& m : impl_->meshes) {
+    glDeleteBuffers(3, m.vbo);
+    glDeleteBuffers(1, &m.ebo);
+    glDeleteVertexArrays(1, &m.vao);
+  }
+  for (auto& [name, t] : impl_->textures) glDeleteTextures(1, &t);
+  if (impl_->snow_vao) glDeleteVertexArrays(1, &impl_->snow_vao);
+  if (impl_->snow_vbo) glDeleteBuffers(1, &impl_->snow_vbo);
+  glDeleteVertexArrays(1, &impl_->empty_vao);
+  glDeleteProgram(impl_->scene.id());
+  glDeleteProgram(impl_->snow.id());
+  glDeleteProgram(impl_->post.id());
+  glDeleteProgram(impl_->inscatter.id());
+}
+
+void Renderer::submit(const Pose& X_WB, const std::string& camera, double stamp_s) {
+  Impl& I = *impl_;
+  const CameraModel& c = I.cam(camera);
+  I.ctx->make_current();
+  if (I.in_flight.size() >= I.slots.size()) I.collect_oldest();
+  const auto t0 = Clock::now();
+  const std::uint64_t seq = I.sequence++;
+  I.draw(X_WB, c, stamp_s, seq);
+  const std::size_t idx = I.next_slot;
+  I.next_slot = (I.next_slot + 1) % I.slots.size();
+  Slot& s = I.slots[idx];
+  s.meta = Frame{};
+  s.meta.camera = c.name;
+  s.meta.stamp_s = stamp_s;
+  s.meta.sequence = seq;
+  s.meta.width = c.width;
+  s.meta.height = c.height;
+  s.meta.K = c.K();
+  s.meta.D = c.distortion;
+  s.meta.X_WC = X_WB * c.X_BC;
+  I.start_readback(s, I.targets.at(c.name));
+  I.in_flight.push_back(idx);
+  I.timings.render_ms = ms_since(t0);
+}
+
+std::optional<Frame> Renderer::collect() {
+  Impl& I = *impl_;
+  if (I.done.empty() && !I.in_flight.empty()) {
+    I.ctx->make_current();
+    I.collect_oldest();
+  }
+  if (I.done.empty()) return std::nullopt;
+  Frame f = std::move(I.done.front());
+  I.done.pop_front();
+  return f;
+}
+
+std::size_t Renderer::in_flight() const { return impl_->in_flight.size() + impl_->done.size(); }
+
+Frame Renderer::render(const Pose& X_WB, const std::string& camera, double stamp_s) {
+  Impl& I = *impl_;
+  I.ctx->make_current();
+  while (!I.in_flight.empty()) I.collect_oldest();   // keep earlier async frames for collect()
+  submit(X_WB, camera, stamp_s);
+  I.collect_oldest();
+  Frame f = std::move(I.done.back());
+  I.done.pop_back();
+  return f;
+}
+
+void Renderer::set_water(const WaterModel& water) {
+  water.validate("Renderer::set_water");
+  impl_->water = water;
+}
+const WaterModel& Renderer::water() const { return impl_->water; }
+void Renderer::set_options(const RenderOptions& options) {
+  const EglOptions egl = impl_->options.egl;
+  const int tex = impl_->options.texture_size, slots = impl_->options.readback_slots;
+  impl_->options = options;
+  impl_->options.egl = egl;
+  impl_->options.texture_size = tex;
+  impl_->options.readback_slots = slots;
+}
+const RenderOptions& Renderer::options() const { return impl_->options; }
+const World& Renderer::world() const { return impl_->world; }
+const CameraModel& Renderer::camera(const std::string& name) const { return impl_->cam(name); }
+std::vector<std::string> Renderer::camera_names() const {
+  std::vector<std::string> n;
+  for (const auto& c : impl_->cameras) n.push_back(c.name);
+  return n;
+}
+const EglContext& Renderer::context() const { return *impl_->ctx; }
+RenderTimings Renderer::last_timings() const { return impl_->timings; }
+std::size_t Renderer::triangle_count() const { return impl_->triangles; }
+Pose Renderer::camera_pose(const Pose& X_WB, const std::string& camera) const {
+  return X_WB * impl_->cam(camera).X_BC;
+}
+
+void write_png_rgb(const Frame& frame, const std::string& path) {
+  cv::Mat rgb(frame.height, frame.width, CV_8UC3, const_cast<std::uint8_t*>(frame.rgb.data()));
+  cv::Mat bgr;
+  cv::cvtColor(rgb, bgr, cv::COLOR_RGB2BGR);
+  if (!cv::imwrite(path, bgr, {cv::IMWRITE_PNG_COMPRESSION, 9}))
+    throw ConfigError(path + ": cannot write PNG");
+}
+
+std::vector<std::uint8_t> read_png_rgb(const std::string& path, int* width, int* height) {
+  cv::Mat bgr = cv::imread(path, cv::IMREAD_COLOR);
+  if (bgr.empty()) throw ConfigError(path + ": cannot read PNG");
+  cv::Mat rgb;
+  cv::cvtColor(bgr, rgb, cv::COLOR_BGR2RGB);
+  *width = rgb.cols;
+  *height = rgb.rows;
+  return std::vector<std::uint8_t>(rgb.data, rgb.data + rgb.total() * 3);
+}
+
+}  // namespace unav_renderer

@@ -1,0 +1,371 @@
+#include "unav_renderer/scene_geometry.hpp"
+
+#include <assimp/Importer.hpp>
+#include <assimp/postprocess.h>
+#include <assimp/scene.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <fstream>
+#include <map>
+
+#include "noise.hpp"
+#include "unav_renderer/errors.hpp"
+
+namespace unav_renderer {
+
+void MeshData::transform(const Pose& X, const Eigen::Vector3d& scale) {
+  const Eigen::Matrix3d A = X.linear() * scale.asDiagonal();
+  const Eigen::Matrix3d N = A.inverse().transpose();
+  for (std::size_t i = 0; i < vertex_count(); ++i) {
+    Eigen::Vector3d p(positions[3 * i], positions[3 * i + 1], positions[3 * i + 2]);
+    p = A * p + X.translation();
+    for (int k = 0; k < 3; ++k) positions[3 * i + k] = static_cast<float>(p[k]);
+    if (normals.size() == positions.size()) {
+      Eigen::Vector3d n(normals[3 * i], normals[3 * i + 1], normals[3 * i + 2]);
+      n = (N * n).normalized();
+      for (int k = 0; k < 3; ++k) normals[3 * i + k] = static_cast<float>(n[k]);
+    }
+  }
+}
+
+void MeshData::append(const MeshData& o) {
+  const auto base = static_cast<std::uint32_t>(vertex_count());
+  positions.insert(positions.end(), o.positions.begin(), o.positions.end());
+  normals.insert(normals.end(), o.normals.begin(), o.normals.end());
+  uvs.insert(uvs.end(), o.uvs.begin(), o.uvs.end());
+  for (auto i : o.indices) indices.push_back(base + i);
+}
+
+std::size_t SceneGeometry::triangle_count() const {
+  std::size_t n = 0;
+  for (const auto& m : meshes) n += m.mesh.triangle_count();
+  return n;
+}
+
+namespace {
+
+void push3(std::vector<float>& v, const Eigen::Vector3d& p) {
+  v.push_back(static_cast<float>(p.x()));
+  v.push_back(static_cast<float>(p.y()));
+  v.push_back(static_cast<float>(p.z()));
+}
+
+void compute_smooth_normals(MeshData& m) {
+  std::vector<Eigen::Vector3d> acc(m.vertex_count(), Eigen::Vector3d::Zero());
+  auto P = [&](std::uint32_t i) {
+    return Eigen::Vector3d(m.positions[3 * i], m.positions[3 * i + 1], m.positions[3 * i + 2]);
+  };
+  for (std::size_t t = 0; t < m.triangle_count(); ++t) {
+    const auto a = m.indices[3 * t], b = m.indices[3 * t + 1], c = m.indices[3 * t + 2];
+    const Eigen::Vector3d n = (P(b) - P(a)).cross(P(c) - P(a));   // area weighted
+    acc[a] += n;
+    acc[b] += n;
+    acc[c] += n;
+  }
+  m.normals.clear();
+  for (auto& n : acc) push3(m.normals, n.norm() > 0 ? n.normalized() : Eigen::Vector3d::UnitZ());
+}
+
+// Unit icosphere with `subdiv` subdivisions (shared vertices).
+MeshData icosphere(int subdiv) {
+  const double t = (1.0 + std::sqrt(5.0)) / 2.0;
+  std::vector<Eigen::Vector3d> v = {{-1, t, 0}, {1, t, 0}, {-1, -t, 0}, {1, -t, 0},
+                                    {0, -1, t}, {0, 1, t}, {0, -1, -t}, {0, 1, -t},
+                                    {t, 0, -1}, {t, 0, 1}, {-t, 0, -1}, {-t, 0, 1}};
+  for (auto& p : v) p.normalize();
+  std::vector<std::array<std::uint32_t, 3>> f = {
+      {0, 11, 5}, {0, 5, 1}, {0, 1, 7}, {0, 7, 10}, {0, 10, 11}, {1, 5, 9}, {5, 11, 4},
+      {11, 10, 2}, {10, 7, 6}, {7, 1, 8}, {3, 9, 4}, {3, 4, 2}, {3, 2, 6}, {3, 6, 8},
+      {3, 8, 9}, {4, 9, 5}, {2, 4, 11}, {6, 2, 10}, {8, 6, 7}, {9, 8, 1}};
+  for (int s = 0; s < subdiv; ++s) {
+    std::map<std::pair<std::uint32_t, std::uint32_t>, std::uint32_t> mid;
+    auto midpoint = [&](std::uint32_t a, std::uint32_t b) {
+      const auto key = std::make_pair(std::min(a, b), std::max(a, b));
+      auto it = mid.find(key);
+      if (it != mid.end()) return it->second;
+      v.push_back((v[a] + v[b]).normalized());
+      const auto id = static_cast<std::uint32_t>(v.size() - 1);
+      mid[key] = id;
+      return id;
+    };
+    std::vector<std::array<std::uint32_t, 3>> nf;
+    for (const auto& tri : f) {
+      const auto a = midpoint(tri[0], tri[1]), b = midpoint(tri[1], tri[2]), c = midpoint(tri[2], tri[0]);
+      nf.push_back({tri[0], a, c});
+      nf.push_back({tri[1], b, a});
+      nf.push_back({tri[2], c, b});
+      nf.push_back({a, b, c});
+    }
+    f.swap(nf);
+  }
+  MeshData m;
+  for (const auto& p : v) {
+    push3(m.positions, p);
+    push3(m.normals, p);
+    m.uvs.push_back(static_cast<float>(std::atan2(p.y(), p.x())));
+    m.uvs.push_back(static_cast<float>(std::acos(std::clamp(p.z(), -1.0, 1.0))));
+  }
+  for (const auto& tri : f) m.indices.insert(m.indices.end(), tri.begin(), tri.end());
+  return m;
+}
+
+}  // namespace
+
+MeshData make_sphere_mesh(double radius_m, int subdivisions) {
+  MeshData m = icosphere(subdivisions);
+  for (auto& x : m.positions) x = static_cast<float>(x * radius_m);
+  return m;
+}
+
+MeshData make_rock_mesh(std::uint32_t seed, const Eigen::Vector3d& radii_m, int subdivisions) {
+  MeshData m = icosphere(subdivisions);
+  for (std::size_t i = 0; i < m.vertex_count(); ++i) {
+    Eigen::Vector3d p(m.positions[3 * i], m.positions[3 * i + 1], m.positions[3 * i + 2]);
+    // Large lumps + facets: two octaves of 3D value noise on the unit sphere.
+    const double n1 = detail::value_noise3(1.7 * p.x() + 10, 1.7 * p.y() + 20, 1.7 * p.z() + 30, seed);
+    const double n2 = detail::value_noise3(4.1 * p.x(), 4.1 * p.y(), 4.1 * p.z(), seed + 7U);
+    double r = 1.0 + 0.45 * (n1 - 0.5) + 0.15 * (n2 - 0.5);
+    Eigen::Vector3d q = r * p;
+    if (q.z() > 0.35) q.z() = 0.35 + 0.3 * (q.z() - 0.35);   // flattened underside (NED z down)
+    q = q.cwiseProduct(radii_m);
+    for (int k = 0; k < 3; ++k) m.positions[3 * i + k] = static_cast<float>(q[k]);
+  }
+  compute_smooth_normals(m);
+  return m;
+}
+
+MeshData make_box_mesh(const Eigen::Vector3d& size_m) {
+  MeshData m;
+  const Eigen::Vector3d h = 0.5 * size_m;
+  for (int axis = 0; axis < 3; ++axis) {
+    for (int sgn = -1; sgn <= 1; sgn += 2) {
+      Eigen::Vector3d n = Eigen::Vector3d::Zero();
+      n[axis] = sgn;
+      const int u = (axis + 1) % 3, v = (axis + 2) % 3;
+      const auto base = static_cast<std::uint32_t>(m.vertex_count());
+      for (int k = 0; k < 4; ++k) {
+        Eigen::Vector3d p = n.cwiseProduct(h);
+        p[u] = ((k == 1 || k == 2) ? 1 : -1) * h[u];
+        p[v] = (k >= 2 ? 1 : -1) * h[v];
+        push3(m.positions, p);
+        push3(m.normals, n);
+        m.uvs.push_back(static_cast<float>(p[u]));
+        m.uvs.push_back(static_cast<float>(p[v]));
+      }
+      m.indices.insert(m.indices.end(), {base, base + 1, base + 2, base, base + 2, base + 3});
+    }
+  }
+  return m;
+}
+
+MeshData make_plane_mesh(double sx, double sy) {
+  MeshData m;
+  const double hx = 0.5 * sx, hy = 0.5 * sy;
+  const Eigen::Vector3d c[4] = {{-hx, -hy, 0}, {hx, -hy, 0}, {hx, hy, 0}, {-hx, hy, 0}};
+  for (const auto& p : c) {
+    push3(m.positions, p);
+    push3(m.normals, Eigen::Vector3d(0, 0, -1));
+    m.uvs.push_back(static_cast<float>(p.x() + hx));
+    m.uvs.push_back(static_cast<float>(p.y() + hy));
+  }
+  m.indices = {0, 1, 2, 0, 2, 3};
+  return m;
+}
+
+MeshData make_tube_mesh(const std::vector<Eigen::Vector3d>& C, double radius_m, int sides) {
+  MeshData m;
+  if (C.size() < 2) return m;
+  // Parallel-transport frames: no twist along the bends.
+  std::vector<Eigen::Vector3d> T(C.size());
+  for (std::size_t i = 0; i < C.size(); ++i) {
+    const Eigen::Vector3d a = C[i == 0 ? 0 : i - 1], b = C[std::min(i + 1, C.size() - 1)];
+    T[i] = (b - a).normalized();
+  }
+  Eigen::Vector3d N = T[0].cross(Eigen::Vector3d::UnitZ());
+  if (N.norm() < 1e-6) N = T[0].cross(Eigen::Vector3d::UnitX());
+  N.normalize();
+  double arc = 0.0;
+  for (std::size_t i = 0; i < C.size(); ++i) {
+    if (i > 0) {
+      arc += (C[i] - C[i - 1]).norm();
+      const Eigen::Quaterniond q = Eigen::Quaterniond::FromTwoVectors(T[i - 1], T[i]);
+      N = (q * N).normalized();
+      N = (N - T[i] * T[i].dot(N)).normalized();
+    }
+    const Eigen::Vector3d B = T[i].cross(N);
+    for (int s = 0; s <= sides; ++s) {
+      const double a = 2.0 * M_PI * s / sides;
+      const Eigen::Vector3d n = std::cos(a) * N + std::sin(a) * B;
+      push3(m.positions, C[i] + radius_m * n);
+      push3(m.normals, n);
+      m.uvs.push_back(static_cast<float>(arc));
+      m.uvs.push_back(static_cast<float>(a * radius_m));
+    }
+  }
+  const auto ring = static_cast<std::uint32_t>(sides + 1);
+  for (std::uint32_t i = 0; i + 1 < C.size(); ++i)
+    for (std::uint32_t s = 0; s < static_cast<std::uint32_t>(sides); ++s) {
+      const std::uint32_t a = i * ring + s, b = a + 1, c = a + ring, d = c + 1;
+      m.indices.insert(m.indices.end(), {a, c, b, b, c, d});
+    }
+  // Flat end caps.
+  for (int end = 0; end < 2; ++end) {
+    const std::size_t i = end == 0 ? 0 : C.size() - 1;
+    const Eigen::Vector3d n = end == 0 ? Eigen::Vector3d(-T[0]) : T.back();
+    const auto centre = static_cast<std::uint32_t>(m.vertex_count());
+    push3(m.positions, C[i]);
+    push3(m.normals, n);
+    m.uvs.insert(m.uvs.end(), {0.f, 0.f});
+    const std::uint32_t first = static_cast<std::uint32_t>(i) * ring;
+    for (int s = 0; s <= sides; ++s) {
+      const std::uint32_t src = first + s;
+      m.positions.insert(m.positions.end(), m.positions.begin() + 3 * src, m.positions.begin() + 3 * src + 3);
+      push3(m.normals, n);
+      m.uvs.insert(m.uvs.end(), {static_cast<float>(radius_m * std::cos(2 * M_PI * s / sides)),
+                                 static_cast<float>(radius_m * std::sin(2 * M_PI * s / sides))});
+    }
+    for (std::uint32_t s = 0; s < static_cast<std::uint32_t>(sides); ++s)
+      m.indices.insert(m.indices.end(), {centre, centre + 1 + s, centre + 2 + s});
+  }
+  return m;
+}
+
+MeshData make_seabed_mesh(const Seabed& sb) {
+  MeshData m;
+  const int nx = std::max(2, static_cast<int>(std::ceil(sb.size_m.x() / sb.resolution_m)) + 1);
+  const int ny = std::max(2, static_cast<int>(std::ceil(sb.size_m.y() / sb.resolution_m)) + 1);
+  const double n0 = sb.center_ne.x() - 0.5 * sb.size_m.x(), e0 = sb.center_ne.y() - 0.5 * sb.size_m.y();
+  const double dn = sb.size_m.x() / (nx - 1), de = sb.size_m.y() / (ny - 1);
+  for (int i = 0; i < nx; ++i)
+    for (int j = 0; j < ny; ++j) {
+      const double n = n0 + i * dn, e = e0 + j * de;
+      const double z = sb.depth_at(n, e);
+      // Normal from central differences of the depth field (NED: up is -z).
+      const double h = 0.5 * std::min(dn, de);
+      const double dzdn = (sb.depth_at(n + h, e) - sb.depth_at(n - h, e)) / (2 * h);
+      const double dzde = (sb.depth_at(n, e + h) - sb.depth_at(n, e - h)) / (2 * h);
+      push3(m.positions, Eigen::Vector3d(n, e, z));
+      push3(m.normals, Eigen::Vector3d(dzdn, dzde, -1.0).normalized());
+      m.uvs.push_back(static_cast<float>(n));
+      m.uvs.push_back(static_cast<float>(e));
+    }
+  for (int i = 0; i + 1 < nx; ++i)
+    for (int j = 0; j + 1 < ny; ++j) {
+      const auto a = static_cast<std::uint32_t>(i * ny + j), b = a + 1, c = a + ny, d = c + 1;
+      m.indices.insert(m.indices.end(), {a, b, c, b, d, c});
+    }
+  return m;
+}
+
+MeshData load_mesh_file(const std::string& path) {
+  {
+    std::ifstream f(path, std::ios::binary);
+    if (!f.good()) throw ConfigError(path + ": mesh file not found or not readable");
+  }
+  Assimp::Importer importer;
+  const aiScene* scene = importer.ReadFile(
+      path, aiProcess_Triangulate | aiProcess_GenSmoothNormals | aiProcess_JoinIdenticalVertices |
+                aiProcess_PreTransformVertices | aiProcess_SortByPType);
+  if (!scene || !scene->mRootNode || (scene->mFlags & AI_SCENE_FLAGS_INCOMPLETE))
+    throw ConfigError(path + ": cannot load mesh: " + importer.GetErrorString());
+  MeshData out;
+  for (unsigned mi = 0; mi < scene->mNumMeshes; ++mi) {
+    const aiMesh* am = scene->mMeshes[mi];
+    if (!(am->mPrimitiveTypes & aiPrimitiveType_TRIANGLE)) continue;
+    MeshData m;
+    for (unsigned v = 0; v < am->mNumVertices; ++v) {
+      const auto& p = am->mVertices[v];
+      m.positions.insert(m.positions.end(), {p.x, p.y, p.z});
+      const aiVector3D n = am->HasNormals() ? am->mNormals[v] : aiVector3D(0, 0, -1);
+      m.normals.insert(m.normals.end(), {n.x, n.y, n.z});
+      const aiVector3D t = am->HasTextureCoords(0) ? am->mTextureCoords[0][v] : aiVector3D(0, 0, 0);
+      m.uvs.insert(m.uvs.end(), {t.x, t.y});
+    }
+    for (unsigned f = 0; f < am->mNumFaces; ++f) {
+      const aiFace& face = am->mFaces[f];
+      if (face.mNumIndices != 3) continue;
+      m.indices.insert(m.indices.end(), {face.mIndices[0], face.mIndices[1], face.mIndices[2]});
+    }
+    out.append(m);
+  }
+  if (out.triangle_count() == 0) throw ConfigError(path + ": mesh file contains no triangles");
+  return out;
+}
+
+void write_obj(const MeshData& m, const std::string& path) {
+  std::ofstream f(path);
+  if (!f) throw ConfigError(path + ": cannot write OBJ file");
+  f << "# generated by unav_renderer (procedural rock)\n";
+  f.precision(5);
+  for (std::size_t i = 0; i < m.vertex_count(); ++i)
+    f << "v " << m.positions[3 * i] << ' ' << m.positions[3 * i + 1] << ' ' << m.positions[3 * i + 2] << '\n';
+  for (std::size_t i = 0; i < m.normals.size() / 3; ++i)
+    f << "vn " << m.normals[3 * i] << ' ' << m.normals[3 * i + 1] << ' ' << m.normals[3 * i + 2] << '\n';
+  for (std::size_t t = 0; t < m.triangle_count(); ++t) {
+    f << 'f';
+    for (int k = 0; k < 3; ++k) f << ' ' << m.indices[3 * t + k] + 1 << "//" << m.indices[3 * t + k] + 1;
+    f << '\n';
+  }
+  if (!f) throw ConfigError(path + ": write failed");
+}
+
+SceneGeometry build_scene_geometry(const World& w) {
+  SceneGeometry g;
+  if (w.seabed.enabled) {
+    g.meshes.push_back({"seabed", make_seabed_mesh(w.seabed), SegClass::kSeabed, w.seabed.material, false});
+  }
+  for (const auto& p : w.pipelines)
+    g.meshes.push_back({"pipeline:" + p.name, make_tube_mesh(p.centerline_W, p.radius_m, 16), SegClass::kPipeline, p.material, false});
+  // Rocks sharing a material are merged into one draw.
+  std::vector<SceneMesh> rock_groups;
+  for (const auto& r : w.rocks) {
+    MeshData m = make_rock_mesh(r.seed, r.radii_m, r.radii_m.maxCoeff() < 0.2 ? 1 : 2);
+    m.transform(pose_from_xyz_rpy(r.p_W, {0, 0, r.yaw_rad}));
+    SceneMesh* grp = nullptr;
+    for (auto& gm : rock_groups)
+      if (gm.material.texture == r.material.texture && gm.material.albedo == r.material.albedo &&
+          gm.material.uv_scale_m == r.material.uv_scale_m)
+        grp = &gm;
+    if (!grp) {
+      rock_groups.push_back({"rocks", {}, SegClass::kRock, r.material, true});
+      grp = &rock_groups.back();
+    }
+    grp->mesh.append(m);
+  }
+  for (auto& gm : rock_groups) g.meshes.push_back(std::move(gm));
+  if (w.seabed.enabled && w.seabed.far_extent_m > std::max(w.seabed.size_m.x(), w.seabed.size_m.y())) {
+    // Coarse flat far seabed, below the detailed patch's lowest point; drawn last (early depth
+    // test rejects it under the patch).
+    Seabed far = w.seabed;
+    far.size_m = {w.seabed.far_extent_m, w.seabed.far_extent_m};
+    far.resolution_m = w.seabed.far_extent_m / 32.0;
+    far.relief_amplitude_m = 0.0;
+    far.hm_width = far.hm_height = 0;
+    far.hm_values.clear();
+    far.depth_m = w.seabed.depth_m + w.seabed.relief_amplitude_m + 0.2;
+    g.meshes.push_back({"seabed_far", make_seabed_mesh(far), SegClass::kSeabed, w.seabed.material, false});
+  }
+  for (const auto& o : w.objects) {
+    MeshData m;
+    if (!o.mesh_file.empty()) {
+      try {
+        m = load_mesh_file(o.mesh_file);
+      } catch (const ConfigError& e) {
+        throw ConfigError(w.file + ": object '" + o.name + "': " + e.what());
+      }
+    } else if (o.shape == "box") {
+      m = make_box_mesh(o.size_m);
+    } else if (o.shape == "sphere") {
+      m = make_sphere_mesh(0.5 * o.size_m.x(), 3);
+    } else {
+      m = make_plane_mesh(o.size_m.x(), o.size_m.y());
+    }
+    m.transform(o.X_WO, o.scale);
+    g.meshes.push_back({"object:" + o.name, std::move(m), o.seg_class, o.material, o.shape != "plane"});
+  }
+  return g;
+}
+
+}  // namespace unav_renderer

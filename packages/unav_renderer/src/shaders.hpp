@@ -1,0 +1,347 @@
+// GLSL 3.30 core shaders, embedded. World frame NED; camera optical frame (x right, y down,
+// z forward). Radiometry in linear "display units" (E0 = 1 gives white on an albedo-1 surface).
+#pragma once
+
+namespace unav_renderer::detail {
+
+// ---------------------------------------------------------------- scene pass (geometry)
+inline constexpr const char* kSceneVS = R"GLSL(
+#version 330 core
+layout(location = 0) in vec3 a_pos_W;
+layout(location = 1) in vec3 a_nrm_W;
+layout(location = 2) in vec2 a_uv;
+uniform mat4 u_view;   // world -> optical
+uniform mat4 u_proj;   // optical -> clip (from K)
+out vec3 v_pos_W;
+out vec3 v_nrm_W;
+out vec2 v_uv;
+out float v_z_C;
+void main() {
+  vec4 p_C = u_view * vec4(a_pos_W, 1.0);
+  v_pos_W = a_pos_W;
+  v_nrm_W = a_nrm_W;
+  v_uv = a_uv;
+  v_z_C = p_C.z;
+  gl_Position = u_proj * p_C;
+}
+)GLSL";
+
+inline constexpr const char* kSceneFS = R"GLSL(
+#version 330 core
+in vec3 v_pos_W;
+in vec3 v_nrm_W;
+in vec2 v_uv;
+in float v_z_C;
+uniform sampler2D u_tex;
+uniform vec3 u_albedo;
+uniform float u_uv_scale;
+uniform bool u_triplanar;
+uniform bool u_macro;        // modulate with a low-frequency copy (breaks tiling)
+uniform float u_seg;
+uniform vec3 u_cam_W;
+uniform vec3 u_sun_dir_W;    // direction the sunlight travels
+uniform vec3 u_E0;           // surface irradiance
+uniform float u_ambient;     // diffuse share of the downwelling light
+uniform vec3 u_Kd;
+uniform vec3 u_betaD;
+uniform int u_nlamps;
+uniform vec3 u_lamp_pos_W[4];
+uniform vec3 u_lamp_dir_W[4];
+uniform vec3 u_lamp_I[4];
+uniform vec2 u_lamp_cos[4];  // cos(outer), cos(inner)
+layout(location = 0) out vec4 o_color;   // rgb: direct signal D = J exp(-beta_D z); a: seg id
+layout(location = 1) out float o_depth;  // z along the optical axis [m]
+
+vec3 tex_at(vec2 uv) { return texture(u_tex, uv / u_uv_scale).rgb; }
+
+void main() {
+  vec3 n = normalize(v_nrm_W);
+  vec3 V = u_cam_W - v_pos_W;
+  float range = length(V);
+  V /= max(range, 1e-6);
+  if (dot(n, V) < 0.0) n = -n;   // two-sided surfaces
+  vec3 albedo;
+  if (u_triplanar) {
+    vec3 w = pow(abs(n), vec3(4.0));
+    w /= (w.x + w.y + w.z);
+    albedo = tex_at(v_pos_W.yz) * w.x + tex_at(v_pos_W.xz) * w.y + tex_at(v_pos_W.xy) * w.z;
+  } else {
+    albedo = tex_at(v_uv);
+  }
+  if (u_macro) albedo *= 0.7 + 0.6 * texture(u_tex, v_uv / (u_uv_scale * 7.31) + vec2(0.37, 0.11)).g;
+  albedo *= u_albedo;
+
+  // Sunlight at this depth: E0 exp(-K_d d); diffuse part from the upper hemisphere, direct
+  // part with the cosine law. A surface facing straight up under a vertical sun gets E(d).
+  float depth = max(v_pos_W.z, 0.0);
+  vec3 Ed = u_E0 * exp(-u_Kd * depth);
+  float up = -n.z;
+  float ndl = max(dot(n, -u_sun_dir_W), 0.0);
+  vec3 E = Ed * (u_ambient * (0.5 + 0.5 * up) + (1.0 - u_ambient) * ndl);
+
+  // Lamps: inverse square, cone, attenuated lamp -> surface (surface -> camera below).
+  for (int i = 0; i < u_nlamps; ++i) {
+    vec3 L = u_lamp_pos_W[i] - v_pos_W;
+    float dl = max(length(L), 0.05);
+    vec3 l = L / dl;
+    float cone = smoothstep(u_lamp_cos[i].x, u_lamp_cos[i].y, dot(-l, u_lamp_dir_W[i]));
+    E += u_lamp_I[i] * cone * max(dot(n, l), 0.0) / (dl * dl) * exp(-u_betaD * dl);
+  }
+  vec3 J = albedo * E;
+  o_color = vec4(J * exp(-u_betaD * range), u_seg);
+  o_depth = v_z_C;
+}
+)GLSL";
+
+// ---------------------------------------------------------------- marine snow (points)
+inline constexpr const char* kSnowVS = R"GLSL(
+#version 330 core
+layout(location = 0) in vec3 a_seed;   // uniform in [0, 1)^3
+uniform mat4 u_view;
+uniform mat4 u_proj;
+uniform vec3 u_cam_W;
+uniform float u_box;
+uniform float u_time;
+uniform float u_size_m;
+uniform float u_fx;
+out vec3 v_pos_W;
+out float v_cover;
+void main() {
+  // Particles fixed in the water (sinking slowly), wrapped into a box around the camera.
+  vec3 p = a_seed * u_box + vec3(0.0, 0.0, 0.01 * u_time);
+  vec3 rel = mod(p - u_cam_W, u_box) - 0.5 * u_box;
+  vec3 pos_W = u_cam_W + rel;
+  vec4 p_C = u_view * vec4(pos_W, 1.0);
+  float px = u_size_m * u_fx / max(p_C.z, 1e-3);
+  gl_PointSize = clamp(px, 1.0, 5.0);
+  v_cover = clamp(px * px, 0.0, 1.0);   // sub-pixel particles cover part of a pixel
+  v_pos_W = pos_W;
+  gl_Position = u_proj * p_C;
+  if (p_C.z < 0.15) gl_Position = vec4(2.0, 2.0, 2.0, 1.0);   // too close: clip
+}
+)GLSL";
+
+inline constexpr const char* kSnowFS = R"GLSL(
+#version 330 core
+in vec3 v_pos_W;
+in float v_cover;
+uniform vec3 u_cam_W;
+uniform vec3 u_E0;
+uniform vec3 u_Kd;
+uniform vec3 u_betaD;
+uniform int u_nlamps;
+uniform vec3 u_lamp_pos_W[4];
+uniform vec3 u_lamp_dir_W[4];
+uniform vec3 u_lamp_I[4];
+uniform vec2 u_lamp_cos[4];
+layout(location = 0) out vec4 o_color;
+layout(location = 1) out float o_depth;
+void main() {
+  vec2 q = gl_PointCoord * 2.0 - 1.0;
+  float disc = clamp(1.0 - dot(q, q), 0.0, 1.0);
+  vec3 E = 0.6 * u_E0 * exp(-u_Kd * max(v_pos_W.z, 0.0));
+  for (int i = 0; i < u_nlamps; ++i) {
+    vec3 L = u_lamp_pos_W[i] - v_pos_W;
+    float dl = max(length(L), 1.0);
+    float cone = smoothstep(u_lamp_cos[i].x, u_lamp_cos[i].y, dot(-L / dl, u_lamp_dir_W[i]));
+    E += u_lamp_I[i] * cone / (dl * dl) * exp(-u_betaD * dl);
+  }
+  float range = length(u_cam_W - v_pos_W);
+  o_color = vec4(0.5 * E * exp(-u_betaD * range) * disc * v_cover, 0.0);
+  o_depth = 0.0;
+}
+)GLSL";
+
+// ---------------------------------------------------------------- full-screen post pass
+inline constexpr const char* kPostVS = R"GLSL(
+#version 330 core
+void main() {
+  vec2 p = vec2((gl_VertexID == 1) ? 3.0 : -1.0, (gl_VertexID == 2) ? 3.0 : -1.0);
+  gl_Position = vec4(p, 0.0, 1.0);
+}
+)GLSL";
+
+inline constexpr const char* kPostFS = R"GLSL(
+#version 330 core
+uniform sampler2D u_color;     // RGBA16F: D and seg
+uniform sampler2D u_depth;     // R32F: z_C
+uniform sampler2D u_distmap;   // RG32F: undistorted pixel for each output pixel
+uniform bool u_use_distmap;
+uniform vec4 u_K;              // fx, fy, cx, cy
+uniform ivec2 u_size;
+uniform vec3 u_betaD;
+uniform vec3 u_betaB;
+uniform vec3 u_Binf;           // veiling light at the camera depth
+uniform float u_veil_gradient;
+uniform mat3 u_R_WC;           // optical -> world rotation
+uniform bool u_fwd;
+uniform float u_fwd_per_m;
+uniform float u_blur_px_per_m;
+uniform sampler2D u_inscatter; // RGBA16F, low resolution: lamp light scattered into the ray
+uniform int u_nlamps_scatter;
+uniform float u_march_max_m;
+uniform float u_gain;
+uniform float u_noise_std;
+uniform uint u_seed;
+uniform bool u_srgb;
+layout(location = 0) out vec4 o_rgba;   // rgb8 + seg id in alpha
+layout(location = 1) out float o_depth;
+
+const float PI = 3.14159265358979;
+
+uint pcg(uint v) {
+  uint state = v * 747796405u + 2891336453u;
+  uint word = ((state >> ((state >> 28u) + 4u)) ^ state) * 277803737u;
+  return (word >> 22u) ^ word;
+}
+float u01(uint h) { return (float(h >> 8u) + 0.5) / 16777216.0; }
+
+vec3 encode(vec3 x) {
+  // Soft shoulder above 0.8 (identity below), then sRGB.
+  vec3 s = 0.8 + 0.2 * (1.0 - exp(-(x - 0.8) / 0.2));
+  x = mix(x, s, step(vec3(0.8), x));
+  x = clamp(x, 0.0, 1.0);
+  if (!u_srgb) return x;
+  return mix(12.92 * x, 1.055 * pow(x, vec3(1.0 / 2.4)) - 0.055, step(vec3(0.0031308), x));
+}
+
+void main() {
+  ivec2 pix = ivec2(gl_FragCoord.xy);
+  vec2 src = u_use_distmap ? texelFetch(u_distmap, pix, 0).xy : vec2(pix);
+  ivec2 si = ivec2(floor(src + 0.5));
+  bool inside = si.x >= 0 && si.y >= 0 && si.x < u_size.x && si.y < u_size.y;
+  vec2 uv = (src + 0.5) / vec2(u_size);
+  float seg = 0.0;
+  float z = 0.0;
+  vec3 D = vec3(0.0);
+  if (inside) {
+    vec4 c = texelFetch(u_color, si, 0);
+    seg = c.a;
+    z = texelFetch(u_depth, si, 0).x;
+    D = u_use_distmap ? textureLod(u_color, uv, 0.0).rgb : c.rgb;
+  }
+  vec3 ray = vec3((src.x - u_K.z) / u_K.x, (src.y - u_K.w) / u_K.y, 1.0);
+  float raylen = length(ray);
+  vec3 d = ray / raylen;
+  bool hit = seg > 0.5;
+  float range = hit ? z * raylen : 1.0e6;
+
+  // Forward scattering: a share 1 - exp(-f z) of the direct signal spreads over a disc
+  // whose radius grows with range (blur read from the mip chain: smooth, no ghost taps).
+  if (u_fwd && hit) {
+    float w = 1.0 - exp(-u_fwd_per_m * range);
+    float rad = clamp(u_blur_px_per_m * range, 0.0, 16.0);
+    float lod = min(log2(max(rad, 1.0)), 4.0);
+    vec3 blur = textureLod(u_color, uv, lod).rgb;   // trilinear mip sample: a smooth disc
+    D = mix(D, blur, w);
+  }
+
+  // Backscatter of ambient light towards the veiling light. The veiling light is brighter
+  // looking up than down (downwelling radiance): factor 1 + gradient * up-component of the ray.
+  vec3 d_W = u_R_WC * d;
+  vec3 B = u_Binf * (1.0 + u_veil_gradient * (-d_W.z)) * (1.0 - exp(-u_betaB * range));
+
+  // Depth-aware upsampling of the low-resolution in-scatter: of the 4 nearest texels, trust
+  // those whose marched length matches this pixel's (no halos at silhouettes).
+  vec3 Ls = vec3(0.0);
+  if (u_nlamps_scatter > 0) {
+    vec2 isz = vec2(textureSize(u_inscatter, 0));
+    vec2 p = uv * isz - 0.5;
+    vec2 f = fract(p);
+    ivec2 b = ivec2(floor(p));
+    float tmax = min(range, u_march_max_m);
+    float wsum = 0.0;
+    for (int j = 0; j < 2; ++j)
+      for (int i = 0; i < 2; ++i) {
+        ivec2 q = clamp(b + ivec2(i, j), ivec2(0), ivec2(isz) - 1);
+        vec4 s = texelFetch(u_inscatter, q, 0);
+        float wb = (i == 1 ? f.x : 1.0 - f.x) * (j == 1 ? f.y : 1.0 - f.y);
+        float wd = 1.0 / (1e-3 + abs(s.a - tmax) / max(tmax, 0.1));
+        Ls += s.rgb * wb * wd;
+        wsum += wb * wd;
+      }
+    Ls /= max(wsum, 1e-9);
+  }
+
+  vec3 I = (D + B + Ls) * u_gain;
+  vec3 col = encode(I);
+  if (u_noise_std > 0.0) {
+    uint h = pcg(uint(pix.x) + 8192u * uint(pix.y) + pcg(u_seed));
+    for (int c = 0; c < 3; ++c) {
+      uint h1 = pcg(h + uint(c) * 0x9E3779B9u);
+      uint h2 = pcg(h1);
+      float g = sqrt(-2.0 * log(u01(h1))) * cos(2.0 * PI * u01(h2));
+      col[c] = clamp(col[c] + u_noise_std * g, 0.0, 1.0);
+    }
+  }
+  o_rgba = vec4(col, seg / 255.0);
+  o_depth = hit ? z : uintBitsToFloat(0x7f800000u);
+}
+)GLSL";
+
+// ---------------------------------------------------------------- lamp in-scattering
+// Single scattering of the lamps' light into each view ray, ray-marched with samples dense
+// near the camera (t = tmax f^2), Schlick phase function plus a backward share. Runs at a
+// fraction of the image resolution: the veil is smooth, and this is the costliest shader.
+inline constexpr const char* kInscatterFS = R"GLSL(
+#version 330 core
+uniform sampler2D u_color;     // RGBA16F: a = seg id (0 = water)
+uniform sampler2D u_depth;     // R32F: z_C
+uniform vec4 u_K;              // fx, fy, cx, cy of the full-resolution (internal) image
+uniform ivec2 u_size;          // full-resolution size
+uniform float u_scale;         // full-resolution pixels per low-resolution pixel
+uniform vec3 u_betaD;
+uniform int u_nlamps;
+uniform vec3 u_lamp_pos_C[4];
+uniform vec3 u_lamp_dir_C[4];
+uniform vec3 u_lamp_I[4];
+uniform vec2 u_lamp_cos[4];
+uniform vec3 u_b_scatter;
+uniform float u_schlick_k;
+uniform float u_back_frac;
+uniform int u_nsamples;
+uniform float u_march_max_m;
+layout(location = 0) out vec4 o_Ls;
+const float PI = 3.14159265358979;
+void main() {
+  vec2 src = (gl_FragCoord.xy) * u_scale - 0.5;   // full-res pixel coordinates of this texel
+  ivec2 si = clamp(ivec2(floor(src + 0.5)), ivec2(0), u_size - 1);
+  float seg = texelFetch(u_color, si, 0).a;
+  float z = texelFetch(u_depth, si, 0).x;
+  vec3 ray = vec3((src.x - u_K.z) / u_K.x, (src.y - u_K.w) / u_K.y, 1.0);
+  float raylen = length(ray);
+  vec3 d = ray / raylen;
+  float range = seg > 0.5 ? z * raylen : 1.0e6;
+  float tmax = min(range, u_march_max_m);
+  float k = u_schlick_k;
+  vec3 Ls = vec3(0.0);
+  for (int s = 0; s < u_nsamples; ++s) {
+    float f = (float(s) + 0.5) / float(u_nsamples);
+    float t = tmax * f * f;
+    float dt = 2.0 * tmax * f / float(u_nsamples);
+    vec3 x = d * t;
+    vec3 trans_cam = exp(-u_betaD * t);
+    for (int i = 0; i < u_nlamps; ++i) {
+      vec3 L = x - u_lamp_pos_C[i];
+      float dl = max(length(L), 0.05);
+      vec3 l = L / dl;   // propagation direction of the lamp light
+      float cone = smoothstep(u_lamp_cos[i].x, u_lamp_cos[i].y, dot(l, u_lamp_dir_C[i]));
+      float cth = dot(l, -d);   // cosine of the scattering angle
+      float den = 1.0 - k * cth;
+      float ph = (1.0 - u_back_frac) * (1.0 - k * k) / (4.0 * PI * den * den) +
+                 u_back_frac * ((cth < 0.0) ? 1.0 / (2.0 * PI) : 0.0);
+      Ls += u_b_scatter * (ph * cone / (dl * dl) * dt) * u_lamp_I[i] * exp(-u_betaD * dl) * trans_cam;
+    }
+  }
+  o_Ls = vec4(Ls, tmax);   // alpha: marched length, for depth-aware upsampling
+}
+)GLSL";
+
+// ---------------------------------------------------------------- context self-test
+inline constexpr const char* kConstFS = R"GLSL(
+#version 330 core
+out vec4 o;
+void main() { o = vec4(0.25, 0.5, 0.75, 1.0); }
+)GLSL";
+
+}  // namespace unav_renderer::detail

@@ -1,0 +1,89 @@
+// Water presets and camera configuration (no OpenGL).
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+
+#include "unav_renderer/camera.hpp"
+#include "unav_renderer/errors.hpp"
+#include "unav_renderer/water.hpp"
+
+using namespace unav_renderer;
+namespace fs = std::filesystem;
+
+namespace {
+const std::string kRoot = UNAV_REPO_ROOT;
+}
+
+TEST(Water, ConfigFilesMatchBuiltInPresets) {
+  const auto names = jerlov_preset_names();
+  ASSERT_EQ(names.size(), 10u);
+  for (const auto& n : names) {
+    const WaterModel a = jerlov_preset(n);
+    const WaterModel b = load_water_file(kRoot + "/config/water/" + n + ".yaml");
+    EXPECT_EQ(a.name, b.name);
+    // Files print 4 significant digits.
+    EXPECT_TRUE(a.beta_D.isApprox(b.beta_D, 1e-3)) << n;
+    EXPECT_TRUE(a.beta_B.isApprox(b.beta_B, 1e-3)) << n;
+    EXPECT_TRUE(a.K_d.isApprox(b.K_d, 1e-3)) << n;
+    EXPECT_TRUE(a.B_inf.isApprox(b.B_inf, 1e-3)) << n;
+    EXPECT_TRUE(a.b_scatter.isApprox(b.b_scatter, 1e-3)) << n;
+    EXPECT_NEAR(a.forward_scatter_per_m, b.forward_scatter_per_m, 1e-9) << n;
+  }
+}
+
+TEST(Water, ReferenceTableValuesAndVeilingLight) {
+  const WaterModel ii = jerlov_preset("II");
+  EXPECT_NEAR(ii.beta_D[0], 0.223, 1e-12);
+  EXPECT_NEAR(ii.beta_D[2], 0.062, 1e-12);
+  EXPECT_EQ(jerlov_preset("jerlov_9C").name, "jerlov_9C");
+  // Veiling light decays with depth like the downwelling light: B_inf exp(-K_d d).
+  const Eigen::Vector3d v = ii.veiling_light_at(10.0);
+  for (int c = 0; c < 3; ++c) EXPECT_NEAR(v[c], ii.B_inf[c] * std::exp(-ii.K_d[c] * 10.0), 1e-12);
+  // Schlick k for g = 0.92: 1.55 g - 0.55 g^3.
+  EXPECT_NEAR(ii.schlick_k(), 1.55 * 0.92 - 0.55 * 0.92 * 0.92 * 0.92, 1e-12);
+  EXPECT_THROW(jerlov_preset("IV"), ConfigError);
+}
+
+TEST(Camera, DefaultVehicleCamerasFromConfig) {
+  const auto cams = load_cameras(kRoot + "/config/sensors/bluerov2_cameras.yaml");
+  ASSERT_EQ(cams.size(), 2u);
+  const CameraModel& front = cams[0];
+  const CameraModel& down = cams[1];
+  EXPECT_EQ(front.name, "front");
+  EXPECT_EQ(down.name, "down");
+  EXPECT_EQ(down.width, 320);   // the paper's policy input: 180 x 320 (h x w)
+  EXPECT_EQ(down.height, 180);
+  // Optical z (column 2 of R_BC) is body x for the front camera, body z for the down camera.
+  EXPECT_TRUE(front.X_BC.linear().col(2).isApprox(Eigen::Vector3d::UnitX(), 1e-12));
+  EXPECT_TRUE(down.X_BC.linear().col(2).isApprox(Eigen::Vector3d::UnitZ(), 1e-12));
+  // Down camera: image right = body right, image up (-y optical) = body forward.
+  EXPECT_TRUE(down.X_BC.linear().col(0).isApprox(Eigen::Vector3d::UnitY(), 1e-12));
+  EXPECT_TRUE((-down.X_BC.linear().col(1)).isApprox(Eigen::Vector3d::UnitX(), 1e-12));
+  // fx from the horizontal FOV: (w / 2) / tan(hfov / 2) = 160 for 90 deg.
+  EXPECT_NEAR(down.fx, 160.0, 1e-9);
+  EXPECT_NEAR(down.cx, 159.5, 1e-12);
+  EXPECT_TRUE(front.has_distortion());
+}
+
+TEST(Camera, BadFieldOfViewNamesFileAndKey) {
+  const fs::path d = fs::temp_directory_path() / ("unav_cam_" + std::to_string(::getpid()));
+  fs::create_directories(d);
+  const std::string f = (d / "cams.yaml").string();
+  std::ofstream(f) << "cameras:\n  - {name: c, width: 64, height: 48, hfov_deg: 0}\n";
+  try {
+    load_cameras(f);
+    FAIL() << "no error";
+  } catch (const ConfigError& e) {
+    const std::string m = e.what();
+    EXPECT_NE(m.find(f), std::string::npos) << m;
+    EXPECT_NE(m.find("cameras[0].hfov_deg"), std::string::npos) << m;
+  }
+  std::ofstream(f) << "cameras:\n  - {name: c, width: 64, height: 48, intrinsics: {fx: 50, fy: 51, cx: 30, cy: 20}}\n";
+  const auto cams = load_cameras(f);
+  EXPECT_NEAR(cams[0].K()(1, 1), 51.0, 1e-12);
+  std::ofstream(f) << "cameras:\n  - {name: c, width: 64, height: 48, hfov_deg: 60, lens: fisheye}\n";
+  EXPECT_THROW(load_cameras(f), ConfigError);
+  EXPECT_THROW(CameraModel::from_hfov("x", 64, 48, -0.1), ConfigError);
+}

@@ -1,0 +1,198 @@
+// World loading, pipeline centre-line API, scene geometry and mesh files (no OpenGL).
+#include <gtest/gtest.h>
+
+#include <assimp/Exporter.hpp>
+#include <assimp/Importer.hpp>
+#include <assimp/postprocess.h>
+#include <assimp/scene.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+
+#include "unav_renderer/errors.hpp"
+#include "unav_renderer/scene_geometry.hpp"
+#include "unav_renderer/world.hpp"
+
+using namespace unav_renderer;
+namespace fs = std::filesystem;
+
+namespace {
+
+const std::string kRoot = UNAV_REPO_ROOT;
+
+fs::path temp_dir(const std::string& name) {
+  const fs::path d = fs::temp_directory_path() / ("unav_renderer_test_" + name + "_" + std::to_string(::getpid()));
+  fs::create_directories(d);
+  return d;
+}
+
+std::string write_file(const fs::path& p, const std::string& text) {
+  std::ofstream(p) << text;
+  return p.string();
+}
+
+// Expect a ConfigError whose message contains every fragment.
+template <typename F>
+void expect_config_error(F&& f, std::initializer_list<std::string> fragments) {
+  try {
+    f();
+    ADD_FAILURE() << "no ConfigError thrown";
+  } catch (const ConfigError& e) {
+    for (const auto& frag : fragments)
+      EXPECT_NE(std::string(e.what()).find(frag), std::string::npos) << "message: " << e.what() << "\nmissing: " << frag;
+  }
+}
+
+double wrap(double a) { return std::atan2(std::sin(a), std::cos(a)); }
+
+}  // namespace
+
+TEST(World, PipeInspectionHasTwentyMetrePipeWithLeftThenRightTurn) {
+  const World w = load_world(kRoot + "/worlds/pipe_inspection/world.yaml");
+  ASSERT_EQ(w.pipelines.size(), 1u);
+  const Pipeline& p = w.pipelines[0];
+  EXPECT_GT(p.length_m(), 18.0);
+  EXPECT_LT(p.length_m(), 24.0);
+  EXPECT_NEAR(w.seabed.depth_m, 10.0, 1e-9);
+  for (const auto& v : p.points_W) EXPECT_NEAR(v.z(), 10.0 - 0.25 * 0.6, 0.2);   // on the seabed
+  // Heading changes at the vertices: NED heading atan2(east, north); a left turn decreases it.
+  std::vector<double> turns;
+  for (std::size_t i = 1; i + 1 < p.points_W.size(); ++i) {
+    const Eigen::Vector3d a = p.points_W[i] - p.points_W[i - 1], b = p.points_W[i + 1] - p.points_W[i];
+    turns.push_back(wrap(std::atan2(b.y(), b.x()) - std::atan2(a.y(), a.x())));
+  }
+  ASSERT_EQ(turns.size(), 2u);
+  EXPECT_LT(turns[0], -0.5);   // left
+  EXPECT_GT(turns[1], 0.5);    // right
+  EXPECT_GE(w.rocks.size(), 20u);
+  EXPECT_EQ(w.lamps.size(), 2u);
+  EXPECT_EQ(w.water.name, "jerlov_IB");
+}
+
+TEST(World, LoopVariantEndsNearItsStart) {
+  const World w = load_world(kRoot + "/worlds/pipe_inspection_loop/world.yaml");
+  ASSERT_EQ(w.pipelines.size(), 1u);
+  const auto& c = w.pipelines[0].centerline_W;
+  EXPECT_LT((c.front() - c.back()).head<2>().norm(), 2.5);
+  EXPECT_GT(w.pipelines[0].length_m(), 30.0);
+}
+
+TEST(World, NearestPipePointDistanceHeadingAndSide) {
+  const World w = load_world(kRoot + "/worlds/pipe_inspection/world.yaml");
+  // First leg runs north along east = 0 from north 0 to 7 (bend starts 7 - 1.5 tan(22.5 deg)).
+  const PipeQuery q = nearest_pipe_point(w, {3.0, 1.0, 8.0});
+  ASSERT_TRUE(q.valid);
+  EXPECT_NEAR(q.horizontal_distance_m, 1.0, 1e-9);
+  EXPECT_NEAR(q.heading_rad, 0.0, 1e-9);
+  EXPECT_NEAR(q.lateral_m, 1.0, 1e-9);   // east of a north-going pipe = right
+  EXPECT_NEAR(q.arc_length_m, 3.0, 1e-3);   // the leg slopes a few mm with the seabed relief
+  EXPECT_NEAR(distance_to_pipe(w, {3.0, -0.4, 9.0}), 0.4, 1e-9);
+  EXPECT_NEAR(nearest_pipe_point(w, {3.0, -0.4, 9.0}).lateral_m, -0.4, 1e-9);
+  // Middle leg heads north-west (-45 deg).
+  EXPECT_NEAR(pipe_heading(w, {9.0, -2.0, 9.0}), -M_PI / 4, 1e-6);
+  // Last leg heads north again.
+  EXPECT_NEAR(pipe_heading(w, {16.0, -4.5, 9.0}), 0.0, 1e-6);
+  // Inside the first bend the heading lies between the legs' headings.
+  const double h = pipe_heading(w, {7.0, -0.3, 9.0});
+  EXPECT_LT(h, 0.0);
+  EXPECT_GT(h, -M_PI / 4);
+}
+
+TEST(World, BentCenterlineKeepsBendRadius) {
+  // 90 deg corner with a 2 m bend: the arc midpoint lies R (sqrt2 - 1) from the corner.
+  const auto c = bent_centerline({{0, 0, 0}, {10, 0, 0}, {10, 10, 0}}, 2.0, 0.01);
+  double dmin = 1e9;
+  for (const auto& p : c) dmin = std::min(dmin, (p - Eigen::Vector3d(10, 0, 0)).norm());
+  EXPECT_NEAR(dmin, 2.0 * (std::sqrt(2.0) - 1.0), 1e-3);   // sampling 1 cm -> < 1 mm error
+  for (std::size_t i = 1; i < c.size(); ++i) EXPECT_LE((c[i] - c[i - 1]).norm(), 0.0101);
+}
+
+TEST(WorldErrors, UnknownKeyNamesFileAndKey) {
+  const auto d = temp_dir("unknown_key");
+  const auto f = write_file(d / "world.yaml", "name: x\nseabed: {depth_m: 10, colour: red}\n");
+  expect_config_error([&] { load_world(f); }, {f, "seabed.colour", "unknown key"});
+  const auto g = write_file(d / "world2.yaml", "name: x\nsea_bed: {}\n");
+  expect_config_error([&] { load_world(g); }, {g, "sea_bed"});
+}
+
+TEST(WorldErrors, MissingMeshNamesFileAndKey) {
+  const auto d = temp_dir("missing_mesh");
+  const auto f = write_file(d / "world.yaml", "objects:\n  - {name: wreck, mesh: meshes/wreck.glb}\n");
+  expect_config_error([&] { load_world(f); }, {f, "objects[0].mesh", (d / "meshes/wreck.glb").string()});
+}
+
+TEST(WorldErrors, UnreadableMeshNamesFile) {
+  const auto d = temp_dir("bad_mesh");
+  write_file(d / "junk.obj", "this is not a mesh\n\x01\x02\x03");
+  const auto f = write_file(d / "world.yaml", "objects:\n  - {name: junk, mesh: junk.obj}\n");
+  const World w = load_world(f);
+  expect_config_error([&] { build_scene_geometry(w); }, {f, "junk", (d / "junk.obj").string()});
+}
+
+TEST(WorldErrors, BadValuesNameTheKey) {
+  const auto d = temp_dir("bad_values");
+  expect_config_error([&] { load_world(write_file(d / "a.yaml", "pipelines:\n  - {radius_m: -1, points_ne: [[0,0],[1,0]]}\n")); },
+                      {"pipelines[0].radius_m"});
+  expect_config_error([&] { load_world(write_file(d / "b.yaml", "water: {preset: jerlov_XII}\n")); },
+                      {"water.preset", "jerlov_XII", "jerlov_II"});
+  expect_config_error([&] { load_world(write_file(d / "c.yaml", "lights: {sun: {direction_ned: [0, 0, -1]}}\n")); },
+                      {"lights.sun.direction_ned"});
+  expect_config_error([&] { load_world(write_file(d / "d.yaml", "pipelines:\n  - {points_ne: [[0,0]]}\n")); },
+                      {"pipelines[0].points_ne"});
+  expect_config_error([&] { load_world((d / "does_not_exist.yaml").string()); }, {"does_not_exist.yaml", "cannot open"});
+  expect_config_error([&] { load_world(write_file(d / "e.yaml", "seabed: {material: {texture: marble}}\n")); },
+                      {"seabed.material.texture", "marble"});
+}
+
+TEST(Meshes, AssimpLoadsObjPlyGltfGlbFbx) {
+  // The repository's boulder (OBJ, written by unav_make_rock) re-exported by assimp into the
+  // other formats; each must load back with the same triangle count.
+  const std::string obj = kRoot + "/worlds/pipe_inspection/meshes/boulder.obj";
+  const MeshData ref = load_mesh_file(obj);
+  ASSERT_GT(ref.triangle_count(), 100u);
+  Assimp::Importer imp;
+  const aiScene* scene = imp.ReadFile(obj, aiProcess_Triangulate);
+  ASSERT_NE(scene, nullptr);
+  const auto d = temp_dir("formats");
+  Assimp::Exporter exp;
+  const std::pair<const char*, const char*> formats[] = {
+      {"ply", "boulder.ply"}, {"gltf2", "boulder.gltf"}, {"glb2", "boulder.glb"}, {"fbxa", "boulder.fbx"}};
+  for (const auto& [id, name] : formats) {
+    const std::string path = (d / name).string();
+    ASSERT_EQ(exp.Export(scene, id, path), AI_SUCCESS) << id << ": " << exp.GetErrorString();
+    const MeshData m = load_mesh_file(path);
+    EXPECT_EQ(m.triangle_count(), ref.triangle_count()) << name;
+    ASSERT_EQ(m.normals.size(), m.positions.size()) << name;
+  }
+}
+
+TEST(Meshes, SceneGeometryOfPipeInspection) {
+  const World w = load_world(kRoot + "/worlds/pipe_inspection/world.yaml");
+  const SceneGeometry g = build_scene_geometry(w);
+  bool seabed = false, pipe = false, rock = false, other = false;
+  for (const auto& m : g.meshes) {
+    seabed |= m.seg_class == SegClass::kSeabed;
+    pipe |= m.seg_class == SegClass::kPipeline;
+    rock |= m.seg_class == SegClass::kRock;
+    other |= m.seg_class == SegClass::kOther;
+    EXPECT_EQ(m.mesh.normals.size(), m.mesh.positions.size()) << m.name;
+    EXPECT_EQ(m.mesh.uvs.size() / 2, m.mesh.positions.size() / 3) << m.name;
+  }
+  EXPECT_TRUE(seabed && pipe && rock && other);
+  // Every tube vertex lies one radius from the bent centre line (bends included).
+  for (const auto& m : g.meshes) {
+    if (m.seg_class != SegClass::kPipeline) continue;
+    const auto& c = w.pipelines[0].centerline_W;
+    for (std::size_t i = 0; i < m.mesh.vertex_count(); i += 97) {
+      const Eigen::Vector3d p(m.mesh.positions[3 * i], m.mesh.positions[3 * i + 1], m.mesh.positions[3 * i + 2]);
+      double dmin = 1e9;
+      for (std::size_t k = 0; k + 1 < c.size(); ++k) {
+        const Eigen::Vector3d ab = c[k + 1] - c[k];
+        const double t = std::clamp((p - c[k]).dot(ab) / ab.squaredNorm(), 0.0, 1.0);
+        dmin = std::min(dmin, (p - c[k] - t * ab).norm());
+      }
+      EXPECT_LE(dmin, 0.25 + 1e-4);   // caps lie inside
+    }
+  }
+}
