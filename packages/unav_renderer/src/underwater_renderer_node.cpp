@@ -1,0 +1,153 @@
+#include "underwater_renderer_node.hpp"
+
+#include <cmath>
+#include <cstring>
+
+#include "unav_launch/package_index.hpp"
+#include "unav_renderer/camera.hpp"
+#include "unav_renderer/water.hpp"
+#include "unav_renderer/world.hpp"
+
+namespace unav_renderer {
+namespace {
+
+std::string resource(const std::string& rel) {
+  const auto share = unav::launch::find_package_share("unav_resources");
+  return share ? *share + "/" + rel : "";
+}
+
+void fill_image(sensor_msgs::msg::Image& m, int w, int h, const char* encoding, int bytes_per_px) {
+  m.width(static_cast<uint32_t>(w));
+  m.height(static_cast<uint32_t>(h));
+  m.encoding(encoding);
+  m.is_bigendian(0);
+  m.step(static_cast<uint32_t>(w * bytes_per_px));
+}
+
+}  // namespace
+
+UnderwaterRendererNode::UnderwaterRendererNode(const unav::NodeOptions& options)
+    : Node("underwater_renderer", options, "rov") {
+  const std::string world_path = declare_parameter<std::string>(
+      "world", resource("worlds/pipe_inspection/world.yaml"), {"world.yaml path", {}, {}, false});
+  const std::string cameras_path = declare_parameter<std::string>(
+      "cameras_config", resource("config/sensors/bluerov2_cameras.yaml"), {"camera YAML path", {}, {}, false});
+  const std::string water = declare_parameter<std::string>(
+      "water", "", {"Jerlov preset (I, II, 3C, ...) or water YAML path; empty = the world's", {}, {}, false});
+  const double rate = declare_parameter<double>("rate", 10.0, {"frame rate per camera [Hz]", 0.01, 1000.0, false});
+  lockstep_ = declare_parameter<bool>("lockstep", false, {"ack every odometry on /lockstep/ack", {}, {}, false});
+  ack_name_ = declare_parameter<std::string>("lockstep_name", "renderer", {"participant name in acks", {}, {}, false});
+  publish_depth_ = declare_parameter<bool>("publish_depth", true, {"publish depth images", {}, {}, false});
+  publish_seg_ = declare_parameter<bool>("publish_segmentation", true, {"publish segmentation images", {}, {}, false});
+  RenderOptions ro;
+  ro.noise = declare_parameter<bool>("noise", true, {"camera noise", {}, {}, false});
+  ro.marine_snow = declare_parameter<bool>("marine_snow", true, {"marine snow particles", {}, {}, false});
+  ro.forward_scatter = declare_parameter<bool>("forward_scatter", true, {"range-dependent blur", {}, {}, false});
+  ro.seed = static_cast<std::uint64_t>(declare_parameter<int64_t>("seed", 1, {"noise seed", 0.0, {}, false}));
+  period_ = 1.0 / rate;
+  if (world_path.empty() || cameras_path.empty())
+    throw unav::ParameterError("node '" + name() + "': 'world' and 'cameras_config' are required (unav_resources "
+                               "is not installed, so there is no default)");
+
+  World world;
+  std::vector<CameraModel> cams;
+  try {
+    world = load_world(world_path);
+    cams = load_cameras(cameras_path);
+    if (!water.empty())
+      world.water = water.find('/') != std::string::npos || water.find(".yaml") != std::string::npos
+                        ? load_water_file(water)
+                        : jerlov_preset(water);
+  } catch (const std::exception& e) {
+    throw unav::ConfigError(e.what());  // world/camera/water errors name the file and key
+  }
+  renderer_ = std::make_unique<Renderer>(std::move(world), cams, ro);
+
+  odom_sub_ = create_subscription<nav_msgs::msg::Odometry>(
+      "ground_truth/odom", unav::QoS::reliable(), [this](const nav_msgs::msg::Odometry& m) { on_odom(m); });
+  if (lockstep_) ack_pub_ = create_publisher<unav_msgs::msg::LockstepAck>("/lockstep/ack", unav::QoS::reliable(100));
+  const unav::QoS qos = unav::QoS::reliable(5);
+  for (const auto& c : cams) {
+    CameraPorts p;
+    p.name = c.name;
+    const std::string base = "camera/" + c.name;
+    p.image = create_publisher<sensor_msgs::msg::Image>(base + "/image_raw", qos);
+    p.info = create_publisher<sensor_msgs::msg::CameraInfo>(base + "/camera_info", qos);
+    if (publish_depth_) p.depth = create_publisher<sensor_msgs::msg::Image>(base + "/depth/image_raw", qos);
+    if (publish_seg_) p.seg = create_publisher<sensor_msgs::msg::Image>(base + "/segmentation/image_raw", qos);
+    fill_image(p.image_msg, c.width, c.height, "rgb8", 3);
+    fill_image(p.depth_msg, c.width, c.height, "32FC1", 4);
+    fill_image(p.seg_msg, c.width, c.height, "mono8", 1);
+    auto& ci = p.info_msg;
+    ci.width(static_cast<uint32_t>(c.width));
+    ci.height(static_cast<uint32_t>(c.height));
+    ci.distortion_model("plumb_bob");
+    ci.d({c.distortion[0], c.distortion[1], c.distortion[2], c.distortion[3], c.distortion[4]});
+    const Eigen::Matrix3d K = c.K();
+    for (int r = 0; r < 3; ++r)
+      for (int k = 0; k < 3; ++k) {
+        ci.k()[static_cast<size_t>(r * 3 + k)] = K(r, k);
+        ci.r()[static_cast<size_t>(r * 3 + k)] = r == k ? 1.0 : 0.0;
+        ci.p()[static_cast<size_t>(r * 4 + k)] = K(r, k);
+      }
+    cameras_.push_back(std::move(p));
+  }
+  logger()->info("world '{}' ({} triangles), {} camera(s) at {:.1f} Hz on {}{}", world_path,
+                 renderer_->triangle_count(), cameras_.size(), rate,
+                 renderer_->context().gl_renderer() + " (EGL " + renderer_->context().platform() + ")",
+                 lockstep_ ? ", lockstep" : "");
+}
+
+UnderwaterRendererNode::~UnderwaterRendererNode() = default;
+
+void UnderwaterRendererNode::on_odom(const nav_msgs::msg::Odometry& odom) {
+  const double t = unav::Time::from_msg(odom.header().stamp().sec(), odom.header().stamp().nanosec()).seconds();
+  const double eps = 1e-6;  // stamps are integer nanoseconds
+  if (t + eps >= next_frame_t_) {
+    const auto& p = odom.pose().pose();
+    Pose X_WB = Pose::Identity();
+    X_WB.translation() = Eigen::Vector3d(p.position().x(), p.position().y(), p.position().z());
+    X_WB.linear() = Eigen::Quaterniond(p.orientation().w(), p.orientation().x(), p.orientation().y(),
+                                       p.orientation().z())
+                        .normalized()
+                        .toRotationMatrix();
+    render_and_publish(X_WB, odom.header());
+    // Next frame instant: the next multiple of the period after t (no drift, no bursts).
+    next_frame_t_ = (std::floor((t + eps) / period_) + 1.0) * period_;
+  }
+  if (ack_pub_) {
+    unav_msgs::msg::LockstepAck ack;
+    ack.header().stamp() = odom.header().stamp();
+    ack.participant(ack_name_);
+    ack_pub_->publish(ack);
+  }
+}
+
+void UnderwaterRendererNode::render_and_publish(const Pose& X_WB, const std_msgs::msg::dds_::Header_& header) {
+  const double t = unav::Time::from_msg(header.stamp().sec(), header.stamp().nanosec()).seconds();
+  for (auto& c : cameras_) {
+    Frame f = renderer_->render(X_WB, c.name, t);
+    const std::string frame_id = c.name + "_optical";
+    for (auto* m : {&c.image_msg, &c.depth_msg, &c.seg_msg}) {
+      m->header().stamp() = header.stamp();
+      m->header().frame_id(frame_id);
+    }
+    c.info_msg.header().stamp() = header.stamp();
+    c.info_msg.header().frame_id(frame_id);
+    c.image_msg.data().swap(f.rgb);  // no copy: the frame's buffer becomes the message's
+    c.image->publish(c.image_msg);
+    if (c.depth) {
+      c.depth_msg.data().resize(f.depth.size() * sizeof(float));
+      std::memcpy(c.depth_msg.data().data(), f.depth.data(), c.depth_msg.data().size());
+      c.depth->publish(c.depth_msg);
+    }
+    if (c.seg) {
+      c.seg_msg.data().swap(f.seg);
+      c.seg->publish(c.seg_msg);
+    }
+    c.info->publish(c.info_msg);
+  }
+  ++frames_;
+}
+
+}  // namespace unav_renderer

@@ -1,0 +1,58 @@
+// underwater_renderer: renders the vehicle's cameras at the poses the physics server publishes.
+//
+// Ports (relative to the node namespace, default /rov; <cam> = camera name from cameras_config):
+//   sub  ground_truth/odom                      nav_msgs/Odometry       reliable
+//   pub  camera/<cam>/image_raw                 sensor_msgs/Image       reliable, depth 5 (rgb8)
+//   pub  camera/<cam>/camera_info               sensor_msgs/CameraInfo  reliable, depth 5
+//   pub  camera/<cam>/depth/image_raw           sensor_msgs/Image       32FC1, metres along z
+//   pub  camera/<cam>/segmentation/image_raw    sensor_msgs/Image       mono8 class ids
+//   pub  /lockstep/ack                          unav_msgs/LockstepAck   (lockstep: true)
+// Images are stamped with the simulated time of the pose they show; frame_id <cam>_optical.
+// A frame is rendered for the first odometry at or after each multiple of 1/rate. In lockstep,
+// frame instants must be physics barriers (1/rate a multiple of the server's lockstep_period),
+// and every odometry message is acked after the frame due at its time has been published.
+#pragma once
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "nav_msgs/msg/odometry.hpp"
+#include "sensor_msgs/msg/camera_info.hpp"
+#include "sensor_msgs/msg/image.hpp"
+#include "unav_msgs/msg/lockstep_ack.hpp"
+#include "unav_renderer/renderer.hpp"
+#include "unav_runtime/runtime.hpp"
+
+namespace unav_renderer {
+
+class UnderwaterRendererNode : public unav::Node {
+ public:
+  explicit UnderwaterRendererNode(const unav::NodeOptions& options);
+  ~UnderwaterRendererNode() override;
+  std::uint64_t frames_published() const { return frames_; }
+
+ private:
+  struct CameraPorts {
+    std::string name;
+    std::shared_ptr<unav::Publisher<sensor_msgs::msg::Image>> image, depth, seg;
+    std::shared_ptr<unav::Publisher<sensor_msgs::msg::CameraInfo>> info;
+    sensor_msgs::msg::Image image_msg, depth_msg, seg_msg;
+    sensor_msgs::msg::CameraInfo info_msg;
+  };
+  void on_odom(const nav_msgs::msg::Odometry& odom);
+  void render_and_publish(const Pose& X_WB, const std_msgs::msg::dds_::Header_& stamp);
+
+  std::unique_ptr<Renderer> renderer_;
+  std::vector<CameraPorts> cameras_;
+  double period_ = 0.1;
+  double next_frame_t_ = 0.0;
+  bool lockstep_ = false;
+  bool publish_depth_ = true, publish_seg_ = true;
+  std::string ack_name_;
+  std::uint64_t frames_ = 0;
+  std::shared_ptr<unav::Subscription<nav_msgs::msg::Odometry>> odom_sub_;
+  std::shared_ptr<unav::Publisher<unav_msgs::msg::LockstepAck>> ack_pub_;
+};
+
+}  // namespace unav_renderer
