@@ -95,7 +95,9 @@ class DatasetRecorder : public unav::Node {
                                                                poses_.emplace_back(stamp_of(m.header()), X);
                                                                if (poses_.size() > 2000) poses_.pop_front();
                                                              });
-    imu_sub_ = create_subscription<sensor_msgs::msg::Imu>("imu", unav::QoS::sensor_data(), [this](const sensor_msgs::msg::Imu& m) {
+    // Best effort to match the IMU publisher (sensor_data), but a deep history: physics runs in
+    // bursts in lockstep and every sample belongs in the dataset.
+    imu_sub_ = create_subscription<sensor_msgs::msg::Imu>("imu", unav::QoS{unav::QoS::Reliability::kBestEffort, unav::QoS::Durability::kVolatile, 1000}, [this](const sensor_msgs::msg::Imu& m) {
       writer_->write_imu(stamp_of(m.header()),
                          Eigen::Vector3d(m.angular_velocity().x(), m.angular_velocity().y(), m.angular_velocity().z()),
                          Eigen::Vector3d(m.linear_acceleration().x(), m.linear_acceleration().y(), m.linear_acceleration().z()));
