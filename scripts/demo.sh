@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
-# README command 1: install what is missing, build, run the main job headless on defaults.
-# Until the pipe-inspection demo lands, the main job is the smallest real multi-process system:
-# a talker and a listener started by `unav launch`, watched by `unav topic echo` and `node list`.
+# README command 1: install what is missing, build, and run the pipe-inspection demo headless on
+# defaults: physics (1 kHz, lockstep) + underwater renderer (front and down cameras) + dataset
+# recorder, as separate processes over DDS. Stops after DEMO_SIM_SECONDS of simulated time.
 set -eo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/install_deps.sh
@@ -9,14 +9,26 @@ bash scripts/build.sh
 source install/setup.bash
 set -u
 OUT="${UNAV_OUT:-$PWD/out/demo}"
-mkdir -p "$OUT"
+SIM_SECONDS="${DEMO_SIM_SECONDS:-20}"
+rm -rf "$OUT" && mkdir -p "$OUT"
 export ROS_DOMAIN_ID="${ROS_DOMAIN_ID:-42}"
-echo "demo: launching talker + listener (two processes) on DDS domain $ROS_DOMAIN_ID"
-unav launch launch_scripts/talker_listener.launch.yaml rate:=10.0 count:=100 > "$OUT/launch.log" 2>&1 &
+echo "demo: pipe inspection, ${SIM_SECONDS} s of simulated time, DDS domain $ROS_DOMAIN_ID"
+unav launch launch_scripts/pipe_inspection.launch.yaml output_dir:="$OUT/dataset" > "$OUT/launch.log" 2>&1 &
 launch_pid=$!
-timeout -s INT 20 unav topic echo /demo/chatter --once | tee "$OUT/echo.txt"
-unav node list | tee "$OUT/nodes.txt"
-unav topic list -t | tee "$OUT/topics.txt"
-timeout -s INT 3 unav topic hz /demo/chatter | tee "$OUT/hz.txt" || true   # hz runs until stopped
-wait "$launch_pid"
-echo "demo: finished; outputs in $OUT (launch.log, echo.txt, nodes.txt, topics.txt, hz.txt)"
+trap 'kill -INT $launch_pid 2>/dev/null || true' EXIT
+frames_wanted=$(awk -v s="$SIM_SECONDS" 'BEGIN{print int(s * 10) + 1}')
+for _ in $(seq 1 600); do
+  n=$(grep -vc '^#' "$OUT/dataset/rgb.txt" 2>/dev/null || true)
+  [ "${n:-0}" -ge "$frames_wanted" ] && break
+  kill -0 "$launch_pid" 2>/dev/null || { echo "demo: launch ended early; see $OUT/launch.log"; exit 1; }
+  sleep 1
+done
+unav topic list -t > "$OUT/topics.txt"
+kill -INT "$launch_pid"
+wait "$launch_pid" || true
+trap - EXIT
+frames=$(grep -vc '^#' "$OUT/dataset/rgb.txt")
+echo "demo: finished: $frames frames with depth, segmentation, ground truth and IMU"
+echo "demo: outputs in $OUT:"
+echo "  dataset/ (TUM RGB-D layout: rgb/ depth/ segmentation/ rgb.txt depth.txt groundtruth.txt imu.txt camera.yaml)"
+echo "  launch.log (all node output), topics.txt (the ROS 2 topics that were live)"
