@@ -71,18 +71,26 @@ macro(unav_interface_package)
     _unav_write_ros_header("${_uip_gen}" "${_base}")
   endforeach()
 
-  # One JVM start for the whole package (~1 s each); fastddsgen writes every included IDL into
-  # the same flat folder, so it runs in scratch and only this package's files are copied out.
-  add_custom_command(
-    OUTPUT ${_uip_sources} ${_uip_headers}
-    COMMAND ${CMAKE_COMMAND} -E rm -rf "${_uip_scratch}"
-    COMMAND ${CMAKE_COMMAND} -E make_directory "${_uip_scratch}"
-    COMMAND ${UNAV_FASTDDSGEN} -replace -cs ${_uip_include_args} -d "${_uip_scratch}" ${_uip_abs}
-    COMMAND ${CMAKE_COMMAND} "-DSCRATCH=${_uip_scratch}" "-DGEN=${_uip_gen}" "-DBASES=${_uip_bases}"
-            -P "${_UNAV_CMAKE_DIR}/unav_copy_generated.cmake"
-    DEPENDS ${_uip_abs} ${_uip_dep_idls}
-    COMMENT "fastddsgen: ${PROJECT_NAME} (${CMAKE_CURRENT_SOURCE_DIR})"
-    VERBATIM)
+  # One fastddsgen run per IDL, each in a scratch folder of its own, and only that IDL's four
+  # files are kept: fastddsgen also writes every #included IDL into the same flat folder, and
+  # those copies can come out empty (their include guard is already defined), so a shared
+  # folder gives order-dependent, broken headers. Separate commands also build in parallel.
+  foreach(_base IN LISTS _uip_bases)
+    get_filename_component(_name "${_base}" NAME)
+    string(REPLACE "/" "_" _tag "${_base}")
+    set(_scratch "${_uip_scratch}/${_tag}")
+    add_custom_command(
+      OUTPUT "${_uip_gen}/${_base}.h" "${_uip_gen}/${_base}.cxx"
+             "${_uip_gen}/${_base}PubSubTypes.h" "${_uip_gen}/${_base}PubSubTypes.cxx"
+      COMMAND ${CMAKE_COMMAND} -E rm -rf "${_scratch}"
+      COMMAND ${CMAKE_COMMAND} -E make_directory "${_scratch}"
+      COMMAND ${UNAV_FASTDDSGEN} -replace -cs ${_uip_include_args} -d "${_scratch}" "${_uip_root}/${_base}.idl"
+      COMMAND ${CMAKE_COMMAND} "-DSCRATCH=${_scratch}" "-DGEN=${_uip_gen}" "-DBASES=${_base}"
+              -P "${_UNAV_CMAKE_DIR}/unav_copy_generated.cmake"
+      DEPENDS ${_uip_abs} ${_uip_dep_idls}
+      COMMENT "fastddsgen: ${_base}.idl"
+      VERBATIM)
+  endforeach()
 
   add_library(${PROJECT_NAME} SHARED ${_uip_sources})
   add_library(${PROJECT_NAME}::${PROJECT_NAME} ALIAS ${PROJECT_NAME})
