@@ -7,12 +7,16 @@
 //   sub  camera/<camera>/camera_info   sensor_msgs/CameraInfo
 //   sub  ground_truth/odom             nav_msgs/Odometry
 //   sub  imu                           sensor_msgs/Imu (sensor_data)
+//   pub  /lockstep/ack                 unav_msgs/LockstepAck (lockstep: true; acks every odometry,
+//                                      so the physics never outruns the recorder's ground truth)
+#include <cmath>
 #include <deque>
 
 #include "nav_msgs/msg/odometry.hpp"
 #include "sensor_msgs/msg/camera_info.hpp"
 #include "sensor_msgs/msg/image.hpp"
 #include "sensor_msgs/msg/imu.hpp"
+#include "unav_msgs/msg/lockstep_ack.hpp"
 #include "unav_datagen/dataset_writer.hpp"
 #include "unav_launch/package_index.hpp"
 #include "unav_renderer/camera.hpp"
@@ -52,6 +56,9 @@ class DatasetRecorder : public unav::Node {
     } catch (const DatasetError& e) {
       throw unav::ConfigError(e.what());
     }
+    if (declare_parameter<bool>("lockstep", false, {"ack every odometry on /lockstep/ack", {}, {}, false}))
+      ack_pub_ = create_publisher<unav_msgs::msg::LockstepAck>("/lockstep/ack", unav::QoS::reliable(100));
+    ack_name_ = declare_parameter<std::string>("lockstep_name", "recorder", {"participant name in acks", {}, {}, false});
     const std::string base = "camera/" + camera_;
     const unav::QoS q = unav::QoS::reliable(5);
     rgb_sub_ = create_subscription<sensor_msgs::msg::Image>(base + "/image_raw", q, [this](const sensor_msgs::msg::Image& m) {
@@ -92,8 +99,13 @@ class DatasetRecorder : public unav::Node {
                                                                                                p.orientation().y(), p.orientation().z())
                                                                                 .normalized()
                                                                                 .toRotationMatrix();
-                                                               poses_.emplace_back(stamp_of(m.header()), X);
-                                                               if (poses_.size() > 2000) poses_.pop_front();
+                                                               on_pose(stamp_of(m.header()), X);
+                                                               if (ack_pub_) {
+                                                                 unav_msgs::msg::LockstepAck ack;
+                                                                 ack.header().stamp() = m.header().stamp();
+                                                                 ack.participant(ack_name_);
+                                                                 ack_pub_->publish(ack);
+                                                               }
                                                              });
     // Best effort to match the IMU publisher (sensor_data), but a deep history: physics runs in
     // bursts in lockstep and every sample belongs in the dataset.
@@ -116,13 +128,28 @@ class DatasetRecorder : public unav::Node {
                    encoding, m.width(), m.height());
     return false;
   }
-  // Ground truth at the image's stamp: the renderer renders at odometry stamps, so an exact
-  // match exists when odometry arrived first; otherwise the nearest earlier pose is used.
+  // Ground truth at the image's stamp. The renderer renders at odometry stamps, so the pose with
+  // exactly that stamp exists; it may arrive after the image (different writers), in which case
+  // the image waits for it.
   void write_pose_at(double t) {
     for (auto it = poses_.rbegin(); it != poses_.rend(); ++it) {
-      if (it->first <= t + 1e-9) {
+      if (std::abs(it->first - t) < 1e-9) {
         writer_->write_pose(t, it->second * X_BC_, it->second);
         return;
+      }
+      if (it->first < t) break;
+    }
+    waiting_.push_back(t);
+  }
+  void on_pose(double t, const Eigen::Isometry3d& X) {
+    poses_.emplace_back(t, X);
+    if (poses_.size() > 2000) poses_.pop_front();
+    for (auto it = waiting_.begin(); it != waiting_.end();) {
+      if (std::abs(*it - t) < 1e-9) {
+        writer_->write_pose(t, X * X_BC_, X);
+        it = waiting_.erase(it);
+      } else {
+        ++it;
       }
     }
   }
@@ -132,6 +159,9 @@ class DatasetRecorder : public unav::Node {
   std::unique_ptr<DatasetWriter> writer_;
   bool camera_written_ = false;
   std::deque<std::pair<double, Eigen::Isometry3d>> poses_;
+  std::vector<double> waiting_;  ///< image stamps whose pose has not arrived yet
+  std::string ack_name_;
+  std::shared_ptr<unav::Publisher<unav_msgs::msg::LockstepAck>> ack_pub_;
   std::shared_ptr<unav::Subscription<sensor_msgs::msg::Image>> rgb_sub_, depth_sub_, seg_sub_;
   std::shared_ptr<unav::Subscription<sensor_msgs::msg::CameraInfo>> info_sub_;
   std::shared_ptr<unav::Subscription<nav_msgs::msg::Odometry>> odom_sub_;
