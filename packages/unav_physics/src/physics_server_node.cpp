@@ -68,6 +68,8 @@ PhysicsServer::PhysicsServer(const unav::NodeOptions& options) : Node("physics_s
                                                              {"names that ack every barrier", {}, {}, false});
   wait_for_command_ = declare_parameter<bool>("lockstep_wait_for_command", false,
                                               {"hold each barrier until a command stamped at it arrives", {}, {}, false});
+  max_sim_time_ = declare_parameter<double>(
+      "max_sim_time", 0.0, {"stop (exit 0) at this simulated time [s]; 0 = run until stopped", 0.0, {}, false});
   world_frame_ = declare_parameter<std::string>("world_frame", "world_ned", {"odometry frame", {}, {}, false});
   body_frame_ = declare_parameter<std::string>("body_frame", "base_link_frd", {"vehicle body frame", {}, {}, false});
   if (p0.size() != 3 || rpy0.size() != 3)
@@ -211,6 +213,16 @@ void PhysicsServer::step_once() {
   }
   publish_sensors();
   const int64_t n = static_cast<int64_t>(sim_->steps());
+  if (max_sim_time_ > 0.0 && sim_->time() >= max_sim_time_ - 0.5 * sim_->options().dt) {
+    publish_state();
+    const RigidBodyState& x = sim_->state();
+    const Eigen::Vector3d rpy = roll_pitch_yaw(x.q_WB);
+    logger()->info("max_sim_time reached: t = {:.3f} s, position NED [{:.4f}, {:.4f}, {:.4f}] m, rpy [{:.4f}, {:.4f}, "
+                   "{:.4f}] rad",
+                   sim_->time(), x.p_WB_W.x(), x.p_WB_W.y(), x.p_WB_W.z(), rpy.x(), rpy.y(), rpy.z());
+    context().shutdown();
+    return;
+  }
   if (n % steps_per_publish_ == 0) publish_state();
   if (n % steps_per_thruster_state_ == 0) publish_thruster_state();
 }

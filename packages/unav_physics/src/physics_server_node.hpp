@@ -73,6 +73,7 @@ class PhysicsServer : public unav::Node {
   std::unique_ptr<Simulator> sim_;
   std::string world_frame_, body_frame_;
   bool lockstep_ = false;
+  double max_sim_time_ = 0.0;
   double real_time_factor_ = 1.0;
   double publish_period_ = 0.005, thruster_state_period_ = 0.01, lockstep_period_ = 0.05;
   bool wait_for_command_ = false;

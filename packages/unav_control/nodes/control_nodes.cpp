@@ -1,0 +1,185 @@
+#include "control_nodes.hpp"
+
+#include <cmath>
+
+#include "unav_control/config.hpp"
+#include "unav_launch/package_index.hpp"
+#include "unav_renderer/world.hpp"
+
+namespace unav::control {
+namespace {
+
+std::string resource(const std::string& rel) {
+  const auto share = unav::launch::find_package_share("unav_resources");
+  return share ? *share + "/" + rel : "";
+}
+std::string config_root() { return resource("config"); }
+
+double stamp_of(const std_msgs::msg::dds_::Header_& h) {
+  return unav::Time::from_msg(h.stamp().sec(), h.stamp().nanosec()).seconds();
+}
+
+physics::RigidBodyState state_of(const nav_msgs::msg::Odometry& m) {
+  physics::RigidBodyState x;
+  const auto& p = m.pose().pose();
+  x.p_WB_W = Eigen::Vector3d(p.position().x(), p.position().y(), p.position().z());
+  x.q_WB = Eigen::Quaterniond(p.orientation().w(), p.orientation().x(), p.orientation().y(), p.orientation().z());
+  const auto& t = m.twist().twist();
+  x.v_WB_B = Eigen::Vector3d(t.linear().x(), t.linear().y(), t.linear().z());
+  x.w_WB_B = Eigen::Vector3d(t.angular().x(), t.angular().y(), t.angular().z());
+  return x;
+}
+
+template <typename F>
+auto wrap_config(F&& f) -> decltype(f()) {
+  try {
+    return f();
+  } catch (const physics::ConfigError& e) {
+    throw unav::ConfigError(e.what());
+  }
+}
+
+}  // namespace
+
+ControlAllocatorNode::ControlAllocatorNode(const unav::NodeOptions& options)
+    : Node("control_allocator", options, "rov") {
+  const std::string file = declare_parameter<std::string>(
+      "config_file", resource("config/controllers/allocator.yaml"), {"allocator YAML", {}, {}, false});
+  allocator_ = wrap_config([&] { return std::make_unique<Allocator>(make_allocator(load_allocator_config(file, config_root()))); });
+  pub_ = create_publisher<unav_msgs::msg::ThrusterCommand>("thrusters/command", unav::QoS::reliable());
+  sub_ = create_subscription<geometry_msgs::msg::WrenchStamped>(
+      "control/wrench_command", unav::QoS::reliable(), [this](const geometry_msgs::msg::WrenchStamped& w) {
+        Vector6d tau;
+        tau << w.wrench().force().x(), w.wrench().force().y(), w.wrench().force().z(), w.wrench().torque().x(),
+            w.wrench().torque().y(), w.wrench().torque().z();
+        ThrusterVector u;
+        const AllocationSummary s = allocator_->Allocate(tau, &u);
+        if (s.status == AllocationStatus::kInvalidInput) {
+          logger()->warn("wrench command with NaN/Inf rejected: all thrusters to zero");
+        } else if ((s.status == AllocationStatus::kScaled || s.status == AllocationStatus::kInfeasible) &&
+                   ++saturated_ % 100 == 1) {
+          logger()->warn("wrench saturates the thrusters (scale {:.2f}); {} saturated commands so far", s.scale, saturated_);
+        }
+        unav_msgs::msg::ThrusterCommand cmd;
+        cmd.header() = w.header();
+        cmd.u().assign(u.data(), u.data() + u.size());
+        pub_->publish(cmd);
+      });
+  logger()->info("{} thrusters, config {}", allocator_->thruster_matrix().cols(), file);
+}
+
+MpcControllerNode::MpcControllerNode(const unav::NodeOptions& options) : Node("mpc_controller", options, "rov") {
+  const std::string file = declare_parameter<std::string>("config_file", resource("config/controllers/mpc.yaml"),
+                                                          {"MPC YAML", {}, {}, false});
+  const MpcConfig cfg = wrap_config([&] { return load_mpc_config(file, config_root()); });
+  dt_ = cfg.options.dt;
+  mpc_ = wrap_config([&] { return std::make_unique<Mpc>(cfg.model, cfg.options); });
+  pub_ = create_publisher<geometry_msgs::msg::WrenchStamped>("control/wrench_command", unav::QoS::reliable());
+  sp_sub_ = create_subscription<geometry_msgs::msg::PoseStamped>(
+      "control/pose_setpoint", unav::QoS::reliable(), [this](const geometry_msgs::msg::PoseStamped& m) {
+        const auto& p = m.pose();
+        const Eigen::Quaterniond q(p.orientation().w(), p.orientation().x(), p.orientation().y(), p.orientation().z());
+        // Pass non-unit or NaN setpoints through: the MPC rejects them with a status (tested).
+        setpoint_.p_W = Eigen::Vector3d(p.position().x(), p.position().y(), p.position().z());
+        setpoint_.q_WB = q;
+        have_setpoint_ = true;
+      });
+  odom_sub_ = create_subscription<nav_msgs::msg::Odometry>("ground_truth/odom", unav::QoS::reliable(),
+                                                           [this](const nav_msgs::msg::Odometry& m) { on_odom(m); });
+  logger()->info("MPC: horizon {} x {:.3f} s, model {}", cfg.options.horizon_steps, dt_, cfg.model_vehicle_path);
+}
+
+void MpcControllerNode::on_odom(const nav_msgs::msg::Odometry& m) {
+  const double t = stamp_of(m.header());
+  if (next_t_ >= 0.0 && t + 1e-6 < next_t_) return;
+  next_t_ = (std::floor((t + 1e-6) / dt_) + 1.0) * dt_;
+  const physics::RigidBodyState x = state_of(m);
+  if (!have_setpoint_) {  // hold where we are until told otherwise
+    setpoint_ = PoseSetpoint::FromPositionYaw(x.p_WB_W, physics::roll_pitch_yaw(x.q_WB).z());
+    have_setpoint_ = true;
+  }
+  Vector6d w;
+  last_ = mpc_->Solve(x, setpoint_, t, &w);
+  if (!last_.ok() && ++failures_ % 20 == 1)
+    logger()->warn("MPC solve failed ({}): publishing the safe wrench; {} failures so far", last_.message, failures_);
+  geometry_msgs::msg::WrenchStamped out;
+  out.header().stamp() = m.header().stamp();
+  out.header().frame_id(m.child_frame_id());
+  out.wrench().force().x(w[0]);
+  out.wrench().force().y(w[1]);
+  out.wrench().force().z(w[2]);
+  out.wrench().torque().x(w[3]);
+  out.wrench().torque().y(w[4]);
+  out.wrench().torque().z(w[5]);
+  pub_->publish(out);
+}
+
+WaypointFollowerNode::WaypointFollowerNode(const unav::NodeOptions& options) : Node("waypoint_follower", options, "rov") {
+  WaypointFollowerOptions wo;
+  wo.acceptance_radius = declare_parameter<double>("acceptance_radius", 0.3, {"waypoint reached within [m]", 1e-3, 100.0, false});
+  const auto flat = declare_parameter<std::vector<double>>("waypoints", {}, {"[x, y, z, ...] NED [m]", {}, {}, false});
+  const std::string world = declare_parameter<std::string>("pipeline_world", "", {"world.yaml whose first pipeline to follow", {}, {}, false});
+  const double height = declare_parameter<double>("height_above_pipe", 1.5, {"m above the pipe's centre line", 0.0, 50.0, false});
+  follower_ = WaypointFollower(wo);
+  std::vector<PoseSetpoint> path;
+  if (!world.empty()) {
+    unav_renderer::World w;
+    try {
+      w = unav_renderer::load_world(world);
+    } catch (const std::exception& e) {
+      throw unav::ConfigError(e.what());
+    }
+    if (w.pipelines.empty()) throw unav::ParameterError("pipeline_world '" + world + "' has no pipeline");
+    std::vector<Eigen::Vector3d> pts;
+    const auto& c = w.pipelines.front().centerline_W;
+    for (size_t i = 0; i < c.size(); i += 10) pts.push_back(c[i]);  // ~1 m spacing
+    pts.push_back(c.back());
+    path = path_above(pts, height);
+  } else {
+    if (flat.size() % 3 != 0)
+      throw unav::ParameterError("node '" + name() + "': parameter 'waypoints' needs x, y, z triples, got " +
+                                 std::to_string(flat.size()) + " numbers");
+    std::vector<Eigen::Vector3d> pts;
+    for (size_t i = 0; i + 2 < flat.size(); i += 3) pts.emplace_back(flat[i], flat[i + 1], flat[i + 2]);
+    if (!pts.empty()) path = path_above(pts, 0.0);
+  }
+  std::string msg;
+  if (!path.empty() && !follower_.SetPath(path, &msg)) throw unav::ParameterError("node '" + name() + "': " + msg);
+  pub_ = create_publisher<geometry_msgs::msg::PoseStamped>("control/pose_setpoint", unav::QoS::reliable());
+  path_sub_ = create_subscription<nav_msgs::msg::Path>("control/path", unav::QoS::reliable(), [this](const nav_msgs::msg::Path& p) {
+    std::vector<PoseSetpoint> sp;
+    for (const auto& ps : p.poses()) {
+      PoseSetpoint s;
+      s.p_W = Eigen::Vector3d(ps.pose().position().x(), ps.pose().position().y(), ps.pose().position().z());
+      s.q_WB = Eigen::Quaterniond(ps.pose().orientation().w(), ps.pose().orientation().x(), ps.pose().orientation().y(),
+                                  ps.pose().orientation().z());
+      sp.push_back(s);
+    }
+    std::string err;
+    if (!follower_.SetPath(sp, &err)) logger()->warn("path rejected: {}", err);
+    finished_logged_ = false;
+  });
+  odom_sub_ = create_subscription<nav_msgs::msg::Odometry>("ground_truth/odom", unav::QoS::reliable(), [this](const nav_msgs::msg::Odometry& m) {
+    if (follower_.path().empty()) return;
+    const auto& p = m.pose().pose().position();
+    const WaypointUpdate u = follower_.Update(Eigen::Vector3d(p.x(), p.y(), p.z()));
+    if (u.finished && !finished_logged_) {
+      logger()->info("path finished at t = {:.2f} s", stamp_of(m.header()));
+      finished_logged_ = true;
+    }
+    geometry_msgs::msg::PoseStamped out;
+    out.header().stamp() = m.header().stamp();
+    out.header().frame_id("world_ned");
+    out.pose().position().x(u.setpoint.p_W.x());
+    out.pose().position().y(u.setpoint.p_W.y());
+    out.pose().position().z(u.setpoint.p_W.z());
+    out.pose().orientation().x(u.setpoint.q_WB.x());
+    out.pose().orientation().y(u.setpoint.q_WB.y());
+    out.pose().orientation().z(u.setpoint.q_WB.z());
+    out.pose().orientation().w(u.setpoint.q_WB.w());
+    pub_->publish(out);
+  });
+  logger()->info("{} waypoints", path.size());
+}
+
+}  // namespace unav::control

@@ -1,0 +1,81 @@
+// Control nodes (thin DDS adapters over unav_control):
+//
+// control_allocator
+//   sub  control/wrench_command   geometry_msgs/WrenchStamped  body FRD [N, N m]
+//   pub  thrusters/command        unav_msgs/ThrusterCommand    u_i in [-1, 1], stamped as the wrench
+//   params: config_file (allocator YAML; default <unav_resources>/config/controllers/allocator.yaml)
+//
+// mpc_controller
+//   sub  ground_truth/odom (remap to any odometry)  nav_msgs/Odometry  world_ned / base_link_frd
+//   sub  control/pose_setpoint    geometry_msgs/PoseStamped (world_ned)
+//   pub  control/wrench_command   geometry_msgs/WrenchStamped, stamped with the state's time
+//   Solves once per odometry whose stamp reached the next multiple of the MPC dt (lockstep: the
+//   physics barrier period should equal it). No setpoint yet: holds the first received pose.
+//   A failed solve publishes the MPC's safe wrench and a warning; never NaN.
+//   params: config_file (mpc YAML; default <unav_resources>/config/controllers/mpc.yaml)
+//
+// waypoint_follower
+//   sub  ground_truth/odom        nav_msgs/Odometry
+//   sub  control/path             nav_msgs/Path (world_ned); replaces the current path
+//   pub  control/pose_setpoint    geometry_msgs/PoseStamped, on every odometry
+//   params: waypoints (flat [x, y, z, ...] NED, m), pipeline_world (world.yaml: follow its first
+//           pipeline), height_above_pipe (m), acceptance_radius (m)
+#pragma once
+
+#include <memory>
+
+#include "geometry_msgs/msg/pose_stamped.hpp"
+#include "geometry_msgs/msg/wrench_stamped.hpp"
+#include "nav_msgs/msg/odometry.hpp"
+#include "nav_msgs/msg/path.hpp"
+#include "unav_control/allocator.hpp"
+#include "unav_control/mpc.hpp"
+#include "unav_control/waypoint_follower.hpp"
+#include "unav_msgs/msg/thruster_command.hpp"
+#include "unav_runtime/runtime.hpp"
+
+namespace unav::control {
+
+class ControlAllocatorNode : public unav::Node {
+ public:
+  explicit ControlAllocatorNode(const unav::NodeOptions& options);
+
+ private:
+  std::unique_ptr<Allocator> allocator_;
+  std::uint64_t saturated_ = 0;
+  std::shared_ptr<unav::Subscription<geometry_msgs::msg::WrenchStamped>> sub_;
+  std::shared_ptr<unav::Publisher<unav_msgs::msg::ThrusterCommand>> pub_;
+};
+
+class MpcControllerNode : public unav::Node {
+ public:
+  explicit MpcControllerNode(const unav::NodeOptions& options);
+  const MpcSummary& last_summary() const { return last_; }
+
+ private:
+  void on_odom(const nav_msgs::msg::Odometry& m);
+  std::unique_ptr<Mpc> mpc_;
+  double dt_ = 0.05;
+  double next_t_ = -1.0;
+  bool have_setpoint_ = false;
+  PoseSetpoint setpoint_;
+  MpcSummary last_;
+  std::uint64_t failures_ = 0;
+  std::shared_ptr<unav::Subscription<nav_msgs::msg::Odometry>> odom_sub_;
+  std::shared_ptr<unav::Subscription<geometry_msgs::msg::PoseStamped>> sp_sub_;
+  std::shared_ptr<unav::Publisher<geometry_msgs::msg::WrenchStamped>> pub_;
+};
+
+class WaypointFollowerNode : public unav::Node {
+ public:
+  explicit WaypointFollowerNode(const unav::NodeOptions& options);
+
+ private:
+  WaypointFollower follower_;
+  bool finished_logged_ = false;
+  std::shared_ptr<unav::Subscription<nav_msgs::msg::Odometry>> odom_sub_;
+  std::shared_ptr<unav::Subscription<nav_msgs::msg::Path>> path_sub_;
+  std::shared_ptr<unav::Publisher<geometry_msgs::msg::PoseStamped>> pub_;
+};
+
+}  // namespace unav::control
