@@ -12,6 +12,7 @@ fail() { echo "FAIL: $*"; echo "--- launch log:"; cat "$log"; exit 1; }
 
 unav launch "$ws/launch_scripts/talker_listener.launch.yaml" rate:=10.0 count:=150 >"$log" 2>&1 &
 launch_pid=$!
+trap 'kill -INT $launch_pid 2>/dev/null || true; wait $launch_pid 2>/dev/null || true' EXIT
 echo_out=$(timeout -s INT 20 unav topic echo /demo/chatter --once) || fail "topic echo got nothing"
 grep -q "^data: 'Hello from UNav-Sim: [0-9]*'$" <<<"$echo_out" || fail "unexpected echo: $echo_out"
 nodes=$(unav node list)
@@ -24,6 +25,7 @@ grep -q "\[listener-2\].*I heard: 'Hello from UNav-Sim: " "$log" || fail "listen
 # Ctrl-C: the launcher forwards SIGINT and leaves no process behind.
 unav launch "$ws/launch_scripts/talker_listener.launch.yaml" >"$log" 2>&1 &
 launch_pid=$!
+trap 'kill -INT $launch_pid 2>/dev/null || true; wait $launch_pid 2>/dev/null || true' EXIT
 sleep 3
 pids=$(pgrep -P "$launch_pid" || true)
 [ -n "$pids" ] || fail "launch started no children"

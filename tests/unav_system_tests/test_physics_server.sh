@@ -11,6 +11,7 @@ fail() { echo "FAIL: $*"; echo "--- launch log:"; cat "$log"; kill -INT "$launch
 
 unav launch "$ws/launch_scripts/physics.launch.yaml" >"$log" 2>&1 &
 launch_pid=$!
+trap 'kill -INT $launch_pid 2>/dev/null || true; wait $launch_pid 2>/dev/null || true' EXIT
 topics=$(unav topic list -t)
 grep -qx "/rov/ground_truth/odom \[nav_msgs/msg/Odometry\]" <<<"$topics" || fail "no odometry topic: $topics"
 grep -qx "/clock \[rosgraph_msgs/msg/Clock\]" <<<"$topics" || fail "no /clock: $topics"

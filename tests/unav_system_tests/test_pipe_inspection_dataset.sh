@@ -12,6 +12,7 @@ fail() { echo "FAIL: $*"; echo "--- launch log:"; tail -30 "$log"; exit 1; }
 
 unav launch "$ws/launch_scripts/pipe_inspection.launch.yaml" output_dir:="$out/ds" >"$log" 2>&1 &
 launch_pid=$!
+trap 'kill -INT $launch_pid 2>/dev/null || true; wait $launch_pid 2>/dev/null || true' EXIT
 for _ in $(seq 1 60); do  # until at least 3 s of simulated time are recorded
   n=$(grep -vc '^#' "$out/ds/rgb.txt" 2>/dev/null || true)
   [ "${n:-0}" -ge 31 ] && break
