@@ -1,5 +1,6 @@
 #include "control_nodes.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 #include "unav_control/config.hpp"
@@ -45,7 +46,11 @@ ControlAllocatorNode::ControlAllocatorNode(const unav::NodeOptions& options)
     : Node("control_allocator", options, "rov") {
   const std::string file = declare_parameter<std::string>(
       "config_file", resource("config/controllers/allocator.yaml"), {"allocator YAML", {}, {}, false});
-  allocator_ = wrap_config([&] { return std::make_unique<Allocator>(make_allocator(load_allocator_config(file, config_root()))); });
+  const AllocatorConfig cfg = wrap_config([&] { return load_allocator_config(file, config_root()); });
+  allocator_ = wrap_config([&] { return std::make_unique<Allocator>(make_allocator(cfg)); });
+  for (const auto& t : cfg.vehicle.thrusters) names_.push_back(t.name);
+  failed_sub_ = create_subscription<std_msgs::msg::String>(
+      "thrusters/set_failed", unav::QoS::reliable(), [this](const std_msgs::msg::String& m) { on_set_failed(m.data()); });
   pub_ = create_publisher<unav_msgs::msg::ThrusterCommand>("thrusters/command", unav::QoS::reliable());
   sub_ = create_subscription<geometry_msgs::msg::WrenchStamped>(
       "control/wrench_command", unav::QoS::reliable(), [this](const geometry_msgs::msg::WrenchStamped& w) {
@@ -66,6 +71,23 @@ ControlAllocatorNode::ControlAllocatorNode(const unav::NodeOptions& options)
         pub_->publish(cmd);
       });
   logger()->info("{} thrusters, config {}", allocator_->thruster_matrix().cols(), file);
+}
+
+void ControlAllocatorNode::on_set_failed(const std::string& request) {
+  const size_t colon = request.find(':');
+  const std::string name = request.substr(0, colon);
+  const std::string flag = colon == std::string::npos ? "true" : request.substr(colon + 1);
+  const auto it = std::find(names_.begin(), names_.end(), name);
+  if (it == names_.end() || (flag != "true" && flag != "false")) {
+    logger()->warn("thrusters/set_failed '{}' ignored: expected '<thruster>' or '<thruster>:false' with a thruster "
+                   "of this vehicle", request);
+    return;
+  }
+  const int index = static_cast<int>(it - names_.begin());
+  if (!allocator_->SetThrusterFailed(index, flag == "true"))
+    logger()->warn("thruster {} could not be marked {}", name, flag == "true" ? "failed" : "working");
+  else
+    logger()->warn("thruster {} marked {}: allocation recomputed", name, flag == "true" ? "FAILED" : "working");
 }
 
 MpcControllerNode::MpcControllerNode(const unav::NodeOptions& options) : Node("mpc_controller", options, "rov") {

@@ -3,6 +3,8 @@
 // control_allocator
 //   sub  control/wrench_command   geometry_msgs/WrenchStamped  body FRD [N, N m]
 //   pub  thrusters/command        unav_msgs/ThrusterCommand    u_i in [-1, 1], stamped as the wrench
+//   sub  thrusters/set_failed     std_msgs/String  "T3" marks thruster T3 failed, "T3:false" repairs
+//                                 it; the allocation is recomputed at once
 //   params: config_file (allocator YAML; default <unav_resources>/config/controllers/allocator.yaml)
 //
 // mpc_controller
@@ -28,6 +30,7 @@
 #include "geometry_msgs/msg/wrench_stamped.hpp"
 #include "nav_msgs/msg/odometry.hpp"
 #include "nav_msgs/msg/path.hpp"
+#include "std_msgs/msg/string.hpp"
 #include "unav_control/allocator.hpp"
 #include "unav_control/mpc.hpp"
 #include "unav_control/waypoint_follower.hpp"
@@ -41,8 +44,11 @@ class ControlAllocatorNode : public unav::Node {
   explicit ControlAllocatorNode(const unav::NodeOptions& options);
 
  private:
+  void on_set_failed(const std::string& request);
   std::unique_ptr<Allocator> allocator_;
+  std::vector<std::string> names_;
   std::uint64_t saturated_ = 0;
+  std::shared_ptr<unav::Subscription<std_msgs::msg::String>> failed_sub_;
   std::shared_ptr<unav::Subscription<geometry_msgs::msg::WrenchStamped>> sub_;
   std::shared_ptr<unav::Publisher<unav_msgs::msg::ThrusterCommand>> pub_;
 };
