@@ -4,6 +4,7 @@
 # in-process tests show < 1 mm steady-state error, 5 cm leaves room for the bounded solver
 # iterations over DDS), and the launch ends cleanly when the physics stops.
 set -euo pipefail
+trap 'echo "FAIL: unexpected exit at line $LINENO: $BASH_COMMAND"; [ -n "${log:-}" ] && [ -f "$log" ] && grep -v "Publishing\|I heard" "$log" | tail -30' ERR
 ws="$1"
 set +u; source "$ws/install/setup.bash"; set -u
 export ROS_DOMAIN_ID=$((200 + $$ % 30))

@@ -2,6 +2,7 @@
 # physics_server launched as a process: odometry and /clock come out with ROS 2 types, a thruster
 # command published by `unav topic pub` moves the vehicle north, the failsafe logs the timeout.
 set -euo pipefail
+trap 'echo "FAIL: unexpected exit at line $LINENO: $BASH_COMMAND"; [ -n "${log:-}" ] && [ -f "$log" ] && grep -v "Publishing\|I heard" "$log" | tail -30' ERR
 ws="$1"
 set +u; source "$ws/install/setup.bash"; set -u
 export ROS_DOMAIN_ID=$((100 + $$ % 50))

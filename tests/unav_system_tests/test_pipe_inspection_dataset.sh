@@ -3,6 +3,7 @@
 # ground-truth pose per frame, every rendered frame (10 Hz of simulated time, none skipped),
 # every IMU sample (200 Hz), depth in TUM units, and nothing is lost on Ctrl-C.
 set -euo pipefail
+trap 'echo "FAIL: unexpected exit at line $LINENO: $BASH_COMMAND"; [ -n "${log:-}" ] && [ -f "$log" ] && grep -v "Publishing\|I heard" "$log" | tail -30' ERR
 ws="$1"
 set +u; source "$ws/install/setup.bash"; set -u
 export ROS_DOMAIN_ID=$((50 + $$ % 50))

@@ -113,6 +113,12 @@ MpcControllerNode::MpcControllerNode(const unav::NodeOptions& options) : Node("m
 
 void MpcControllerNode::on_odom(const nav_msgs::msg::Odometry& m) {
   const double t = stamp_of(m.header());
+  if (have_output_ && std::abs(t - last_output_t_) < 1e-9) {
+    // The same state again: the physics re-publishes a held lockstep barrier when an answer was
+    // lost (e.g. published before the allocator matched). Answer it again, or the loop stalls.
+    pub_->publish(last_output_);
+    return;
+  }
   if (next_t_ >= 0.0 && t + 1e-6 < next_t_) return;
   next_t_ = (std::floor((t + 1e-6) / dt_) + 1.0) * dt_;
   const physics::RigidBodyState x = state_of(m);
@@ -134,6 +140,9 @@ void MpcControllerNode::on_odom(const nav_msgs::msg::Odometry& m) {
   out.wrench().torque().y(w[4]);
   out.wrench().torque().z(w[5]);
   pub_->publish(out);
+  last_output_ = out;
+  last_output_t_ = t;
+  have_output_ = true;
 }
 
 WaypointFollowerNode::WaypointFollowerNode(const unav::NodeOptions& options) : Node("waypoint_follower", options, "rov") {

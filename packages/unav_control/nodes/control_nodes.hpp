@@ -67,6 +67,9 @@ class MpcControllerNode : public unav::Node {
   PoseSetpoint setpoint_;
   MpcSummary last_;
   std::uint64_t failures_ = 0;
+  geometry_msgs::msg::WrenchStamped last_output_;
+  double last_output_t_ = -1.0;
+  bool have_output_ = false;
   std::shared_ptr<unav::Subscription<nav_msgs::msg::Odometry>> odom_sub_;
   std::shared_ptr<unav::Subscription<geometry_msgs::msg::PoseStamped>> sp_sub_;
   std::shared_ptr<unav::Publisher<geometry_msgs::msg::WrenchStamped>> pub_;
