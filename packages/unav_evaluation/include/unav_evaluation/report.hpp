@@ -1,0 +1,35 @@
+// Results of a localization benchmark in the layout of the paper's Table II, written as
+// Markdown, CSV and JSON, and a top-view (north-east) trajectory plot as PNG.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "unav_evaluation/metrics.hpp"
+
+namespace unav_evaluation {
+
+struct AlgorithmResult {
+  std::string trajectory;  ///< e.g. "linear", "with loop"
+  std::string algorithm;   ///< e.g. "orb_slam", "klt_vo"
+  Statistics ape_m, rpe_m, ape_rad, rpe_rad;
+  std::size_t poses = 0;   ///< associated poses
+  double scale = 1.0;      ///< Sim(3) scale applied to the estimate
+};
+
+/// Evaluates one estimate against ground truth: association (max_diff), alignment, APE and RPE
+/// (translation and rotation angle). Throws TrajectoryError (no overlap, too few poses).
+AlgorithmResult evaluate(const Trajectory& ground_truth, const Trajectory& estimate, const std::string& trajectory,
+                         const std::string& algorithm, Alignment alignment = Alignment::kSim3,
+                         const RpeOptions& rpe_options = {}, double max_diff_s = 0.02);
+
+/// Writes <stem>.md, <stem>.csv and <stem>.json (rmse values in the Table II columns, plus every
+/// statistic in the JSON). Throws TrajectoryError naming the file on I/O failure.
+void write_results(const std::string& stem, const std::vector<AlgorithmResult>& results);
+
+/// Top view: x = east (right), y = north (up), ground truth black, estimates (already aligned)
+/// in colours, with a legend and a metre scale bar. Throws TrajectoryError on I/O failure.
+void write_top_view_png(const std::string& path, const Trajectory& ground_truth,
+                        const std::vector<std::pair<std::string, Trajectory>>& estimates, int size_px = 800);
+
+}  // namespace unav_evaluation

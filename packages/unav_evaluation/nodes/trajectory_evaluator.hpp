@@ -1,0 +1,41 @@
+// trajectory_evaluator: records ground truth and every estimator's odometry during a run and, on
+// shutdown (Ctrl-C included), writes the TUM files, a Table II-style results table (Markdown,
+// CSV, JSON: APE/RPE in m and rad after Sim(3) alignment) and a top-view PNG.
+//
+// Ports (relative to the node namespace, default /rov):
+//   sub  ground_truth/odom                 nav_msgs/Odometry
+//   sub  localization/<algo>/odom          nav_msgs/Odometry, one per name in `estimates`
+// Params: estimates (names), output_dir, trajectory_name (table row label), alignment
+//         (none|se3|sim3|scale), rpe_delta (frames), max_time_diff (s, association).
+#pragma once
+
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "nav_msgs/msg/odometry.hpp"
+#include "unav_evaluation/report.hpp"
+#include "unav_runtime/runtime.hpp"
+
+namespace unav_evaluation {
+
+class TrajectoryEvaluator : public unav::Node {
+ public:
+  explicit TrajectoryEvaluator(const unav::NodeOptions& options);
+  ~TrajectoryEvaluator() override;
+  /// Writes every output now (also called by the destructor); returns the results.
+  std::vector<AlgorithmResult> write_outputs();
+
+ private:
+  std::string output_dir_, trajectory_name_;
+  Alignment alignment_ = Alignment::kSim3;
+  RpeOptions rpe_;
+  double max_diff_ = 0.02;
+  bool written_ = false;
+  Trajectory ground_truth_;
+  std::map<std::string, Trajectory> estimates_;
+  std::vector<std::shared_ptr<unav::Subscription<nav_msgs::msg::Odometry>>> subs_;
+};
+
+}  // namespace unav_evaluation

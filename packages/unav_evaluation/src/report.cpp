@@ -1,0 +1,120 @@
+#include "unav_evaluation/report.hpp"
+
+#include <fstream>
+#include <iomanip>
+
+#include <nlohmann/json.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+namespace unav_evaluation {
+
+AlgorithmResult evaluate(const Trajectory& gt, const Trajectory& est, const std::string& trajectory,
+                         const std::string& algorithm, Alignment alignment, const RpeOptions& rpe_options,
+                         double max_diff_s) {
+  auto [ref, aligned] = associate(gt, est, max_diff_s);
+  if (ref.size() < 3) throw TrajectoryError(algorithm + ": only " + std::to_string(ref.size()) + " associated poses");
+  AlgorithmResult r;
+  r.trajectory = trajectory;
+  r.algorithm = algorithm;
+  r.poses = ref.size();
+  r.scale = align(aligned, ref, alignment).s;
+  r.ape_m = statistics(ape(ref, aligned, PoseRelation::kTranslation));
+  r.ape_rad = statistics(ape(ref, aligned, PoseRelation::kRotationAngleRad));
+  r.rpe_m = statistics(rpe(ref, aligned, PoseRelation::kTranslation, rpe_options));
+  r.rpe_rad = statistics(rpe(ref, aligned, PoseRelation::kRotationAngleRad, rpe_options));
+  return r;
+}
+
+namespace {
+
+nlohmann::json stats_json(const Statistics& s) {
+  return {{"rmse", s.rmse}, {"mean", s.mean}, {"median", s.median}, {"std", s.std},
+          {"min", s.min},   {"max", s.max},   {"sse", s.sse},       {"count", s.count}};
+}
+
+std::ofstream open_out(const std::string& path) {
+  std::ofstream f(path);
+  if (!f) throw TrajectoryError(path + ": cannot be written");
+  return f;
+}
+
+}  // namespace
+
+void write_results(const std::string& stem, const std::vector<AlgorithmResult>& results) {
+  std::ofstream md = open_out(stem + ".md");
+  md << "| trajectory | algorithm | APE [m] | RPE [m] | APE [rad] | RPE [rad] | poses | scale |\n"
+     << "|---|---|---|---|---|---|---|---|\n"
+     << std::fixed;
+  for (const auto& r : results)
+    md << "| " << r.trajectory << " | " << r.algorithm << " | " << std::setprecision(3) << r.ape_m.rmse << " | "
+       << r.rpe_m.rmse << " | " << r.ape_rad.rmse << " | " << r.rpe_rad.rmse << " | " << r.poses << " | "
+       << std::setprecision(4) << r.scale << " |\n";
+  md << "\nRMSE values; Sim(3) Umeyama alignment; metrics as evo defines them (APE: pose error after "
+        "alignment; RPE: relative motion error between consecutive pose pairs).\n";
+  std::ofstream csv = open_out(stem + ".csv");
+  csv << "trajectory,algorithm,ape_m,rpe_m,ape_rad,rpe_rad,poses,scale\n" << std::setprecision(9);
+  for (const auto& r : results)
+    csv << r.trajectory << ',' << r.algorithm << ',' << r.ape_m.rmse << ',' << r.rpe_m.rmse << ',' << r.ape_rad.rmse
+        << ',' << r.rpe_rad.rmse << ',' << r.poses << ',' << r.scale << '\n';
+  nlohmann::json j = nlohmann::json::array();
+  for (const auto& r : results)
+    j.push_back({{"trajectory", r.trajectory},
+                 {"algorithm", r.algorithm},
+                 {"poses", r.poses},
+                 {"scale", r.scale},
+                 {"ape_m", stats_json(r.ape_m)},
+                 {"rpe_m", stats_json(r.rpe_m)},
+                 {"ape_rad", stats_json(r.ape_rad)},
+                 {"rpe_rad", stats_json(r.rpe_rad)}});
+  open_out(stem + ".json") << j.dump(2) << '\n';
+}
+
+void write_top_view_png(const std::string& path, const Trajectory& gt,
+                        const std::vector<std::pair<std::string, Trajectory>>& estimates, int size_px) {
+  double min_n = 1e300, max_n = -1e300, min_e = 1e300, max_e = -1e300;
+  auto extend = [&](const Trajectory& t) {
+    for (const auto& P : t.poses) {
+      min_n = std::min(min_n, P.translation().x());
+      max_n = std::max(max_n, P.translation().x());
+      min_e = std::min(min_e, P.translation().y());
+      max_e = std::max(max_e, P.translation().y());
+    }
+  };
+  extend(gt);
+  for (const auto& e : estimates) extend(e.second);
+  if (gt.empty()) throw TrajectoryError(path + ": no ground truth to plot");
+  const double span = std::max({max_n - min_n, max_e - min_e, 1.0});
+  const int margin = 60;
+  const double px_per_m = (size_px - 2 * margin) / span;
+  cv::Mat img(size_px, size_px, CV_8UC3, cv::Scalar(255, 255, 255));
+  auto to_px = [&](const Eigen::Vector3d& p) {
+    return cv::Point(static_cast<int>(margin + (p.y() - min_e) * px_per_m),
+                     static_cast<int>(size_px - margin - (p.x() - min_n) * px_per_m));
+  };
+  const cv::Scalar colours[] = {{40, 40, 220}, {200, 120, 30}, {40, 160, 40}, {160, 40, 160}};
+  auto draw = [&](const Trajectory& t, const cv::Scalar& c, int thickness) {
+    for (size_t i = 1; i < t.size(); ++i)
+      cv::line(img, to_px(t.poses[i - 1].translation()), to_px(t.poses[i].translation()), c, thickness, cv::LINE_AA);
+  };
+  draw(gt, cv::Scalar(0, 0, 0), 2);
+  int y = 30;
+  cv::putText(img, "ground truth", cv::Point(margin, y), cv::FONT_HERSHEY_SIMPLEX, 0.6, cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
+  for (size_t k = 0; k < estimates.size(); ++k) {
+    const cv::Scalar c = colours[k % 4];
+    draw(estimates[k].second, c, 1);
+    y += 22;
+    cv::putText(img, estimates[k].first, cv::Point(margin, y), cv::FONT_HERSHEY_SIMPLEX, 0.6, c, 1, cv::LINE_AA);
+  }
+  // 1 m (or 5 m) scale bar and axes labels.
+  const double bar_m = span > 20 ? 5.0 : 1.0;
+  const cv::Point b0(size_px - margin - static_cast<int>(bar_m * px_per_m), size_px - 25);
+  cv::line(img, b0, cv::Point(size_px - margin, size_px - 25), cv::Scalar(0, 0, 0), 2);
+  cv::putText(img, std::to_string(static_cast<int>(bar_m)) + " m", cv::Point(b0.x, size_px - 32), cv::FONT_HERSHEY_SIMPLEX,
+              0.5, cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
+  cv::putText(img, "north ^  east >  (top view, world_ned)", cv::Point(margin, size_px - 10), cv::FONT_HERSHEY_SIMPLEX,
+              0.45, cv::Scalar(90, 90, 90), 1, cv::LINE_AA);
+  if (!cv::imwrite(path, img)) throw TrajectoryError(path + ": PNG write failed");
+}
+
+}  // namespace unav_evaluation
