@@ -27,4 +27,6 @@ grep -h "path finished\|max_sim_time reached" "$OUT/launch.log" | sed 's/^\[[^]]
 echo "demo: finished: $frames frames of the down camera with depth, segmentation, ground truth and IMU"
 echo "demo: outputs in $OUT:"
 echo "  dataset/ (TUM RGB-D layout: rgb/ depth/ segmentation/ rgb.txt depth.txt groundtruth.txt imu.txt camera.yaml)"
+echo "  dataset/evaluation/ (KLT RGB-D VO vs ground truth: results.md/csv/json, TUM files, top_view.png)"
 echo "  launch.log (all node output), topics.txt (the ROS 2 topics that were live)"
+[ -f "$OUT/dataset/evaluation/results.md" ] && head -3 "$OUT/dataset/evaluation/results.md"

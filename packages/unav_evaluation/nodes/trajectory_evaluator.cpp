@@ -80,7 +80,7 @@ std::vector<AlgorithmResult> TrajectoryEvaluator::write_outputs() {
       logger()->warn("estimator '{}' not evaluated: {}", name, e.what());
     }
   }
-  write_results(output_dir_ + "/results", results);
+  write_results(output_dir_ + "/results", results, alignment_);
   write_top_view_png(output_dir_ + "/top_view.png", ground_truth_, aligned);
   logger()->info("evaluation written to {}", output_dir_);
   return results;

@@ -41,7 +41,7 @@ std::ofstream open_out(const std::string& path) {
 
 }  // namespace
 
-void write_results(const std::string& stem, const std::vector<AlgorithmResult>& results) {
+void write_results(const std::string& stem, const std::vector<AlgorithmResult>& results, Alignment alignment) {
   std::ofstream md = open_out(stem + ".md");
   md << "| trajectory | algorithm | APE [m] | RPE [m] | APE [rad] | RPE [rad] | poses | scale |\n"
      << "|---|---|---|---|---|---|---|---|\n"
@@ -50,7 +50,11 @@ void write_results(const std::string& stem, const std::vector<AlgorithmResult>& 
     md << "| " << r.trajectory << " | " << r.algorithm << " | " << std::setprecision(3) << r.ape_m.rmse << " | "
        << r.rpe_m.rmse << " | " << r.ape_rad.rmse << " | " << r.rpe_rad.rmse << " | " << r.poses << " | "
        << std::setprecision(4) << r.scale << " |\n";
-  md << "\nRMSE values; Sim(3) Umeyama alignment; metrics as evo defines them (APE: pose error after "
+  const char* how = alignment == Alignment::kSim3   ? "Sim(3) Umeyama alignment"
+                    : alignment == Alignment::kSE3  ? "SE(3) Umeyama alignment"
+                    : alignment == Alignment::kScaleOnly ? "scale-only alignment"
+                                                         : "no alignment";
+  md << "\nRMSE values; " << how << "; metrics as evo defines them (APE: pose error after "
         "alignment; RPE: relative motion error between consecutive pose pairs).\n";
   std::ofstream csv = open_out(stem + ".csv");
   csv << "trajectory,algorithm,ape_m,rpe_m,ape_rad,rpe_rad,poses,scale\n" << std::setprecision(9);

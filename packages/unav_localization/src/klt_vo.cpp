@@ -1,5 +1,6 @@
 #include "unav_localization/klt_vo.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
@@ -20,6 +21,7 @@ bool KltVoOptions::IsValid(std::string* msg) const {
   if (!(fb_max_error_px > 0) || !(ransac_reprojection_px > 0)) return fail("pixel thresholds must be > 0");
   if (min_inliers < 6) return fail("min_inliers must be >= 6, got " + std::to_string(min_inliers));
   if (!(min_depth_m > 0) || !(max_depth_m > min_depth_m)) return fail("need 0 < min_depth_m < max_depth_m");
+  if (!(max_step_rotation_rad > 0) || !(max_step_translation_m > 0)) return fail("step limits must be > 0");
   return true;
 }
 
@@ -61,6 +63,9 @@ float depth_at(const cv::Mat& depth, const cv::Point2f& p) {
   const float a = p.x - static_cast<float>(u), b = p.y - static_cast<float>(v);
   const float d00 = depth.at<float>(v, u), d01 = depth.at<float>(v, u + 1), d10 = depth.at<float>(v + 1, u),
               d11 = depth.at<float>(v + 1, u + 1);
+  // Depth edges (pipe against sand) would interpolate to a surface that is not there.
+  const float lo = std::min(std::min(d00, d01), std::min(d10, d11)), hi = std::max(std::max(d00, d01), std::max(d10, d11));
+  if (!(hi - lo < 0.05f * lo)) return NAN;
   return (1 - a) * (1 - b) * d00 + a * (1 - b) * d01 + (1 - a) * b * d10 + a * b * d11;
 }
 
@@ -125,7 +130,7 @@ VoSummary KltVo::ProcessFrame(const cv::Mat& gray, const cv::Mat& depth, Eigen::
     ok = cv::solvePnPRansac(obj, img, K_, cv::noArray(), rvec, tvec, false, 200,
                             static_cast<float>(options_.ransac_reprojection_px), 0.999, inliers, cv::SOLVEPNP_ITERATIVE);
     s.inliers = static_cast<int>(inliers.size());
-    ok = ok && s.inliers >= options_.min_inliers;
+    ok = ok && s.inliers >= options_.min_inliers && 10 * s.inliers >= 3 * static_cast<int>(obj.size());
     if (ok) {
       cv::Mat R;
       cv::Rodrigues(rvec, R);
@@ -146,6 +151,16 @@ VoSummary KltVo::ProcessFrame(const cv::Mat& gray, const cv::Mat& depth, Eigen::
   }
   const Eigen::Isometry3d previous = T_C0C_;
   if (ok) {
+    // A planar scene can give PnP a mirrored solution with plenty of inliers: reject steps no
+    // vehicle makes between two frames.
+    const Eigen::Isometry3d step = previous.inverse() * (T_C0K_ * X_cur_kf.inverse());
+    const double angle = Eigen::AngleAxisd(step.linear()).angle();
+    if (angle > options_.max_step_rotation_rad || step.translation().norm() > options_.max_step_translation_m) {
+      ok = false;
+      s.inliers = 0;
+    }
+  }
+  if (ok) {
     T_C0C_ = T_C0K_ * X_cur_kf.inverse();
     last_motion_ = previous.inverse() * T_C0C_;
     kf_points_ = obj;
@@ -154,7 +169,7 @@ VoSummary KltVo::ProcessFrame(const cv::Mat& gray, const cv::Mat& depth, Eigen::
   } else {
     T_C0C_ = T_C0C_ * last_motion_;  // constant-velocity prediction
     s.status = VoStatus::kLost;
-    s.message = "too few PnP inliers (" + std::to_string(s.inliers) + "): constant-velocity prediction";
+    s.message = "no consistent PnP solution (" + std::to_string(s.tracked) + " tracks): constant-velocity prediction";
     prev_pts_.clear();
   }
   if (static_cast<int>(prev_pts_.size()) < options_.redetect_below) make_keyframe(gray, depth);

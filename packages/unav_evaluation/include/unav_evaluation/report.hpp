@@ -25,7 +25,8 @@ AlgorithmResult evaluate(const Trajectory& ground_truth, const Trajectory& estim
 
 /// Writes <stem>.md, <stem>.csv and <stem>.json (rmse values in the Table II columns, plus every
 /// statistic in the JSON). Throws TrajectoryError naming the file on I/O failure.
-void write_results(const std::string& stem, const std::vector<AlgorithmResult>& results);
+void write_results(const std::string& stem, const std::vector<AlgorithmResult>& results,
+                   Alignment alignment = Alignment::kSim3);
 
 /// Top view: x = east (right), y = north (up), ground truth black, estimates (already aligned)
 /// in colours, with a legend and a metre scale bar. Throws TrajectoryError on I/O failure.

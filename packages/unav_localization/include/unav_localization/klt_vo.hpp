@@ -21,8 +21,10 @@ struct KltVoOptions {
   int redetect_below = 150;        ///< re-detect corners when fewer are tracked
   double fb_max_error_px = 1.0;    ///< forward-backward tracking consistency
   double ransac_reprojection_px = 2.0;
-  int min_inliers = 12;            ///< fewer: tracking lost for this frame
+  int min_inliers = 12;            ///< fewer (or under 30% of the tracks): tracking lost for this frame
   double min_depth_m = 0.1, max_depth_m = 30.0;  ///< depths outside are not used
+  double max_step_rotation_rad = 0.35;  ///< larger frame-to-frame rotations are rejected as wrong
+  double max_step_translation_m = 1.0;  ///< larger frame-to-frame translations are rejected
   bool IsValid(std::string* msg) const;
 };
 

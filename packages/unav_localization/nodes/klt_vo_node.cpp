@@ -1,0 +1,142 @@
+// klt_vo: KLT RGB-D visual odometry as a node.
+//
+// Ports (relative to the node namespace, default /rov):
+//   sub  camera/<camera>/image_raw, camera/<camera>/depth/image_raw   sensor_msgs/Image (rgb8, 32FC1)
+//   sub  camera/<camera>/camera_info                                   sensor_msgs/CameraInfo
+//   pub  localization/klt_vo/odom   nav_msgs/Odometry: base_link_frd in frame `klt_vo_odom` (the
+//                                   body pose at the first frame), stamped with the image time
+//   pub  localization/klt_vo/path   nav_msgs/Path (every 10 frames)
+// The camera's mount (cameras_config) turns camera motion into body motion.
+#include <map>
+
+#include <opencv2/imgproc.hpp>
+
+#include "nav_msgs/msg/odometry.hpp"
+#include "nav_msgs/msg/path.hpp"
+#include "sensor_msgs/msg/camera_info.hpp"
+#include "sensor_msgs/msg/image.hpp"
+#include "unav_launch/package_index.hpp"
+#include "unav_localization/klt_vo.hpp"
+#include "unav_renderer/camera.hpp"
+#include "unav_runtime/runtime.hpp"
+
+namespace unav_localization {
+
+class KltVoNode : public unav::Node {
+ public:
+  explicit KltVoNode(const unav::NodeOptions& options) : Node("klt_vo", options, "rov") {
+    const std::string cam = declare_parameter<std::string>("camera", "down", {"camera name", {}, {}, false});
+    const auto share = unav::launch::find_package_share("unav_resources");
+    const std::string cams_path = declare_parameter<std::string>(
+        "cameras_config", share ? *share + "/config/sensors/bluerov2_cameras.yaml" : "", {"camera YAML", {}, {}, false});
+    bool found = false;
+    try {
+      for (const auto& c : unav_renderer::load_cameras(cams_path))
+        if (c.name == cam) {
+          X_BC_ = c.X_BC;
+          found = true;
+        }
+    } catch (const std::exception& e) {
+      throw unav::ConfigError(e.what());
+    }
+    if (!found) throw unav::ParameterError("node '" + name() + "': camera '" + cam + "' is not in " + cams_path);
+    const std::string base = "camera/" + cam;
+    odom_pub_ = create_publisher<nav_msgs::msg::Odometry>("localization/klt_vo/odom", unav::QoS::reliable());
+    path_pub_ = create_publisher<nav_msgs::msg::Path>("localization/klt_vo/path", unav::QoS::reliable(1));
+    info_sub_ = create_subscription<sensor_msgs::msg::CameraInfo>(base + "/camera_info", unav::QoS::reliable(5),
+                                                                  [this](const sensor_msgs::msg::CameraInfo& m) {
+                                                                    if (vo_) return;
+                                                                    Eigen::Matrix3d K;
+                                                                    for (int i = 0; i < 9; ++i) K(i / 3, i % 3) = m.k()[static_cast<size_t>(i)];
+                                                                    vo_ = std::make_unique<KltVo>(K);
+                                                                    try_process();
+                                                                  });
+    rgb_sub_ = create_subscription<sensor_msgs::msg::Image>(base + "/image_raw", unav::QoS::reliable(20),
+                                                            [this](const sensor_msgs::msg::Image& m) {
+                                                              if (m.encoding() != "rgb8") return;
+                                                              cv::Mat rgb(static_cast<int>(m.height()), static_cast<int>(m.width()), CV_8UC3,
+                                                                          const_cast<uint8_t*>(m.data().data()));
+                                                              cv::Mat gray;
+                                                              cv::cvtColor(rgb, gray, cv::COLOR_RGB2GRAY);
+                                                              grays_[key(m.header())] = {gray, m.header()};
+                                                              try_process();
+                                                            });
+    depth_sub_ = create_subscription<sensor_msgs::msg::Image>(base + "/depth/image_raw", unav::QoS::reliable(20),
+                                                              [this](const sensor_msgs::msg::Image& m) {
+                                                                if (m.encoding() != "32FC1") return;
+                                                                depths_[key(m.header())] =
+                                                                    cv::Mat(static_cast<int>(m.height()), static_cast<int>(m.width()), CV_32FC1,
+                                                                            const_cast<uint8_t*>(m.data().data()))
+                                                                        .clone();
+                                                                try_process();
+                                                              });
+    path_.header().frame_id("klt_vo_odom");
+  }
+
+ private:
+  static int64_t key(const std_msgs::msg::dds_::Header_& h) {
+    return unav::Time::from_msg(h.stamp().sec(), h.stamp().nanosec()).ns;
+  }
+  // Processes, in time order, every frame whose rgb and depth have both arrived.
+  void try_process() {
+    if (!vo_) return;
+    while (!grays_.empty()) {
+      const auto it = grays_.begin();
+      const auto d = depths_.find(it->first);
+      if (d == depths_.end()) {
+        if (depths_.empty() || depths_.rbegin()->first < it->first) return;  // its depth may still come
+        grays_.erase(it);                                                   // depth lost: skip the frame
+        continue;
+      }
+      Eigen::Isometry3d T_C0C;
+      const VoSummary s = vo_->ProcessFrame(it->second.gray, d->second, &T_C0C);
+      if (s.status == VoStatus::kLost) logger()->warn("tracking lost ({}), predicting; re-initialising on new corners", s.message);
+      publish(it->second.header, X_BC_ * T_C0C * X_BC_.inverse());
+      depths_.erase(depths_.begin(), std::next(d));
+      grays_.erase(it);
+    }
+  }
+  void publish(const std_msgs::msg::dds_::Header_& h, const Eigen::Isometry3d& T_OB) {
+    nav_msgs::msg::Odometry o;
+    o.header().stamp() = h.stamp();
+    o.header().frame_id("klt_vo_odom");
+    o.child_frame_id("base_link_frd");
+    const Eigen::Quaterniond q(T_OB.linear());
+    auto& p = o.pose().pose();
+    p.position().x(T_OB.translation().x());
+    p.position().y(T_OB.translation().y());
+    p.position().z(T_OB.translation().z());
+    p.orientation().x(q.x());
+    p.orientation().y(q.y());
+    p.orientation().z(q.z());
+    p.orientation().w(q.w());
+    odom_pub_->publish(o);
+    geometry_msgs::msg::dds_::PoseStamped_ ps;
+    ps.header() = o.header();
+    ps.pose() = p;
+    path_.poses().push_back(ps);
+    if (++frames_ % 10 == 0) {
+      path_.header().stamp() = h.stamp();
+      path_pub_->publish(path_);
+    }
+  }
+
+  struct GrayFrame {
+    cv::Mat gray;
+    std_msgs::msg::dds_::Header_ header;
+  };
+  Eigen::Isometry3d X_BC_ = Eigen::Isometry3d::Identity();
+  std::unique_ptr<KltVo> vo_;
+  std::map<int64_t, GrayFrame> grays_;
+  std::map<int64_t, cv::Mat> depths_;
+  nav_msgs::msg::Path path_;
+  uint64_t frames_ = 0;
+  std::shared_ptr<unav::Publisher<nav_msgs::msg::Odometry>> odom_pub_;
+  std::shared_ptr<unav::Publisher<nav_msgs::msg::Path>> path_pub_;
+  std::shared_ptr<unav::Subscription<sensor_msgs::msg::CameraInfo>> info_sub_;
+  std::shared_ptr<unav::Subscription<sensor_msgs::msg::Image>> rgb_sub_, depth_sub_;
+};
+
+}  // namespace unav_localization
+
+int main(int argc, char** argv) { return unav::run_node<unav_localization::KltVoNode>(argc, argv); }
