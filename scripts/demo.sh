@@ -29,4 +29,4 @@ echo "demo: outputs in $OUT:"
 echo "  dataset/ (TUM RGB-D layout: rgb/ depth/ segmentation/ rgb.txt depth.txt groundtruth.txt imu.txt camera.yaml)"
 echo "  dataset/evaluation/ (KLT RGB-D VO vs ground truth: results.md/csv/json, TUM files, top_view.png)"
 echo "  launch.log (all node output), topics.txt (the ROS 2 topics that were live)"
-[ -f "$OUT/dataset/evaluation/results.md" ] && head -3 "$OUT/dataset/evaluation/results.md"
+if [ -f "$OUT/dataset/evaluation/results.md" ]; then head -3 "$OUT/dataset/evaluation/results.md"; fi
