@@ -95,6 +95,9 @@ MpcControllerNode::MpcControllerNode(const unav::NodeOptions& options) : Node("m
                                                           {"MPC YAML", {}, {}, false});
   const MpcConfig cfg = wrap_config([&] { return load_mpc_config(file, config_root()); });
   dt_ = cfg.options.dt;
+  setpoint_sync_ = declare_parameter<bool>(
+      "setpoint_sync", false,
+      {"solve for a state only once a setpoint stamped at or after it arrived (deterministic lockstep)", {}, {}, false});
   mpc_ = wrap_config([&] { return std::make_unique<Mpc>(cfg.model, cfg.options); });
   pub_ = create_publisher<geometry_msgs::msg::WrenchStamped>("control/wrench_command", unav::QoS::reliable());
   sp_sub_ = create_subscription<geometry_msgs::msg::PoseStamped>(
@@ -105,6 +108,12 @@ MpcControllerNode::MpcControllerNode(const unav::NodeOptions& options) : Node("m
         setpoint_.p_W = Eigen::Vector3d(p.position().x(), p.position().y(), p.position().z());
         setpoint_.q_WB = q;
         have_setpoint_ = true;
+        setpoint_t_ = std::max(setpoint_t_, stamp_of(m.header()));
+        if (pending_ && setpoint_t_ >= stamp_of(pending_->header()) - 1e-9) {
+          const nav_msgs::msg::Odometry odom = *pending_;
+          pending_.reset();
+          solve(odom);
+        }
       });
   odom_sub_ = create_subscription<nav_msgs::msg::Odometry>("ground_truth/odom", unav::QoS::reliable(),
                                                            [this](const nav_msgs::msg::Odometry& m) { on_odom(m); });
@@ -120,6 +129,15 @@ void MpcControllerNode::on_odom(const nav_msgs::msg::Odometry& m) {
     return;
   }
   if (next_t_ >= 0.0 && t + 1e-6 < next_t_) return;
+  if (setpoint_sync_ && setpoint_t_ < t - 1e-9) {
+    pending_ = m;  // solved when the setpoint for this instant arrives
+    return;
+  }
+  solve(m);
+}
+
+void MpcControllerNode::solve(const nav_msgs::msg::Odometry& m) {
+  const double t = stamp_of(m.header());
   next_t_ = (std::floor((t + 1e-6) / dt_) + 1.0) * dt_;
   const physics::RigidBodyState x = state_of(m);
   if (!have_setpoint_) {  // hold where we are until told otherwise
@@ -191,8 +209,7 @@ WaypointFollowerNode::WaypointFollowerNode(const unav::NodeOptions& options) : N
     finished_logged_ = false;
   });
   odom_sub_ = create_subscription<nav_msgs::msg::Odometry>("ground_truth/odom", unav::QoS::reliable(), [this](const nav_msgs::msg::Odometry& m) {
-    if (follower_.path().empty()) return;
-    const auto& p = m.pose().pose().position();
+    const auto& p = m.pose().pose().position();  // without a path: a hold setpoint at p
     const WaypointUpdate u = follower_.Update(Eigen::Vector3d(p.x(), p.y(), p.z()));
     if (u.finished && !finished_logged_) {
       logger()->info("path finished at t = {:.2f} s", stamp_of(m.header()));

@@ -13,7 +13,9 @@
 //   pub  control/wrench_command   geometry_msgs/WrenchStamped, stamped with the state's time
 //   Solves once per odometry whose stamp reached the next multiple of the MPC dt (lockstep: the
 //   physics barrier period should equal it). No setpoint yet: holds the first received pose.
-//   A failed solve publishes the MPC's safe wrench and a warning; never NaN.
+//   A failed solve publishes the MPC's safe wrench and a warning; never NaN. With setpoint_sync,
+//   a state is solved only once a setpoint stamped at or after it arrived (the waypoint follower
+//   answers every odometry), which makes lockstep runs repeatable.
 //   params: config_file (mpc YAML; default <unav_resources>/config/controllers/mpc.yaml)
 //
 // waypoint_follower
@@ -25,6 +27,7 @@
 #pragma once
 
 #include <memory>
+#include <optional>
 
 #include "geometry_msgs/msg/pose_stamped.hpp"
 #include "geometry_msgs/msg/wrench_stamped.hpp"
@@ -60,7 +63,11 @@ class MpcControllerNode : public unav::Node {
 
  private:
   void on_odom(const nav_msgs::msg::Odometry& m);
+  void solve(const nav_msgs::msg::Odometry& m);
   std::unique_ptr<Mpc> mpc_;
+  bool setpoint_sync_ = false;
+  double setpoint_t_ = -1.0;
+  std::optional<nav_msgs::msg::Odometry> pending_;
   double dt_ = 0.05;
   double next_t_ = -1.0;
   bool have_setpoint_ = false;
