@@ -1,12 +1,16 @@
-// klt_vo: KLT RGB-D visual odometry as a node.
+// klt_vo: KLT visual odometry (RGB-D or monocular) as a node.
 //
 // Ports (relative to the node namespace, default /rov):
-//   sub  camera/<camera>/image_raw, camera/<camera>/depth/image_raw   sensor_msgs/Image (rgb8, 32FC1)
+//   sub  camera/<camera>/image_raw, camera/<camera>/depth/image_raw   sensor_msgs/Image (rgb8, 32FC1;
+//                                                                      depth only in mode rgbd)
 //   sub  camera/<camera>/camera_info                                   sensor_msgs/CameraInfo
 //   pub  localization/klt_vo/odom   nav_msgs/Odometry: base_link_frd in frame `klt_vo_odom` (the
 //                                   body pose at the first frame), stamped with the image time
 //   pub  localization/klt_vo/path   nav_msgs/Path (every 10 frames)
-// The camera's mount (cameras_config) turns camera motion into body motion.
+// The camera's mount (cameras_config) turns camera motion into body motion. Mode rgbd publishes
+// every frame (a lost frame with a constant-velocity prediction); mode monocular publishes only
+// frames with an estimate (initialised or tracking), in arbitrary units (the first map's median
+// scene depth is 1): compare with ground truth after a Sim(3) alignment.
 #include <map>
 
 #include <opencv2/imgproc.hpp>
@@ -40,6 +44,12 @@ class KltVoNode : public unav::Node {
       throw unav::ConfigError(e.what());
     }
     if (!found) throw unav::ParameterError("node '" + name() + "': camera '" + cam + "' is not in " + cams_path);
+    const std::string mode = declare_parameter<std::string>("mode", "rgbd", {"rgbd | monocular", {}, {}, false});
+    if (mode == "monocular") {
+      options_.mode = KltVoOptions::Mode::kMonocular;
+    } else if (mode != "rgbd") {
+      throw unav::ParameterError("node '" + name() + "': parameter 'mode' must be 'rgbd' or 'monocular', got '" + mode + "'");
+    }
     const std::string base = "camera/" + cam;
     odom_pub_ = create_publisher<nav_msgs::msg::Odometry>("localization/klt_vo/odom", unav::QoS::reliable());
     path_pub_ = create_publisher<nav_msgs::msg::Path>("localization/klt_vo/path", unav::QoS::reliable(1));
@@ -48,7 +58,7 @@ class KltVoNode : public unav::Node {
                                                                     if (vo_) return;
                                                                     Eigen::Matrix3d K;
                                                                     for (int i = 0; i < 9; ++i) K(i / 3, i % 3) = m.k()[static_cast<size_t>(i)];
-                                                                    vo_ = std::make_unique<KltVo>(K);
+                                                                    vo_ = std::make_unique<KltVo>(K, options_);
                                                                     try_process();
                                                                   });
     rgb_sub_ = create_subscription<sensor_msgs::msg::Image>(base + "/image_raw", unav::QoS::reliable(20),
@@ -61,15 +71,16 @@ class KltVoNode : public unav::Node {
                                                               grays_[key(m.header())] = {gray, m.header()};
                                                               try_process();
                                                             });
-    depth_sub_ = create_subscription<sensor_msgs::msg::Image>(base + "/depth/image_raw", unav::QoS::reliable(20),
-                                                              [this](const sensor_msgs::msg::Image& m) {
-                                                                if (m.encoding() != "32FC1") return;
-                                                                depths_[key(m.header())] =
-                                                                    cv::Mat(static_cast<int>(m.height()), static_cast<int>(m.width()), CV_32FC1,
-                                                                            const_cast<uint8_t*>(m.data().data()))
-                                                                        .clone();
-                                                                try_process();
-                                                              });
+    if (!monocular()) {
+      depth_sub_ = create_subscription<sensor_msgs::msg::Image>(
+          base + "/depth/image_raw", unav::QoS::reliable(20), [this](const sensor_msgs::msg::Image& m) {
+            if (m.encoding() != "32FC1") return;
+            depths_[key(m.header())] = cv::Mat(static_cast<int>(m.height()), static_cast<int>(m.width()), CV_32FC1,
+                                               const_cast<uint8_t*>(m.data().data()))
+                                           .clone();
+            try_process();
+          });
+    }
     path_.header().frame_id("klt_vo_odom");
   }
 
@@ -77,9 +88,34 @@ class KltVoNode : public unav::Node {
   static int64_t key(const std_msgs::msg::dds_::Header_& h) {
     return unav::Time::from_msg(h.stamp().sec(), h.stamp().nanosec()).ns;
   }
+  bool monocular() const { return options_.mode == KltVoOptions::Mode::kMonocular; }
+  // Monocular: processes the frames in time order.
+  void process_monocular() {
+    for (const auto& entry : grays_) {
+      const GrayFrame& frame = entry.second;
+      Eigen::Isometry3d T_C0C;
+      const VoSummary s = vo_->ProcessFrame(frame.gray, &T_C0C);
+      if (s.status != last_status_) {
+        if (s.status == VoStatus::kLost)
+          logger()->warn("tracking lost ({}); re-initialising", s.message);
+        else if (s.status == VoStatus::kInitialized)
+          logger()->info("monocular map initialised ({})", s.message);
+        else if (s.status == VoStatus::kInvalidInput)
+          logger()->warn("frame rejected: {}", s.message);
+      }
+      last_status_ = s.status;
+      if (s.status == VoStatus::kInitialized || s.status == VoStatus::kTracking)
+        publish(frame.header, X_BC_ * T_C0C * X_BC_.inverse());
+    }
+    grays_.clear();
+  }
   // Processes, in time order, every frame whose rgb and depth have both arrived.
   void try_process() {
     if (!vo_) return;
+    if (monocular()) {
+      process_monocular();
+      return;
+    }
     while (!grays_.empty()) {
       const auto it = grays_.begin();
       const auto d = depths_.find(it->first);
@@ -126,7 +162,9 @@ class KltVoNode : public unav::Node {
     std_msgs::msg::dds_::Header_ header;
   };
   Eigen::Isometry3d X_BC_ = Eigen::Isometry3d::Identity();
+  KltVoOptions options_;
   std::unique_ptr<KltVo> vo_;
+  VoStatus last_status_ = VoStatus::kInitializing;
   std::map<int64_t, GrayFrame> grays_;
   std::map<int64_t, cv::Mat> depths_;
   nav_msgs::msg::Path path_;

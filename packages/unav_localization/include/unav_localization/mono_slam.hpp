@@ -1,0 +1,102 @@
+// Feature-based monocular SLAM in the spirit of ORB-SLAM: ORB features spread over the image;
+// map initialisation from two views (essential matrix or homography, whichever explains more
+// triangulated points); tracking with a constant-velocity prediction and projection search, then
+// the local map; keyframes; local bundle adjustment (Ceres, Huber loss) with map-point culling;
+// loop detection by bag of binary words, Sim(3) loop correction, essential-graph optimisation and
+// a global bundle adjustment; relocalisation, and re-initialisation when it fails.
+//
+// Everything runs in the caller's thread, frame by frame (tracking, then mapping, then loop
+// closing on new keyframes), so a run is deterministic: the same images give the same map.
+// Monocular scale is arbitrary: the first map's median depth is 1. Compare trajectories with a
+// Sim(3) alignment.
+#pragma once
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <Eigen/Geometry>
+#include <opencv2/core.hpp>
+
+#include "unav_localization/bow_vocabulary.hpp"
+#include "unav_localization/orb_extractor.hpp"
+#include "unav_localization/slam_map.hpp"
+
+namespace unav_localization {
+
+struct MonoSlamOptions {
+  OrbOptions orb;
+  int init_orb_features_factor = 2;      ///< more features while initialising
+  double init_min_parallax_deg = 1.0;    ///< triangulated points need this much parallax
+  int init_min_points = 60;              ///< triangulated points to accept an initial map
+  int init_max_frames = 30;              ///< a reference frame older than this is replaced
+  int min_tracked_inliers = 30;          ///< fewer after pose optimisation: tracking lost
+  int keyframe_max_gap = 10;             ///< frames between keyframes at most
+  int keyframe_min_gap = 2;              ///< frames between keyframes at least (unless weak)
+  double keyframe_tracked_ratio = 0.8;   ///< new keyframe when tracked < ratio x reference's
+  int local_ba_keyframes = 10;           ///< keyframes optimised by local BA
+  int local_ba_iterations = 10;
+  int mapping_neighbours = 10;           ///< keyframes searched for new points
+  bool loop_closing = true;
+  double loop_min_score_ratio = 1.0;     ///< candidate score >= ratio x weakest covisible score
+  int loop_consistency = 2;              ///< consecutive keyframes that must agree
+  int loop_min_inliers = 40;             ///< matches after Sim(3) optimisation and guided search
+  int loop_min_keyframe_gap = 20;        ///< keyframes between the loop ends at least
+  bool global_ba_after_loop = true;
+  int global_ba_iterations = 15;
+  int relocalize_frames = 10;            ///< frames of relocalisation attempts before re-initialising
+  bool IsValid(std::string* msg) const;
+};
+
+enum class SlamState { kInitializing, kTracking, kRelocalized, kLost, kInvalidInput };
+const char* to_string(SlamState state);
+
+struct SlamFrameSummary {
+  SlamState state = SlamState::kInvalidInput;
+  int features = 0;
+  int inliers = 0;          ///< map points matched after pose optimisation
+  bool keyframe = false;
+  bool loop_closed = false;
+  bool reinitialized = false;
+  double tracking_ms = 0.0;  ///< features + tracking
+  double mapping_ms = 0.0;   ///< keyframe insertion, local BA, loop closing (0 without keyframe)
+  Eigen::Isometry3d T_wc = Eigen::Isometry3d::Identity();  ///< current camera pose (tracked or predicted)
+  std::string message;
+};
+
+struct SlamStats {
+  int frames = 0, tracked_frames = 0, lost_frames = 0, keyframes = 0, points = 0;
+  int loops = 0, relocalizations = 0, reinitializations = 0, maps = 1;
+};
+
+class MonoSlam {
+ public:
+  /// distortion: OpenCV plumb_bob coefficients (empty = rectified). vocabulary: needed for loop
+  /// closing and relocalisation (null or empty: both off). Throws std::invalid_argument.
+  MonoSlam(const PinholeCamera& camera, const std::vector<double>& distortion, const MonoSlamOptions& options,
+           std::shared_ptr<const BowVocabulary> vocabulary);
+  ~MonoSlam();
+  MonoSlam(const MonoSlam&) = delete;
+  MonoSlam& operator=(const MonoSlam&) = delete;
+
+  /// gray: CV_8UC1 of the camera's size; stamp [s], increasing. Never throws.
+  SlamFrameSummary Track(const cv::Mat& gray, double stamp);
+
+  struct StampedPose {
+    double stamp;
+    Eigen::Isometry3d T_wc;
+    int map;  ///< which map (re-initialisation starts a new one, joined at the last good pose)
+  };
+  /// Every tracked frame's pose, expressed through its reference keyframe, so loop corrections
+  /// and bundle adjustment move the whole history. Frames before initialisation are absent.
+  std::vector<StampedPose> Trajectory() const;
+  std::vector<StampedPose> KeyFrameTrajectory() const;
+  SlamStats stats() const;
+  const Map& map() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace unav_localization

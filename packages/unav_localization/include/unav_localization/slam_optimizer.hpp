@@ -1,0 +1,62 @@
+// Ceres optimisations of the monocular SLAM: pose-only tracking refinement, local and global
+// bundle adjustment, the Sim(3) between two keyframes at a loop, and the Sim(3) pose graph
+// (essential graph) that spreads a loop correction. Residuals are reprojection errors in pixels
+// divided by the feature's pyramid scale, under a Huber loss; measurements whose chi-square
+// exceeds the 95% gate (2 dof: 5.991) are marked outliers between rounds, as in ORB-SLAM.
+#pragma once
+
+#include <vector>
+
+#include "unav_localization/sim3.hpp"
+#include "unav_localization/slam_map.hpp"
+
+namespace unav_localization {
+
+struct PoseObservation {
+  Eigen::Vector3d X_w;
+  Eigen::Vector2d uv;
+  double inv_sigma2 = 1.0;
+  bool outlier = false;
+};
+
+/// Refines T_cw from 2D-3D matches (4 rounds x 10 iterations, outliers re-classified each
+/// round). Returns the number of inliers.
+int OptimizePose(const PinholeCamera& cam, std::vector<PoseObservation>* obs, Eigen::Isometry3d* T_cw);
+
+struct BundleAdjustmentSummary {
+  int keyframes = 0, fixed_keyframes = 0, points = 0, residuals = 0, outliers_removed = 0;
+  double seconds = 0.0;
+};
+
+/// Local BA around keyframe `kf_id`: it and its covisible keyframes (up to max_local) are
+/// optimised with every point they see; other keyframes that see those points stay fixed, and so
+/// does keyframe 0 (gauge). Outlier observations are erased from the map afterwards.
+BundleAdjustmentSummary LocalBundleAdjustment(Map* map, const PinholeCamera& cam, const std::vector<double>& level_sigma2,
+                                              int kf_id, int max_local, int iterations);
+
+/// All keyframes and points, keyframe 0 fixed.
+BundleAdjustmentSummary GlobalBundleAdjustment(Map* map, const PinholeCamera& cam, const std::vector<double>& level_sigma2,
+                                               int iterations);
+
+struct Sim3Match {
+  Eigen::Vector3d X1_c1, X2_c2;  ///< the matched points in their keyframes' camera frames
+  Eigen::Vector2d uv1, uv2;      ///< their features in keyframe 1 and keyframe 2
+  double inv_sigma2_1 = 1.0, inv_sigma2_2 = 1.0;
+  bool outlier = false;
+};
+
+/// Refines S_12 (camera 2 -> camera 1) by reprojecting each pair into both images. Returns inliers.
+int OptimizeSim3(const PinholeCamera& cam, std::vector<Sim3Match>* matches, Sim3* S_12, double chi2_gate);
+
+struct PoseGraphEdge {
+  int i = -1, j = -1;
+  Sim3 S_ij;  ///< measured camera j -> camera i
+};
+
+/// Essential-graph optimisation over keyframe Sim(3) poses S_iw (world -> camera i): minimises
+/// the relative-pose errors of the edges, keeping `fixed` keyframes constant. S_iw is indexed by
+/// keyframe id; entries of bad keyframes are ignored.
+void OptimizePoseGraph(std::vector<Sim3>* S_iw, const std::vector<bool>& active, const std::vector<PoseGraphEdge>& edges,
+                       const std::vector<int>& fixed, int iterations);
+
+}  // namespace unav_localization

@@ -1,0 +1,218 @@
+// orb_slam: the monocular ORB SLAM (unav_localization::MonoSlam) as a node.
+//
+// Ports (relative to the node namespace, default /rov):
+//   sub  camera/<camera>/image_raw     sensor_msgs/Image (rgb8, bgr8 or mono8)
+//   sub  camera/<camera>/camera_info   sensor_msgs/CameraInfo (K and plumb_bob D are used)
+//   pub  localization/orb_slam/odom    nav_msgs/Odometry: base_link_frd in frame `orb_slam_map` (the
+//                                      body at the first keyframe; monocular scale: arbitrary),
+//                                      stamped with the image time; tracked frames only
+//   pub  localization/orb_slam/path    nav_msgs/Path: every tracked frame so far, as corrected by
+//                                      bundle adjustment and loop closing; after each keyframe
+//   pub  /lockstep/ack                 unav_msgs/LockstepAck (lockstep: true): after processing the
+//                                      image at t, acks up to t + image_period (just under the next
+//                                      image), so a lockstep simulation waits for the SLAM
+// The camera's mount (cameras_config) turns camera motion into body motion.
+#include <cmath>
+#include <deque>
+
+#include <opencv2/imgproc.hpp>
+
+#include "nav_msgs/msg/odometry.hpp"
+#include "nav_msgs/msg/path.hpp"
+#include "sensor_msgs/msg/camera_info.hpp"
+#include "sensor_msgs/msg/image.hpp"
+#include "unav_launch/package_index.hpp"
+#include "unav_localization/mono_slam.hpp"
+#include "unav_msgs/msg/lockstep_ack.hpp"
+#include "unav_renderer/camera.hpp"
+#include "unav_runtime/runtime.hpp"
+
+namespace unav_localization {
+
+class OrbSlamNode : public unav::Node {
+ public:
+  explicit OrbSlamNode(const unav::NodeOptions& options) : Node("orb_slam", options, "rov") {
+    const std::string cam = declare_parameter<std::string>("camera", "down", {"camera name", {}, {}, false});
+    const auto share = unav::launch::find_package_share("unav_resources");
+    const std::string cams_path = declare_parameter<std::string>(
+        "cameras_config", share ? *share + "/config/sensors/bluerov2_cameras.yaml" : "", {"camera YAML (mounts)", {}, {}, false});
+    const std::string voc_path = declare_parameter<std::string>(
+        "vocabulary", share ? *share + "/config/vocabulary/orb_vocabulary.bin" : "",
+        {"bag-of-words vocabulary (unav_train_vocabulary); empty: no loop closing or relocalisation", {}, {}, false});
+    options_.orb.features = static_cast<int>(declare_parameter<int64_t>("features", 1000, {"ORB features per image", 100.0, 10000.0, false}));
+    options_.loop_closing = declare_parameter<bool>("loop_closing", true, {"detect and close loops", {}, {}, false});
+    lockstep_ = declare_parameter<bool>("lockstep", false, {"ack every processed image on /lockstep/ack", {}, {}, false});
+    ack_name_ = declare_parameter<std::string>("lockstep_name", "orb_slam", {"participant name in acks", {}, {}, false});
+    image_period_ = declare_parameter<double>("image_period", 0.1, {"camera frame period [s] (lockstep acks)", 1e-3, 10.0, false});
+    frame_id_ = declare_parameter<std::string>("frame_id", "orb_slam_map", {"odometry frame", {}, {}, false});
+    std::string msg;
+    if (!options_.IsValid(&msg)) throw unav::ParameterError("node '" + name() + "': " + msg);
+    bool found = false;
+    try {
+      for (const auto& c : unav_renderer::load_cameras(cams_path))
+        if (c.name == cam) {
+          X_BC_ = c.X_BC;
+          found = true;
+        }
+    } catch (const std::exception& e) {
+      throw unav::ConfigError(e.what());
+    }
+    if (!found) throw unav::ParameterError("node '" + name() + "': camera '" + cam + "' is not in " + cams_path);
+    if (!voc_path.empty()) {
+      try {
+        vocabulary_ = std::make_shared<BowVocabulary>(BowVocabulary::Load(voc_path));
+        logger()->info("vocabulary {}: {} words", voc_path, vocabulary_->size());
+      } catch (const std::exception& e) {
+        throw unav::ConfigError(std::string("parameter 'vocabulary': ") + e.what());
+      }
+    } else {
+      logger()->warn("no vocabulary: loop closing and relocalisation are off");
+    }
+    const std::string base = "camera/" + cam;
+    odom_pub_ = create_publisher<nav_msgs::msg::Odometry>("localization/orb_slam/odom", unav::QoS::reliable());
+    path_pub_ = create_publisher<nav_msgs::msg::Path>("localization/orb_slam/path", unav::QoS::reliable(1));
+    if (lockstep_) ack_pub_ = create_publisher<unav_msgs::msg::LockstepAck>("/lockstep/ack", unav::QoS::reliable(100));
+    info_sub_ = create_subscription<sensor_msgs::msg::CameraInfo>(
+        base + "/camera_info", unav::QoS::reliable(5), [this](const sensor_msgs::msg::CameraInfo& m) { on_info(m); });
+    image_sub_ = create_subscription<sensor_msgs::msg::Image>(base + "/image_raw", unav::QoS::reliable(50),
+                                                              [this](const sensor_msgs::msg::Image& m) { on_image(m); });
+  }
+
+  ~OrbSlamNode() override {
+    if (slam_) {
+      const auto st = slam_->stats();
+      logger()->info("{} frames ({} tracked, {} lost), {} keyframes, {} points, {} loops, {} relocalisations, {} re-initialisations",
+                     st.frames, st.tracked_frames, st.lost_frames, st.keyframes, st.points, st.loops, st.relocalizations,
+                     st.reinitializations);
+    }
+  }
+
+ private:
+  void on_info(const sensor_msgs::msg::CameraInfo& m) {
+    if (slam_) return;
+    PinholeCamera c;
+    c.fx = m.k()[0];
+    c.cx = m.k()[2];
+    c.fy = m.k()[4];
+    c.cy = m.k()[5];
+    c.width = static_cast<int>(m.width());
+    c.height = static_cast<int>(m.height());
+    try {
+      slam_ = std::make_unique<MonoSlam>(c, m.d(), options_, vocabulary_);
+    } catch (const std::exception& e) {
+      logger()->error("camera_info rejected: {}", e.what());
+      return;
+    }
+    while (!pending_.empty()) {
+      process(pending_.front());
+      pending_.pop_front();
+    }
+  }
+
+  void on_image(const sensor_msgs::msg::Image& m) {
+    if (!slam_) {
+      pending_.push_back(m);
+      if (pending_.size() > 100) pending_.pop_front();
+      return;
+    }
+    process(m);
+  }
+
+  void process(const sensor_msgs::msg::Image& m) {
+    const int h = static_cast<int>(m.height()), w = static_cast<int>(m.width());
+    cv::Mat gray;
+    auto* data = const_cast<uint8_t*>(m.data().data());
+    if (m.encoding() == "rgb8" && m.data().size() >= static_cast<size_t>(w * h * 3)) {
+      cv::cvtColor(cv::Mat(h, w, CV_8UC3, data, m.step()), gray, cv::COLOR_RGB2GRAY);
+    } else if (m.encoding() == "bgr8" && m.data().size() >= static_cast<size_t>(w * h * 3)) {
+      cv::cvtColor(cv::Mat(h, w, CV_8UC3, data, m.step()), gray, cv::COLOR_BGR2GRAY);
+    } else if (m.encoding() == "mono8" && m.data().size() >= static_cast<size_t>(w * h)) {
+      gray = cv::Mat(h, w, CV_8UC1, data, m.step()).clone();
+    } else {
+      logger()->warn("image encoding '{}' ({}x{}, {} bytes) is not rgb8/bgr8/mono8: skipped", m.encoding(), w, h, m.data().size());
+      ack(m.header());
+      return;
+    }
+    const double t = unav::Time::from_msg(m.header().stamp().sec(), m.header().stamp().nanosec()).seconds();
+    const SlamFrameSummary s = slam_->Track(gray, t);
+    if (s.state == SlamState::kLost || s.state == SlamState::kInvalidInput) {
+      if (!was_lost_) logger()->warn("{} at t = {:.3f}: {}", to_string(s.state), t, s.message);
+      was_lost_ = true;
+    } else if (s.state == SlamState::kTracking || s.state == SlamState::kRelocalized) {
+      if (was_lost_) logger()->info("{} again at t = {:.3f}", to_string(s.state), t);
+      was_lost_ = false;
+      publish_odometry(m.header(), s.T_wc);
+    }
+    if (s.reinitialized) logger()->warn("re-initialising: a new map will continue from the last good pose");
+    if (s.loop_closed) logger()->info("loop closed at t = {:.3f} ({} loops)", t, slam_->stats().loops);
+    if (s.keyframe || s.loop_closed) publish_path(m.header());
+    ack(m.header());
+  }
+
+  Eigen::Isometry3d body_pose(const Eigen::Isometry3d& T_wc) const { return X_BC_ * T_wc * X_BC_.inverse(); }
+
+  void fill_pose(const Eigen::Isometry3d& X, geometry_msgs::msg::dds_::Pose_* p) const {
+    const Eigen::Quaterniond q(X.linear());
+    p->position().x(X.translation().x());
+    p->position().y(X.translation().y());
+    p->position().z(X.translation().z());
+    p->orientation().x(q.x());
+    p->orientation().y(q.y());
+    p->orientation().z(q.z());
+    p->orientation().w(q.w());
+  }
+
+  void publish_odometry(const std_msgs::msg::dds_::Header_& h, const Eigen::Isometry3d& T_wc) {
+    nav_msgs::msg::Odometry o;
+    o.header().stamp() = h.stamp();
+    o.header().frame_id(frame_id_);
+    o.child_frame_id("base_link_frd");
+    fill_pose(body_pose(T_wc), &o.pose().pose());
+    odom_pub_->publish(o);
+  }
+
+  void publish_path(const std_msgs::msg::dds_::Header_& h) {
+    nav_msgs::msg::Path path;
+    path.header().stamp() = h.stamp();
+    path.header().frame_id(frame_id_);
+    for (const auto& p : slam_->Trajectory()) {
+      geometry_msgs::msg::dds_::PoseStamped_ ps;
+      const unav::Time t = unav::Time{static_cast<int64_t>(std::llround((p.stamp) * 1e9))};
+      ps.header().stamp().sec(t.sec());
+      ps.header().stamp().nanosec(t.nanosec());
+      ps.header().frame_id(frame_id_);
+      fill_pose(body_pose(p.T_wc), &ps.pose());
+      path.poses().push_back(ps);
+    }
+    path_pub_->publish(path);
+  }
+
+  void ack(const std_msgs::msg::dds_::Header_& h) {
+    if (!ack_pub_) return;
+    const double t = unav::Time::from_msg(h.stamp().sec(), h.stamp().nanosec()).seconds();
+    const unav::Time until = unav::Time{static_cast<int64_t>(std::llround((t + image_period_ - 1e-3) * 1e9))};
+    unav_msgs::msg::LockstepAck a;
+    a.header().stamp().sec(until.sec());
+    a.header().stamp().nanosec(until.nanosec());
+    a.participant(ack_name_);
+    ack_pub_->publish(a);
+  }
+
+  MonoSlamOptions options_;
+  std::shared_ptr<const BowVocabulary> vocabulary_;
+  std::unique_ptr<MonoSlam> slam_;
+  std::deque<sensor_msgs::msg::Image> pending_;
+  Eigen::Isometry3d X_BC_ = Eigen::Isometry3d::Identity();
+  bool lockstep_ = false, was_lost_ = false;
+  std::string ack_name_, frame_id_;
+  double image_period_ = 0.1;
+  std::shared_ptr<unav::Publisher<nav_msgs::msg::Odometry>> odom_pub_;
+  std::shared_ptr<unav::Publisher<nav_msgs::msg::Path>> path_pub_;
+  std::shared_ptr<unav::Publisher<unav_msgs::msg::LockstepAck>> ack_pub_;
+  std::shared_ptr<unav::Subscription<sensor_msgs::msg::CameraInfo>> info_sub_;
+  std::shared_ptr<unav::Subscription<sensor_msgs::msg::Image>> image_sub_;
+};
+
+}  // namespace unav_localization
+
+int main(int argc, char** argv) { return unav::run_node<unav_localization::OrbSlamNode>(argc, argv); }

@@ -1,0 +1,129 @@
+#include "unav_localization/image_sequence.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include <yaml-cpp/yaml.h>
+
+namespace unav_localization {
+namespace fs = std::filesystem;
+
+namespace {
+
+double Number(const YAML::Node& n, const std::string& file, const std::string& key) {
+  if (!n) throw InputError(file + ": key '" + key + "' is missing");
+  double v = 0;
+  try {
+    v = n.as<double>();
+  } catch (const YAML::Exception&) {
+    throw InputError(file + ": key '" + key + "' must be a number, got '" + n.as<std::string>("?") + "'");
+  }
+  if (!std::isfinite(v)) throw InputError(file + ": key '" + key + "' must be finite, got " + n.as<std::string>("?"));
+  return v;
+}
+
+}  // namespace
+
+CameraFile LoadCameraFile(const std::string& path) {
+  YAML::Node y;
+  try {
+    y = YAML::LoadFile(path);
+  } catch (const YAML::BadFile&) {
+    throw InputError(path + ": cannot be read");
+  } catch (const YAML::Exception& e) {
+    throw InputError(path + ": not valid YAML: " + e.what());
+  }
+  if (!y.IsMap()) throw InputError(path + ": expected a map of camera keys");
+  CameraFile c;
+  auto& k = c.camera;
+  if (y["camera_matrix"]) {  // ROS camera_info YAML
+    k.width = static_cast<int>(Number(y["image_width"], path, "image_width"));
+    k.height = static_cast<int>(Number(y["image_height"], path, "image_height"));
+    const YAML::Node d = y["camera_matrix"]["data"];
+    if (!d || !d.IsSequence() || d.size() != 9) throw InputError(path + ": key 'camera_matrix.data' must hold 9 numbers");
+    k.fx = Number(d[0], path, "camera_matrix.data[0]");
+    k.cx = Number(d[2], path, "camera_matrix.data[2]");
+    k.fy = Number(d[4], path, "camera_matrix.data[4]");
+    k.cy = Number(d[5], path, "camera_matrix.data[5]");
+    if (const YAML::Node dist = y["distortion_coefficients"]["data"])
+      for (size_t i = 0; i < dist.size(); ++i) c.distortion.push_back(Number(dist[i], path, "distortion_coefficients.data"));
+  } else {
+    k.width = static_cast<int>(Number(y["width"], path, "width"));
+    k.height = static_cast<int>(Number(y["height"], path, "height"));
+    k.fx = Number(y["fx"], path, "fx");
+    k.fy = Number(y["fy"], path, "fy");
+    k.cx = Number(y["cx"], path, "cx");
+    k.cy = Number(y["cy"], path, "cy");
+    if (const YAML::Node dist = y["distortion"]) {
+      if (!dist.IsSequence()) throw InputError(path + ": key 'distortion' must be a list of numbers");
+      for (size_t i = 0; i < dist.size(); ++i) c.distortion.push_back(Number(dist[i], path, "distortion"));
+    }
+  }
+  if (k.width <= 0 || k.height <= 0)
+    throw InputError(path + ": image size must be positive, got " + std::to_string(k.width) + "x" + std::to_string(k.height));
+  if (!(k.fx > 0 && k.fy > 0)) throw InputError(path + ": fx and fy must be > 0");
+  if (c.distortion.size() > 8) throw InputError(path + ": at most 8 distortion coefficients, got " + std::to_string(c.distortion.size()));
+  return c;
+}
+
+std::vector<SequenceImage> ListImages(const std::string& dir, double fps) {
+  if (!fs::is_directory(dir)) throw InputError(dir + ": not a folder");
+  std::vector<SequenceImage> out;
+  const fs::path list = fs::path(dir) / "rgb.txt";
+  if (fs::exists(list)) {
+    std::ifstream f(list);
+    std::string line;
+    int n = 0;
+    while (std::getline(f, line)) {
+      ++n;
+      if (line.empty() || line[0] == '#') continue;
+      std::istringstream is(line);
+      double stamp;
+      std::string rel, extra;
+      if (!(is >> stamp >> rel) || (is >> extra))
+        throw InputError(list.string() + ":" + std::to_string(n) + ": expected 'timestamp filename', got '" + line + "'");
+      if (!std::isfinite(stamp)) throw InputError(list.string() + ":" + std::to_string(n) + ": timestamp must be finite");
+      if (!out.empty() && stamp <= out.back().stamp)
+        throw InputError(list.string() + ":" + std::to_string(n) + ": timestamp " + std::to_string(stamp) + " is not after the previous one");
+      out.push_back({stamp, (fs::path(dir) / rel).string()});
+    }
+  } else {
+    std::vector<fs::path> files;
+    for (const auto& e : fs::directory_iterator(dir)) {
+      std::string ext = e.path().extension().string();
+      std::transform(ext.begin(), ext.end(), ext.begin(), ::tolower);
+      if (e.is_regular_file() && (ext == ".png" || ext == ".jpg" || ext == ".jpeg")) files.push_back(e.path());
+    }
+    std::sort(files.begin(), files.end());
+    bool numeric = !files.empty();
+    std::vector<double> stamps;
+    for (const auto& p : files) {
+      try {
+        size_t used = 0;
+        const std::string stem = p.stem().string();
+        stamps.push_back(std::stod(stem, &used));
+        numeric = numeric && used == stem.size();
+      } catch (const std::exception&) {
+        numeric = false;
+      }
+    }
+    if (numeric) {
+      std::vector<size_t> order(files.size());
+      for (size_t i = 0; i < order.size(); ++i) order[i] = i;
+      std::sort(order.begin(), order.end(), [&](size_t a, size_t b) { return stamps[a] < stamps[b]; });
+      for (size_t i : order) out.push_back({stamps[i], files[i].string()});
+      for (size_t i = 1; i < out.size(); ++i)
+        if (out[i].stamp <= out[i - 1].stamp) throw InputError(dir + ": two images have the stamp " + std::to_string(out[i].stamp));
+    } else {
+      if (!(fps > 0)) throw InputError(dir + ": images are not named by time and fps is not positive");
+      for (size_t i = 0; i < files.size(); ++i) out.push_back({static_cast<double>(i) / fps, files[i].string()});
+    }
+  }
+  if (out.empty()) throw InputError(dir + ": no images (.png/.jpg or rgb.txt)");
+  return out;
+}
+
+}  // namespace unav_localization

@@ -1,0 +1,200 @@
+// Monocular ORB SLAM: geometry pieces (Sim(3) estimation, pose graph) on analytic cases, then
+// the whole system on sequences rendered by our renderer (llvmpipe) with known motion: the down
+// camera over the pipe-inspection seabed, a straight run and a closed square loop.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <random>
+
+#include <opencv2/imgproc.hpp>
+
+#include "unav_localization/mono_slam.hpp"
+#include "unav_localization/sim3.hpp"
+#include "unav_localization/slam_optimizer.hpp"
+#include "unav_renderer/camera.hpp"
+#include "unav_renderer/renderer.hpp"
+#include "unav_renderer/world.hpp"
+
+namespace ul = unav_localization;
+
+namespace {
+
+Eigen::Matrix3d Rot(double roll, double pitch, double yaw) {
+  return (Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()) * Eigen::AngleAxisd(pitch, Eigen::Vector3d::UnitY()) *
+          Eigen::AngleAxisd(roll, Eigen::Vector3d::UnitX()))
+      .toRotationMatrix();
+}
+
+// Sim(3)-aligned position RMSE of est against gt (same length, paired by index).
+double AlignedRmse(const std::vector<Eigen::Vector3d>& gt, const std::vector<Eigen::Vector3d>& est, double* scale = nullptr) {
+  Eigen::Matrix3Xd a(3, static_cast<long>(est.size())), b(3, static_cast<long>(gt.size()));
+  for (size_t i = 0; i < est.size(); ++i) {
+    a.col(static_cast<long>(i)) = est[i];
+    b.col(static_cast<long>(i)) = gt[i];
+  }
+  ul::Sim3 S;
+  if (!ul::EstimateSim3(a, b, false, &S)) return 1e9;
+  if (scale) *scale = S.s;
+  double se = 0;
+  for (size_t i = 0; i < est.size(); ++i) se += (S * est[i] - gt[i]).squaredNorm();
+  return std::sqrt(se / static_cast<double>(est.size()));
+}
+
+struct RenderedRun {
+  std::vector<cv::Mat> gray;
+  std::vector<double> stamps;
+  std::vector<Eigen::Isometry3d> X_WC;  ///< camera optical frame in world
+  Eigen::Matrix3d K;
+};
+
+// Renders the down camera (640 x 480, 90 deg) along body poses X_WB.
+RenderedRun Render(const std::vector<Eigen::Isometry3d>& X_WB) {
+  unav_renderer::World world = unav_renderer::load_world(std::string(UNAV_REPO_ROOT) + "/worlds/pipe_inspection/world.yaml");
+  unav_renderer::CameraModel cam = unav_renderer::CameraModel::from_hfov("down", 640, 480, 90.0 * M_PI / 180.0);
+  unav_renderer::RenderOptions ro;
+  ro.marine_snow = false;  // particles move on their own: not part of the static scene
+  unav_renderer::Renderer renderer(world, {cam}, ro);
+  RenderedRun run;
+  run.K = cam.K();
+  for (size_t k = 0; k < X_WB.size(); ++k) {
+    const unav_renderer::Frame f = renderer.render(X_WB[k], "down", 0.1 * static_cast<double>(k));
+    cv::Mat rgb(f.height, f.width, CV_8UC3, const_cast<uint8_t*>(f.rgb.data())), gray;
+    cv::cvtColor(rgb, gray, cv::COLOR_RGB2GRAY);
+    run.gray.push_back(gray);
+    run.stamps.push_back(0.1 * static_cast<double>(k));
+    run.X_WC.push_back(f.X_WC);
+  }
+  return run;
+}
+
+ul::PinholeCamera Pinhole(const Eigen::Matrix3d& K) {
+  ul::PinholeCamera c;
+  c.fx = K(0, 0);
+  c.fy = K(1, 1);
+  c.cx = K(0, 2);
+  c.cy = K(1, 2);
+  c.width = 640;
+  c.height = 480;
+  return c;
+}
+
+// APE (Sim(3)-aligned) of a SLAM run against the rendered ground truth, matched by stamp.
+double Ape(const ul::MonoSlam& slam, const RenderedRun& run, size_t* n_poses, double* path) {
+  std::vector<Eigen::Vector3d> gt, est;
+  *path = 0;
+  for (size_t k = 1; k < run.X_WC.size(); ++k) *path += (run.X_WC[k].translation() - run.X_WC[k - 1].translation()).norm();
+  for (const auto& p : slam.Trajectory()) {
+    const size_t k = static_cast<size_t>(std::lround(p.stamp / 0.1));
+    gt.push_back(run.X_WC[k].translation());
+    est.push_back(p.T_wc.translation());
+  }
+  *n_poses = est.size();
+  return est.size() < 3 ? 1e9 : AlignedRmse(gt, est);
+}
+
+}  // namespace
+
+TEST(Sim3, UmeyamaRecoversAKnownSimilarity) {
+  std::mt19937 rng(3);
+  std::normal_distribution<double> n(0.0, 2.0);
+  const ul::Sim3 S_true(2.5, Rot(0.3, -0.2, 1.1), Eigen::Vector3d(1, -2, 0.5));
+  Eigen::Matrix3Xd from(3, 20), to(3, 20);
+  for (int i = 0; i < 20; ++i) {
+    from.col(i) = Eigen::Vector3d(n(rng), n(rng), n(rng));
+    to.col(i) = S_true * Eigen::Vector3d(from.col(i));
+  }
+  ul::Sim3 S;
+  ASSERT_TRUE(ul::EstimateSim3(from, to, false, &S));
+  EXPECT_NEAR(S.s, 2.5, 1e-10);
+  EXPECT_LT((S.R - S_true.R).norm(), 1e-10);
+  EXPECT_LT((S.t - S_true.t).norm(), 1e-9);
+  // Composition and inverse are consistent.
+  const Eigen::Vector3d x(0.3, 0.2, -1);
+  EXPECT_LT(((S.inverse() * S) * x - x).norm(), 1e-12);
+  // Collinear points are refused.
+  Eigen::Matrix3Xd line(3, 4);
+  line << 0, 1, 2, 3, 0, 1, 2, 3, 0, 1, 2, 3;
+  EXPECT_FALSE(ul::EstimateSim3(line, line, false, &S));
+}
+
+TEST(PoseGraph, LoopEdgeRemovesAccumulatedDrift) {
+  // 40 keyframes on a circle; odometry edges exact but the initial guess accumulates a yaw and
+  // scale drift; one loop edge (39 -> 0) with the true relative pose. After optimisation the
+  // poses agree with the truth up to the gauge (keyframe 0 fixed).
+  const int n = 40;
+  std::vector<ul::Sim3> truth(n), guess(n);
+  for (int k = 0; k < n; ++k) {
+    const double a = 2 * M_PI * k / n;
+    Eigen::Isometry3d T_wc = Eigen::Isometry3d::Identity();
+    T_wc.linear() = Rot(0, 0, a + M_PI / 2);
+    T_wc.translation() = Eigen::Vector3d(5 * std::cos(a), 5 * std::sin(a), 0);
+    truth[static_cast<size_t>(k)] = ul::Sim3(T_wc.inverse());
+  }
+  std::vector<ul::PoseGraphEdge> edges;
+  for (int k = 1; k < n; ++k) edges.push_back({k, k - 1, truth[static_cast<size_t>(k)] * truth[static_cast<size_t>(k - 1)].inverse()});
+  edges.push_back({n - 1, 0, truth[static_cast<size_t>(n - 1)] * truth[0].inverse()});
+  // Drifted chain: each relative step is perturbed by 0.01 rad of yaw and 1% of scale.
+  guess[0] = truth[0];
+  const ul::Sim3 drift(1.01, Rot(0, 0, 0.01), Eigen::Vector3d::Zero());
+  for (int k = 1; k < n; ++k) guess[static_cast<size_t>(k)] = drift * edges[static_cast<size_t>(k - 1)].S_ij * guess[static_cast<size_t>(k - 1)];
+  auto max_err = [&](const std::vector<ul::Sim3>& S) {
+    double e = 0;
+    for (int k = 0; k < n; ++k)
+      e = std::max(e, (S[static_cast<size_t>(k)].inverse().t - truth[static_cast<size_t>(k)].inverse().t).norm());
+    return e;
+  };
+  const double before = max_err(guess);
+  ul::OptimizePoseGraph(&guess, std::vector<bool>(n, true), edges, {0}, 50);
+  const double after = max_err(guess);
+  std::printf("pose graph: max position error %.3f -> %.6f\n", before, after);
+  EXPECT_GT(before, 1.0);
+  EXPECT_LT(after, 1e-4);  // consistent edges: the optimum is the truth
+}
+
+TEST(MonoSlam, BadInputIsRejected) {
+  ul::PinholeCamera cam = Pinhole((Eigen::Matrix3d() << 320, 0, 320, 0, 320, 240, 0, 0, 1).finished());
+  ul::MonoSlamOptions bad;
+  bad.keyframe_tracked_ratio = 1.5;
+  EXPECT_THROW(ul::MonoSlam(cam, {}, bad, nullptr), std::invalid_argument);
+  ul::PinholeCamera zero;
+  EXPECT_THROW(ul::MonoSlam(zero, {}, {}, nullptr), std::invalid_argument);
+  ul::MonoSlam slam(cam, {}, {}, nullptr);
+  EXPECT_EQ(slam.Track(cv::Mat(), 0.0).state, ul::SlamState::kInvalidInput);
+  EXPECT_EQ(slam.Track(cv::Mat(100, 100, CV_8UC1, cv::Scalar(3)), 0.0).state, ul::SlamState::kInvalidInput);
+  EXPECT_EQ(slam.Track(cv::Mat(480, 640, CV_8UC1, cv::Scalar(3)), NAN).state, ul::SlamState::kInvalidInput);
+  // A featureless image is not an error: the system waits to initialise.
+  EXPECT_EQ(slam.Track(cv::Mat(480, 640, CV_8UC1, cv::Scalar(90)), 0.0).state, ul::SlamState::kInitializing);
+}
+
+TEST(MonoSlam, StraightRunOverTheSeabedWithKnownMotion) {
+  // 100 frames: 6 m north at 6 cm per frame 1.5 m above the pipe, swaying 0.3 m east and
+  // yawing +-0.1 rad, as the pipe-following controller flies it.
+  std::vector<Eigen::Isometry3d> X_WB;
+  for (int k = 0; k < 100; ++k) {
+    Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
+    X.translation() = Eigen::Vector3d(-1.0 + 0.06 * k, 0.3 * std::sin(0.05 * k), 8.35);
+    X.linear() = Rot(0, 0, 0.1 * std::sin(0.04 * k));
+    X_WB.push_back(X);
+  }
+  const RenderedRun run = Render(X_WB);
+  ul::MonoSlam slam(Pinhole(run.K), {}, {}, nullptr);
+  int first_tracked = -1, lost = 0;
+  for (size_t k = 0; k < run.gray.size(); ++k) {
+    const auto s = slam.Track(run.gray[k], run.stamps[k]);
+    if (s.state == ul::SlamState::kTracking && first_tracked < 0) first_tracked = static_cast<int>(k);
+    if (s.state == ul::SlamState::kLost) ++lost;
+  }
+  size_t n = 0;
+  double path = 0;
+  const double ape = Ape(slam, run, &n, &path);
+  const auto st = slam.stats();
+  std::printf("straight run: initialised at frame %d, %zu poses, %d lost, %d keyframes, %d points; APE %.4f m over %.2f m (%.2f%%)\n",
+              first_tracked, n, lost, st.keyframes, st.points, ape, path, 100 * ape / path);
+  EXPECT_GE(first_tracked, 1);
+  EXPECT_LE(first_tracked, 15);  // needs parallax: a few frames of 6 cm at 1.4 m
+  EXPECT_EQ(lost, 0);
+  EXPECT_GE(n, 85u);
+  // Bound: 1% of the distance, twice the 0.5% typical of ORB-SLAM on such a run; seen: see log.
+  EXPECT_LT(ape, 0.01 * path);
+}

@@ -1,0 +1,195 @@
+// unav_localize: runs an estimator offline over a folder of images (also `unav localize`).
+//
+//   unav_localize --images DIR --camera FILE [--method orb_slam|klt_mono|klt_rgbd]
+//                 [--vocabulary FILE] [--output FILE] [--groundtruth FILE] [--max-frames N]
+//
+// DIR: a TUM RGB-D dataset folder (rgb.txt; depth.txt for klt_rgbd), as our dataset_recorder
+// writes it, or a folder of images. Writes the camera trajectory (optical frame, TUM format) and,
+// when ground truth is given or DIR holds groundtruth.txt, prints APE/RPE after Sim(3)
+// alignment (SE(3) for klt_rgbd, which has metric scale). Exit codes: 0 ok, 2 bad input.
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <memory>
+#include <sstream>
+
+#include <CLI/CLI.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <yaml-cpp/yaml.h>
+
+#include "unav_evaluation/report.hpp"
+#include "unav_evaluation/trajectory.hpp"
+#include "unav_launch/package_index.hpp"
+#include "unav_localization/image_sequence.hpp"
+#include "unav_localization/klt_vo.hpp"
+#include "unav_localization/mono_slam.hpp"
+
+namespace ul = unav_localization;
+namespace ue = unav_evaluation;
+
+namespace {
+
+double Percentile(std::vector<double> v, double q) {
+  if (v.empty()) return 0.0;
+  std::sort(v.begin(), v.end());
+  return v[std::min(v.size() - 1, static_cast<size_t>(q * static_cast<double>(v.size())))];
+}
+
+std::map<double, std::string> ReadDepthList(const std::string& dir) {
+  std::map<double, std::string> out;
+  std::ifstream f(dir + "/depth.txt");
+  if (!f) throw ul::InputError(dir + "/depth.txt: cannot be read (klt_rgbd needs the depth images)");
+  std::string line;
+  while (std::getline(f, line)) {
+    if (line.empty() || line[0] == '#') continue;
+    std::istringstream is(line);
+    double t;
+    std::string rel;
+    if (is >> t >> rel) out[t] = dir + "/" + rel;
+  }
+  return out;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"Runs a visual localization estimator offline over a folder of images"};
+  std::string images, camera_path, method = "orb_slam", vocabulary, output, groundtruth;
+  int max_frames = 0;
+  double fps = 10.0;
+  bool quiet = false, no_loops = false;
+  int features = 1000;
+  app.add_option("--images", images, "image folder (TUM RGB-D dataset folder or .png/.jpg files)")->required();
+  app.add_option("--camera", camera_path, "camera YAML (dataset camera.yaml or ROS camera_info YAML)")->required();
+  app.add_option("--method", method, "orb_slam | klt_mono | klt_rgbd")->check(CLI::IsMember({"orb_slam", "klt_mono", "klt_rgbd"}));
+  app.add_option("--vocabulary", vocabulary, "bag-of-words vocabulary (default: unav_resources config/vocabulary/orb_vocabulary.bin)");
+  app.add_option("--output", output, "TUM trajectory to write (default: <method>_trajectory.txt)");
+  app.add_option("--groundtruth", groundtruth, "TUM ground truth of the camera (default: DIR/groundtruth.txt if present)");
+  app.add_option("--max-frames", max_frames, "process at most N frames (0: all)")->check(CLI::NonNegativeNumber);
+  app.add_option("--fps", fps, "frame rate for images not named by time")->check(CLI::PositiveNumber);
+  app.add_flag("--quiet", quiet, "no per-frame lines");
+  app.add_flag("--no-loop-closing", no_loops, "orb_slam: do not detect loops");
+  app.add_option("--features", features, "orb_slam: ORB features per image")->check(CLI::Range(100, 10000));
+  CLI11_PARSE(app, argc, argv);
+  if (output.empty()) output = method + "_trajectory.txt";
+
+  try {
+    const ul::CameraFile cam = ul::LoadCameraFile(camera_path);
+    const auto seq = ul::ListImages(images, fps);
+    std::unique_ptr<ul::MonoSlam> slam;
+    std::unique_ptr<ul::KltVo> klt;
+    std::map<double, std::string> depths;
+    double depth_scale = 1.0;
+    if (method == "orb_slam") {
+      if (vocabulary.empty()) {
+        const auto share = unav::launch::find_package_share("unav_resources");
+        if (share) vocabulary = *share + "/config/vocabulary/orb_vocabulary.bin";
+      }
+      std::shared_ptr<const ul::BowVocabulary> voc;
+      if (!vocabulary.empty()) {
+        try {
+          voc = std::make_shared<ul::BowVocabulary>(ul::BowVocabulary::Load(vocabulary));
+        } catch (const std::exception& e) {
+          std::fprintf(stderr, "unav_localize: %s\n", e.what());
+          return 2;
+        }
+      }
+      if (!voc) std::fprintf(stderr, "unav_localize: no vocabulary: loop closing and relocalisation are off\n");
+      ul::MonoSlamOptions o;
+      o.loop_closing = !no_loops;
+      o.orb.features = features;
+      slam = std::make_unique<ul::MonoSlam>(cam.camera, cam.distortion, o, voc);
+    } else {
+      ul::KltVoOptions o;
+      o.mode = method == "klt_mono" ? ul::KltVoOptions::Mode::kMonocular : ul::KltVoOptions::Mode::kRgbd;
+      klt = std::make_unique<ul::KltVo>(cam.camera.K(), o);
+      if (method == "klt_rgbd") {
+        depths = ReadDepthList(images);
+        const YAML::Node y = YAML::LoadFile(camera_path);
+        depth_scale = y["depth_scale"] ? y["depth_scale"].as<double>() : 1000.0;
+      }
+    }
+    ue::Trajectory est;
+    std::vector<double> track_ms, total_ms;
+    int n = 0, lost = 0;
+    for (const auto& im : seq) {
+      if (max_frames > 0 && n >= max_frames) break;
+      cv::Mat gray = cv::imread(im.path, cv::IMREAD_GRAYSCALE);
+      if (gray.empty()) throw ul::InputError(im.path + ": cannot be read as an image");
+      ++n;
+      const auto t0 = std::chrono::steady_clock::now();
+      if (slam) {
+        const auto s = slam->Track(gray, im.stamp);
+        track_ms.push_back(s.tracking_ms);
+        total_ms.push_back(s.tracking_ms + s.mapping_ms);
+        if (s.state == ul::SlamState::kLost) ++lost;
+        if (!quiet && (s.state != ul::SlamState::kTracking || s.loop_closed || s.reinitialized))
+          std::printf("%.3f %s%s%s %s\n", im.stamp, ul::to_string(s.state), s.loop_closed ? " loop closed" : "",
+                      s.reinitialized ? " re-initialised" : "", s.message.c_str());
+      } else {
+        Eigen::Isometry3d T;
+        ul::VoSummary s;
+        if (method == "klt_mono") {
+          s = klt->ProcessFrame(gray, &T);
+        } else {
+          const auto it = depths.lower_bound(im.stamp - 1e-4);
+          if (it == depths.end() || std::abs(it->first - im.stamp) > 1e-3) throw ul::InputError(im.path + ": no depth image with its stamp");
+          cv::Mat d16 = cv::imread(it->second, cv::IMREAD_ANYDEPTH), depth;
+          if (d16.empty()) throw ul::InputError(it->second + ": cannot be read as a depth image");
+          d16.convertTo(depth, CV_32F, 1.0 / depth_scale);
+          depth.setTo(std::numeric_limits<float>::quiet_NaN(), d16 == 0);
+          s = klt->ProcessFrame(gray, depth, &T);
+        }
+        const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+        track_ms.push_back(ms);
+        total_ms.push_back(ms);
+        if (s.status == ul::VoStatus::kLost) ++lost;
+        if (!quiet && s.status != ul::VoStatus::kTracking) std::printf("%.3f %s %s\n", im.stamp, ul::to_string(s.status), s.message.c_str());
+        if (s.status == ul::VoStatus::kTracking || s.status == ul::VoStatus::kInitialized) est.push_back(im.stamp, T);
+      }
+    }
+    if (slam)
+      for (const auto& p : slam->Trajectory()) est.push_back(p.stamp, p.T_wc);
+    if (est.empty()) {
+      std::fprintf(stderr, "unav_localize: no pose was estimated from %d frames\n", n);
+      return 1;
+    }
+    ue::write_tum(output, est);
+    double mean_track = 0, mean_total = 0;
+    for (double v : track_ms) mean_track += v / static_cast<double>(track_ms.size());
+    for (double v : total_ms) mean_total += v / static_cast<double>(total_ms.size());
+    std::printf("%s: %d frames, %zu poses, %d lost; per frame: tracking mean %.2f ms (p50 %.2f, p90 %.2f), with mapping mean %.2f ms (p99 %.1f) -> %.1f frames/s\n",
+                method.c_str(), n, est.size(), lost, mean_track, Percentile(track_ms, 0.5), Percentile(track_ms, 0.9), mean_total,
+                Percentile(total_ms, 0.99), 1000.0 / std::max(mean_total, 1e-9));
+    if (slam) {
+      const auto st = slam->stats();
+      std::printf("orb_slam: %d keyframes, %d points, %d loops closed, %d relocalisations, %d re-initialisations\n", st.keyframes, st.points,
+                  st.loops, st.relocalizations, st.reinitializations);
+    }
+    std::printf("trajectory: %s\n", output.c_str());
+    if (groundtruth.empty() && std::filesystem::exists(images + "/groundtruth.txt")) groundtruth = images + "/groundtruth.txt";
+    if (!groundtruth.empty()) {
+      const ue::Trajectory gt = ue::read_tum(groundtruth);
+      const auto align = method == "klt_rgbd" ? ue::Alignment::kSE3 : ue::Alignment::kSim3;
+      const auto r = ue::evaluate(gt, est, "sequence", method, align);
+      std::printf("APE (%s-aligned, %zu poses, scale %.4f): rmse %.4f m, mean %.4f m, max %.4f m; rotation rmse %.4f rad\n",
+                  align == ue::Alignment::kSE3 ? "SE(3)" : "Sim(3)", r.poses, r.scale, r.ape_m.rmse, r.ape_m.mean, r.ape_m.max,
+                  r.ape_rad.rmse);
+      std::printf("RPE (1 frame): rmse %.4f m, rotation rmse %.5f rad; ground-truth path %.2f m\n", r.rpe_m.rmse, r.rpe_rad.rmse,
+                  gt.path_length());
+    }
+  } catch (const ul::InputError& e) {
+    std::fprintf(stderr, "unav_localize: %s\n", e.what());
+    return 2;
+  } catch (const ue::TrajectoryError& e) {
+    std::fprintf(stderr, "unav_localize: %s\n", e.what());
+    return 2;
+  } catch (const std::invalid_argument& e) {
+    std::fprintf(stderr, "unav_localize: %s\n", e.what());
+    return 2;
+  }
+  return 0;
+}
