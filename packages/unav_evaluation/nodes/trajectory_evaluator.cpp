@@ -1,6 +1,13 @@
 #include "trajectory_evaluator.hpp"
 
+#include <sys/file.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cstring>
+#include <fcntl.h>
 #include <filesystem>
+#include <unistd.h>
 
 namespace unav_evaluation {
 namespace {
@@ -17,6 +24,35 @@ void append(Trajectory& t, const nav_msgs::msg::Odometry& m) {
   t.push_back(stamp, X);
 }
 
+Trajectory from_path(const nav_msgs::msg::Path& m) {
+  Trajectory t;
+  for (const auto& ps : m.poses()) {
+    nav_msgs::msg::Odometry o;
+    o.header() = ps.header();
+    o.pose().pose() = ps.pose();
+    append(t, o);
+  }
+  return t;
+}
+
+// An exclusive lock on a file for the scope (several evaluators may share one folder).
+class FolderLock {
+ public:
+  explicit FolderLock(const std::string& path) : fd_(::open(path.c_str(), O_CREAT | O_RDWR, 0644)) {
+    if (fd_ < 0) throw TrajectoryError(path + ": cannot open lock file: " + std::strerror(errno));
+    ::flock(fd_, LOCK_EX);
+  }
+  ~FolderLock() {
+    ::flock(fd_, LOCK_UN);
+    ::close(fd_);
+  }
+  FolderLock(const FolderLock&) = delete;
+  FolderLock& operator=(const FolderLock&) = delete;
+
+ private:
+  int fd_;
+};
+
 }  // namespace
 
 TrajectoryEvaluator::TrajectoryEvaluator(const unav::NodeOptions& options) : Node("trajectory_evaluator", options, "rov") {
@@ -30,6 +66,9 @@ TrajectoryEvaluator::TrajectoryEvaluator(const unav::NodeOptions& options) : Nod
   }
   rpe_.delta = static_cast<double>(declare_parameter<int64_t>("rpe_delta", 1, {"RPE delta [frames]", 1.0, {}, false}));
   max_diff_ = declare_parameter<double>("max_time_diff", 0.02, {"association max time difference [s]", 1e-6, 10.0, false});
+  combine_ = declare_parameter<bool>("combine", false, {"share output_dir with other runs (prefixed files, one combined table)", {}, {}, false});
+  if (combine_ && (trajectory_name_.empty() || trajectory_name_.find_first_of("/\t") != std::string::npos))
+    throw unav::ParameterError("node '" + name() + "': trajectory_name '" + trajectory_name_ + "' must be a non-empty file name with combine");
   std::error_code ec;
   std::filesystem::create_directories(output_dir_, ec);
   if (ec) throw unav::ConfigError("output_dir '" + output_dir_ + "': cannot create: " + ec.message());
@@ -40,6 +79,8 @@ TrajectoryEvaluator::TrajectoryEvaluator(const unav::NodeOptions& options) : Nod
     subs_.push_back(create_subscription<nav_msgs::msg::Odometry>(
         "localization/" + n + "/odom", unav::QoS::reliable(100),
         [this, n](const nav_msgs::msg::Odometry& m) { append(estimates_[n], m); }));
+    path_subs_.push_back(create_subscription<nav_msgs::msg::Path>(
+        "localization/" + n + "/path", unav::QoS::reliable(2), [this, n](const nav_msgs::msg::Path& m) { paths_[n] = from_path(m); }));
   }
   logger()->info("evaluating {} estimator(s) against ground truth; results in {}", names.size(), output_dir_);
 }
@@ -60,14 +101,23 @@ std::vector<AlgorithmResult> TrajectoryEvaluator::write_outputs() {
     logger()->warn("no ground truth received: nothing to evaluate");
     return results;
   }
-  write_tum(output_dir_ + "/ground_truth.tum", ground_truth_);
+  const std::string prefix = output_dir_ + "/" + (combine_ ? trajectory_name_ + "_" : "");
+  write_tum(prefix + "ground_truth.tum", ground_truth_);
   std::vector<std::pair<std::string, Trajectory>> aligned;
-  for (const auto& [name, traj] : estimates_) {
+  for (const auto& [name, odom] : estimates_) {
+    // The latest whole path (corrected history), then the odometry after its end.
+    Trajectory traj = odom;
+    const auto p = paths_.find(name);
+    if (p != paths_.end() && !p->second.empty()) {
+      traj = p->second;
+      for (size_t i = 0; i < odom.size(); ++i)
+        if (odom.stamps[i] > traj.stamps.back()) traj.push_back(odom.stamps[i], odom.poses[i]);
+    }
     if (traj.empty()) {
       logger()->warn("estimator '{}' published nothing", name);
       continue;
     }
-    write_tum(output_dir_ + "/" + name + ".tum", traj);
+    write_tum(prefix + name + ".tum", traj);
     try {
       results.push_back(evaluate(ground_truth_, traj, trajectory_name_, name, alignment_, rpe_, max_diff_));
       auto [ref, est] = associate(ground_truth_, traj, max_diff_);
@@ -80,8 +130,24 @@ std::vector<AlgorithmResult> TrajectoryEvaluator::write_outputs() {
       logger()->warn("estimator '{}' not evaluated: {}", name, e.what());
     }
   }
-  write_results(output_dir_ + "/results", results, alignment_);
-  write_top_view_png(output_dir_ + "/top_view.png", ground_truth_, aligned);
+  write_top_view_png(prefix + "top_view.png", ground_truth_, aligned);
+  if (!combine_) {
+    write_results(output_dir_ + "/results", results, alignment_);
+  } else {
+    FolderLock lock(output_dir_ + "/.results.lock");
+    std::filesystem::create_directories(output_dir_ + "/rows");
+    write_result_rows(output_dir_ + "/rows/" + trajectory_name_ + ".tsv", results);
+    std::vector<AlgorithmResult> all;
+    std::vector<std::string> files;
+    for (const auto& e : std::filesystem::directory_iterator(output_dir_ + "/rows"))
+      if (e.path().extension() == ".tsv") files.push_back(e.path().string());
+    std::sort(files.begin(), files.end());
+    for (const auto& f : files) {
+      const auto rows = read_result_rows(f);
+      all.insert(all.end(), rows.begin(), rows.end());
+    }
+    write_results(output_dir_ + "/results", all, alignment_);
+  }
   logger()->info("evaluation written to {}", output_dir_);
   return results;
 }

@@ -5,8 +5,13 @@
 // Ports (relative to the node namespace, default /rov):
 //   sub  ground_truth/odom                 nav_msgs/Odometry
 //   sub  localization/<algo>/odom          nav_msgs/Odometry, one per name in `estimates`
+//   sub  localization/<algo>/path          nav_msgs/Path: when an estimator publishes its whole
+//                                          (corrected) trajectory, the latest path is evaluated,
+//                                          followed by the odometry stamped after its end
 // Params: estimates (names), output_dir, trajectory_name (table row label), alignment
-//         (none|se3|sim3|scale), rpe_delta (frames), max_time_diff (s, association).
+//         (none|se3|sim3|scale), rpe_delta (frames), max_time_diff (s, association),
+//         combine (several runs share output_dir: files are prefixed with trajectory_name and
+//         results.md/csv/json hold the rows of every run, kept in rows/<trajectory_name>.tsv).
 #pragma once
 
 #include <map>
@@ -15,6 +20,7 @@
 #include <vector>
 
 #include "nav_msgs/msg/odometry.hpp"
+#include "nav_msgs/msg/path.hpp"
 #include "unav_evaluation/report.hpp"
 #include "unav_runtime/runtime.hpp"
 
@@ -32,10 +38,11 @@ class TrajectoryEvaluator : public unav::Node {
   Alignment alignment_ = Alignment::kSim3;
   RpeOptions rpe_;
   double max_diff_ = 0.02;
-  bool written_ = false;
+  bool written_ = false, combine_ = false;
   Trajectory ground_truth_;
-  std::map<std::string, Trajectory> estimates_;
+  std::map<std::string, Trajectory> estimates_, paths_;
   std::vector<std::shared_ptr<unav::Subscription<nav_msgs::msg::Odometry>>> subs_;
+  std::vector<std::shared_ptr<unav::Subscription<nav_msgs::msg::Path>>> path_subs_;
 };
 
 }  // namespace unav_evaluation

@@ -2,6 +2,7 @@
 
 #include <fstream>
 #include <iomanip>
+#include <sstream>
 
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
@@ -119,6 +120,70 @@ void write_top_view_png(const std::string& path, const Trajectory& gt,
   cv::putText(img, "north ^  east >  (top view, world_ned)", cv::Point(margin, size_px - 10), cv::FONT_HERSHEY_SIMPLEX,
               0.45, cv::Scalar(90, 90, 90), 1, cv::LINE_AA);
   if (!cv::imwrite(path, img)) throw TrajectoryError(path + ": PNG write failed");
+}
+
+namespace {
+constexpr int kRowFields = 4 + 4 * 8;
+void put_stats(std::ostream& o, const Statistics& st) {
+  o << '\t' << st.rmse << '\t' << st.mean << '\t' << st.median << '\t' << st.std << '\t' << st.min << '\t' << st.max << '\t'
+    << st.sse << '\t' << st.count;
+}
+}  // namespace
+
+void write_result_rows(const std::string& path, const std::vector<AlgorithmResult>& results) {
+  std::ofstream o(path);
+  if (!o) throw TrajectoryError(path + ": cannot be written");
+  o << std::setprecision(17);
+  for (const auto& r : results) {
+    if (r.trajectory.find('\t') != std::string::npos || r.algorithm.find('\t') != std::string::npos)
+      throw TrajectoryError(path + ": names must not contain tabs");
+    o << r.trajectory << '\t' << r.algorithm << '\t' << r.poses << '\t' << r.scale;
+    for (const Statistics* st : {&r.ape_m, &r.rpe_m, &r.ape_rad, &r.rpe_rad}) put_stats(o, *st);
+    o << '\n';
+  }
+  o.flush();
+  if (!o) throw TrajectoryError(path + ": write failed");
+}
+
+std::vector<AlgorithmResult> read_result_rows(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw TrajectoryError(path + ": cannot be read");
+  std::vector<AlgorithmResult> out;
+  std::string line;
+  int n = 0;
+  while (std::getline(in, line)) {
+    ++n;
+    if (line.empty()) continue;
+    std::vector<std::string> f;
+    std::stringstream ss(line);
+    std::string cell;
+    while (std::getline(ss, cell, '\t')) f.push_back(cell);
+    if (static_cast<int>(f.size()) != kRowFields)
+      throw TrajectoryError(path + ":" + std::to_string(n) + ": expected " + std::to_string(kRowFields) + " tab-separated fields, got " +
+                            std::to_string(f.size()));
+    AlgorithmResult r;
+    try {
+      r.trajectory = f[0];
+      r.algorithm = f[1];
+      r.poses = static_cast<std::size_t>(std::stoull(f[2]));
+      r.scale = std::stod(f[3]);
+      size_t k = 4;
+      for (Statistics* st : {&r.ape_m, &r.rpe_m, &r.ape_rad, &r.rpe_rad}) {
+        st->rmse = std::stod(f[k++]);
+        st->mean = std::stod(f[k++]);
+        st->median = std::stod(f[k++]);
+        st->std = std::stod(f[k++]);
+        st->min = std::stod(f[k++]);
+        st->max = std::stod(f[k++]);
+        st->sse = std::stod(f[k++]);
+        st->count = static_cast<size_t>(std::stoull(f[k++]));
+      }
+    } catch (const std::exception&) {
+      throw TrajectoryError(path + ":" + std::to_string(n) + ": a field is not a number");
+    }
+    out.push_back(r);
+  }
+  return out;
 }
 
 }  // namespace unav_evaluation

@@ -54,6 +54,18 @@ layout(location = 1) out float o_depth;  // z along the optical axis [m]
 
 vec3 tex_at(vec2 uv) { return texture(u_tex, uv / u_uv_scale).rgb; }
 
+// Smooth value noise (hash lattice, cell 1 unit): not periodic, unlike the texture tile.
+float hash12(vec2 p) {
+  vec3 q = fract(vec3(p.xyx) * 0.1031);
+  q += dot(q, q.yzx + 33.33);
+  return fract((q.x + q.y) * q.z);
+}
+float value_noise(vec2 p) {
+  vec2 i = floor(p), f = fract(p);
+  vec2 u = f * f * (3.0 - 2.0 * f);
+  return mix(mix(hash12(i), hash12(i + vec2(1.0, 0.0)), u.x), mix(hash12(i + vec2(0.0, 1.0)), hash12(i + vec2(1.0, 1.0)), u.x), u.y);
+}
+
 void main() {
   vec3 n = normalize(v_nrm_W);
   vec3 V = u_cam_W - v_pos_W;
@@ -66,7 +78,12 @@ void main() {
     w /= (w.x + w.y + w.z);
     albedo = tex_at(v_pos_W.yz) * w.x + tex_at(v_pos_W.xz) * w.y + tex_at(v_pos_W.xy) * w.z;
   } else {
-    albedo = tex_at(v_uv);
+    vec2 uv = v_uv;
+    // Macro materials (the seabed) are domain-warped by low-frequency noise in world units, so
+    // the texture tile never repeats exactly: a seabed that looks the same every tile would
+    // alias visual place recognition.
+    if (u_macro) uv += u_uv_scale * 0.45 * (vec2(value_noise(v_uv / 1.7), value_noise(v_uv / 1.7 + vec2(41.3, 17.9))) - 0.5);
+    albedo = tex_at(uv);
   }
   if (u_macro) albedo *= 0.7 + 0.6 * texture(u_tex, v_uv / (u_uv_scale * 7.31) + vec2(0.37, 0.11)).g;
   albedo *= u_albedo;

@@ -28,6 +28,12 @@ AlgorithmResult evaluate(const Trajectory& ground_truth, const Trajectory& estim
 void write_results(const std::string& stem, const std::vector<AlgorithmResult>& results,
                    Alignment alignment = Alignment::kSim3);
 
+/// Rows of results in a lossless tab-separated form (one AlgorithmResult per line, every
+/// statistic), so several runs can be combined into one table. read_result_rows throws
+/// TrajectoryError "<file>:<line>: ..." for a malformed line.
+void write_result_rows(const std::string& path, const std::vector<AlgorithmResult>& results);
+std::vector<AlgorithmResult> read_result_rows(const std::string& path);
+
 /// Top view: x = east (right), y = north (up), ground truth black, estimates (already aligned)
 /// in colours, with a legend and a metre scale bar. Throws TrajectoryError on I/O failure.
 void write_top_view_png(const std::string& path, const Trajectory& ground_truth,
