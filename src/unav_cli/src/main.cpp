@@ -17,6 +17,7 @@
 #include "unav_introspection/type_registry.hpp"
 #include "unav_evaluation/metrics.hpp"
 #include "unav_launch/launch_description.hpp"
+#include "unav_launch/package_index.hpp"
 #include "unav_launch/supervisor.hpp"
 
 using namespace std::chrono_literals;
@@ -340,8 +341,27 @@ int launch(const std::string& file, const std::vector<std::string>& args) {
 }  // namespace
 }  // namespace unav_cli
 
+// `unav localize ...` runs unav_localization's offline runner with the same arguments.
+int localize(int argc, char** argv) {
+  std::vector<std::string> searched;
+  const auto exe = unav::launch::find_executable("unav_localization", "unav_localize", &searched);
+  if (!exe) {
+    std::string dirs;
+    for (const auto& d : searched) dirs += " " + d;
+    std::cerr << "unav: error: unav_localize not found (package unav_localization; searched:" << dirs << ")" << std::endl;
+    return 2;
+  }
+  std::vector<char*> args{const_cast<char*>(exe->c_str())};
+  for (int i = 2; i < argc; ++i) args.push_back(argv[i]);
+  args.push_back(nullptr);
+  ::execv(exe->c_str(), args.data());
+  std::cerr << "unav: error: cannot run " << *exe << std::endl;
+  return 1;
+}
+
 int main(int argc, char** argv) {
   using namespace unav_cli;
+  if (argc >= 2 && std::string(argv[1]) == "localize") return localize(argc, argv);
   CLI::App app{"unav: command-line tool of UNav-Sim (like ros2)", "unav"};
   app.require_subcommand(1);
 
@@ -392,6 +412,8 @@ int main(int argc, char** argv) {
   auto* launch_cmd = app.add_subcommand("launch", "start the nodes of a *.launch.yaml file, one process each");
   launch_cmd->add_option("file", launch_file, "launch file")->required();
   launch_cmd->add_option("args", launch_args, "launch arguments name:=value");
+
+  app.add_subcommand("localize", "run a visual localization estimator on an image folder (unav localize --help)");
 
   EvalOptions eval_opts;
   auto* eval_cmd = app.add_subcommand("eval", "trajectory metrics on TUM files, as evo computes them");
