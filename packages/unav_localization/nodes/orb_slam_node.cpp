@@ -215,4 +215,6 @@ class OrbSlamNode : public unav::Node {
 
 }  // namespace unav_localization
 
+#ifndef UNAV_ORB_SLAM_NO_MAIN
 int main(int argc, char** argv) { return unav::run_node<unav_localization::OrbSlamNode>(argc, argv); }
+#endif

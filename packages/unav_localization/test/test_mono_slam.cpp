@@ -167,17 +167,28 @@ TEST(MonoSlam, BadInputIsRejected) {
   EXPECT_EQ(slam.Track(cv::Mat(480, 640, CV_8UC1, cv::Scalar(90)), 0.0).state, ul::SlamState::kInitializing);
 }
 
+// 100 frames: 6 m north at 6 cm per frame 1.5 m above the pipe, swaying 0.3 m east and
+// yawing +-0.1 rad, as the pipe-following controller flies it. Rendered once for all tests.
+const RenderedRun& StraightRun() {
+  static const RenderedRun run = [] {
+    std::vector<Eigen::Isometry3d> X_WB;
+    for (int k = 0; k < 100; ++k) {
+      Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
+      X.translation() = Eigen::Vector3d(-1.0 + 0.06 * k, 0.3 * std::sin(0.05 * k), 8.35);
+      X.linear() = Rot(0, 0, 0.1 * std::sin(0.04 * k));
+      X_WB.push_back(X);
+    }
+    return Render(X_WB);
+  }();
+  return run;
+}
+
+std::shared_ptr<const ul::BowVocabulary> Vocabulary() {
+  return std::make_shared<ul::BowVocabulary>(ul::BowVocabulary::Load(std::string(UNAV_REPO_ROOT) + "/config/vocabulary/orb_vocabulary.bin"));
+}
+
 TEST(MonoSlam, StraightRunOverTheSeabedWithKnownMotion) {
-  // 100 frames: 6 m north at 6 cm per frame 1.5 m above the pipe, swaying 0.3 m east and
-  // yawing +-0.1 rad, as the pipe-following controller flies it.
-  std::vector<Eigen::Isometry3d> X_WB;
-  for (int k = 0; k < 100; ++k) {
-    Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
-    X.translation() = Eigen::Vector3d(-1.0 + 0.06 * k, 0.3 * std::sin(0.05 * k), 8.35);
-    X.linear() = Rot(0, 0, 0.1 * std::sin(0.04 * k));
-    X_WB.push_back(X);
-  }
-  const RenderedRun run = Render(X_WB);
+  const RenderedRun& run = StraightRun();
   ul::MonoSlam slam(Pinhole(run.K), {}, {}, nullptr);
   int first_tracked = -1, lost = 0;
   for (size_t k = 0; k < run.gray.size(); ++k) {
@@ -197,4 +208,68 @@ TEST(MonoSlam, StraightRunOverTheSeabedWithKnownMotion) {
   EXPECT_GE(n, 85u);
   // Bound: 1% of the distance, twice the 0.5% typical of ORB-SLAM on such a run; seen: see log.
   EXPECT_LT(ape, 0.01 * path);
+}
+
+TEST(MonoSlam, SaysWhenTrackingIsLostAndRelocalises) {
+  // Frames 50-54 are blank (the camera blinded: silt, a light failure). The SLAM must report
+  // kLost for them, then find its map again by bag of words + PnP (kRelocalized) and go on with
+  // the same map: one trajectory, accurate after Sim(3) alignment.
+  const RenderedRun& run = StraightRun();
+  ul::MonoSlam slam(Pinhole(run.K), {}, {}, Vocabulary());
+  int lost_in_gap = 0, relocalized_at = -1, lost_after = 0;
+  for (size_t k = 0; k < run.gray.size(); ++k) {
+    const bool blank = k >= 50 && k < 55;
+    const cv::Mat img = blank ? cv::Mat(480, 640, CV_8UC1, cv::Scalar(70)) : run.gray[k];
+    const auto s = slam.Track(img, run.stamps[k]);
+    if (blank && s.state == ul::SlamState::kLost) {
+      ++lost_in_gap;
+      EXPECT_FALSE(s.message.empty());
+    }
+    if (!blank && k > 50 && s.state == ul::SlamState::kRelocalized && relocalized_at < 0) relocalized_at = static_cast<int>(k);
+    if (!blank && k > 55 && relocalized_at >= 0 && s.state == ul::SlamState::kLost) ++lost_after;
+  }
+  size_t n = 0;
+  double path = 0;
+  const double ape = Ape(slam, run, &n, &path);
+  const auto st = slam.stats();
+  std::printf("blank frames 50-54: %d reported lost, relocalised at frame %d, %d re-initialisations; APE %.4f m over %.2f m, %zu poses\n",
+              lost_in_gap, relocalized_at, st.reinitializations, ape, path, n);
+  EXPECT_EQ(lost_in_gap, 5);
+  EXPECT_EQ(relocalized_at, 55);  // the first image after the gap: 30 cm further, still over mapped seabed
+  EXPECT_EQ(lost_after, 0);
+  EXPECT_EQ(st.reinitializations, 0);
+  EXPECT_GE(n, 90u);  // every frame but the 5 blank ones and the few before initialisation
+  EXPECT_LT(ape, 0.01 * path);
+}
+
+TEST(MonoSlam, ReinitialisesWhenItCannotRelocalise) {
+  // Without a vocabulary there is no relocalisation: after a blank gap the SLAM starts a new map
+  // that continues from the last good pose (map index 1) and tracks again.
+  const RenderedRun& run = StraightRun();
+  ul::MonoSlam slam(Pinhole(run.K), {}, {}, nullptr);
+  bool reinit = false;
+  int tracking_after = 0;
+  for (size_t k = 0; k < run.gray.size(); ++k) {
+    const bool blank = k >= 50 && k < 55;
+    const auto s = slam.Track(blank ? cv::Mat(480, 640, CV_8UC1, cv::Scalar(70)) : run.gray[k], run.stamps[k]);
+    reinit = reinit || s.reinitialized;
+    if (k > 55 && s.state == ul::SlamState::kTracking) ++tracking_after;
+  }
+  const auto traj = slam.Trajectory();
+  ASSERT_FALSE(traj.empty());
+  std::printf("re-initialised: %d, tracking after the gap: %d frames, %zu poses, last map %d\n", reinit ? 1 : 0, tracking_after,
+              traj.size(), traj.back().map);
+  EXPECT_TRUE(reinit);
+  EXPECT_EQ(slam.stats().reinitializations, 1);
+  EXPECT_EQ(traj.back().map, 1);
+  EXPECT_GE(tracking_after, 30);  // a new two-view initialisation needs a few frames of parallax
+  // The new map starts at the last good pose: no jump larger than the gap's motion (5 x 6 cm)
+  // times the map scale uncertainty.
+  for (size_t i = 1; i < traj.size(); ++i)
+    if (traj[i].map != traj[i - 1].map) {
+      const double jump = (traj[i].T_wc.translation() - traj[i - 1].T_wc.translation()).norm();
+      const double step = (traj[i - 1].T_wc.translation() - traj[i - 2].T_wc.translation()).norm();
+      std::printf("map change at %.1f s: jump %.3f, previous step %.3f (map units)\n", traj[i].stamp, jump, step);
+      EXPECT_LT(jump, 20 * step);
+    }
 }

@@ -18,6 +18,7 @@
 
 #include <CLI/CLI.hpp>
 #include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 #include <yaml-cpp/yaml.h>
 
 #include "unav_evaluation/report.hpp"
@@ -117,8 +118,12 @@ int main(int argc, char** argv) {
     int n = 0, lost = 0;
     for (const auto& im : seq) {
       if (max_frames > 0 && n >= max_frames) break;
-      cv::Mat gray = cv::imread(im.path, cv::IMREAD_GRAYSCALE);
-      if (gray.empty()) throw ul::InputError(im.path + ": cannot be read as an image");
+      // Decoded in colour and converted like the nodes convert rgb8 messages (libpng's own
+      // grey conversion rounds differently).
+      const cv::Mat bgr = cv::imread(im.path, cv::IMREAD_COLOR);
+      if (bgr.empty()) throw ul::InputError(im.path + ": cannot be read as an image");
+      cv::Mat gray;
+      cv::cvtColor(bgr, gray, cv::COLOR_BGR2GRAY);
       ++n;
       const auto t0 = std::chrono::steady_clock::now();
       if (slam) {

@@ -1,0 +1,128 @@
+// orb_slam node over DDS: camera_info and 50 rendered down-camera images (known body motion)
+// in; odometry of the body, the corrected path and lockstep acks out. The body trajectory
+// matches the ground truth after a Sim(3) alignment (monocular scale).
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <map>
+
+#include <Eigen/Geometry>
+
+#include "nav_msgs/msg/odometry.hpp"
+#include "nav_msgs/msg/path.hpp"
+#include "sensor_msgs/msg/camera_info.hpp"
+#include "sensor_msgs/msg/image.hpp"
+#include "unav_localization/sim3.hpp"
+#include "unav_msgs/msg/lockstep_ack.hpp"
+#include "unav_renderer/camera.hpp"
+#include "unav_renderer/renderer.hpp"
+#include "unav_renderer/world.hpp"
+#include "unav_runtime/runtime.hpp"
+
+#define UNAV_ORB_SLAM_NO_MAIN
+#include "../nodes/orb_slam_node.cpp"
+
+using namespace std::chrono_literals;
+
+TEST(OrbSlamNode, TracksRenderedImagesOverDdsAndAcksLockstep) {
+  const std::string root = UNAV_REPO_ROOT;
+  const auto cams = unav_renderer::load_cameras(root + "/config/sensors/bluerov2_down_vslam.yaml");
+  const auto world = unav_renderer::load_world(root + "/worlds/pipe_inspection/world.yaml");
+  unav_renderer::RenderOptions ro;
+  ro.marine_snow = false;
+  unav_renderer::Renderer renderer(world, cams, ro);
+
+  unav::ContextOptions o;
+  o.domain_id = 120 + static_cast<int>(getpid() % 80);
+  o.handle_signals = false;
+  const std::string p_cams = "cameras_config:=" + root + "/config/sensors/bluerov2_down_vslam.yaml";
+  const std::string p_voc = "vocabulary:=" + root + "/config/vocabulary/orb_vocabulary.bin";
+  const char* argv[] = {"orb_slam", "--ros-args", "-p", p_cams.c_str(), "-p", p_voc.c_str(), "-p", "lockstep:=true"};
+  unav::Context node_ctx(8, argv, o);
+  auto node = std::make_unique<unav_localization::OrbSlamNode>(unav::NodeOptions{&node_ctx});
+  unav::Context test_ctx(o);
+  unav::Node probe("probe", {&test_ctx});
+  auto info_pub = probe.create_publisher<sensor_msgs::msg::CameraInfo>("/rov/camera/down/camera_info", unav::QoS::reliable(5));
+  auto img_pub = probe.create_publisher<sensor_msgs::msg::Image>("/rov/camera/down/image_raw", unav::QoS::reliable(50));
+  std::map<int64_t, Eigen::Vector3d> odom;
+  size_t path_poses = 0;
+  std::map<int64_t, int64_t> acks;  // acked stamp by image index
+  auto odom_sub = probe.create_subscription<nav_msgs::msg::Odometry>(
+      "/rov/localization/orb_slam/odom", unav::QoS::reliable(100), [&](const nav_msgs::msg::Odometry& m) {
+        EXPECT_EQ(m.header().frame_id(), "orb_slam_map");
+        const auto& p = m.pose().pose().position();
+        odom[unav::Time::from_msg(m.header().stamp().sec(), m.header().stamp().nanosec()).ns] = Eigen::Vector3d(p.x(), p.y(), p.z());
+      });
+  auto path_sub = probe.create_subscription<nav_msgs::msg::Path>("/rov/localization/orb_slam/path", unav::QoS::reliable(2),
+                                                                 [&](const nav_msgs::msg::Path& m) { path_poses = m.poses().size(); });
+  auto ack_sub = probe.create_subscription<unav_msgs::msg::LockstepAck>(
+      "/lockstep/ack", unav::QoS::reliable(100), [&](const unav_msgs::msg::LockstepAck& m) {
+        EXPECT_EQ(m.participant(), "orb_slam");
+        const int64_t ns = unav::Time::from_msg(m.header().stamp().sec(), m.header().stamp().nanosec()).ns;
+        acks[ns / 100000000] = ns;
+      });
+  auto spin = [&](std::chrono::milliseconds d, const std::function<bool()>& done) {
+    const auto end = std::chrono::steady_clock::now() + d;
+    while (!done() && std::chrono::steady_clock::now() < end) {
+      node_ctx.spin_some(1ms);
+      test_ctx.spin_some(1ms);
+    }
+    return done();
+  };
+  ASSERT_TRUE(spin(10s, [&] { return img_pub->subscription_count() > 0 && info_pub->subscription_count() > 0 && ack_sub->publisher_count() > 0; }));
+
+  const int n = 50;
+  std::map<int64_t, Eigen::Vector3d> truth;
+  for (int k = 0; k < n; ++k) {
+    Eigen::Isometry3d X_WB = Eigen::Isometry3d::Identity();
+    X_WB.translation() = Eigen::Vector3d(-1.0 + 0.06 * k, 0.2 * std::sin(0.1 * k), 8.35);
+    X_WB.linear() = Eigen::AngleAxisd(0.05 * std::sin(0.08 * k), Eigen::Vector3d::UnitZ()).toRotationMatrix();
+    const unav_renderer::Frame f = renderer.render(X_WB, "down", 0.1 * k);
+    const unav::Time t{static_cast<int64_t>(k) * 100000000};
+    truth[t.ns] = X_WB.translation();
+    sensor_msgs::msg::CameraInfo info;
+    info.header().stamp().sec(t.sec());
+    info.header().stamp().nanosec(t.nanosec());
+    info.width(static_cast<uint32_t>(f.width));
+    info.height(static_cast<uint32_t>(f.height));
+    const Eigen::Matrix3d K = cams[0].K();
+    for (int i = 0; i < 9; ++i) info.k()[static_cast<size_t>(i)] = K(i / 3, i % 3);
+    info.distortion_model("plumb_bob");
+    info.d({0, 0, 0, 0, 0});
+    info_pub->publish(info);
+    sensor_msgs::msg::Image img;
+    img.header().stamp() = info.header().stamp();
+    img.width(static_cast<uint32_t>(f.width));
+    img.height(static_cast<uint32_t>(f.height));
+    img.encoding("rgb8");
+    img.step(static_cast<uint32_t>(3 * f.width));
+    img.data(f.rgb);
+    img_pub->publish(img);
+    // Lockstep: the node acks t + image_period - 1 ms once it has processed the image.
+    ASSERT_TRUE(spin(20s, [&] { return acks.count(k) > 0; })) << "no ack for image " << k;
+    EXPECT_EQ(acks[k], t.ns + 99000000);
+  }
+  spin(1s, [&] { return odom.size() >= 40 && path_poses > 0; });
+  EXPECT_GE(odom.size(), 40u);  // initialisation needs a few frames of parallax (seen: tracking from frame 2-3)
+  EXPECT_GE(path_poses, 30u);
+  std::vector<Eigen::Vector3d> est, gt;
+  for (const auto& [ns, p] : odom) {
+    est.push_back(p);
+    gt.push_back(truth.at(ns));
+  }
+  Eigen::Matrix3Xd a(3, static_cast<long>(est.size())), b(3, static_cast<long>(est.size()));
+  for (size_t i = 0; i < est.size(); ++i) {
+    a.col(static_cast<long>(i)) = est[i];
+    b.col(static_cast<long>(i)) = gt[i];
+  }
+  unav_localization::Sim3 S;
+  ASSERT_TRUE(unav_localization::EstimateSim3(a, b, false, &S));
+  double se = 0;
+  for (size_t i = 0; i < est.size(); ++i) se += (S * est[i] - gt[i]).squaredNorm();
+  const double rmse = std::sqrt(se / static_cast<double>(est.size()));
+  std::printf("orb_slam node: %zu odometry messages, path of %zu poses, body APE (Sim(3)) %.4f m over 2.9 m\n", odom.size(), path_poses, rmse);
+  // Live odometry (before later bundle adjustment): 3 cm over 2.9 m, ~1%, several times what
+  // is seen (see log), still far below a wrong body/camera frame conversion (metres).
+  EXPECT_LT(rmse, 0.03);
+}

@@ -1,0 +1,36 @@
+#!/usr/bin/env bash
+# One short run of the visual-localisation benchmark (launch_scripts/vslam_run.launch.yaml):
+# physics (lockstep, waiting for the renderer and the ORB SLAM) + controller + renderer (down
+# camera 640 x 480) + orb_slam + klt_vo (monocular) + evaluator, 15 s of simulated time along the
+# linear pipeline. The run must end by itself and leave the Table II files, with the SLAM's
+# Sim(3)-aligned APE under 5 cm (seen: ~5 mm) and the KLT VO's under 15 cm.
+set -euo pipefail
+trap 'echo "FAIL: unexpected exit at line $LINENO: $BASH_COMMAND"; [ -n "${log:-}" ] && [ -f "$log" ] && tail -30 "$log"' ERR
+ws="$1"
+set +u; source "$ws/install/setup.bash"; set -u
+export ROS_DOMAIN_ID=$((150 + $$ % 50))
+out=$(mktemp -d)
+log="$out/launch.log"
+fail() { echo "FAIL: $*"; echo "--- launch log:"; tail -40 "$log"; exit 1; }
+
+rc=0
+timeout -s INT 200 unav launch "$ws/launch_scripts/vslam_run.launch.yaml" route:=linear output_dir:="$out/eval" duration:=15 \
+  domain:="$ROS_DOMAIN_ID" >"$log" 2>&1 || rc=$?
+[ "$rc" -eq 0 ] || fail "launch exit code $rc (the run should stop itself at 15 s)"
+for f in results.md results.csv results.json linear_top_view.png linear_ground_truth.tum linear_orb_slam.tum linear_klt_vo.tum rows/linear.tsv; do
+  [ -s "$out/eval/$f" ] || fail "missing $f"
+done
+grep -q "orb_slam.*loops" "$log" || fail "orb_slam printed no summary"
+python3 - "$out/eval/results.json" <<'PY' || fail "results out of bounds: $(cat "$out/eval/results.md")"
+import json, sys
+rows = {r["algorithm"]: r for r in json.load(open(sys.argv[1]))}
+slam, klt = rows["orb_slam"], rows["klt_vo"]
+print("orb_slam APE %.4f m (%d poses), klt_vo APE %.4f m (%d poses)" % (slam["ape_m"]["rmse"], slam["poses"], klt["ape_m"]["rmse"], klt["poses"]))
+assert slam["trajectory"] == "linear"
+assert slam["poses"] >= 120, slam["poses"]      # 150 frames, a few before initialisation
+assert slam["ape_m"]["rmse"] < 0.05
+assert klt["poses"] >= 100
+assert klt["ape_m"]["rmse"] < 0.15
+PY
+rm -rf "$out"
+echo "1 passed, 0 failed"
