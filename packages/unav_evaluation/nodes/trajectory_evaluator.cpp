@@ -9,6 +9,8 @@
 #include <filesystem>
 #include <unistd.h>
 
+#include "unav_renderer/camera.hpp"
+
 namespace unav_evaluation {
 namespace {
 
@@ -69,6 +71,22 @@ TrajectoryEvaluator::TrajectoryEvaluator(const unav::NodeOptions& options) : Nod
   combine_ = declare_parameter<bool>("combine", false, {"share output_dir with other runs (prefixed files, one combined table)", {}, {}, false});
   if (combine_ && (trajectory_name_.empty() || trajectory_name_.find_first_of("/\t") != std::string::npos))
     throw unav::ParameterError("node '" + name() + "': trajectory_name '" + trajectory_name_ + "' must be a non-empty file name with combine");
+  const std::string camera = declare_parameter<std::string>(
+      "camera", "", {"estimators report this camera's optical frame (empty: base_link_frd)", {}, {}, false});
+  const std::string cams_path = declare_parameter<std::string>("cameras_config", "", {"camera YAML with `camera`", {}, {}, false});
+  if (!camera.empty()) {
+    bool found = false;
+    try {
+      for (const auto& c : unav_renderer::load_cameras(cams_path))
+        if (c.name == camera) {
+          X_BE_ = c.X_BC;
+          found = true;
+        }
+    } catch (const std::exception& e) {
+      throw unav::ConfigError(std::string("parameter 'cameras_config': ") + e.what());
+    }
+    if (!found) throw unav::ParameterError("node '" + name() + "': camera '" + camera + "' is not in '" + cams_path + "'");
+  }
   std::error_code ec;
   std::filesystem::create_directories(output_dir_, ec);
   if (ec) throw unav::ConfigError("output_dir '" + output_dir_ + "': cannot create: " + ec.message());
@@ -102,7 +120,10 @@ std::vector<AlgorithmResult> TrajectoryEvaluator::write_outputs() {
     return results;
   }
   const std::string prefix = output_dir_ + "/" + (combine_ ? trajectory_name_ + "_" : "");
-  write_tum(prefix + "ground_truth.tum", ground_truth_);
+  // Ground truth of the frame the estimators report (the body, or a camera on it).
+  Trajectory truth = ground_truth_;
+  for (auto& X : truth.poses) X = X * X_BE_;
+  write_tum(prefix + "ground_truth.tum", truth);
   std::vector<std::pair<std::string, Trajectory>> aligned;
   for (const auto& [name, odom] : estimates_) {
     // The latest whole path (corrected history), then the odometry after its end.
@@ -119,8 +140,8 @@ std::vector<AlgorithmResult> TrajectoryEvaluator::write_outputs() {
     }
     write_tum(prefix + name + ".tum", traj);
     try {
-      results.push_back(evaluate(ground_truth_, traj, trajectory_name_, name, alignment_, rpe_, max_diff_));
-      auto [ref, est] = associate(ground_truth_, traj, max_diff_);
+      results.push_back(evaluate(truth, traj, trajectory_name_, name, alignment_, rpe_, max_diff_));
+      auto [ref, est] = associate(truth, traj, max_diff_);
       align(est, ref, alignment_);
       aligned.emplace_back(name, est);
       logger()->info("{}: APE {:.4f} m, RPE {:.4f} m, APE {:.4f} rad, RPE {:.4f} rad ({} poses)", name,
@@ -130,7 +151,7 @@ std::vector<AlgorithmResult> TrajectoryEvaluator::write_outputs() {
       logger()->warn("estimator '{}' not evaluated: {}", name, e.what());
     }
   }
-  write_top_view_png(prefix + "top_view.png", ground_truth_, aligned);
+  write_top_view_png(prefix + "top_view.png", truth, aligned);
   if (!combine_) {
     write_results(output_dir_ + "/results", results, alignment_);
   } else {

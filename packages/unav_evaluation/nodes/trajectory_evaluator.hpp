@@ -10,6 +10,8 @@
 //                                          followed by the odometry stamped after its end
 // Params: estimates (names), output_dir, trajectory_name (table row label), alignment
 //         (none|se3|sim3|scale), rpe_delta (frames), max_time_diff (s, association),
+//         camera + cameras_config (estimators report that camera's optical frame, as monocular
+//         ones do: ground truth is moved from base_link_frd to it before comparing),
 //         combine (several runs share output_dir: files are prefixed with trajectory_name and
 //         results.md/csv/json hold the rows of every run, kept in rows/<trajectory_name>.tsv).
 #pragma once
@@ -40,6 +42,7 @@ class TrajectoryEvaluator : public unav::Node {
   double max_diff_ = 0.02;
   bool written_ = false, combine_ = false;
   Trajectory ground_truth_;
+  Eigen::Isometry3d X_BE_ = Eigen::Isometry3d::Identity();  ///< estimated frame on the body
   std::map<std::string, Trajectory> estimates_, paths_;
   std::vector<std::shared_ptr<unav::Subscription<nav_msgs::msg::Odometry>>> subs_;
   std::vector<std::shared_ptr<unav::Subscription<nav_msgs::msg::Path>>> path_subs_;

@@ -25,12 +25,12 @@ namespace ul = unav_localization;
 
 namespace {
 
-void Report(const char* what, std::vector<double> ms) {
+void Report(const char* what, std::vector<double> ms, const char* unit = "frames/s") {
   std::sort(ms.begin(), ms.end());
   const double mean = std::accumulate(ms.begin(), ms.end(), 0.0) / static_cast<double>(ms.size());
   auto pct = [&](double q) { return ms[std::min(ms.size() - 1, static_cast<size_t>(q * static_cast<double>(ms.size())))]; };
-  std::printf("  %-30s mean %7.2f ms  p50 %7.2f  p90 %7.2f  p99 %7.2f  max %7.2f  -> %6.1f frames/s\n", what, mean, pct(0.5), pct(0.9),
-              pct(0.99), ms.back(), 1000.0 / mean);
+  std::printf("  %-30s mean %7.2f ms  p50 %7.2f  p90 %7.2f  p99 %7.2f  max %7.2f  -> %6.1f %s\n", what, mean, pct(0.5), pct(0.9),
+              pct(0.99), ms.back(), 1000.0 / mean, unit);
 }
 
 }  // namespace
@@ -92,7 +92,7 @@ int main(int argc, char** argv) {
               st.points, st.loops);
   Report("tracking (ORB + pose)", track);
   Report("tracking + mapping", total);
-  if (!kf_mapping.empty()) Report("mapping per keyframe", kf_mapping);
+  if (!kf_mapping.empty()) Report("mapping per keyframe", kf_mapping, "keyframes/s");
 
   ul::KltVoOptions ko;
   ko.mode = ul::KltVoOptions::Mode::kMonocular;

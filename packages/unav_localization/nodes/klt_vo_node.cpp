@@ -4,8 +4,12 @@
 //   sub  camera/<camera>/image_raw, camera/<camera>/depth/image_raw   sensor_msgs/Image (rgb8, 32FC1;
 //                                                                      depth only in mode rgbd)
 //   sub  camera/<camera>/camera_info                                   sensor_msgs/CameraInfo
-//   pub  localization/klt_vo/odom   nav_msgs/Odometry: base_link_frd in frame `klt_vo_odom` (the
-//                                   body pose at the first frame), stamped with the image time
+//   pub  localization/klt_vo/odom   nav_msgs/Odometry, stamped with the image time. Mode rgbd:
+//                                   base_link_frd in frame `klt_vo_odom` (the body at the first
+//                                   frame). Mode monocular: the camera optical frame
+//                                   `<camera>_optical` in frame `klt_vo_odom` (the first camera
+//                                   frame): without metric scale the camera's lever arm cannot be
+//                                   applied, so the camera itself is reported
 //   pub  localization/klt_vo/path   nav_msgs/Path (every 10 frames)
 // The camera's mount (cameras_config) turns camera motion into body motion. Mode rgbd publishes
 // every frame (a lost frame with a constant-velocity prediction); mode monocular publishes only
@@ -30,6 +34,7 @@ class KltVoNode : public unav::Node {
  public:
   explicit KltVoNode(const unav::NodeOptions& options) : Node("klt_vo", options, "rov") {
     const std::string cam = declare_parameter<std::string>("camera", "down", {"camera name", {}, {}, false});
+    camera_ = cam;
     const auto share = unav::launch::find_package_share("unav_resources");
     const std::string cams_path = declare_parameter<std::string>(
         "cameras_config", share ? *share + "/config/sensors/bluerov2_cameras.yaml" : "", {"camera YAML", {}, {}, false});
@@ -105,7 +110,7 @@ class KltVoNode : public unav::Node {
       }
       last_status_ = s.status;
       if (s.status == VoStatus::kInitialized || s.status == VoStatus::kTracking)
-        publish(frame.header, X_BC_ * T_C0C * X_BC_.inverse());
+        publish(frame.header, T_C0C);
     }
     grays_.clear();
   }
@@ -136,7 +141,7 @@ class KltVoNode : public unav::Node {
     nav_msgs::msg::Odometry o;
     o.header().stamp() = h.stamp();
     o.header().frame_id("klt_vo_odom");
-    o.child_frame_id("base_link_frd");
+    o.child_frame_id(monocular() ? camera_ + "_optical" : "base_link_frd");
     const Eigen::Quaterniond q(T_OB.linear());
     auto& p = o.pose().pose();
     p.position().x(T_OB.translation().x());
@@ -162,6 +167,7 @@ class KltVoNode : public unav::Node {
     std_msgs::msg::dds_::Header_ header;
   };
   Eigen::Isometry3d X_BC_ = Eigen::Isometry3d::Identity();
+  std::string camera_;
   KltVoOptions options_;
   std::unique_ptr<KltVo> vo_;
   VoStatus last_status_ = VoStatus::kInitializing;

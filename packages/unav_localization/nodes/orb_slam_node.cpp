@@ -3,15 +3,18 @@
 // Ports (relative to the node namespace, default /rov):
 //   sub  camera/<camera>/image_raw     sensor_msgs/Image (rgb8, bgr8 or mono8)
 //   sub  camera/<camera>/camera_info   sensor_msgs/CameraInfo (K and plumb_bob D are used)
-//   pub  localization/orb_slam/odom    nav_msgs/Odometry: base_link_frd in frame `orb_slam_map` (the
-//                                      body at the first keyframe; monocular scale: arbitrary),
-//                                      stamped with the image time; tracked frames only
-//   pub  localization/orb_slam/path    nav_msgs/Path: every tracked frame so far, as corrected by
-//                                      bundle adjustment and loop closing; after each keyframe
+//   pub  localization/orb_slam/odom    nav_msgs/Odometry: the camera optical frame `<camera>_optical`
+//                                      in frame `orb_slam_map` (the first keyframe's camera frame;
+//                                      monocular scale: arbitrary), stamped with the image time;
+//                                      tracked frames only. Without metric scale the camera's lever
+//                                      arm on the body cannot be applied, so the camera is reported
+//                                      (evaluate against ground truth moved to the camera frame)
+//   pub  localization/orb_slam/path    nav_msgs/Path: every tracked frame so far (camera poses), as
+//                                      corrected by bundle adjustment and loop closing; after each
+//                                      keyframe
 //   pub  /lockstep/ack                 unav_msgs/LockstepAck (lockstep: true): after processing the
 //                                      image at t, acks up to t + image_period (just under the next
 //                                      image), so a lockstep simulation waits for the SLAM
-// The camera's mount (cameras_config) turns camera motion into body motion.
 #include <cmath>
 #include <deque>
 
@@ -33,9 +36,10 @@ class OrbSlamNode : public unav::Node {
  public:
   explicit OrbSlamNode(const unav::NodeOptions& options) : Node("orb_slam", options, "rov") {
     const std::string cam = declare_parameter<std::string>("camera", "down", {"camera name", {}, {}, false});
+    camera_ = cam;
     const auto share = unav::launch::find_package_share("unav_resources");
     const std::string cams_path = declare_parameter<std::string>(
-        "cameras_config", share ? *share + "/config/sensors/bluerov2_cameras.yaml" : "", {"camera YAML (mounts)", {}, {}, false});
+        "cameras_config", share ? *share + "/config/sensors/bluerov2_cameras.yaml" : "", {"camera YAML (the camera must be in it)", {}, {}, false});
     const std::string voc_path = declare_parameter<std::string>(
         "vocabulary", share ? *share + "/config/vocabulary/orb_vocabulary.bin" : "",
         {"bag-of-words vocabulary (unav_train_vocabulary); empty: no loop closing or relocalisation", {}, {}, false});
@@ -51,7 +55,6 @@ class OrbSlamNode : public unav::Node {
     try {
       for (const auto& c : unav_renderer::load_cameras(cams_path))
         if (c.name == cam) {
-          X_BC_ = c.X_BC;
           found = true;
         }
     } catch (const std::exception& e) {
@@ -149,8 +152,6 @@ class OrbSlamNode : public unav::Node {
     ack(m.header());
   }
 
-  Eigen::Isometry3d body_pose(const Eigen::Isometry3d& T_wc) const { return X_BC_ * T_wc * X_BC_.inverse(); }
-
   void fill_pose(const Eigen::Isometry3d& X, geometry_msgs::msg::dds_::Pose_* p) const {
     const Eigen::Quaterniond q(X.linear());
     p->position().x(X.translation().x());
@@ -166,8 +167,8 @@ class OrbSlamNode : public unav::Node {
     nav_msgs::msg::Odometry o;
     o.header().stamp() = h.stamp();
     o.header().frame_id(frame_id_);
-    o.child_frame_id("base_link_frd");
-    fill_pose(body_pose(T_wc), &o.pose().pose());
+    o.child_frame_id(camera_ + "_optical");
+    fill_pose(T_wc, &o.pose().pose());
     odom_pub_->publish(o);
   }
 
@@ -181,7 +182,7 @@ class OrbSlamNode : public unav::Node {
       ps.header().stamp().sec(t.sec());
       ps.header().stamp().nanosec(t.nanosec());
       ps.header().frame_id(frame_id_);
-      fill_pose(body_pose(p.T_wc), &ps.pose());
+      fill_pose(p.T_wc, &ps.pose());
       path.poses().push_back(ps);
     }
     path_pub_->publish(path);
@@ -202,9 +203,8 @@ class OrbSlamNode : public unav::Node {
   std::shared_ptr<const BowVocabulary> vocabulary_;
   std::unique_ptr<MonoSlam> slam_;
   std::deque<sensor_msgs::msg::Image> pending_;
-  Eigen::Isometry3d X_BC_ = Eigen::Isometry3d::Identity();
   bool lockstep_ = false, was_lost_ = false;
-  std::string ack_name_, frame_id_;
+  std::string ack_name_, frame_id_, camera_;
   double image_period_ = 0.1;
   std::shared_ptr<unav::Publisher<nav_msgs::msg::Odometry>> odom_pub_;
   std::shared_ptr<unav::Publisher<nav_msgs::msg::Path>> path_pub_;
