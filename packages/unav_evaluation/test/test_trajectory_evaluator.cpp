@@ -10,7 +10,9 @@
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 
+#include "nav_msgs/msg/path.hpp"
 #include "trajectory_evaluator.hpp"
+#include "unav_renderer/camera.hpp"
 
 using namespace std::chrono_literals;
 
@@ -76,4 +78,107 @@ TEST(TrajectoryEvaluator, WritesTableTumAndPlotOnShutdown) {
   EXPECT_NEAR(j[0]["scale"].get<double>(), 1.0 / 0.3, 1e-6);
   const cv::Mat png = cv::imread(out + "/top_view.png");
   EXPECT_EQ(png.cols, 800);
+}
+
+// Two runs share one folder (combine): each publishes ground truth of the body, and an estimate
+// of the down camera (a Sim(3) copy) as a Path up to frame 79 and odometry after it; odometry
+// before the path's end is garbage and must be superseded by the path. Ground truth is moved to
+// the camera with the camera's mount, so the APE is ~0, and results.json holds both rows.
+namespace {
+
+void RunCombined(const std::string& out, const std::string& run, int domain) {
+  const std::string root = UNAV_REPO_ROOT;
+  const std::string cams = root + "/config/sensors/bluerov2_down_vslam.yaml";
+  Eigen::Isometry3d X_BC = Eigen::Isometry3d::Identity();
+  for (const auto& c : unav_renderer::load_cameras(cams))
+    if (c.name == "down") X_BC = c.X_BC;
+  unav::ContextOptions o;
+  o.domain_id = domain;
+  o.handle_signals = false;
+  const std::string p_out = "output_dir:=" + out, p_run = "trajectory_name:=" + run, p_cams = "cameras_config:=" + cams;
+  const char* argv[] = {"trajectory_evaluator", "--ros-args", "-p", p_out.c_str(), "-p", "estimates:=[mono]", "-p", p_run.c_str(),
+                        "-p", "combine:=true", "-p", "camera:=down", "-p", p_cams.c_str()};
+  unav::Context node_ctx(14, argv, o);
+  auto node = std::make_unique<unav_evaluation::TrajectoryEvaluator>(unav::NodeOptions{&node_ctx});
+  unav::Context test_ctx(o);
+  unav::Node probe("probe", {&test_ctx});
+  auto gt_pub = probe.create_publisher<nav_msgs::msg::Odometry>("/rov/ground_truth/odom", unav::QoS::reliable(100));
+  auto est_pub = probe.create_publisher<nav_msgs::msg::Odometry>("/rov/localization/mono/odom", unav::QoS::reliable(100));
+  auto path_pub = probe.create_publisher<nav_msgs::msg::Path>("/rov/localization/mono/path", unav::QoS::reliable(2));
+  auto spin = [&](std::chrono::milliseconds d, const std::function<bool()>& done) {
+    const auto end = std::chrono::steady_clock::now() + d;
+    while (!done() && std::chrono::steady_clock::now() < end) {
+      node_ctx.spin_some(1ms);
+      test_ctx.spin_some(1ms);
+    }
+    return done();
+  };
+  ASSERT_TRUE(spin(10s, [&] { return gt_pub->subscription_count() > 0 && est_pub->subscription_count() > 0 && path_pub->subscription_count() > 0; }));
+  auto pose_msg = [](double t, const Eigen::Isometry3d& X) {
+    nav_msgs::msg::Odometry m;
+    const unav::Time s{std::llround(t * 1e9)};
+    m.header().stamp().sec(s.sec());
+    m.header().stamp().nanosec(s.nanosec());
+    const Eigen::Quaterniond q(X.linear());
+    m.pose().pose().position().x(X.translation().x());
+    m.pose().pose().position().y(X.translation().y());
+    m.pose().pose().position().z(X.translation().z());
+    m.pose().pose().orientation().x(q.x());
+    m.pose().pose().orientation().y(q.y());
+    m.pose().pose().orientation().z(q.z());
+    m.pose().pose().orientation().w(q.w());
+    return m;
+  };
+  const Eigen::Isometry3d G(Eigen::AngleAxisd(0.7, Eigen::Vector3d::UnitX()));
+  nav_msgs::msg::Path path;
+  for (int i = 0; i < 100; ++i) {
+    const double t = 0.1 * i, a = 0.04 * i;
+    Eigen::Isometry3d X_WB = Eigen::Isometry3d::Identity();
+    X_WB.translation() = Eigen::Vector3d(4 * std::sin(a), 3 * std::cos(a), 8.0);
+    X_WB.linear() = Eigen::AngleAxisd(a, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+    gt_pub->publish(pose_msg(t, X_WB));
+    Eigen::Isometry3d X_C = G * X_WB * X_BC;  // the camera, in another frame
+    X_C.translation() *= 0.5;                  // and another scale
+    if (i < 50) {
+      Eigen::Isometry3d wrong = X_C;
+      wrong.translation().x() += 3.0;
+      est_pub->publish(pose_msg(t, wrong));
+    }
+    if (i < 80) {
+      geometry_msgs::msg::dds_::PoseStamped_ ps;
+      const auto m = pose_msg(t, X_C);
+      ps.header() = m.header();
+      ps.pose() = m.pose().pose();
+      path.poses().push_back(ps);
+    } else {
+      est_pub->publish(pose_msg(t, X_C));
+    }
+    if (i == 79) path_pub->publish(path);
+    spin(2ms, [] { return false; });
+  }
+  spin(500ms, [] { return false; });
+  node.reset();
+}
+
+}  // namespace
+
+TEST(TrajectoryEvaluator, CombinesRunsPrefersPathsAndComparesInTheCameraFrame) {
+  const std::string out = ::testing::TempDir() + "eval_node_combined";
+  std::filesystem::remove_all(out);
+  const int domain = 100 + static_cast<int>((getpid() + 37) % 100);
+  RunCombined(out, "linear", domain);
+  RunCombined(out, "with_loop", domain);
+  for (const char* f : {"linear_ground_truth.tum", "linear_mono.tum", "linear_top_view.png", "with_loop_mono.tum",
+                        "with_loop_top_view.png", "rows/linear.tsv", "rows/with_loop.tsv", "results.md", "results.json"})
+    EXPECT_TRUE(std::filesystem::exists(out + "/" + f)) << f;
+  nlohmann::json j;
+  std::ifstream(out + "/results.json") >> j;
+  ASSERT_EQ(j.size(), 2u);
+  EXPECT_EQ(j[0]["trajectory"], "linear");
+  EXPECT_EQ(j[1]["trajectory"], "with_loop");
+  for (const auto& row : j) {
+    EXPECT_EQ(row["poses"], 100);
+    EXPECT_LT(row["ape_m"]["rmse"].get<double>(), 1e-6);  // the path won over the wrong odometry
+    EXPECT_NEAR(row["scale"].get<double>(), 2.0, 1e-6);
+  }
 }
