@@ -50,6 +50,7 @@ bool MonoSlamOptions::IsValid(std::string* msg) const {
   if (mapping_neighbours < 1) return fail("mapping_neighbours must be >= 1, got " + std::to_string(mapping_neighbours));
   if (loop_consistency < 0) return fail("loop_consistency must be >= 0, got " + std::to_string(loop_consistency));
   if (loop_min_inliers < 20) return fail("loop_min_inliers must be >= 20, got " + std::to_string(loop_min_inliers));
+  if (!(loop_max_correction_ratio > 0)) return fail("loop_max_correction_ratio must be > 0, got " + std::to_string(loop_max_correction_ratio));
   if (loop_min_keyframe_gap < 5) return fail("loop_min_keyframe_gap must be >= 5, got " + std::to_string(loop_min_keyframe_gap));
   if (global_ba_iterations < 1) return fail("global_ba_iterations must be >= 1, got " + std::to_string(global_ba_iterations));
   if (relocalize_frames < 0) return fail("relocalize_frames must be >= 0, got " + std::to_string(relocalize_frames));
@@ -908,6 +909,19 @@ struct MonoSlam::Impl {
       lc->matches.emplace_back(bi, pid);
     }
     if (static_cast<int>(lc->matches.size()) < opt.loop_min_inliers) return false;
+    // Plausibility: the correction against the path flown between the loop ends.
+    double path = 0;
+    int prev = -1;
+    for (int k = cand; k <= kid; ++k) {
+      if (map->kf(k).bad) continue;
+      if (prev >= 0) path += (map->kf(k).Center() - map->kf(prev).Center()).norm();
+      prev = k;
+    }
+    const double correction = (T_cw_loop.inverse().translation() - c.Center()).norm();
+    if (std::getenv("UNAV_SLAM_DEBUG"))
+      std::fprintf(stderr, "loop candidate kf %d <-> %d: s %.3f, %zu matches, correction %.3f over a path of %.3f\n", kid, cand, best.s,
+                   lc->matches.size(), correction, path);
+    if (correction > opt.loop_max_correction_ratio * path) return false;
     lc->kf = cand;
     lc->S_cm = best;
     return true;

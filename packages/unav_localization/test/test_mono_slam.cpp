@@ -5,11 +5,14 @@
 
 #include <cmath>
 #include <cstdio>
+#include <algorithm>
 #include <random>
+#include <set>
 
 #include <opencv2/imgproc.hpp>
 
 #include "unav_localization/mono_slam.hpp"
+#include "unav_localization/orb_extractor.hpp"
 #include "unav_localization/sim3.hpp"
 #include "unav_localization/slam_optimizer.hpp"
 #include "unav_renderer/camera.hpp"
@@ -116,6 +119,73 @@ TEST(Sim3, UmeyamaRecoversAKnownSimilarity) {
   Eigen::Matrix3Xd line(3, 4);
   line << 0, 1, 2, 3, 0, 1, 2, 3, 0, 1, 2, 3;
   EXPECT_FALSE(ul::EstimateSim3(line, line, false, &S));
+}
+
+TEST(OrbExtractor, SpreadsFeaturesOverWeakTexture) {
+  // Texture whose contrast fades from 100 % on the left to 30 % on the right (like sand under a
+  // lamp's falloff). Plain ORB keeps its strongest corners, crowded on the left; the grid
+  // selection over ORB's (3x) candidates covers more of the image. It can only choose among
+  // those candidates: the faintest third stays nearly empty for both (seen: 0.00 and 0.01).
+  cv::Mat noise(480, 640, CV_8UC1), img;
+  cv::RNG rng(7);
+  rng.fill(noise, cv::RNG::UNIFORM, 0, 255);
+  cv::GaussianBlur(noise, img, cv::Size(0, 0), 1.5);
+  for (int x = 0; x < img.cols; ++x) {
+    const double c = 1.0 - 0.7 * x / (img.cols - 1.0);
+    img.col(x).convertTo(img.col(x), CV_8U, c, 128 * (1 - c));
+  }
+  auto coverage = [](const std::vector<cv::KeyPoint>& k) {  // share of 32 px cells with a feature
+    std::set<int> cells;
+    for (const auto& p : k) cells.insert(static_cast<int>(p.pt.y) / 32 * 20 + static_cast<int>(p.pt.x) / 32);
+    return static_cast<double>(cells.size()) / (15 * 20);
+  };
+  auto right_share = [](const std::vector<cv::KeyPoint>& k) {
+    return static_cast<double>(std::count_if(k.begin(), k.end(), [](const cv::KeyPoint& p) { return p.pt.x >= 427; })) / k.size();
+  };
+  std::vector<cv::KeyPoint> plain, ours;
+  cv::ORB::create(1000)->detect(img, plain);
+  cv::Mat desc;
+  ul::OrbExtractor().Extract(img, &ours, &desc);
+  std::printf("cells covered: plain ORB %.2f, grid %.2f; right third: plain %.2f, grid %.2f\n", coverage(plain), coverage(ours),
+              right_share(plain), right_share(ours));
+  EXPECT_EQ(desc.rows, static_cast<int>(ours.size()));
+  EXPECT_EQ(desc.cols, 32);
+  EXPECT_GE(ours.size(), 900u);
+  EXPECT_GT(coverage(ours), coverage(plain) + 0.1);
+  EXPECT_THROW(ul::OrbExtractor(ul::OrbOptions{10}), std::invalid_argument);
+
+  // Rotation invariance: the image turned by 30 deg about its centre; a feature's best
+  // descriptor match lands where the rotation maps it for most confident matches.
+  cv::Mat tex;
+  cv::GaussianBlur(noise, tex, cv::Size(0, 0), 1.5);
+  const cv::Mat R = cv::getRotationMatrix2D(cv::Point2f(320, 240), 30.0, 1.0);
+  cv::Mat rotated;
+  cv::warpAffine(tex, rotated, R, tex.size(), cv::INTER_LINEAR, cv::BORDER_REFLECT);
+  std::vector<cv::KeyPoint> k0, k1;
+  cv::Mat d0, d1;
+  const ul::OrbExtractor ex;
+  ex.Extract(tex, &k0, &d0);
+  ex.Extract(rotated, &k1, &d1);
+  int confident = 0, correct = 0;
+  for (int i = 0; i < d0.rows; ++i) {
+    int best = 256, bj = -1;
+    for (int j = 0; j < d1.rows; ++j) {
+      const int d = ul::DescriptorDistance(d0.ptr<uint8_t>(i), d1.ptr<uint8_t>(j));
+      if (d < best) {
+        best = d;
+        bj = j;
+      }
+    }
+    if (best > 40) continue;
+    ++confident;
+    const cv::Point2f p = k0[static_cast<size_t>(i)].pt;
+    const cv::Point2f q(static_cast<float>(R.at<double>(0, 0) * p.x + R.at<double>(0, 1) * p.y + R.at<double>(0, 2)),
+                        static_cast<float>(R.at<double>(1, 0) * p.x + R.at<double>(1, 1) * p.y + R.at<double>(1, 2)));
+    correct += cv::norm(q - k1[static_cast<size_t>(bj)].pt) < 3.0 * (1 << std::max(0, k1[static_cast<size_t>(bj)].octave / 2)) ? 1 : 0;
+  }
+  std::printf("rotated 30 deg: %d confident matches, %d at the right place\n", confident, correct);
+  EXPECT_GT(confident, 200);
+  EXPECT_GT(correct, 0.9 * confident);
 }
 
 TEST(PoseGraph, LoopEdgeRemovesAccumulatedDrift) {
@@ -238,6 +308,7 @@ TEST(MonoSlam, SaysWhenTrackingIsLostAndRelocalises) {
   EXPECT_EQ(relocalized_at, 55);  // the first image after the gap: 30 cm further, still over mapped seabed
   EXPECT_EQ(lost_after, 0);
   EXPECT_EQ(st.reinitializations, 0);
+  EXPECT_EQ(st.loops, 0);  // a straight run has no loop to close (the seabed must not alias)
   EXPECT_GE(n, 90u);  // every frame but the 5 blank ones and the few before initialisation
   EXPECT_LT(ape, 0.01 * path);
 }
@@ -272,4 +343,35 @@ TEST(MonoSlam, ReinitialisesWhenItCannotRelocalise) {
       std::printf("map change at %.1f s: jump %.3f, previous step %.3f (map units)\n", traj[i].stamp, jump, step);
       EXPECT_LT(jump, 20 * step);
     }
+}
+
+TEST(MonoSlam, ClosesALoopAroundASquare) {
+  // 3.6 m x 3.6 m square at constant heading (north, east, south, west) and 1.2 m on past the
+  // start, 6 cm per frame: the camera sees its first images again after 14.4 m. The loop must
+  // be detected by bag of words, verified by Sim(3) and closed.
+  std::vector<Eigen::Isometry3d> X_WB;
+  const std::vector<Eigen::Vector2d> dirs{{1, 0}, {0, 1}, {-1, 0}, {0, -1}, {1, 0}};
+  Eigen::Vector2d p(2.0, -1.8);
+  for (size_t leg = 0; leg < dirs.size(); ++leg) {
+    const int steps = leg + 1 < dirs.size() ? 60 : 20;
+    for (int k = 0; k < steps; ++k) {
+      Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
+      X.translation() = Eigen::Vector3d(p.x(), p.y(), 8.35);
+      X_WB.push_back(X);
+      p += 0.06 * dirs[leg];
+    }
+  }
+  const RenderedRun run = Render(X_WB);
+  ul::MonoSlam slam(Pinhole(run.K), {}, {}, Vocabulary());
+  int loop_frame = -1;
+  for (size_t k = 0; k < run.gray.size(); ++k)
+    if (slam.Track(run.gray[k], run.stamps[k]).loop_closed && loop_frame < 0) loop_frame = static_cast<int>(k);
+  size_t n = 0;
+  double path = 0;
+  const double ape = Ape(slam, run, &n, &path);
+  std::printf("square: loop closed at frame %d (%zu frames), %d loops; APE %.4f m over %.2f m, %zu poses\n", loop_frame, run.gray.size(),
+              slam.stats().loops, ape, path, n);
+  EXPECT_GE(slam.stats().loops, 1);
+  EXPECT_GE(loop_frame, 200);  // only once the start area is in view again
+  EXPECT_LT(ape, 0.005 * path);
 }

@@ -19,8 +19,10 @@
 
 #include <opencv2/features2d.hpp>
 #include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include "unav_localization/bow_vocabulary.hpp"
+#include "unav_localization/orb_extractor.hpp"
 
 namespace fs = std::filesystem;
 namespace ul = unav_localization;
@@ -90,11 +92,16 @@ int Run(const std::vector<std::string>& dirs, const std::string& out, int featur
   std::printf("%s: extracting up to %d ORB features from each of %zu images\n", kName, features, images.size());
   std::fflush(stdout);
   const auto t_extract = std::chrono::steady_clock::now();
-  auto orb = cv::ORB::create(features, 1.2f, 8);
+  // The SLAM's own extractor (grid-spread ORB), so the words describe the features it matches.
+  unav_localization::OrbOptions orb_options;
+  orb_options.features = features;
+  const unav_localization::OrbExtractor orb(orb_options);
   std::vector<cv::Mat> descriptors;
   size_t total = 0, skipped = 0;
   for (const fs::path& p : images) {
-    const cv::Mat gray = cv::imread(p.string(), cv::IMREAD_GRAYSCALE);
+    const cv::Mat bgr = cv::imread(p.string(), cv::IMREAD_COLOR);
+    cv::Mat gray;
+    if (!bgr.empty()) cv::cvtColor(bgr, gray, cv::COLOR_BGR2GRAY);
     if (gray.empty()) {
       std::fprintf(stderr, "%s: warning: cannot read %s, skipped\n", kName, p.c_str());
       ++skipped;
@@ -102,7 +109,7 @@ int Run(const std::vector<std::string>& dirs, const std::string& out, int featur
     }
     std::vector<cv::KeyPoint> keypoints;
     cv::Mat d;
-    orb->detectAndCompute(gray, cv::noArray(), keypoints, d);
+    orb.Extract(gray, &keypoints, &d);
     total += static_cast<size_t>(d.rows);
     descriptors.push_back(d);
   }
@@ -136,7 +143,7 @@ int main(int argc, char** argv) {
   app.add_option("--images", dirs, "directory of training images (repeatable; not recursive, sorted by name)")
       ->required();
   app.add_option("--out", out, "vocabulary file to write")->required();
-  app.add_option("--features", features, "ORB features per image (scale factor 1.2, 8 levels)");
+  app.add_option("--features", features, "ORB features per image (the SLAM's extractor: grid-spread, scale 1.2, 8 levels)");
   app.add_option("--branching", options.branching, "children per tree node, k");
   app.add_option("--levels", options.levels, "tree depth, L (up to k^L words)");
   app.add_option("--max-images", max_images, "use at most N images, evenly spaced over the sorted list (0: all)");

@@ -42,6 +42,10 @@ struct MonoSlamOptions {
   int loop_consistency = 2;              ///< consecutive keyframes that must agree
   int loop_min_inliers = 40;             ///< matches after Sim(3) optimisation and guided search
   int loop_min_keyframe_gap = 20;        ///< keyframes between the loop ends at least
+  /// A loop whose correction moves the current keyframe further than this share of the path
+  /// flown since the loop keyframe is taken for perceptual aliasing (a repetitive seabed) and
+  /// rejected: it would mean several times the drift this SLAM shows (< 0.5 % here).
+  double loop_max_correction_ratio = 0.08;
   bool global_ba_after_loop = true;
   int global_ba_iterations = 15;
   int relocalize_frames = 10;            ///< frames of relocalisation attempts before re-initialising
