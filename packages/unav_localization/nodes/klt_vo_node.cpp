@@ -11,10 +11,13 @@
 //                                   frame): without metric scale the camera's lever arm cannot be
 //                                   applied, so the camera itself is reported
 //   pub  localization/klt_vo/path   nav_msgs/Path (every 10 frames)
+//   pub  /lockstep/ack                 unav_msgs/LockstepAck (lockstep: true): after each processed
+//                                   image at t, acks up to t + image_period - 1 ms
 // The camera's mount (cameras_config) turns camera motion into body motion. Mode rgbd publishes
 // every frame (a lost frame with a constant-velocity prediction); mode monocular publishes only
 // frames with an estimate (initialised or tracking), in arbitrary units (the first map's median
 // scene depth is 1): compare with ground truth after a Sim(3) alignment.
+#include <cmath>
 #include <map>
 
 #include <opencv2/imgproc.hpp>
@@ -25,6 +28,7 @@
 #include "sensor_msgs/msg/image.hpp"
 #include "unav_launch/package_index.hpp"
 #include "unav_localization/klt_vo.hpp"
+#include "unav_msgs/msg/lockstep_ack.hpp"
 #include "unav_renderer/camera.hpp"
 #include "unav_runtime/runtime.hpp"
 
@@ -55,6 +59,10 @@ class KltVoNode : public unav::Node {
     } else if (mode != "rgbd") {
       throw unav::ParameterError("node '" + name() + "': parameter 'mode' must be 'rgbd' or 'monocular', got '" + mode + "'");
     }
+    lockstep_ = declare_parameter<bool>("lockstep", false, {"ack every processed image on /lockstep/ack", {}, {}, false});
+    ack_name_ = declare_parameter<std::string>("lockstep_name", "klt_vo", {"participant name in acks", {}, {}, false});
+    image_period_ = declare_parameter<double>("image_period", 0.1, {"camera frame period [s] (lockstep acks)", 1e-3, 10.0, false});
+    if (lockstep_) ack_pub_ = create_publisher<unav_msgs::msg::LockstepAck>("/lockstep/ack", unav::QoS::reliable(100));
     const std::string base = "camera/" + cam;
     odom_pub_ = create_publisher<nav_msgs::msg::Odometry>("localization/klt_vo/odom", unav::QoS::reliable());
     path_pub_ = create_publisher<nav_msgs::msg::Path>("localization/klt_vo/path", unav::QoS::reliable(1));
@@ -111,6 +119,7 @@ class KltVoNode : public unav::Node {
       last_status_ = s.status;
       if (s.status == VoStatus::kInitialized || s.status == VoStatus::kTracking)
         publish(frame.header, T_C0C);
+      ack(frame.header);
     }
     grays_.clear();
   }
@@ -126,6 +135,7 @@ class KltVoNode : public unav::Node {
       const auto d = depths_.find(it->first);
       if (d == depths_.end()) {
         if (depths_.empty() || depths_.rbegin()->first < it->first) return;  // its depth may still come
+        ack(it->second.header);
         grays_.erase(it);                                                   // depth lost: skip the frame
         continue;
       }
@@ -133,9 +143,20 @@ class KltVoNode : public unav::Node {
       const VoSummary s = vo_->ProcessFrame(it->second.gray, d->second, &T_C0C);
       if (s.status == VoStatus::kLost) logger()->warn("tracking lost ({}), predicting; re-initialising on new corners", s.message);
       publish(it->second.header, X_BC_ * T_C0C * X_BC_.inverse());
+      ack(it->second.header);
       depths_.erase(depths_.begin(), std::next(d));
       grays_.erase(it);
     }
+  }
+  // Lockstep: after the image at t, acks up to just under the next image (t + image_period).
+  void ack(const std_msgs::msg::dds_::Header_& h) {
+    if (!ack_pub_) return;
+    const unav::Time until{key(h) + static_cast<int64_t>(std::llround((image_period_ - 1e-3) * 1e9))};
+    unav_msgs::msg::LockstepAck a;
+    a.header().stamp().sec(until.sec());
+    a.header().stamp().nanosec(until.nanosec());
+    a.participant(ack_name_);
+    ack_pub_->publish(a);
   }
   void publish(const std_msgs::msg::dds_::Header_& h, const Eigen::Isometry3d& T_OB) {
     nav_msgs::msg::Odometry o;
@@ -167,7 +188,10 @@ class KltVoNode : public unav::Node {
     std_msgs::msg::dds_::Header_ header;
   };
   Eigen::Isometry3d X_BC_ = Eigen::Isometry3d::Identity();
-  std::string camera_;
+  std::string camera_, ack_name_;
+  bool lockstep_ = false;
+  double image_period_ = 0.1;
+  std::shared_ptr<unav::Publisher<unav_msgs::msg::LockstepAck>> ack_pub_;
   KltVoOptions options_;
   std::unique_ptr<KltVo> vo_;
   VoStatus last_status_ = VoStatus::kInitializing;

@@ -147,7 +147,8 @@ class OrbSlamNode : public unav::Node {
       publish_odometry(m.header(), s.T_wc);
     }
     if (s.reinitialized) logger()->warn("re-initialising: a new map will continue from the last good pose");
-    if (s.loop_closed) logger()->info("loop closed at t = {:.3f} ({} loops)", t, slam_->stats().loops);
+    if (s.loop_closed) logger()->info("loop closed at t = {:.3f} ({} loops): {}", t, slam_->stats().loops, s.message);
+    else if (s.keyframe && !s.message.empty()) logger()->info("t = {:.3f}: {}", t, s.message);
     if (s.keyframe || s.loop_closed) publish_path(m.header());
     ack(m.header());
   }

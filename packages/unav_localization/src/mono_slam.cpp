@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
-#include <cstdlib>
 #include <functional>
 #include <cmath>
 #include <random>
@@ -105,6 +104,7 @@ struct MonoSlam::Impl {
   std::vector<int> local_kfs, local_points;
   std::vector<int> recent_points;
   std::vector<std::pair<std::set<int>, int>> consistent_groups;
+  std::string loop_log;  ///< verified loop candidates of the current keyframe (summary message)
   std::vector<TrajEntry> traj;
   std::vector<StampedPose> frozen;  ///< trajectories of earlier maps, in the global frame
   Sim3 G;                          ///< current map's world -> global frame
@@ -882,19 +882,15 @@ struct MonoSlam::Impl {
     std::vector<int> taken(c.f.size(), -1);
     for (int pid : pts) {
       const MapPoint& p = map->mp(pid);
-      Eigen::Vector2d uv;
-      int level;
-      double vc;
-      // Distances scale with the Sim(3): compare in the loop side's units.
+      // The loop side's points seen from the current keyframe placed by the Sim(3) (in the loop
+      // side's units, like the points' distance ranges).
       const Eigen::Vector3d pc = T_cw_loop * p.X_w;
       if (pc.z() <= 0) continue;
-      uv = cam.Project(pc);
+      const Eigen::Vector2d uv = cam.Project(pc);
       if (uv.x() < 0 || uv.y() < 0 || uv.x() >= cam.width || uv.y() >= cam.height) continue;
-      (void)vc;
-      level = 0;
       const double dist = (p.X_w - T_cw_loop.inverse().translation()).norm();
       if (dist < 0.8 * p.min_distance || dist > 1.2 * p.max_distance) continue;
-      level = PredictLevel(p, dist);
+      const int level = PredictLevel(p, dist);
       const auto cands = c.f.InArea(uv, 10.0 * scales[static_cast<size_t>(level)], std::max(0, level - 1), level + 1);
       int bd = 256, bi = -1;
       for (int i : cands) {
@@ -918,10 +914,14 @@ struct MonoSlam::Impl {
       prev = k;
     }
     const double correction = (T_cw_loop.inverse().translation() - c.Center()).norm();
-    if (std::getenv("UNAV_SLAM_DEBUG"))
-      std::fprintf(stderr, "loop candidate kf %d <-> %d: s %.3f, %zu matches, correction %.3f over a path of %.3f\n", kid, cand, best.s,
-                   lc->matches.size(), correction, path);
-    if (correction > opt.loop_max_correction_ratio * path) return false;
+    char text[200];
+    std::snprintf(text, sizeof(text), "keyframe %d <-> %d: scale %.3f, %zu matches, correction %.3f over a path of %.3f (map units)", kid,
+                  cand, best.s, lc->matches.size(), correction, path);
+    loop_log += (loop_log.empty() ? "" : "; ") + std::string(text);
+    if (correction > opt.loop_max_correction_ratio * path) {
+      loop_log += " rejected (aliasing)";
+      return false;
+    }
     lc->kf = cand;
     lc->S_cm = best;
     return true;
@@ -1021,12 +1021,6 @@ struct MonoSlam::Impl {
       for (int cand : DetectLoopCandidates(kid)) {
         LoopCandidate lc;
         if (ComputeSim3(kid, cand, &lc)) {
-          if (std::getenv("UNAV_SLAM_DEBUG")) {
-            const Sim3 S_cw = lc.S_cm * Sim3(map->kf(cand).T_cw);
-            std::fprintf(stderr, "loop kf %d <-> %d: s %.3f, matches %zu, correction %.3f m (kf frames %d, %d)\n", kid, cand, lc.S_cm.s,
-                         lc.matches.size(), (S_cw.ToIsometryUnscaled().inverse().translation() - map->kf(kid).Center()).norm(),
-                         map->kf(kid).frame_index, map->kf(cand).frame_index);
-          }
           CorrectLoop(kid, lc);
           consistent_groups.clear();
           closed = true;
@@ -1154,7 +1148,9 @@ struct MonoSlam::Impl {
       const auto t1 = Clock::now();
       InsertKeyFrame();
       s.keyframe = true;
+      loop_log.clear();
       s.loop_closed = LoopClosing(ref_kf);
+      if (!loop_log.empty()) s.message = (s.loop_closed ? "loop closed: " : "loop candidates: ") + loop_log;
       if (s.loop_closed) {
         // The current frame moves with its keyframe.
         cur.T_cw = map->kf(ref_kf).T_cw;

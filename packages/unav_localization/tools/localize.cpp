@@ -131,7 +131,7 @@ int main(int argc, char** argv) {
         track_ms.push_back(s.tracking_ms);
         total_ms.push_back(s.tracking_ms + s.mapping_ms);
         if (s.state == ul::SlamState::kLost) ++lost;
-        if (!quiet && (s.state != ul::SlamState::kTracking || s.loop_closed || s.reinitialized))
+        if (!quiet && (s.state != ul::SlamState::kTracking || s.loop_closed || s.reinitialized || !s.message.empty()))
           std::printf("%.3f %s%s%s %s\n", im.stamp, ul::to_string(s.state), s.loop_closed ? " loop closed" : "",
                       s.reinitialized ? " re-initialised" : "", s.message.c_str());
       } else {
