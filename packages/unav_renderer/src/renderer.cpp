@@ -106,6 +106,7 @@ struct GpuMesh {
   Material material;
   bool triplanar = false;
   bool macro = false;
+  bool sections = false;  ///< pipe coating: each section shows another part of the texture
   GLuint texture = 0;
 };
 
@@ -249,6 +250,7 @@ void Renderer::Impl::upload_scene(const SceneGeometry& geo) {
     g.material = sm.material;
     g.triplanar = sm.triplanar;
     g.macro = (sm.name == "seabed" || sm.name == "seabed_far") && sm.material.texture != "none";
+    g.sections = sm.material.texture == "pipe_coating" && !sm.triplanar;
     g.texture = texture(sm.material.texture);
     glGenVertexArrays(1, &g.vao);
     glBindVertexArray(g.vao);
@@ -447,6 +449,7 @@ void Renderer::Impl::draw(const Pose& X_WB, const CameraModel& out_cam, double s
     glUniform1f(scene["u_uv_scale"], static_cast<float>(m.material.uv_scale_m));
     glUniform1i(scene["u_triplanar"], m.triplanar ? 1 : 0);
     glUniform1i(scene["u_macro"], m.macro ? 1 : 0);
+    glUniform1i(scene["u_sections"], m.sections ? 1 : 0);
     glUniform1f(scene["u_seg"], static_cast<float>(m.seg_class));
     glBindTexture(GL_TEXTURE_2D, m.texture);
     glBindVertexArray(m.vao);

@@ -37,6 +37,7 @@ uniform vec3 u_albedo;
 uniform float u_uv_scale;
 uniform bool u_triplanar;
 uniform bool u_macro;        // modulate with a low-frequency copy (breaks tiling)
+uniform bool u_sections;     // u along a pipe: each texture tile (coating section) turned differently
 uniform float u_seg;
 uniform vec3 u_cam_W;
 uniform vec3 u_sun_dir_W;    // direction the sunlight travels
@@ -83,6 +84,9 @@ void main() {
     // the texture tile never repeats exactly: a seabed that looks the same every tile would
     // alias visual place recognition.
     if (u_macro) uv += u_uv_scale * 0.45 * (vec2(value_noise(v_uv / 1.7), value_noise(v_uv / 1.7 + vec2(41.3, 17.9))) - 0.5);
+    // Pipe coating sections are not copies of each other: each shows the texture turned by its
+    // own angle about the pipe (field joints stay at the section ends).
+    if (u_sections) uv.y += u_uv_scale * hash12(vec2(floor(uv.x / u_uv_scale), 7.0));
     albedo = tex_at(uv);
   }
   if (u_macro) albedo *= 0.7 + 0.6 * texture(u_tex, v_uv / (u_uv_scale * 7.31) + vec2(0.37, 0.11)).g;
