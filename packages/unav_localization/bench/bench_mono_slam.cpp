@@ -65,13 +65,7 @@ int main(int argc, char** argv) {
       frames.push_back(gray);
       stamps.push_back(0.1 * k);
     }
-    const Eigen::Matrix3d K = model.K();
-    cam.fx = K(0, 0);
-    cam.fy = K(1, 1);
-    cam.cx = K(0, 2);
-    cam.cy = K(1, 2);
-    cam.width = 640;
-    cam.height = 480;
+    cam = ul::PinholeCamera::FromK(model.K(), 640, 480);
     source = "300 rendered frames (pipe_inspection seabed, 6 cm/frame, 1.4 m range)";
   }
   std::printf("bench_mono_slam: %zu frames of %dx%d from %s, one thread\n", frames.size(), cam.width, cam.height, source.c_str());
@@ -96,9 +90,7 @@ int main(int argc, char** argv) {
 
   ul::KltVoOptions ko;
   ko.mode = ul::KltVoOptions::Mode::kMonocular;
-  Eigen::Matrix3d K;
-  K << cam.fx, 0, cam.cx, 0, cam.fy, cam.cy, 0, 0, 1;
-  ul::KltVo klt(K, ko);
+  ul::KltVo klt(cam.K(), ko);
   std::vector<double> klt_ms;
   for (const auto& f : frames) {
     Eigen::Isometry3d T;

@@ -57,6 +57,10 @@ CameraFile LoadCameraFile(const std::string& path) {
     k.fy = Number(y["fy"], path, "fy");
     k.cx = Number(y["cx"], path, "cx");
     k.cy = Number(y["cy"], path, "cy");
+    if (y["depth_scale"]) {
+      c.depth_scale = Number(y["depth_scale"], path, "depth_scale");
+      if (!(c.depth_scale > 0)) throw InputError(path + ": key 'depth_scale' must be > 0");
+    }
     if (const YAML::Node dist = y["distortion"]) {
       if (!dist.IsSequence()) throw InputError(path + ": key 'distortion' must be a list of numbers");
       for (size_t i = 0; i < dist.size(); ++i) c.distortion.push_back(Number(dist[i], path, "distortion"));

@@ -24,6 +24,23 @@ constexpr int kThLow = 50;    // descriptor distance accepted for matching by ap
 constexpr double kChi2Mono = 5.991;
 using Clock = std::chrono::steady_clock;
 double Ms(Clock::time_point a) { return std::chrono::duration<double, std::milli>(Clock::now() - a).count(); }
+
+// The two smallest descriptor distances seen, for best-match plus ratio tests.
+struct BestTwo {
+  int best = 256, second = 256, index = -1, best_level = -1, second_level = -1;
+  void Add(int d, int i, int level = -1) {
+    if (d < best) {
+      second = best;
+      second_level = best_level;
+      best = d;
+      index = i;
+      best_level = level;
+    } else if (d < second) {
+      second = d;
+      second_level = level;
+    }
+  }
+};
 }  // namespace
 
 bool MonoSlamOptions::IsValid(std::string* msg) const {
@@ -109,9 +126,8 @@ struct MonoSlam::Impl {
   std::vector<StampedPose> frozen;  ///< trajectories of earlier maps, in the global frame
   Sim3 G;                          ///< current map's world -> global frame
   int map_number = 0;
-  double last_median_depth_global = 1.0;
   Eigen::Isometry3d last_good_T_wc_global = Eigen::Isometry3d::Identity();
-  bool have_good_pose = false;
+  int last_good_ref_kf = -1;  ///< reference keyframe of the last tracked frame
   SlamStats stats;
   std::mt19937 rng{12345};
 
@@ -151,19 +167,11 @@ struct MonoSlam::Impl {
     auto match_sets = [&](const std::vector<int>& ia, const std::vector<int>& ib) {
       for (int i : ia) {
         if (!use_a(i)) continue;
-        int best = 256, second = 256, bj = -1;
-        for (int j : ib) {
-          if (!use_b(j)) continue;
-          const int d = DescriptorDistance(a.desc(i), b.desc(j));
-          if (d < best) {
-            second = best;
-            best = d;
-            bj = j;
-          } else if (d < second) {
-            second = d;
-          }
-        }
-        if (bj < 0 || best > th || best >= ratio * second) continue;
+        BestTwo m;
+        for (int j : ib)
+          if (use_b(j)) m.Add(DescriptorDistance(a.desc(i), b.desc(j)), j);
+        const int best = m.best, bj = m.index;
+        if (bj < 0 || best > th || best >= ratio * m.second) continue;
         if (best < best_dist_b[static_cast<size_t>(bj)]) {
           best_dist_b[static_cast<size_t>(bj)] = best;
           best_for_b[static_cast<size_t>(bj)] = i;
@@ -265,18 +273,10 @@ struct MonoSlam::Impl {
     for (size_t i = 0; i < init_ref->f.size(); ++i) {
       if (init_ref->f.keypoints[i].octave > 1) continue;
       const auto cands = cur.f.InArea(init_ref->f.un[i], 0.15 * cam.width, 0, 2);
-      int best = 256, second = 256, bj = -1;
-      for (int j : cands) {
-        const int d = DescriptorDistance(init_ref->f.desc(static_cast<int>(i)), cur.f.desc(j));
-        if (d < best) {
-          second = best;
-          best = d;
-          bj = j;
-        } else if (d < second) {
-          second = d;
-        }
-      }
-      if (bj < 0 || best > kThLow || best > 0.9 * second) continue;
+      BestTwo m;
+      for (int j : cands) m.Add(DescriptorDistance(init_ref->f.desc(static_cast<int>(i)), cur.f.desc(j)), j);
+      const int best = m.best, bj = m.index;
+      if (bj < 0 || best > kThLow || best > 0.9 * m.second) continue;
       if (best < taken_dist[static_cast<size_t>(bj)]) {
         taken_dist[static_cast<size_t>(bj)] = best;
         taken[static_cast<size_t>(bj)] = static_cast<int>(i);
@@ -456,22 +456,13 @@ struct MonoSlam::Impl {
       if (count_visible) ++p.visible;
       const double r = radius_factor * (vc > 0.998 ? 2.5 : 4.0) * scales[static_cast<size_t>(level)];
       const auto cands = f->f.InArea(uv, r, std::max(0, level - 1), level + 1);
-      int best = 256, second = 256, bi = -1, best_level = -1, second_level = -1;
+      BestTwo m;
       for (int i : cands) {
         const int q = f->points[static_cast<size_t>(i)];
         if (q >= 0 && !map->mp(q).bad && !f->outlier[static_cast<size_t>(i)]) continue;
-        const int d = DescriptorDistance(p.descriptor.ptr<uint8_t>(), f->f.desc(i));
-        if (d < best) {
-          second = best;
-          second_level = best_level;
-          best = d;
-          bi = i;
-          best_level = f->f.keypoints[static_cast<size_t>(i)].octave;
-        } else if (d < second) {
-          second = d;
-          second_level = f->f.keypoints[static_cast<size_t>(i)].octave;
-        }
+        m.Add(DescriptorDistance(p.descriptor.ptr<uint8_t>(), f->f.desc(i)), i, f->f.keypoints[static_cast<size_t>(i)].octave);
       }
+      const int best = m.best, bi = m.index, best_level = m.best_level, second_level = m.second_level, second = m.second;
       if (bi < 0 || best > th) continue;
       if (best_level == second_level && best > 0.8 * second) continue;
       f->points[static_cast<size_t>(bi)] = pid;
@@ -1054,7 +1045,9 @@ struct MonoSlam::Impl {
       auto t = CurrentTrajectory();
       frozen.insert(frozen.end(), t.begin(), t.end());
       // The next map continues from the last good pose at the last map's depth scale.
-      G = Sim3(last_median_depth_global, last_good_T_wc_global.linear(), last_good_T_wc_global.translation());
+      // (No mapping runs while lost, so that keyframe's depth is as it was at the last good frame.)
+      const double median_depth_global = G.s * map->MedianDepth(last_good_ref_kf);
+      G = Sim3(median_depth_global, last_good_T_wc_global.linear(), last_good_T_wc_global.translation());
       ++map_number;
       ++stats.reinitializations;
       ++stats.maps;
@@ -1168,8 +1161,7 @@ struct MonoSlam::Impl {
 
   void UpdateGoodPose() {
     last_good_T_wc_global = ToGlobal(cur.T_cw.inverse());
-    last_median_depth_global = G.s * map->MedianDepth(ref_kf);
-    have_good_pose = true;
+    last_good_ref_kf = ref_kf;
   }
 };
 

@@ -69,10 +69,7 @@ void Map::EraseObservation(int point, int kf_id) {
   if (k.points[static_cast<size_t>(it->second)] == point) k.points[static_cast<size_t>(it->second)] = -1;
   p.obs.erase(it);
   if (p.ref_kf == kf_id && !p.obs.empty()) p.ref_kf = p.obs.begin()->first;
-  if (p.obs.size() <= 2 && !p.bad) {
-    // A monocular point needs two views; with fewer it is dropped.
-    if (p.obs.size() < 2) ErasePoint(point);
-  }
+  if (!p.bad && p.obs.size() < 2) ErasePoint(point);  // a monocular point needs two views
 }
 
 void Map::ErasePoint(int point) {

@@ -71,16 +71,7 @@ RenderedRun Render(const std::vector<Eigen::Isometry3d>& X_WB) {
   return run;
 }
 
-ul::PinholeCamera Pinhole(const Eigen::Matrix3d& K) {
-  ul::PinholeCamera c;
-  c.fx = K(0, 0);
-  c.fy = K(1, 1);
-  c.cx = K(0, 2);
-  c.cy = K(1, 2);
-  c.width = 640;
-  c.height = 480;
-  return c;
-}
+ul::PinholeCamera Pinhole(const Eigen::Matrix3d& K) { return ul::PinholeCamera::FromK(K, 640, 480); }
 
 // APE (Sim(3)-aligned) of a SLAM run against the rendered ground truth, matched by stamp.
 double Ape(const ul::MonoSlam& slam, const RenderedRun& run, size_t* n_poses, double* path) {

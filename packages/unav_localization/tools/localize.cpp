@@ -19,7 +19,6 @@
 #include <CLI/CLI.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
-#include <yaml-cpp/yaml.h>
 
 #include "unav_evaluation/report.hpp"
 #include "unav_evaluation/trajectory.hpp"
@@ -109,8 +108,7 @@ int main(int argc, char** argv) {
       klt = std::make_unique<ul::KltVo>(cam.camera.K(), o);
       if (method == "klt_rgbd") {
         depths = ReadDepthList(images);
-        const YAML::Node y = YAML::LoadFile(camera_path);
-        depth_scale = y["depth_scale"] ? y["depth_scale"].as<double>() : 1000.0;
+        depth_scale = cam.depth_scale > 0 ? cam.depth_scale : 1000.0;
       }
     }
     ue::Trajectory est;

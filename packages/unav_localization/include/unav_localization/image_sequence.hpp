@@ -18,6 +18,7 @@ class InputError : public std::runtime_error {
 struct CameraFile {
   PinholeCamera camera;
   std::vector<double> distortion;  ///< plumb_bob k1 k2 p1 p2 k3 (may be empty)
+  double depth_scale = 0.0;        ///< depth PNG units per metre (`depth_scale`; 0: not given)
 };
 
 /// Reads a camera YAML: our dataset format (width, height, fx, fy, cx, cy, distortion: [...]) or

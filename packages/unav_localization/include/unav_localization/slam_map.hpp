@@ -20,6 +20,9 @@ namespace unav_localization {
 struct PinholeCamera {
   double fx = 0, fy = 0, cx = 0, cy = 0;
   int width = 0, height = 0;
+  static PinholeCamera FromK(const Eigen::Matrix3d& K, int image_width, int image_height) {
+    return {K(0, 0), K(1, 1), K(0, 2), K(1, 2), image_width, image_height};
+  }
   Eigen::Vector2d Project(const Eigen::Vector3d& p_c) const {
     return {fx * p_c.x() / p_c.z() + cx, fy * p_c.y() / p_c.z() + cy};
   }
@@ -60,7 +63,6 @@ struct MapPoint {
   int ref_kf = -1;               ///< keyframe whose correction moves it
   int visible = 1, found = 1;    ///< times predicted in view / times matched (tracking)
   int last_seen_frame = -1;      ///< tracking bookkeeping
-  int fuse_mark = -1, ba_mark = -1;
   bool bad = false;
   double FoundRatio() const { return static_cast<double>(found) / visible; }
 };
@@ -75,7 +77,6 @@ struct KeyFrame {
   std::map<int, int> covisibility;  ///< keyframe id -> shared map points (>= threshold)
   int parent = -1;               ///< spanning tree
   std::set<int> children, loop_edges;
-  int ba_mark = -1, fixed_mark = -1, loop_query = -1;
   bool bad = false;
   Eigen::Vector3d Center() const { return T_cw.inverse().translation(); }
   std::vector<int> BestCovisible(size_t n) const;  ///< by weight, strongest first
