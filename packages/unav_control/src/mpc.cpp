@@ -118,8 +118,8 @@ bool MpcOptions::IsValid(std::string* msg) const {
     os << "disturbance_limit_fraction must be finite and >= 0 (got " << disturbance_limit_fraction << ")";
   } else if (max_iterations < 1) {
     os << "max_iterations must be >= 1 (got " << max_iterations << ")";
-  } else if (!(std::isfinite(max_solve_time_ms) && max_solve_time_ms > 0.0)) {
-    os << "max_solve_time_ms must be finite and > 0 (got " << max_solve_time_ms << ")";
+  } else if (!(std::isfinite(max_solve_time_ms) && max_solve_time_ms >= 0.0)) {
+    os << "max_solve_time_ms must be finite and >= 0 (0 = iterations only; got " << max_solve_time_ms << ")";
   } else if (!(std::isfinite(function_tolerance) && function_tolerance > 0.0)) {
     os << "function_tolerance must be finite and > 0 (got " << function_tolerance << ")";
   }
@@ -370,7 +370,9 @@ Mpc::Impl::Impl(const physics::VehicleParams& model, const MpcOptions& o, const 
   // Plain projected steps (the trust region still accepts/rejects them) are much cheaper.
   so.max_num_line_search_step_size_iterations = 0;
   so.max_num_iterations = o.max_iterations;
-  so.max_solver_time_in_seconds = o.max_solve_time_ms * 1e-3;
+  // 0 = no wall-clock budget: the solve is bounded by max_iterations only, so the same inputs
+  // give the same wrench on any machine (lockstep runs repeat bit for bit).
+  if (o.max_solve_time_ms > 0.0) so.max_solver_time_in_seconds = o.max_solve_time_ms * 1e-3;
   so.function_tolerance = o.function_tolerance;
   so.num_threads = 1;
   so.logging_type = ceres::SILENT;
@@ -552,7 +554,8 @@ MpcSummary Mpc::Solve(const RigidBodyState& x_in, const PoseSetpoint& sp, double
   }
   if (cs.termination_type == ceres::CONVERGENCE) {
     s.status = MpcStatus::kConverged;
-  } else if (cs.total_time_in_seconds >= m.solver_options.max_solver_time_in_seconds) {
+  } else if (m.opt.max_solve_time_ms > 0.0 &&
+             cs.total_time_in_seconds >= m.solver_options.max_solver_time_in_seconds) {
     s.status = MpcStatus::kTimeLimit;
   } else {
     s.status = MpcStatus::kMaxIterations;
@@ -562,7 +565,9 @@ MpcSummary Mpc::Solve(const RigidBodyState& x_in, const PoseSetpoint& sp, double
   *wrench_B = m.opt.input_bounds.Clamp(first);
   m.applied = *wrench_B;
   s.solve_time_ms = elapsed_ms();
-  if (s.solve_time_ms > m.opt.max_solve_time_ms && s.status == MpcStatus::kConverged) s.status = MpcStatus::kTimeLimit;
+  if (m.opt.max_solve_time_ms > 0.0 && s.solve_time_ms > m.opt.max_solve_time_ms &&
+      s.status == MpcStatus::kConverged)
+    s.status = MpcStatus::kTimeLimit;
   return s;
 }
 

@@ -199,18 +199,27 @@ void VehicleDynamics::step(RigidBodyState& x, double dt, const DynamicsInputs& i
     x.p_WB_W += R0 * dp_B;
     x.q_WB = (x.q_WB * exp_quaternion(dt * x.w_WB_B + 0.5 * dt * dt * a0.tail<3>())).normalized();
     x.set_nu(nu0 + dt * a0);
-    const Vector6d a1 = acceleration(x, in, dt);
+    DynamicsInputs in_end = in;
+    if (in.tau_staged) in_end.tau_B = in.tau_B_end;
+    const Vector6d a1 = acceleration(x, in_end, dt);
     x.set_nu(nu0 + 0.5 * dt * (a0 + a1));
     return;
   }
   // Classic RK4 on (p, q coefficients, nu); the quaternion is renormalised after the step.
+  // Stage inputs: a staged force is evaluated at each stage's time (t0, t0 + dt/2, t0 + dt).
+  DynamicsInputs in_half = in, in_end = in;
+  if (in.tau_staged) {
+    in_half.tau_B = in.tau_B_half;
+    in_end.tau_B = in.tau_B_end;
+  }
   auto derivative = [&](const RigidBodyState& s, double h) {
+    const DynamicsInputs& in_h = h == 0.0 ? in : (h < dt ? in_half : in_end);
     Derivative d;
     const Eigen::Matrix3d R = s.q_WB.normalized().toRotationMatrix();
     d.p_dot = R * s.v_WB_B;
     const Eigen::Quaterniond omega(0.0, s.w_WB_B.x(), s.w_WB_B.y(), s.w_WB_B.z());
     d.q_dot = 0.5 * (s.q_WB * omega).coeffs();
-    d.nu_dot = acceleration(s, R, in, h);
+    d.nu_dot = acceleration(s, R, in_h, h);
     return d;
   };
   auto advance = [&](const RigidBodyState& s, const Derivative& d, double h) {
@@ -248,6 +257,9 @@ ThrusterBank::ThrusterBank(const std::vector<ThrusterParams>& thrusters) {
   alpha_.resize(n);
   u_f_.setZero(n);
   thrust_.setZero(n);
+  mean_thrust_.setZero(n);
+  u_f0_.setZero(n);
+  u_.setZero(n);
   for (int i = 0; i < n; ++i) {
     const ThrusterParams& t = thrusters[static_cast<std::size_t>(i)];
     const double len = t.direction_B.norm();
@@ -263,6 +275,18 @@ ThrusterBank::ThrusterBank(const std::vector<ThrusterParams>& thrusters) {
 void ThrusterBank::reset() {
   u_f_.setZero();
   thrust_.setZero();
+  mean_thrust_.setZero();
+  u_f0_.setZero();
+  u_.setZero();
+}
+
+Vector6d ThrusterBank::wrench_at_B(double h) const {
+  ThrusterVector T(size());
+  for (int i = 0; i < size(); ++i) {
+    const double uf = u_(i) + (u_f0_(i) - u_(i)) * std::exp(-h / tc_(i));
+    T(i) = uf >= 0.0 ? gain_fwd_(i) * uf : gain_rev_(i) * uf;
+  }
+  return B_ * T;
 }
 
 void ThrusterBank::step(double dt, const ThrusterVector& u) {
@@ -271,8 +295,27 @@ void ThrusterBank::step(double dt, const ThrusterVector& u) {
     alpha_dt_ = dt;
   }
   for (int i = 0; i < size(); ++i) {
-    u_f_(i) += alpha_(i) * (u(i) - u_f_(i));
-    thrust_(i) = u_f_(i) >= 0.0 ? gain_fwd_(i) * u_f_(i) : gain_rev_(i) * u_f_(i);
+    const double u0 = u_f_(i), ui = u(i), tc = tc_(i);
+    const auto gain = [&](double v) { return v >= 0.0 ? gain_fwd_(i) : gain_rev_(i); };
+    // Integral of u_f over [a, b] within the step: u (b - a) + (u0 - u) t_c (e^(-a/t_c) - e^(-b/t_c)).
+    const auto integral = [&](double a, double b, double e_a, double e_b) {
+      return ui * (b - a) + (u0 - ui) * tc * (e_a - e_b);
+    };
+    const double e_dt = 1.0 - alpha_(i);  // e^(-dt/t_c)
+    u_f0_(i) = u0;
+    u_(i) = ui;
+    u_f_(i) = u0 + alpha_(i) * (ui - u0);
+    thrust_(i) = gain(u_f_(i)) * u_f_(i);
+    if ((u0 > 0.0 && u_f_(i) < 0.0) || (u0 < 0.0 && u_f_(i) > 0.0)) {
+      // u_f is monotonic and crosses zero once, at e^(-t*/t_c) = -u / (u0 - u).
+      const double e_star = -ui / (u0 - ui);
+      const double t_star = -tc * std::log(e_star);
+      mean_thrust_(i) = (gain(u0) * integral(0.0, t_star, 1.0, e_star) +
+                         gain(ui) * integral(t_star, dt, e_star, e_dt)) / dt;
+    } else {
+      const double mean_u = integral(0.0, dt, 1.0, e_dt) / dt;
+      mean_thrust_(i) = gain(u0 != 0.0 ? u0 : ui) * mean_u;
+    }
   }
 }
 

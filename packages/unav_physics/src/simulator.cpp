@@ -125,10 +125,17 @@ void Simulator::step() {
   const bool expired = timeout_.expired(t0);
   if (expired && !timed_out_) ++stats_.timeouts;
   timed_out_ = expired;
-  // The lag filter advances first; the thrust at the end of the interval is held over it.
+  // The lag filter advances first; the integrator sees the thrust as the lag makes it vary over
+  // the step (start, middle, end: RK4 keeps its 4th order; holding the end value made thrust
+  // lead by half a step and the integration first order).
+  const Vector6d tau_start_B = thrusters_.wrench_B() + external_tau_B_;
   thrusters_.step(dt, expired ? u_zero_ : u_cmd_);
-
-  dynamics_.step(x_, dt, inputs_at(t0), options_.integrator);
+  DynamicsInputs in = inputs_at(t0);
+  in.tau_staged = true;
+  in.tau_B = tau_start_B;
+  in.tau_B_half = thrusters_.wrench_at_B(0.5 * dt) + external_tau_B_;
+  in.tau_B_end = thrusters_.wrench_B() + external_tau_B_;
+  dynamics_.step(x_, dt, in, options_.integrator);
   current_->step(t0, dt);
   ++steps_;
   nu_dot_fresh_ = false;

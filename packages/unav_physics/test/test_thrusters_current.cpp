@@ -38,6 +38,38 @@ TEST(Thrusters, LagReaches63PercentAfterTimeConstant) {
   EXPECT_EQ(bank.filtered_command()(1), 0.0);
 }
 
+TEST(Thrusters, MeanThrustIsTheExactIntegralOfTheLagOverTheStep) {
+  // u_f(t) = u + (u_f0 - u) e^(-t/t_c); its mean over [0, dt] is u + (u_f0 - u)(t_c/dt)(1 - e^(-dt/t_c)).
+  // Checked against a 100k-point midpoint quadrature of T(u_f(t)), including a step that crosses
+  // zero thrust with different forward and reverse gains (quadrature error ~1e-10 relative).
+  up::VehicleParams v = up::bluerov2_heavy_params();
+  v.thrusters[0].C_T_reverse = 0.6 * v.thrusters[0].C_T;
+  up::ThrusterBank bank(v.thrusters);
+  const double tc = v.thrusters[0].time_constant, gf = v.thrusters[0].max_forward_thrust(),
+               gr = v.thrusters[0].max_reverse_thrust();
+  const double dt = 0.05;
+  auto quadrature = [&](double u0, double u) {
+    const int n = 100000;
+    double sum = 0.0;
+    for (int k = 0; k < n; ++k) {
+      const double t = (k + 0.5) * dt / n, uf = u + (u0 - u) * std::exp(-t / tc);
+      sum += (uf >= 0.0 ? gf : gr) * uf;
+    }
+    return sum / n;
+  };
+  up::ThrusterVector u = up::ThrusterVector::Zero(bank.size());
+  u(0) = 1.0;
+  bank.step(dt, u);  // 0 -> rising towards 1
+  EXPECT_NEAR(bank.mean_thrust()(0), quadrature(0.0, 1.0), 1e-7);
+  const double uf1 = bank.filtered_command()(0);
+  EXPECT_NEAR(uf1, 1.0 - std::exp(-dt / tc), 1e-12);
+  EXPECT_LT(bank.mean_thrust()(0), bank.thrust()(0));  // the end value leads the mean
+  u(0) = -1.0;
+  bank.step(dt, u);  // crosses zero within the step (uf1 ~ 0.39, t* = t_c ln(1 + uf1) ~ 0.033 s)
+  EXPECT_NEAR(bank.mean_thrust()(0), quadrature(uf1, -1.0), 1e-7);
+  EXPECT_LT(bank.filtered_command()(0), 0.0);
+}
+
 TEST(Thrusters, WrenchIsSumOfForcesAndMoments) {
   up::ThrusterBank bank(up::bluerov2_heavy_params().thrusters);
   up::ThrusterVector u = up::ThrusterVector::Zero(bank.size());

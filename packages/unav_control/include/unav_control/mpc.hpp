@@ -59,7 +59,9 @@ struct MpcOptions {
   /// |d_hat| limits as a fraction of input_bounds (anti-windup), >= 0.
   double disturbance_limit_fraction = 0.8;
   int max_iterations = 10;          ///< Ceres iterations per solve, >= 1
-  double max_solve_time_ms = 10.0;  ///< Ceres wall-time budget, ms, > 0 (a late solve returns its best iterate)
+  /// Ceres wall-time budget, ms, >= 0 (a late solve returns its best iterate). 0 = none: the solve
+  /// is bounded by max_iterations only and repeats exactly (lockstep, learning, data generation).
+  double max_solve_time_ms = 0.0;
   double function_tolerance = 1e-6;  ///< Ceres relative cost-change tolerance, > 0
 
   /// False, with a message naming the field and the offending values, when an option is invalid

@@ -26,6 +26,12 @@ const char* to_string(Integrator integrator);
 /// Inputs held over one step (zero-order hold, except the current: first-order hold).
 struct DynamicsInputs {
   Vector6d tau_B = Vector6d::Zero();                    ///< generalised force [F; M] in body FRD, N / N m
+  /// When true, the force varies within the step: tau_B at its start, tau_B_half at dt/2 and
+  /// tau_B_end at dt (e.g. lagged thrust). RK4 evaluates each stage at its own time (4th order);
+  /// velocity Verlet uses the start and end values. False: tau_B is held over the step.
+  bool tau_staged = false;
+  Vector6d tau_B_half = Vector6d::Zero();
+  Vector6d tau_B_end = Vector6d::Zero();
   Eigen::Vector3d v_c_W = Eigen::Vector3d::Zero();      ///< water velocity at the step start, NED, m/s
   Eigen::Vector3d a_c_W = Eigen::Vector3d::Zero();      ///< its time derivative, m/s^2
   const Seabed* seabed = nullptr;                       ///< contact when non-null
