@@ -1,6 +1,8 @@
 #include "unav_runtime/node.hpp"
 
+#include <cstring>
 #include <iostream>
+#include <sstream>
 
 #include "unav_runtime/names.hpp"
 
@@ -12,7 +14,64 @@ Context& require_context(const NodeOptions& o) {
   return *o.context;
 }
 
+std::string flow_text(const YAML::Node& n) {
+  if (!n.IsDefined() || n.IsNull()) return "null";
+  YAML::Emitter e;
+  e << YAML::Flow << n;
+  return e.c_str();
+}
+
+std::string format_number(double v) {
+  std::ostringstream os;
+  os << v;
+  return os.str();
+}
+
+// Flattens nested maps into dotted names (as params files are flattened).
+void flatten(const YAML::Node& n, const std::string& prefix, std::map<std::string, YAML::Node>* out) {
+  if (n.IsMap()) {
+    for (const auto& kv : n) flatten(kv.second, prefix.empty() ? kv.first.as<std::string>() : prefix + "." + kv.first.as<std::string>(), out);
+  } else {
+    (*out)[prefix] = n;
+  }
+}
+
+bool wants_help(int argc, char** argv) {
+  for (int i = 1; i < argc; ++i) {
+    if (std::strcmp(argv[i], "--ros-args") == 0) return false;
+    if (std::strcmp(argv[i], "--help") == 0 || std::strcmp(argv[i], "-h") == 0) return true;
+  }
+  return false;
+}
+
 }  // namespace
+
+void Node::record_parameter(const std::string& name, const char* type, const YAML::Node& default_value,
+                            const ParameterDescriptor& desc) {
+  common::FieldInfo f;
+  f.name = name;
+  f.type = type;
+  f.default_value = flow_text(default_value);
+  if (desc.min && desc.max)
+    f.rule = "[" + format_number(*desc.min) + ", " + format_number(*desc.max) + "]";
+  else if (desc.min)
+    f.rule = ">= " + format_number(*desc.min);
+  else if (desc.max)
+    f.rule = "<= " + format_number(*desc.max);
+  f.doc = desc.description;
+  table_.push_back(std::move(f));
+}
+
+void Node::record_params(const std::vector<common::FieldInfo>& fields, const YAML::Node& effective) {
+  for (const auto& f : fields) {
+    if (f.type == "mapping" || f.type == "mapping[]") continue;
+    if (values_.count(f.name)) throw ParameterError("node '" + name_ + "': parameter '" + f.name + "' declared twice");
+    table_.push_back(f);
+  }
+  std::map<std::string, YAML::Node> flat;
+  flatten(effective, "", &flat);
+  for (auto& [k, v] : flat) values_[k] = v;
+}
 
 Node::Node(const std::string& default_name, const NodeOptions& options, const std::string& default_namespace)
     : ctx_(require_context(options)) {
@@ -78,6 +137,24 @@ std::vector<const SubscriptionBase*> Node::subscriptions() const {
 int run_node_impl(int argc, char** argv, const std::function<std::unique_ptr<Node>(const NodeOptions&)>& make) {
   std::string exe = argc > 0 ? argv[0] : "node";
   exe = exe.substr(exe.find_last_of('/') + 1);
+  if (wants_help(argc, argv)) {
+    // Construct the node on a private, local-only domain (nothing reaches a running system)
+    // and print every parameter it declares: name, type, default, range, unit, description.
+    try {
+      ContextOptions o;
+      o.domain_id = 232;
+      o.handle_signals = false;
+      Context ctx(o);
+      std::unique_ptr<Node> node = make(NodeOptions{&ctx});
+      std::cout << "usage: " << exe << " [--ros-args [--params-file FILE] [-p NAME:=VALUE] [-r FROM:=TO] ...]\n\n"
+                << "parameters of node '" << node->name() << "':\n"
+                << common::FormatHelp(node->parameter_table());
+      return 0;
+    } catch (const std::exception& e) {
+      std::cerr << exe << ": --help: the node could not be constructed with its defaults: " << e.what() << std::endl;
+      return 2;
+    }
+  }
   try {
     Context ctx(argc, argv);
     std::unique_ptr<Node> node;

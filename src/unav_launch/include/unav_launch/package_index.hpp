@@ -4,6 +4,9 @@
 // executables are the executable files P/lib/PKG/EXEC. Prefixes come from the environment:
 // AMENT_PREFIX_PATH and CMAKE_PREFIX_PATH list prefixes, COLCON_PREFIX_PATH lists install
 // roots R, each searched as R/PKG (isolated layout) and R (merged layout).
+//
+// Forwards to unav_common/resources.hpp (unav::common), which holds the implementation and
+// also finds data files (unav::common::find_resource).
 #pragma once
 
 #include <optional>

@@ -4,16 +4,9 @@
 #include <atomic>
 #include <cstdint>
 
-namespace unav {
+#include "unav_common/time.hpp"  // unav::Time
 
-/// Nanoseconds since the epoch (ROS time) for conversions to builtin_interfaces/Time.
-struct Time {
-  int64_t ns = 0;
-  double seconds() const { return static_cast<double>(ns) * 1e-9; }
-  int32_t sec() const { return static_cast<int32_t>(ns >= 0 ? ns / 1000000000 : (ns - 999999999) / 1000000000); }
-  uint32_t nanosec() const { return static_cast<uint32_t>(ns - static_cast<int64_t>(sec()) * 1000000000); }
-  static Time from_msg(int32_t sec, uint32_t nanosec) { return Time{int64_t{sec} * 1000000000 + nanosec}; }
-};
+namespace unav {
 
 class Clock {
  public:

@@ -6,11 +6,10 @@
 #include <stdexcept>
 #include <string>
 
+#include "unav_common/errors.hpp"  // unav::ConfigError (file, key, value, rule)
+
 namespace unav {
 
-struct ConfigError : std::runtime_error {
-  using std::runtime_error::runtime_error;
-};
 struct NameError : ConfigError {
   using ConfigError::ConfigError;
 };

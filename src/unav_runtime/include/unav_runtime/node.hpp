@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "unav_common/config.hpp"
 #include "unav_runtime/context.hpp"
 #include "unav_runtime/errors.hpp"
 #include "unav_runtime/logging.hpp"
@@ -66,6 +67,15 @@ class Node {
   /// `default_value`. Throws ParameterError naming the source, parameter, value and rule.
   template <typename T>
   T declare_parameter(const std::string& name, const T& default_value, const ParameterDescriptor& desc = {});
+  /// Declares every field of a config schema (unav_common/config.hpp: a struct whose
+  /// Serialize() names each field once with type, default, range, unit, doc) as parameters of
+  /// this node: a params file or `-p name:=value` overrides a field (nested fields as `a.b`),
+  /// checked by the schema's rules (errors name the source, key, value and rule). The fields
+  /// are listed by `<node> --help`.
+  template <class T>
+  void declare_params(T* config);
+  /// One row per declared parameter, in declaration order (what `--help` prints).
+  const std::vector<common::FieldInfo>& parameter_table() const { return table_; }
   /// Value of a declared parameter as YAML (for tools and logs).
   const std::map<std::string, YAML::Node>& parameters() const { return values_; }
   /// Throws ParameterError listing overrides no declare_parameter() asked for (typos in YAML).
@@ -82,6 +92,10 @@ class Node {
   Logger logger_;
   ParameterOverrides overrides_;
   std::map<std::string, YAML::Node> values_;
+  std::vector<common::FieldInfo> table_;
+  void record_parameter(const std::string& name, const char* type, const YAML::Node& default_value,
+                        const ParameterDescriptor& desc);
+  void record_params(const std::vector<common::FieldInfo>& fields, const YAML::Node& effective);
   std::vector<std::shared_ptr<PublisherBase>> publishers_;
   std::vector<std::shared_ptr<SubscriptionBase>> subscriptions_;
 };
@@ -102,7 +116,23 @@ T Node::declare_parameter(const std::string& name, const T& default_value, const
   YAML::Node stored;
   stored = value;
   values_[name] = stored;
+  YAML::Node d;
+  d = default_value;
+  record_parameter(name, parameter_type_name<T>(), d, desc);
   return value;
+}
+
+template <class T>
+void Node::declare_params(T* config) {
+  const std::vector<common::FieldInfo> fields = common::Describe(*config);
+  for (const auto& f : fields) {
+    if (f.type == "mapping" || f.type == "mapping[]") continue;  // overrides name leaves
+    if (const ParameterOverride* o = overrides_.find(f.name)) {
+      overrides_.mark_used(f.name);
+      common::ApplyOverride(config, f.name, YAML::Dump(o->value), o->source + ": node '" + name_ + "'");
+    }
+  }
+  record_params(fields, common::ToYaml(*config));
 }
 
 /// Runs one component as a process: parses arguments, constructs NodeT, spins until SIGINT or

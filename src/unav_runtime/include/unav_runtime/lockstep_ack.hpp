@@ -1,0 +1,48 @@
+// A lockstep participant's acks on /lockstep/ack, by the one ack rule of lockstep.hpp. A node
+// that includes this links unav_msgs (header-only here, so the runtime itself does not).
+//
+//   acker_ = std::make_unique<unav::lockstep::Acker>(*this, "renderer");          // answers states
+//   acker_ = std::make_unique<unav::lockstep::Acker>(*this, "orb_slam", 0.099);   // frame consumer
+//   ...publish every output owed for the input...
+//   acker_->ack(input.header());
+#pragma once
+
+#include <cmath>
+#include <memory>
+#include <string>
+
+#include "unav_msgs/msg/lockstep_ack.hpp"
+#include "unav_runtime/conversions.hpp"
+#include "unav_runtime/lockstep.hpp"
+#include "unav_runtime/node.hpp"
+
+namespace unav::lockstep {
+
+class Acker {
+ public:
+  /// `name`: the participant name the physics server lists; `lead_s`: see Participant (0 for a
+  /// participant that answers every state, frame period - margin for a frame consumer).
+  Acker(unav::Node& node, std::string name, double lead_s = 0.0)
+      : name_(std::move(name)),
+        participant_(std::llround(lead_s * 1e9)),
+        pub_(node.create_publisher<unav_msgs::msg::LockstepAck>("/lockstep/ack", unav::QoS::reliable(100))) {}
+
+  /// Call once every output owed for the input with this header has been published.
+  void ack(const std_msgs::msg::Header& input) {
+    unav_msgs::msg::LockstepAck a;
+    a.header().stamp() = to_msg(Time{participant_.ack_for(nanoseconds(input))});
+    a.participant(name_);
+    pub_->publish(a);
+  }
+  const std::string& name() const { return name_; }
+  const Participant& participant() const { return participant_; }
+  /// The ack publisher (tests wait for it to match).
+  const std::shared_ptr<unav::Publisher<unav_msgs::msg::LockstepAck>>& publisher() const { return pub_; }
+
+ private:
+  std::string name_;
+  Participant participant_;
+  std::shared_ptr<unav::Publisher<unav_msgs::msg::LockstepAck>> pub_;
+};
+
+}  // namespace unav::lockstep
