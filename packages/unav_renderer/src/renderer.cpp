@@ -14,11 +14,11 @@
 #include <stdexcept>
 #include <unordered_map>
 
-#include "noise.hpp"
+#include "unav_scene/noise.hpp"
 #include "shaders.hpp"
 #include "textures.hpp"
 #include "unav_renderer/errors.hpp"
-#include "unav_renderer/scene_geometry.hpp"
+#include "unav_scene/scene_geometry.hpp"
 
 namespace unav_renderer {
 namespace {
@@ -283,7 +283,7 @@ void Renderer::Impl::upload_snow() {
   if (snow_count == 0) return;
   std::vector<float> seeds(static_cast<std::size_t>(snow_count) * 3);
   for (GLsizei i = 0; i < snow_count; ++i)
-    for (int k = 0; k < 3; ++k) seeds[3 * i + k] = static_cast<float>(detail::lattice(i, k, 3, ms.seed));
+    for (int k = 0; k < 3; ++k) seeds[3 * i + k] = static_cast<float>(noise::lattice(i, k, 3, ms.seed));
   glGenVertexArrays(1, &snow_vao);
   glBindVertexArray(snow_vao);
   glGenBuffers(1, &snow_vbo);
@@ -572,7 +572,7 @@ void Renderer::Impl::draw(const Pose& X_WB, const CameraModel& out_cam, double s
   }
   glUniform1f(post["u_gain"], static_cast<float>(gain));
   glUniform1f(post["u_noise_std"], options.noise ? static_cast<float>(c.noise_stddev) : 0.0f);
-  glUniform1ui(post["u_seed"], static_cast<GLuint>(detail::hash32(static_cast<std::uint32_t>(options.seed) ^
+  glUniform1ui(post["u_seed"], static_cast<GLuint>(noise::hash32(static_cast<std::uint32_t>(options.seed) ^
                                                                   static_cast<std::uint32_t>(seq * 2654435761ULL))));
   glUniform1i(post["u_srgb"], options.srgb_output ? 1 : 0);
   glBindVertexArray(empty_vao);

@@ -3,11 +3,13 @@
 #include <algorithm>
 #include <cmath>
 
-#include "noise.hpp"
+#include "unav_scene/noise.hpp"
 #include "unav_renderer/errors.hpp"
 
 namespace unav_renderer::detail {
 namespace {
+
+using namespace unav::scene::noise;
 
 struct C3 {
   double r, g, b;

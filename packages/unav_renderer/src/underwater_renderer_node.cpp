@@ -3,18 +3,17 @@
 #include <cmath>
 #include <cstring>
 
-#include "unav_launch/package_index.hpp"
-#include "unav_renderer/camera.hpp"
-#include "unav_renderer/water.hpp"
-#include "unav_renderer/world.hpp"
+#include "unav_common/resources.hpp"
+#include "unav_runtime/conversions.hpp"
+#include "unav_scene/camera.hpp"
+#include "unav_scene/water.hpp"
+#include "unav_scene/world.hpp"
 
 namespace unav_renderer {
 namespace {
 
-std::string resource(const std::string& rel) {
-  const auto share = unav::launch::find_package_share("unav_resources");
-  return share ? *share + "/" + rel : "";
-}
+// Installed data file (config/, worlds/), or "" when unav_resources is not installed.
+std::string resource(const std::string& rel) { return unav::common::try_find_resource(rel).value_or(""); }
 
 void fill_image(sensor_msgs::msg::Image& m, int w, int h, const char* encoding, int bytes_per_px) {
   m.width(static_cast<uint32_t>(w));
@@ -65,7 +64,7 @@ UnderwaterRendererNode::UnderwaterRendererNode(const unav::NodeOptions& options)
 
   odom_sub_ = create_subscription<nav_msgs::msg::Odometry>(
       "ground_truth/odom", unav::QoS::reliable(), [this](const nav_msgs::msg::Odometry& m) { on_odom(m); });
-  if (lockstep_) ack_pub_ = create_publisher<unav_msgs::msg::LockstepAck>("/lockstep/ack", unav::QoS::reliable(100));
+  if (lockstep_) acker_ = std::make_unique<unav::lockstep::Acker>(*this, ack_name_);  // answers every state
   const unav::QoS qos = unav::QoS::reliable(5);
   for (const auto& c : cams) {
     CameraPorts p;
@@ -92,6 +91,15 @@ UnderwaterRendererNode::UnderwaterRendererNode(const unav::NodeOptions& options)
       }
     cameras_.push_back(std::move(p));
   }
+  // Camera mounts, published once and latched by their owner: ROS 2 tools (RViz, Foxglove, tf2)
+  // and our estimators and evaluator look them up instead of reading the camera YAML.
+  const std::string body_frame =
+      declare_parameter<std::string>("body_frame", "base_link_frd", {"vehicle body frame (tf parent of the cameras)", {}, {}, false});
+  tf_static_pub_ = create_publisher<tf2_msgs::msg::TFMessage>("/tf_static", unav::QoS::static_latched());
+  tf2_msgs::msg::TFMessage mounts;
+  for (const auto& c : cams)
+    mounts.transforms().push_back(unav::to_transform_stamped(c.X_BC, 0.0, body_frame, c.name + "_optical"));
+  tf_static_pub_->publish(mounts);
   logger()->info("world '{}' ({} triangles), {} camera(s) at {:.1f} Hz on {}{}", world_path,
                  renderer_->triangle_count(), cameras_.size(), rate,
                  renderer_->context().gl_renderer() + " (EGL " + renderer_->context().platform() + ")",
@@ -101,26 +109,14 @@ UnderwaterRendererNode::UnderwaterRendererNode(const unav::NodeOptions& options)
 UnderwaterRendererNode::~UnderwaterRendererNode() = default;
 
 void UnderwaterRendererNode::on_odom(const nav_msgs::msg::Odometry& odom) {
-  const double t = unav::Time::from_msg(odom.header().stamp().sec(), odom.header().stamp().nanosec()).seconds();
+  const double t = unav::seconds(odom.header());
   const double eps = 1e-6;  // stamps are integer nanoseconds
   if (t + eps >= next_frame_t_) {
-    const auto& p = odom.pose().pose();
-    Pose X_WB = Pose::Identity();
-    X_WB.translation() = Eigen::Vector3d(p.position().x(), p.position().y(), p.position().z());
-    X_WB.linear() = Eigen::Quaterniond(p.orientation().w(), p.orientation().x(), p.orientation().y(),
-                                       p.orientation().z())
-                        .normalized()
-                        .toRotationMatrix();
-    render_and_publish(X_WB, odom.header());
+    render_and_publish(unav::from_msg(odom.pose().pose()), odom.header());
     // Next frame instant: the next multiple of the period after t (no drift, no bursts).
     next_frame_t_ = (std::floor((t + eps) / period_) + 1.0) * period_;
   }
-  if (ack_pub_) {
-    unav_msgs::msg::LockstepAck ack;
-    ack.header().stamp() = odom.header().stamp();
-    ack.participant(ack_name_);
-    ack_pub_->publish(ack);
-  }
+  if (acker_) acker_->ack(odom.header());
 }
 
 void UnderwaterRendererNode::render_and_publish(const Pose& X_WB, const std_msgs::msg::dds_::Header_& header) {

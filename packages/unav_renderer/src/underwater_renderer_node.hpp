@@ -7,6 +7,8 @@
 //   pub  camera/<cam>/depth/image_raw           sensor_msgs/Image       32FC1, metres along z
 //   pub  camera/<cam>/segmentation/image_raw    sensor_msgs/Image       mono8 class ids
 //   pub  /lockstep/ack                          unav_msgs/LockstepAck   (lockstep: true)
+//   pub  /tf_static                             tf2_msgs/TFMessage      static (latched): every camera
+//                                               mount, <body_frame> -> <cam>_optical, once
 // Images are stamped with the simulated time of the pose they show; frame_id <cam>_optical.
 // A frame is rendered for the first odometry at or after each multiple of 1/rate. In lockstep,
 // frame instants must be physics barriers (1/rate a multiple of the server's lockstep_period),
@@ -20,7 +22,8 @@
 #include "nav_msgs/msg/odometry.hpp"
 #include "sensor_msgs/msg/camera_info.hpp"
 #include "sensor_msgs/msg/image.hpp"
-#include "unav_msgs/msg/lockstep_ack.hpp"
+#include "tf2_msgs/msg/tf_message.hpp"
+#include "unav_runtime/lockstep_ack.hpp"
 #include "unav_renderer/renderer.hpp"
 #include "unav_runtime/runtime.hpp"
 
@@ -52,7 +55,8 @@ class UnderwaterRendererNode : public unav::Node {
   std::string ack_name_;
   std::uint64_t frames_ = 0;
   std::shared_ptr<unav::Subscription<nav_msgs::msg::Odometry>> odom_sub_;
-  std::shared_ptr<unav::Publisher<unav_msgs::msg::LockstepAck>> ack_pub_;
+  std::unique_ptr<unav::lockstep::Acker> acker_;
+  std::shared_ptr<unav::Publisher<tf2_msgs::msg::TFMessage>> tf_static_pub_;
 };
 
 }  // namespace unav_renderer

@@ -1,24 +1,16 @@
 // underwater_renderer over DDS: odometry in, stamped images out (and lockstep acks).
 #include <gtest/gtest.h>
-#include <unistd.h>
 
 #include <cmath>
 #include <fstream>
 
 #include "underwater_renderer_node.hpp"
+#include "unav_runtime/testing.hpp"
 
 using namespace std::chrono_literals;
+using unav::testing::make_link;
 
 namespace {
-
-int domain() { return 100 + static_cast<int>(getpid() % 100); }
-
-unav::ContextOptions opts() {
-  unav::ContextOptions o;
-  o.domain_id = domain();
-  o.handle_signals = false;
-  return o;
-}
 
 std::string small_cameras() {
   // One small downward camera keeps llvmpipe fast.
@@ -35,9 +27,9 @@ TEST(UnderwaterRendererNode, PublishesImagesStampedWithThePoseTimeAndAcks) {
   const std::string cams = "cameras_config:=" + small_cameras();
   const char* argv[] = {"underwater_renderer", "--ros-args", "-p", world.c_str(), "-p", cams.c_str(),
                         "-p", "lockstep:=true", "-p", "rate:=10.0", "-p", "noise:=false"};
-  unav::Context node_ctx(12, argv, opts());
+  unav::Context node_ctx(12, argv, unav::testing::test_context_options());
   unav_renderer::UnderwaterRendererNode node({&node_ctx});
-  unav::Context test_ctx(opts());
+  unav::Context test_ctx(unav::testing::test_context_options());
   unav::Node probe("probe", {&test_ctx});
   auto odom_pub = probe.create_publisher<nav_msgs::msg::Odometry>("/rov/ground_truth/odom", unav::QoS::reliable());
   std::vector<sensor_msgs::msg::Image> images, depths, segs;
@@ -54,15 +46,18 @@ TEST(UnderwaterRendererNode, PublishesImagesStampedWithThePoseTimeAndAcks) {
         acks.push_back(unav::Time::from_msg(a.header().stamp().sec(), a.header().stamp().nanosec()).seconds());
       });
   auto spin_until = [&](const std::function<bool()>& done) {
-    const auto end = std::chrono::steady_clock::now() + 20s;
-    while (!done() && std::chrono::steady_clock::now() < end) {
-      node_ctx.spin_some(1ms);
-      test_ctx.spin_some(1ms);
-    }
-    return done();
+    return unav::testing::spin_until({&node_ctx, &test_ctx}, done);
   };
-  ASSERT_TRUE(spin_until([&] { return odom_pub->subscription_count() > 0 && img_sub->publisher_count() > 0 &&
-                                      ack_sub->publisher_count() > 0; }));
+  // Every link matched on BOTH sides before the first odometry. This test used to wait for the
+  // probe's side only (its readers counting the node's writers): the node's ack and image writers
+  // could still be unaware of the probe's readers, and what a volatile writer writes before it
+  // knows a reader is never sent to it. On a slow machine the acks of 1.5 and 1.55 (and their
+  // images) were lost that way: "1 of 3" answers. With all links matched on both sides, reliable
+  // delivery within the history depths (odometry 10, images 5, acks 100) loses nothing.
+  const std::vector<unav::testing::Link> links = {make_link(*odom_pub, node), make_link(node, *img_sub),
+                                                  make_link(node, *depth_sub), make_link(node, *seg_sub),
+                                                  make_link(node, *ack_sub)};
+  ASSERT_TRUE(unav::testing::wait_for_match({&node_ctx, &test_ctx}, links)) << unav::testing::describe(links);
   // 2 m above the 10 m deep seabed, over the pipe's first point (north 0, east 0 of the world).
   auto send = [&](double t) {
     nav_msgs::msg::Odometry o;

@@ -1,11 +1,11 @@
-#include "unav_renderer/camera.hpp"
+#include "unav_scene/camera.hpp"
 
 #include <cmath>
 
-#include "unav_renderer/errors.hpp"
+#include "unav_scene/errors.hpp"
 #include "yaml_util.hpp"
 
-namespace unav_renderer {
+namespace unav::scene {
 
 Eigen::Matrix3d CameraModel::K() const {
   Eigen::Matrix3d K;
@@ -125,4 +125,4 @@ std::vector<CameraModel> default_cameras() {
   return {front, down};
 }
 
-}  // namespace unav_renderer
+}  // namespace unav::scene

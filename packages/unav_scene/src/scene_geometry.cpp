@@ -1,4 +1,4 @@
-#include "unav_renderer/scene_geometry.hpp"
+#include "unav_scene/scene_geometry.hpp"
 
 #include <assimp/Importer.hpp>
 #include <assimp/postprocess.h>
@@ -10,10 +10,10 @@
 #include <fstream>
 #include <map>
 
-#include "noise.hpp"
-#include "unav_renderer/errors.hpp"
+#include "unav_scene/noise.hpp"
+#include "unav_scene/errors.hpp"
 
-namespace unav_renderer {
+namespace unav::scene {
 
 void MeshData::transform(const Pose& X, const Eigen::Vector3d& scale) {
   const Eigen::Matrix3d A = X.linear() * scale.asDiagonal();
@@ -124,8 +124,8 @@ MeshData make_rock_mesh(std::uint32_t seed, const Eigen::Vector3d& radii_m, int 
   for (std::size_t i = 0; i < m.vertex_count(); ++i) {
     Eigen::Vector3d p(m.positions[3 * i], m.positions[3 * i + 1], m.positions[3 * i + 2]);
     // Large lumps + facets: two octaves of 3D value noise on the unit sphere.
-    const double n1 = detail::value_noise3(1.7 * p.x() + 10, 1.7 * p.y() + 20, 1.7 * p.z() + 30, seed);
-    const double n2 = detail::value_noise3(4.1 * p.x(), 4.1 * p.y(), 4.1 * p.z(), seed + 7U);
+    const double n1 = noise::value_noise3(1.7 * p.x() + 10, 1.7 * p.y() + 20, 1.7 * p.z() + 30, seed);
+    const double n2 = noise::value_noise3(4.1 * p.x(), 4.1 * p.y(), 4.1 * p.z(), seed + 7U);
     double r = 1.0 + 0.45 * (n1 - 0.5) + 0.15 * (n2 - 0.5);
     Eigen::Vector3d q = r * p;
     if (q.z() > 0.35) q.z() = 0.35 + 0.3 * (q.z() - 0.35);   // flattened underside (NED z down)
@@ -368,4 +368,4 @@ SceneGeometry build_scene_geometry(const World& w) {
   return g;
 }
 
-}  // namespace unav_renderer
+}  // namespace unav::scene

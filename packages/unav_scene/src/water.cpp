@@ -1,12 +1,12 @@
-#include "unav_renderer/water.hpp"
+#include "unav_scene/water.hpp"
 
 #include <cmath>
 #include <stdexcept>
 
-#include "unav_renderer/errors.hpp"
+#include "unav_scene/errors.hpp"
 #include "yaml_util.hpp"
 
-namespace unav_renderer {
+namespace unav::scene {
 namespace {
 
 struct PresetRow {
@@ -148,4 +148,4 @@ WaterModel load_water_file(const std::string& path) {
   return detail::parse_water(c, node, root["water"] ? "water" : "", false);
 }
 
-}  // namespace unav_renderer
+}  // namespace unav::scene

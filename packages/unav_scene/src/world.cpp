@@ -1,4 +1,4 @@
-#include "unav_renderer/world.hpp"
+#include "unav_scene/world.hpp"
 
 #include <opencv2/imgcodecs.hpp>
 
@@ -7,11 +7,11 @@
 #include <fstream>
 #include <limits>
 
-#include "noise.hpp"
-#include "unav_renderer/errors.hpp"
+#include "unav_scene/noise.hpp"
+#include "unav_scene/errors.hpp"
 #include "yaml_util.hpp"
 
-namespace unav_renderer {
+namespace unav::scene {
 namespace detail {
 WaterModel parse_water(const YamlCtx& c, const YAML::Node& node, const std::string& path,
                        bool in_world);
@@ -29,7 +29,7 @@ using detail::YamlCtx;
 double Seabed::depth_at(double n_m, double e_m) const {
   double d = depth_m;
   if (relief_amplitude_m > 0.0 && relief_wavelength_m > 0.0) {
-    const double f = detail::fbm2(n_m / relief_wavelength_m, e_m / relief_wavelength_m, relief_seed, 4);
+    const double f = noise::fbm2(n_m / relief_wavelength_m, e_m / relief_wavelength_m, relief_seed, 4);
     d += relief_amplitude_m * (2.0 * f - 1.0);
   }
   if (hm_width > 1 && hm_height > 1) {
@@ -314,7 +314,7 @@ World load_world(const std::string& path) {
     const Material mat = parse_material(c, rf["material"], "rock_field.material", Rock{}.material);
     int placed = 0;
     for (int k = 0; placed < count && k < count * 20; ++k) {
-      auto U = [&](int j) { return detail::lattice(k, j, 17, seed); };
+      auto U = [&](int j) { return noise::lattice(k, j, 17, seed); };
       const double n_m = lo.x() + (hi.x() - lo.x()) * U(0), e_m = lo.y() + (hi.y() - lo.y()) * U(1);
       // Mostly small rocks, a few large ones.
       const double rad = rr.x() + (rr.y() - rr.x()) * std::pow(U(2), 2.0);
@@ -444,4 +444,4 @@ double pipe_heading(const World& world, const Eigen::Vector3d& p_W) {
   return q.valid ? q.heading_rad : 0.0;
 }
 
-}  // namespace unav_renderer
+}  // namespace unav::scene

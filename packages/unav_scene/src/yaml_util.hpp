@@ -7,9 +7,9 @@
 #include <initializer_list>
 #include <string>
 
-#include "unav_renderer/errors.hpp"
+#include "unav_scene/errors.hpp"
 
-namespace unav_renderer::detail {
+namespace unav::scene::detail {
 
 struct YamlCtx {
   std::string file;
@@ -101,4 +101,4 @@ inline YAML::Node load_yaml_file(const std::string& path) {
   }
 }
 
-}  // namespace unav_renderer::detail
+}  // namespace unav::scene::detail

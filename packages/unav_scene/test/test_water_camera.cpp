@@ -5,11 +5,11 @@
 #include <filesystem>
 #include <fstream>
 
-#include "unav_renderer/camera.hpp"
-#include "unav_renderer/errors.hpp"
-#include "unav_renderer/water.hpp"
+#include "unav_scene/camera.hpp"
+#include "unav_scene/errors.hpp"
+#include "unav_scene/water.hpp"
 
-using namespace unav_renderer;
+using namespace unav::scene;
 namespace fs = std::filesystem;
 
 namespace {

@@ -10,11 +10,11 @@
 #include <filesystem>
 #include <fstream>
 
-#include "unav_renderer/errors.hpp"
-#include "unav_renderer/scene_geometry.hpp"
-#include "unav_renderer/world.hpp"
+#include "unav_scene/errors.hpp"
+#include "unav_scene/scene_geometry.hpp"
+#include "unav_scene/world.hpp"
 
-using namespace unav_renderer;
+using namespace unav::scene;
 namespace fs = std::filesystem;
 
 namespace {
@@ -22,7 +22,7 @@ namespace {
 const std::string kRoot = UNAV_REPO_ROOT;
 
 fs::path temp_dir(const std::string& name) {
-  const fs::path d = fs::temp_directory_path() / ("unav_renderer_test_" + name + "_" + std::to_string(::getpid()));
+  const fs::path d = fs::temp_directory_path() / ("unav_scene_test_" + name + "_" + std::to_string(::getpid()));
   fs::create_directories(d);
   return d;
 }

@@ -3,7 +3,7 @@
 #include <cstdlib>
 #include <iostream>
 
-#include "unav_renderer/scene_geometry.hpp"
+#include "unav_scene/scene_geometry.hpp"
 
 int main(int argc, char** argv) {
   if (argc < 2) {
@@ -14,7 +14,7 @@ int main(int argc, char** argv) {
   Eigen::Vector3d radii(0.6, 0.45, 0.35);
   if (argc > 5) radii = {std::atof(argv[3]), std::atof(argv[4]), std::atof(argv[5])};
   try {
-    unav_renderer::write_obj(unav_renderer::make_rock_mesh(seed, radii, 2), argv[1]);
+    unav::scene::write_obj(unav::scene::make_rock_mesh(seed, radii, 2), argv[1]);
   } catch (const std::exception& e) {
     std::cerr << e.what() << "\n";
     return 1;

@@ -4,13 +4,12 @@
 #include <stdexcept>
 #include <string>
 
+#include "unav_scene/errors.hpp"
+
 namespace unav_renderer {
 
 /// Bad configuration: world/water/camera YAML, missing or unreadable mesh, bad value.
-class ConfigError : public std::invalid_argument {
- public:
-  using std::invalid_argument::invalid_argument;
-};
+using unav::scene::ConfigError;
 
 /// No usable EGL display/device or OpenGL context.
 class EglError : public std::runtime_error {

@@ -18,13 +18,16 @@
 #include <string>
 #include <vector>
 
-#include "unav_renderer/camera.hpp"
 #include "unav_renderer/egl_context.hpp"
-#include "unav_renderer/frames.hpp"
-#include "unav_renderer/water.hpp"
-#include "unav_renderer/world.hpp"
+#include "unav_scene/camera.hpp"
+#include "unav_scene/frames.hpp"
+#include "unav_scene/water.hpp"
+#include "unav_scene/world.hpp"
 
 namespace unav_renderer {
+
+// The scene (world, water, cameras, frames) is described by unav_scene; the renderer draws it.
+using namespace unav::scene;  // NOLINT(google-build-using-namespace): World, CameraModel, Pose, ...
 
 struct RenderOptions {
   bool forward_scatter = true;

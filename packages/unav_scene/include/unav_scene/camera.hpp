@@ -5,9 +5,9 @@
 #include <string>
 #include <vector>
 
-#include "unav_renderer/frames.hpp"
+#include "unav_scene/frames.hpp"
 
-namespace unav_renderer {
+namespace unav::scene {
 
 /// Pinhole camera with plumb_bob distortion, mounted on the vehicle body.
 /// Pixel convention as OpenCV / ROS CameraInfo: the centre of the top-left pixel is (0, 0),
@@ -28,7 +28,7 @@ struct CameraModel {
   bool has_distortion() const { return distortion.cwiseAbs().maxCoeff() > 0.0; }
   /// Build from a horizontal field of view [rad]; fy = fx, principal point at the centre.
   static CameraModel from_hfov(const std::string& name, int width, int height, double hfov_rad);
-  /// Throws std::invalid_argument naming the camera and field (non-positive FOV/size, ...).
+  /// Throws ConfigError naming the camera and field (non-positive FOV/size, ...).
   void validate(const std::string& where) const;
 };
 
@@ -39,4 +39,4 @@ std::vector<CameraModel> load_cameras(const std::string& path);
 /// The paper's default vehicle: "front" (640x480, 80 deg) and "down" (320x180, 90 deg).
 std::vector<CameraModel> default_cameras();
 
-}  // namespace unav_renderer
+}  // namespace unav::scene

@@ -1,4 +1,4 @@
-// Frames and poses used by the renderer and the world API.
+// Frames and poses of the scene: the common floor's (unav_common/frames.hpp), named here.
 //
 // World frame `world_ned`: x north, y east, z down (metres; z = depth below the surface).
 // Body frame `base_link_frd`: x forward, y right, z down.
@@ -7,23 +7,13 @@
 // p_W = X_WB * p_B.
 #pragma once
 
-#include <Eigen/Geometry>
+#include "unav_common/frames.hpp"
 
-namespace unav_renderer {
+namespace unav::scene {
 
-/// Rigid transform (rotation + translation in metres).
-using Pose = Eigen::Isometry3d;
+using unav::common::Pose;
+using unav::common::pose_from_xyz_rpy;
+using unav::common::R_camera_body_to_optical;
+using unav::common::rotation_from_rpy;
 
-/// Rotation from roll, pitch, yaw [rad] (ZYX convention, R = Rz(yaw) Ry(pitch) Rx(roll)).
-Eigen::Matrix3d rotation_from_rpy(double roll_rad, double pitch_rad, double yaw_rad);
-
-/// Pose from a translation [m] and roll, pitch, yaw [rad] (ZYX).
-Pose pose_from_xyz_rpy(const Eigen::Vector3d& xyz_m, const Eigen::Vector3d& rpy_rad);
-
-/// Rotation from a "camera body" frame (x along the optical axis, y right, z down; FRD-like)
-/// to the optical frame convention (z forward, x right, y down): R_CbCo. A camera mounted
-/// with rpy = (0, 0, 0) looks along body x; rpy = (0, -90 deg, 0) looks down (image top =
-/// body forward).
-Eigen::Matrix3d R_camera_body_to_optical();
-
-}  // namespace unav_renderer
+}  // namespace unav::scene

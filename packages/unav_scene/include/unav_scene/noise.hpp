@@ -4,7 +4,7 @@
 #include <cmath>
 #include <cstdint>
 
-namespace unav_renderer::detail {
+namespace unav::scene::noise {
 
 inline std::uint32_t hash32(std::uint32_t x) {
   x ^= x >> 16;
@@ -70,4 +70,4 @@ inline double value_noise3(double x, double y, double z, std::uint32_t seed) {
   return lerp(v[0], v[1], fz);
 }
 
-}  // namespace unav_renderer::detail
+}  // namespace unav::scene::noise

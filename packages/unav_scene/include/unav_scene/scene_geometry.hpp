@@ -6,9 +6,9 @@
 #include <string>
 #include <vector>
 
-#include "unav_renderer/world.hpp"
+#include "unav_scene/world.hpp"
 
-namespace unav_renderer {
+namespace unav::scene {
 
 struct MeshData {
   std::vector<float> positions;   ///< xyz per vertex
@@ -55,4 +55,4 @@ MeshData make_seabed_mesh(const Seabed& seabed);
 /// Write a mesh as Wavefront OBJ (v, vn, f). Throws ConfigError when the file cannot be written.
 void write_obj(const MeshData& mesh, const std::string& path);
 
-}  // namespace unav_renderer
+}  // namespace unav::scene

@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-namespace unav_renderer {
+namespace unav::scene {
 
 /// Per-channel (R, G, B) optical properties of the water. All coefficients in 1/m.
 struct WaterModel {
@@ -40,7 +40,7 @@ struct WaterModel {
                                    const Eigen::Vector3d& E0 = Eigen::Vector3d::Ones()) const;
   /// Schlick phase parameter k = 1.55 g - 0.55 g^3.
   double schlick_k() const { return 1.55 * phase_g - 0.55 * phase_g * phase_g * phase_g; }
-  /// Throws std::invalid_argument naming the field on negative/NaN values.
+  /// Throws ConfigError naming the field on negative/NaN values.
   void validate(const std::string& where) const;
 };
 
@@ -50,11 +50,11 @@ std::vector<std::string> jerlov_preset_names();
 
 /// Built-in Jerlov preset (beta from REFERENCE.md table, B_inf an estimate). Accepts the
 /// name with or without the "jerlov_" prefix ("II", "jerlov_3C"). Throws
-/// std::invalid_argument listing valid names.
+/// ConfigError listing valid names.
 WaterModel jerlov_preset(const std::string& name);
 
 /// Load a water YAML file (config/water/*.yaml). Either `preset: <name>` optionally
 /// followed by overrides, or explicit coefficients. Unknown keys are errors naming the file.
 WaterModel load_water_file(const std::string& path);
 
-}  // namespace unav_renderer
+}  // namespace unav::scene

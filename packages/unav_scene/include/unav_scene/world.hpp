@@ -1,5 +1,5 @@
 // World description (worlds/<name>/world.yaml) and the pipeline centre-line API.
-// This header and its library (target unav_renderer::scene) need no OpenGL and no DDS:
+// This header and its library (package unav_scene) need no OpenGL and no DDS:
 // planning and evaluation use load_world() + nearest_pipe_point().
 #pragma once
 
@@ -8,10 +8,10 @@
 #include <string>
 #include <vector>
 
-#include "unav_renderer/frames.hpp"
-#include "unav_renderer/water.hpp"
+#include "unav_scene/frames.hpp"
+#include "unav_scene/water.hpp"
 
-namespace unav_renderer {
+namespace unav::scene {
 
 /// Segmentation class ids written to the segmentation image.
 enum class SegClass : std::uint8_t { kWater = 0, kSeabed = 1, kPipeline = 2, kRock = 3, kOther = 4 };
@@ -148,4 +148,4 @@ double pipe_heading(const World& world, const Eigen::Vector3d& p_W);
 std::vector<Eigen::Vector3d> bent_centerline(const std::vector<Eigen::Vector3d>& points_W,
                                              double bend_radius_m, double step_m = 0.1);
 
-}  // namespace unav_renderer
+}  // namespace unav::scene
