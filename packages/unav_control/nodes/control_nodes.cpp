@@ -2,32 +2,34 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 
 #include "unav_control/config.hpp"
-#include "unav_launch/package_index.hpp"
-#include "unav_renderer/world.hpp"
+#include "unav_runtime/conversions.hpp"
+#include "unav_common/resources.hpp"
+#include "unav_scene/world.hpp"
 
 namespace unav::control {
 namespace {
 
-std::string resource(const std::string& rel) {
-  const auto share = unav::launch::find_package_share("unav_resources");
-  return share ? *share + "/" + rel : "";
-}
+// Installed data file (config/, worlds/), or "" when unav_resources is not installed.
+std::string resource(const std::string& rel) { return unav::common::try_find_resource(rel).value_or(""); }
 std::string config_root() { return resource("config"); }
-
-double stamp_of(const std_msgs::msg::dds_::Header_& h) {
-  return unav::Time::from_msg(h.stamp().sec(), h.stamp().nanosec()).seconds();
+// Relative vehicle paths: against the installed config/, or without it the file's config root.
+std::string config_root_for(const std::string& file) {
+  const std::string installed = config_root();
+  return !installed.empty() ? installed : std::filesystem::absolute(file).parent_path().parent_path().string();
 }
+
+double stamp_of(const std_msgs::msg::Header& h) { return unav::seconds(h); }
 
 physics::RigidBodyState state_of(const nav_msgs::msg::Odometry& m) {
+  // The quaternion is passed as sent: the MPC rejects a non-unit one with a status.
   physics::RigidBodyState x;
-  const auto& p = m.pose().pose();
-  x.p_WB_W = Eigen::Vector3d(p.position().x(), p.position().y(), p.position().z());
-  x.q_WB = Eigen::Quaterniond(p.orientation().w(), p.orientation().x(), p.orientation().y(), p.orientation().z());
-  const auto& t = m.twist().twist();
-  x.v_WB_B = Eigen::Vector3d(t.linear().x(), t.linear().y(), t.linear().z());
-  x.w_WB_B = Eigen::Vector3d(t.angular().x(), t.angular().y(), t.angular().z());
+  x.p_WB_W = unav::from_msg(m.pose().pose().position());
+  x.q_WB = unav::from_msg(m.pose().pose().orientation());
+  x.v_WB_B = unav::from_msg(m.twist().twist().linear());
+  x.w_WB_B = unav::from_msg(m.twist().twist().angular());
   return x;
 }
 
@@ -46,7 +48,9 @@ ControlAllocatorNode::ControlAllocatorNode(const unav::NodeOptions& options)
     : Node("control_allocator", options, "rov") {
   const std::string file = declare_parameter<std::string>(
       "config_file", resource("config/controllers/allocator.yaml"), {"allocator YAML", {}, {}, false});
-  const AllocatorConfig cfg = wrap_config([&] { return load_allocator_config(file, config_root()); });
+  AllocatorParams params = load_allocator_params(file);
+  declare_params(&params);  // params files and -p name:=value, checked by the schema
+  const AllocatorConfig cfg = make_allocator_config(params, config_root_for(file), "node '" + name() + "' (config_file " + file + ")");
   allocator_ = wrap_config([&] { return std::make_unique<Allocator>(make_allocator(cfg)); });
   for (const auto& t : cfg.vehicle.thrusters) names_.push_back(t.name);
   failed_sub_ = create_subscription<std_msgs::msg::String>(
@@ -93,20 +97,28 @@ void ControlAllocatorNode::on_set_failed(const std::string& request) {
 MpcControllerNode::MpcControllerNode(const unav::NodeOptions& options) : Node("mpc_controller", options, "rov") {
   const std::string file = declare_parameter<std::string>("config_file", resource("config/controllers/mpc.yaml"),
                                                           {"MPC YAML", {}, {}, false});
-  const MpcConfig cfg = wrap_config([&] { return load_mpc_config(file, config_root()); });
+  // One parameter system: the schema's defaults, then the config file, then this node's params
+  // files and `-p name:=value` (e.g. -p horizon_steps:=30), each checked by the schema.
+  MpcParams params = load_mpc_params(file);
+  declare_params(&params);
+  MpcConfig cfg = make_mpc_config(params, config_root_for(file), "node '" + name() + "' (config_file " + file + ")");
   dt_ = cfg.options.dt;
   setpoint_sync_ = declare_parameter<bool>(
       "setpoint_sync", false,
       {"solve for a state only once a setpoint stamped at or after it arrived (deterministic lockstep)", {}, {}, false});
+  if (setpoint_sync_ && cfg.options.max_solve_time_ms > 0.0) {
+    // Lockstep promises identical runs: a wall-clock budget would make the plan depend on load.
+    logger()->info("lockstep (setpoint_sync): max_solve_time_ms {} ignored, solves bounded by {} iterations",
+                   cfg.options.max_solve_time_ms, cfg.options.max_iterations);
+    cfg.options.max_solve_time_ms = 0.0;
+  }
   mpc_ = wrap_config([&] { return std::make_unique<Mpc>(cfg.model, cfg.options); });
   pub_ = create_publisher<geometry_msgs::msg::WrenchStamped>("control/wrench_command", unav::QoS::reliable());
   sp_sub_ = create_subscription<geometry_msgs::msg::PoseStamped>(
       "control/pose_setpoint", unav::QoS::reliable(), [this](const geometry_msgs::msg::PoseStamped& m) {
-        const auto& p = m.pose();
-        const Eigen::Quaterniond q(p.orientation().w(), p.orientation().x(), p.orientation().y(), p.orientation().z());
         // Pass non-unit or NaN setpoints through: the MPC rejects them with a status (tested).
-        setpoint_.p_W = Eigen::Vector3d(p.position().x(), p.position().y(), p.position().z());
-        setpoint_.q_WB = q;
+        setpoint_.p_W = unav::from_msg(m.pose().position());
+        setpoint_.q_WB = unav::from_msg(m.pose().orientation());
         have_setpoint_ = true;
         setpoint_t_ = std::max(setpoint_t_, stamp_of(m.header()));
         if (pending_ && setpoint_t_ >= stamp_of(pending_->header()) - 1e-9) {
@@ -151,12 +163,7 @@ void MpcControllerNode::solve(const nav_msgs::msg::Odometry& m) {
   geometry_msgs::msg::WrenchStamped out;
   out.header().stamp() = m.header().stamp();
   out.header().frame_id(m.child_frame_id());
-  out.wrench().force().x(w[0]);
-  out.wrench().force().y(w[1]);
-  out.wrench().force().z(w[2]);
-  out.wrench().torque().x(w[3]);
-  out.wrench().torque().y(w[4]);
-  out.wrench().torque().z(w[5]);
+  out.wrench() = unav::to_wrench_msg(w);
   pub_->publish(out);
   last_output_ = out;
   last_output_t_ = t;
@@ -172,9 +179,9 @@ WaypointFollowerNode::WaypointFollowerNode(const unav::NodeOptions& options) : N
   follower_ = WaypointFollower(wo);
   std::vector<PoseSetpoint> path;
   if (!world.empty()) {
-    unav_renderer::World w;
+    unav::scene::World w;
     try {
-      w = unav_renderer::load_world(world);
+      w = unav::scene::load_world(world);
     } catch (const std::exception& e) {
       throw unav::ConfigError(e.what());
     }
@@ -199,9 +206,8 @@ WaypointFollowerNode::WaypointFollowerNode(const unav::NodeOptions& options) : N
     std::vector<PoseSetpoint> sp;
     for (const auto& ps : p.poses()) {
       PoseSetpoint s;
-      s.p_W = Eigen::Vector3d(ps.pose().position().x(), ps.pose().position().y(), ps.pose().position().z());
-      s.q_WB = Eigen::Quaterniond(ps.pose().orientation().w(), ps.pose().orientation().x(), ps.pose().orientation().y(),
-                                  ps.pose().orientation().z());
+      s.p_W = unav::from_msg(ps.pose().position());
+      s.q_WB = unav::from_msg(ps.pose().orientation());
       sp.push_back(s);
     }
     std::string err;
@@ -209,8 +215,8 @@ WaypointFollowerNode::WaypointFollowerNode(const unav::NodeOptions& options) : N
     finished_logged_ = false;
   });
   odom_sub_ = create_subscription<nav_msgs::msg::Odometry>("ground_truth/odom", unav::QoS::reliable(), [this](const nav_msgs::msg::Odometry& m) {
-    const auto& p = m.pose().pose().position();  // without a path: a hold setpoint at p
-    const WaypointUpdate u = follower_.Update(Eigen::Vector3d(p.x(), p.y(), p.z()));
+    // Without a path: a hold setpoint at the current position.
+    const WaypointUpdate u = follower_.Update(unav::from_msg(m.pose().pose().position()));
     if (u.finished && !finished_logged_) {
       logger()->info("path finished at t = {:.2f} s", stamp_of(m.header()));
       finished_logged_ = true;
@@ -218,13 +224,7 @@ WaypointFollowerNode::WaypointFollowerNode(const unav::NodeOptions& options) : N
     geometry_msgs::msg::PoseStamped out;
     out.header().stamp() = m.header().stamp();
     out.header().frame_id("world_ned");
-    out.pose().position().x(u.setpoint.p_W.x());
-    out.pose().position().y(u.setpoint.p_W.y());
-    out.pose().position().z(u.setpoint.p_W.z());
-    out.pose().orientation().x(u.setpoint.q_WB.x());
-    out.pose().orientation().y(u.setpoint.q_WB.y());
-    out.pose().orientation().z(u.setpoint.q_WB.z());
-    out.pose().orientation().w(u.setpoint.q_WB.w());
+    out.pose() = unav::to_msg(u.setpoint.p_W, u.setpoint.q_WB);
     pub_->publish(out);
   });
   logger()->info("{} waypoints", path.size());

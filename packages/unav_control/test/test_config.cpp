@@ -62,30 +62,32 @@ class TempConfig : public ::testing::Test {
 
 TEST_F(TempConfig, MpcErrorsNameFileKeyValue) {
   std::string e = mpc_error("    horizon_steps: 0\n");
-  EXPECT_NE(e.find("mpc.yaml: mpc_controller.ros__parameters.horizon_steps must be >= 1 (got 0)"), std::string::npos)
+  EXPECT_NE(e.find("mpc.yaml: mpc_controller.ros__parameters.horizon_steps = 0: must be in [1, 500]"), std::string::npos)
       << e;
   e = mpc_error("    position_weights: [1.0, -3.0, 1.0]\n");
-  EXPECT_NE(e.find("position_weights must be >= 0"), std::string::npos) << e;
-  EXPECT_NE(e.find("-3"), std::string::npos) << e;
+  EXPECT_NE(e.find("position_weights[1] = -3.0: must be >= 0"), std::string::npos) << e;
   e = mpc_error("    attitude_weights: [1.0, 1.0]\n");
-  EXPECT_NE(e.find("attitude_weights must have 3 entries (got [1.0, 1.0])"), std::string::npos) << e;
+  EXPECT_NE(e.find("attitude_weights = [1.0, 1.0]: must be a list of 3 numbers (got 2)"), std::string::npos) << e;
   e = mpc_error("    dt: .nan\n");
-  EXPECT_NE(e.find("dt must be finite"), std::string::npos) << e;
+  EXPECT_NE(e.find("dt = .nan: must be finite"), std::string::npos) << e;
   e = mpc_error("    horizon: 20\n");
-  EXPECT_NE(e.find("horizon is not a known key"), std::string::npos) << e;
+  EXPECT_NE(e.find("horizon = 20: unknown key; allowed keys: model_vehicle_config, horizon_steps"), std::string::npos) << e;
   e = mpc_error("    bounds_margin: 1.5\n");
-  EXPECT_NE(e.find("bounds_margin must be in (0, 1] (got 1.5"), std::string::npos) << e;
+  EXPECT_NE(e.find("bounds_margin = 1.5: must be in (0, 1]"), std::string::npos) << e;
   e = mpc_error("    disturbance_gain: 2.0\n");
-  EXPECT_NE(e.find("disturbance_gain must be in [0, 1] (got 2)"), std::string::npos) << e;
+  EXPECT_NE(e.find("disturbance_gain = 2.0: must be in [0, 1]"), std::string::npos) << e;
   e = mpc_error("    control_blocks: 25\n");
-  EXPECT_NE(e.find("control_blocks"), std::string::npos) << e;
+  EXPECT_NE(e.find("control_blocks = 25: must be in [1, 20]"), std::string::npos) << e;
+  e = mpc_error("    horizon_steps: 4\n    control_blocks: 5\n");
+  EXPECT_NE(e.find("control_blocks = 5: must be <= horizon_steps (4)"), std::string::npos) << e;
   // Relative model path resolved against the config root (the parent of controllers/).
   const std::string f = write("mpc2.yaml", "model_vehicle_config: vehicles/missing.yaml\n");
   try {
     load_mpc_config(f);
     FAIL();
   } catch (const physics::ConfigError& err) {
-    EXPECT_NE(std::string(err.what()).find("model_vehicle_config names a file that does not exist"), std::string::npos);
+    EXPECT_NE(std::string(err.what()).find(": names a file that does not exist"), std::string::npos) << err.what();
+    EXPECT_EQ(err.key(), "model_vehicle_config");
     EXPECT_NE(std::string(err.what()).find((dir_ / "vehicles/missing.yaml").string()), std::string::npos) << err.what();
   }
 }
@@ -100,12 +102,16 @@ TEST_F(TempConfig, AllocatorErrors) {
     }
     return std::string("no error");
   };
-  EXPECT_NE(err("mode: magic\n").find("mode must be pseudo_inverse or redistributed (got magic)"), std::string::npos);
-  EXPECT_NE(err("failed_thrusters: [T9]\n").find("failed_thrusters names a thruster the vehicle does not have (got T9)"),
+  EXPECT_NE(err("mode: magic\n").find("mode = magic: must be one of {pseudo_inverse, redistributed}"),
             std::string::npos);
-  EXPECT_NE(err("thruster_weights: [1, 2]\n").find("thruster_weights must be empty or have one entry per thruster"),
+  EXPECT_NE(err("failed_thrusters: [T9]\n").find("failed_thrusters = T9: names a thruster the vehicle does not have"),
             std::string::npos);
-  EXPECT_NE(err("thruster_weights: [1, 1, 1, 0, 1, 1, 1, 1]\n").find("thruster_weights must all be > 0"),
+  EXPECT_NE(err("thruster_weights: [1, 2]\n").find("thruster_weights = 2 entries: must be empty or have one entry per "
+                                                  "thruster (8)"),
+            std::string::npos);
+  EXPECT_NE(err("thruster_weights: [1, 1, 1, 0, 1, 1, 1, 1]\n").find("thruster_weights[3] = 0: must be > 0"),
+            std::string::npos);
+  EXPECT_NE(err("max_redistribution_iterations: 0\n").find("max_redistribution_iterations = 0: must be in [1, 1000]"),
             std::string::npos);
   const AllocatorConfig c = load_allocator_config(write("ok.yaml", veh + "failed_thrusters: [T3]\nmode: pseudo_inverse\n"));
   ASSERT_EQ(c.failed_thrusters, std::vector<int>{2});

@@ -1,17 +1,16 @@
 // control_allocator over DDS: a wrench in gives the thruster command that produces it; a thruster
 // marked failed at run time gets zero and the wrench is still produced.
 #include <gtest/gtest.h>
-#include <unistd.h>
 
 #include "control_nodes.hpp"
 #include "unav_control/config.hpp"
+#include "unav_runtime/testing.hpp"
 
 using namespace std::chrono_literals;
+using unav::testing::make_link;
 
 TEST(ControlAllocatorNode, WrenchInCommandOutAndRuntimeFailure) {
-  unav::ContextOptions o;
-  o.domain_id = 100 + static_cast<int>(getpid() % 100);
-  o.handle_signals = false;
+  const unav::ContextOptions o = unav::testing::test_context_options();
   const std::string cfg_file = std::string(UNAV_CONFIG_DIR) + "/controllers/allocator.yaml";
   const std::string p = "config_file:=" + cfg_file;
   const char* argv[] = {"control_allocator", "--ros-args", "-p", p.c_str()};
@@ -25,15 +24,13 @@ TEST(ControlAllocatorNode, WrenchInCommandOutAndRuntimeFailure) {
   auto sub = probe.create_subscription<unav_msgs::msg::ThrusterCommand>(
       "/rov/thrusters/command", unav::QoS::reliable(), [&](const unav_msgs::msg::ThrusterCommand& c) { cmds.push_back(c); });
   auto spin_until = [&](const std::function<bool()>& done) {
-    const auto end = std::chrono::steady_clock::now() + 10s;
-    while (!done() && std::chrono::steady_clock::now() < end) {
-      node_ctx.spin_some(1ms);
-      test_ctx.spin_some(1ms);
-    }
-    return done();
+    return unav::testing::spin_until({&node_ctx, &test_ctx}, done);
   };
-  ASSERT_TRUE(spin_until([&] { return wrench_pub->subscription_count() > 0 && fail_pub->subscription_count() > 0 &&
-                                      sub->publisher_count() > 0; }));
+  // Both sides of every link matched before the first message (a reader that counts the writer
+  // is not enough: the writer drops what it writes before it knows the reader).
+  const std::vector<unav::testing::Link> links = {make_link(*wrench_pub, node), make_link(*fail_pub, node),
+                                                  make_link(node, *sub)};
+  ASSERT_TRUE(unav::testing::wait_for_match({&node_ctx, &test_ctx}, links)) << unav::testing::describe(links);
   // Reference allocator from the same config: the wrench a command produces.
   const auto cfg = unav::control::load_allocator_config(cfg_file, UNAV_CONFIG_DIR);
   unav::control::Allocator ref = unav::control::make_allocator(cfg);
@@ -64,11 +61,7 @@ TEST(ControlAllocatorNode, WrenchInCommandOutAndRuntimeFailure) {
   ref.SetThrusterFailed(2, true);
   ASSERT_TRUE(spin_until([&] {
     wrench_pub->publish(w);
-    const auto end = std::chrono::steady_clock::now() + 50ms;
-    while (std::chrono::steady_clock::now() < end) {
-      node_ctx.spin_some(1ms);
-      test_ctx.spin_some(1ms);
-    }
+    unav::testing::spin_for({&node_ctx, &test_ctx}, 50ms);
     return cmds.back().u()[2] == 0.0;
   }));
   check(cmds.back());  // the remaining seven thrusters still produce the wrench

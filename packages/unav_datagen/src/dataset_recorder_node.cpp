@@ -16,10 +16,11 @@
 #include "sensor_msgs/msg/camera_info.hpp"
 #include "sensor_msgs/msg/image.hpp"
 #include "sensor_msgs/msg/imu.hpp"
-#include "unav_msgs/msg/lockstep_ack.hpp"
+#include "unav_runtime/conversions.hpp"
+#include "unav_runtime/lockstep_ack.hpp"
 #include "unav_datagen/dataset_writer.hpp"
-#include "unav_launch/package_index.hpp"
-#include "unav_renderer/camera.hpp"
+#include "unav_common/resources.hpp"
+#include "unav_scene/camera.hpp"
 #include "unav_runtime/runtime.hpp"
 
 namespace unav_datagen {
@@ -36,13 +37,12 @@ class DatasetRecorder : public unav::Node {
   explicit DatasetRecorder(const unav::NodeOptions& options) : Node("dataset_recorder", options, "rov") {
     const std::string out = declare_parameter<std::string>("output_dir", "out/dataset", {"dataset folder", {}, {}, false});
     camera_ = declare_parameter<std::string>("camera", "front", {"camera name to record", {}, {}, false});
-    const auto share = unav::launch::find_package_share("unav_resources");
     const std::string cams_path = declare_parameter<std::string>(
-        "cameras_config", share ? *share + "/config/sensors/bluerov2_cameras.yaml" : "",
+        "cameras_config", unav::common::try_find_resource("config/sensors/bluerov2_cameras.yaml").value_or(""),
         {"camera YAML (for the camera's mount on the body)", {}, {}, false});
     bool found = false;
     try {
-      for (const auto& c : unav_renderer::load_cameras(cams_path))
+      for (const auto& c : unav::scene::load_cameras(cams_path))
         if (c.name == camera_) {
           X_BC_ = c.X_BC;
           found = true;
@@ -56,9 +56,9 @@ class DatasetRecorder : public unav::Node {
     } catch (const DatasetError& e) {
       throw unav::ConfigError(e.what());
     }
-    if (declare_parameter<bool>("lockstep", false, {"ack every odometry on /lockstep/ack", {}, {}, false}))
-      ack_pub_ = create_publisher<unav_msgs::msg::LockstepAck>("/lockstep/ack", unav::QoS::reliable(100));
+    const bool lockstep = declare_parameter<bool>("lockstep", false, {"ack every odometry on /lockstep/ack", {}, {}, false});
     ack_name_ = declare_parameter<std::string>("lockstep_name", "recorder", {"participant name in acks", {}, {}, false});
+    if (lockstep) acker_ = std::make_unique<unav::lockstep::Acker>(*this, ack_name_);  // answers every state
     const std::string base = "camera/" + camera_;
     const unav::QoS q = unav::QoS::reliable(5);
     rgb_sub_ = create_subscription<sensor_msgs::msg::Image>(base + "/image_raw", q, [this](const sensor_msgs::msg::Image& m) {
@@ -92,20 +92,8 @@ class DatasetRecorder : public unav::Node {
     });
     odom_sub_ = create_subscription<nav_msgs::msg::Odometry>("ground_truth/odom", unav::QoS::reliable(100),
                                                              [this](const nav_msgs::msg::Odometry& m) {
-                                                               Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
-                                                               const auto& p = m.pose().pose();
-                                                               X.translation() = Eigen::Vector3d(p.position().x(), p.position().y(), p.position().z());
-                                                               X.linear() = Eigen::Quaterniond(p.orientation().w(), p.orientation().x(),
-                                                                                               p.orientation().y(), p.orientation().z())
-                                                                                .normalized()
-                                                                                .toRotationMatrix();
-                                                               on_pose(stamp_of(m.header()), X);
-                                                               if (ack_pub_) {
-                                                                 unav_msgs::msg::LockstepAck ack;
-                                                                 ack.header().stamp() = m.header().stamp();
-                                                                 ack.participant(ack_name_);
-                                                                 ack_pub_->publish(ack);
-                                                               }
+                                                               on_pose(stamp_of(m.header()), unav::from_msg(m.pose().pose()));
+                                                               if (acker_) acker_->ack(m.header());
                                                              });
     // Best effort to match the IMU publisher (sensor_data), but a deep history: physics runs in
     // bursts in lockstep and every sample belongs in the dataset.
@@ -161,7 +149,7 @@ class DatasetRecorder : public unav::Node {
   std::deque<std::pair<double, Eigen::Isometry3d>> poses_;
   std::vector<double> waiting_;  ///< image stamps whose pose has not arrived yet
   std::string ack_name_;
-  std::shared_ptr<unav::Publisher<unav_msgs::msg::LockstepAck>> ack_pub_;
+  std::unique_ptr<unav::lockstep::Acker> acker_;
   std::shared_ptr<unav::Subscription<sensor_msgs::msg::Image>> rgb_sub_, depth_sub_, seg_sub_;
   std::shared_ptr<unav::Subscription<sensor_msgs::msg::CameraInfo>> info_sub_;
   std::shared_ptr<unav::Subscription<nav_msgs::msg::Odometry>> odom_sub_;

@@ -9,7 +9,8 @@
 #include <filesystem>
 #include <unistd.h>
 
-#include "unav_renderer/camera.hpp"
+#include "unav_runtime/conversions.hpp"
+#include "unav_scene/camera.hpp"
 
 namespace unav_evaluation {
 namespace {
@@ -73,11 +74,27 @@ TrajectoryEvaluator::TrajectoryEvaluator(const unav::NodeOptions& options) : Nod
     throw unav::ParameterError("node '" + name() + "': trajectory_name '" + trajectory_name_ + "' must be a non-empty file name with combine");
   const std::string camera = declare_parameter<std::string>(
       "camera", "", {"estimators report this camera's optical frame (empty: base_link_frd)", {}, {}, false});
-  const std::string cams_path = declare_parameter<std::string>("cameras_config", "", {"camera YAML with `camera`", {}, {}, false});
-  if (!camera.empty()) {
+  const std::string cams_path = declare_parameter<std::string>(
+      "cameras_config", "", {"camera YAML with `camera` (empty: the mount comes from /tf_static)", {}, {}, false});
+  body_frame_ = declare_parameter<std::string>("body_frame", "base_link_frd", {"vehicle body frame", {}, {}, false});
+  if (!camera.empty() && cams_path.empty()) {
+    // The mount's owner (the renderer) publishes it once, latched: look it up like tf2 does.
+    camera_frame_ = camera + "_optical";
+    have_mount_ = false;
+    tf_static_sub_ = create_subscription<tf2_msgs::msg::TFMessage>(
+        "/tf_static", unav::QoS{unav::QoS::Reliability::kReliable, unav::QoS::Durability::kTransientLocal, 100},
+        [this](const tf2_msgs::msg::TFMessage& m) {
+          for (const auto& t : m.transforms())
+            if (t.child_frame_id() == camera_frame_ && t.header().frame_id() == body_frame_) {
+              X_BE_ = unav::from_msg(t.transform());
+              if (!have_mount_) logger()->info("camera mount {} -> {} from /tf_static", body_frame_, camera_frame_);
+              have_mount_ = true;
+            }
+        });
+  } else if (!camera.empty()) {
     bool found = false;
     try {
-      for (const auto& c : unav_renderer::load_cameras(cams_path))
+      for (const auto& c : unav::scene::load_cameras(cams_path))
         if (c.name == camera) {
           X_BE_ = c.X_BC;
           found = true;
@@ -118,6 +135,10 @@ std::vector<AlgorithmResult> TrajectoryEvaluator::write_outputs() {
   if (ground_truth_.empty()) {
     logger()->warn("no ground truth received: nothing to evaluate");
     return results;
+  }
+  if (!have_mount_) {
+    logger()->error("no {} -> {} transform on /tf_static (is the renderer running?): estimates are compared "
+                    "with the body frame", body_frame_, camera_frame_);
   }
   const std::string prefix = output_dir_ + "/" + (combine_ ? trajectory_name_ + "_" : "");
   // Ground truth of the frame the estimators report (the body, or a camera on it).

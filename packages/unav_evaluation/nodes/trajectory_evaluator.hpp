@@ -5,13 +5,16 @@
 // Ports (relative to the node namespace, default /rov):
 //   sub  ground_truth/odom                 nav_msgs/Odometry
 //   sub  localization/<algo>/odom          nav_msgs/Odometry, one per name in `estimates`
+//   sub  /tf_static                        tf2_msgs/TFMessage (latched): camera mounts
 //   sub  localization/<algo>/path          nav_msgs/Path: when an estimator publishes its whole
 //                                          (corrected) trajectory, the latest path is evaluated,
 //                                          followed by the odometry stamped after its end
 // Params: estimates (names), output_dir, trajectory_name (table row label), alignment
 //         (none|se3|sim3|scale), rpe_delta (frames), max_time_diff (s, association),
-//         camera + cameras_config (estimators report that camera's optical frame, as monocular
-//         ones do: ground truth is moved from base_link_frd to it before comparing),
+//         camera (estimators report that camera's optical frame, as monocular ones do: ground
+//         truth is moved from body_frame to it before comparing; the mount body_frame ->
+//         <camera>_optical is looked up on /tf_static, where the renderer publishes it, or read
+//         from cameras_config when that YAML is given), body_frame (default base_link_frd),
 //         combine (several runs share output_dir: files are prefixed with trajectory_name and
 //         results.md/csv/json hold the rows of every run, kept in rows/<trajectory_name>.tsv).
 #pragma once
@@ -23,6 +26,7 @@
 
 #include "nav_msgs/msg/odometry.hpp"
 #include "nav_msgs/msg/path.hpp"
+#include "tf2_msgs/msg/tf_message.hpp"
 #include "unav_evaluation/report.hpp"
 #include "unav_runtime/runtime.hpp"
 
@@ -43,6 +47,9 @@ class TrajectoryEvaluator : public unav::Node {
   bool written_ = false, combine_ = false;
   Trajectory ground_truth_;
   Eigen::Isometry3d X_BE_ = Eigen::Isometry3d::Identity();  ///< estimated frame on the body
+  std::string camera_frame_, body_frame_;  ///< tf lookup of X_BE_ (camera_frame_ empty: not needed)
+  bool have_mount_ = true;                 ///< false until the camera mount is known
+  std::shared_ptr<unav::Subscription<tf2_msgs::msg::TFMessage>> tf_static_sub_;
   std::map<std::string, Trajectory> estimates_, paths_;
   std::vector<std::shared_ptr<unav::Subscription<nav_msgs::msg::Odometry>>> subs_;
   std::vector<std::shared_ptr<unav::Subscription<nav_msgs::msg::Path>>> path_subs_;

@@ -41,24 +41,14 @@ Sim3 umeyama(const Eigen::Matrix3Xd& src, const Eigen::Matrix3Xd& dst, bool with
   if (src.cols() != dst.cols() || src.cols() < 2)
     throw TrajectoryError("umeyama: need the same number (>= 2) of source and destination points, got " +
                           std::to_string(src.cols()) + " and " + std::to_string(dst.cols()));
-  const double n = static_cast<double>(src.cols());
-  const Eigen::Vector3d mean_src = src.rowwise().mean();
-  const Eigen::Vector3d mean_dst = dst.rowwise().mean();
-  const Eigen::Matrix3Xd src_c = src.colwise() - mean_src;
-  const Eigen::Matrix3Xd dst_c = dst.colwise() - mean_dst;
-  const double sigma_src = src_c.squaredNorm() / n;
-  const Eigen::Matrix3d cov = dst_c * src_c.transpose() / n;
-  Eigen::JacobiSVD<Eigen::Matrix3d> svd(cov, Eigen::ComputeFullU | Eigen::ComputeFullV);
-  Eigen::Matrix3d S = Eigen::Matrix3d::Identity();
-  if (svd.matrixU().determinant() * svd.matrixV().determinant() < 0.0) S(2, 2) = -1.0;
-  Sim3 out;
-  out.R = svd.matrixU() * S * svd.matrixV().transpose();
-  if (with_scale) {
-    if (sigma_src <= 0.0) throw TrajectoryError("umeyama: source points have no spread (all identical)");
-    out.s = (svd.singularValues().asDiagonal() * S).trace() / sigma_src;
-  }
-  out.t = mean_dst - out.s * out.R * mean_src;
-  return out;
+  // evo's rules: two points suffice, collinear sets and any scale are accepted.
+  unav::common::UmeyamaOptions options;
+  options.with_scale = with_scale;
+  options.min_points = 2;
+  const unav::common::UmeyamaResult r = unav::common::Umeyama(src, dst, options);
+  if (with_scale && r.source_variance <= 0.0)
+    throw TrajectoryError("umeyama: source points have no spread (all identical)");
+  return r.S;
 }
 
 Alignment alignment_from_string(const std::string& name) {

@@ -1,7 +1,6 @@
 // trajectory_evaluator over DDS: ground truth and a monocular-like estimate (scaled, shifted,
 // rotated copy) in; on destruction: TUM files, results (APE ~0 after Sim(3)), and a PNG.
 #include <gtest/gtest.h>
-#include <unistd.h>
 
 #include <cmath>
 #include <filesystem>
@@ -12,14 +11,14 @@
 
 #include "nav_msgs/msg/path.hpp"
 #include "trajectory_evaluator.hpp"
-#include "unav_renderer/camera.hpp"
+#include "unav_runtime/testing.hpp"
+#include "unav_scene/camera.hpp"
 
 using namespace std::chrono_literals;
+using unav::testing::make_link;
 
 TEST(TrajectoryEvaluator, WritesTableTumAndPlotOnShutdown) {
-  unav::ContextOptions o;
-  o.domain_id = 100 + static_cast<int>(getpid() % 100);
-  o.handle_signals = false;
+  const unav::ContextOptions o = unav::testing::test_context_options();
   const std::string out = ::testing::TempDir() + "eval_node_out";
   std::filesystem::remove_all(out);
   const std::string p_out = "output_dir:=" + out;
@@ -32,14 +31,12 @@ TEST(TrajectoryEvaluator, WritesTableTumAndPlotOnShutdown) {
   auto gt_pub = probe.create_publisher<nav_msgs::msg::Odometry>("/rov/ground_truth/odom", unav::QoS::reliable(100));
   auto est_pub = probe.create_publisher<nav_msgs::msg::Odometry>("/rov/localization/mono/odom", unav::QoS::reliable(100));
   auto spin = [&](std::chrono::milliseconds d, const std::function<bool()>& done) {
-    const auto end = std::chrono::steady_clock::now() + d;
-    while (!done() && std::chrono::steady_clock::now() < end) {
-      node_ctx.spin_some(1ms);
-      test_ctx.spin_some(1ms);
-    }
-    return done();
+    return unav::testing::spin_until({&node_ctx, &test_ctx}, done, d);
   };
-  ASSERT_TRUE(spin(10s, [&] { return gt_pub->subscription_count() > 0 && est_pub->subscription_count() > 0; }));
+  // Both sides matched before the first pose; every pose delivered and taken before the node
+  // writes its outputs (see unav_runtime/testing.hpp).
+  const std::vector<unav::testing::Link> links = {make_link(*gt_pub, *node), make_link(*est_pub, *node)};
+  ASSERT_TRUE(unav::testing::wait_for_match({&node_ctx, &test_ctx}, links)) << unav::testing::describe(links);
   const Eigen::AngleAxisd R(0.4, Eigen::Vector3d::UnitZ());
   for (int i = 0; i < 100; ++i) {
     const double t = 0.1 * i, a = 0.05 * i;
@@ -63,7 +60,7 @@ TEST(TrajectoryEvaluator, WritesTableTumAndPlotOnShutdown) {
     est_pub->publish(msg(0.3 * (R * p) + Eigen::Vector3d(1, 2, 3), Eigen::Quaterniond(R) * q));  // Sim(3) copy
     spin(2ms, [] { return false; });
   }
-  spin(500ms, [] { return false; });
+  ASSERT_TRUE(unav::testing::wait_for_delivery({&node_ctx, &test_ctx}, links));
   node.reset();  // shutdown: writes everything
   for (const char* f : {"ground_truth.tum", "mono.tum", "results.md", "results.csv", "results.json", "top_view.png"})
     EXPECT_TRUE(std::filesystem::exists(out + "/" + f)) << f;
@@ -90,7 +87,7 @@ void RunCombined(const std::string& out, const std::string& run, int domain) {
   const std::string root = UNAV_REPO_ROOT;
   const std::string cams = root + "/config/sensors/bluerov2_down_vslam.yaml";
   Eigen::Isometry3d X_BC = Eigen::Isometry3d::Identity();
-  for (const auto& c : unav_renderer::load_cameras(cams))
+  for (const auto& c : unav::scene::load_cameras(cams))
     if (c.name == "down") X_BC = c.X_BC;
   unav::ContextOptions o;
   o.domain_id = domain;
@@ -106,14 +103,11 @@ void RunCombined(const std::string& out, const std::string& run, int domain) {
   auto est_pub = probe.create_publisher<nav_msgs::msg::Odometry>("/rov/localization/mono/odom", unav::QoS::reliable(100));
   auto path_pub = probe.create_publisher<nav_msgs::msg::Path>("/rov/localization/mono/path", unav::QoS::reliable(2));
   auto spin = [&](std::chrono::milliseconds d, const std::function<bool()>& done) {
-    const auto end = std::chrono::steady_clock::now() + d;
-    while (!done() && std::chrono::steady_clock::now() < end) {
-      node_ctx.spin_some(1ms);
-      test_ctx.spin_some(1ms);
-    }
-    return done();
+    return unav::testing::spin_until({&node_ctx, &test_ctx}, done, d);
   };
-  ASSERT_TRUE(spin(10s, [&] { return gt_pub->subscription_count() > 0 && est_pub->subscription_count() > 0 && path_pub->subscription_count() > 0; }));
+  const std::vector<unav::testing::Link> links = {make_link(*gt_pub, *node), make_link(*est_pub, *node),
+                                                  make_link(*path_pub, *node)};
+  ASSERT_TRUE(unav::testing::wait_for_match({&node_ctx, &test_ctx}, links)) << unav::testing::describe(links);
   auto pose_msg = [](double t, const Eigen::Isometry3d& X) {
     nav_msgs::msg::Odometry m;
     const unav::Time s{std::llround(t * 1e9)};
@@ -156,7 +150,7 @@ void RunCombined(const std::string& out, const std::string& run, int domain) {
     if (i == 79) path_pub->publish(path);
     spin(2ms, [] { return false; });
   }
-  spin(500ms, [] { return false; });
+  ASSERT_TRUE(unav::testing::wait_for_delivery({&node_ctx, &test_ctx}, links));
   node.reset();
 }
 
@@ -165,7 +159,7 @@ void RunCombined(const std::string& out, const std::string& run, int domain) {
 TEST(TrajectoryEvaluator, CombinesRunsPrefersPathsAndComparesInTheCameraFrame) {
   const std::string out = ::testing::TempDir() + "eval_node_combined";
   std::filesystem::remove_all(out);
-  const int domain = 100 + static_cast<int>((getpid() + 37) % 100);
+  const int domain = unav::testing::unique_domain_id();
   RunCombined(out, "linear", domain);
   RunCombined(out, "with_loop", domain);
   for (const char* f : {"linear_ground_truth.tum", "linear_mono.tum", "linear_top_view.png", "with_loop_mono.tum",

@@ -17,9 +17,9 @@
 #include "unav_localization/image_sequence.hpp"
 #include "unav_localization/klt_vo.hpp"
 #include "unav_localization/mono_slam.hpp"
-#include "unav_renderer/camera.hpp"
+#include "unav_scene/camera.hpp"
 #include "unav_renderer/renderer.hpp"
-#include "unav_renderer/world.hpp"
+#include "unav_scene/world.hpp"
 
 namespace ul = unav_localization;
 
@@ -52,8 +52,8 @@ int main(int argc, char** argv) {
     }
     source = argv[1];
   } else {
-    const auto world = unav_renderer::load_world(std::string(UNAV_REPO_ROOT) + "/worlds/pipe_inspection/world.yaml");
-    const auto model = unav_renderer::CameraModel::from_hfov("down", 640, 480, 90.0 * M_PI / 180.0);
+    const auto world = unav::scene::load_world(std::string(UNAV_REPO_ROOT) + "/worlds/pipe_inspection/world.yaml");
+    const auto model = unav::scene::CameraModel::from_hfov("down", 640, 480, 90.0 * M_PI / 180.0);
     unav_renderer::Renderer renderer(world, {model}, {});
     for (int k = 0; k < 300; ++k) {
       Eigen::Isometry3d X = Eigen::Isometry3d::Identity();

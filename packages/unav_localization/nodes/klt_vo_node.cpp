@@ -26,10 +26,10 @@
 #include "nav_msgs/msg/path.hpp"
 #include "sensor_msgs/msg/camera_info.hpp"
 #include "sensor_msgs/msg/image.hpp"
-#include "unav_launch/package_index.hpp"
+#include "unav_common/resources.hpp"
 #include "unav_localization/klt_vo.hpp"
-#include "unav_msgs/msg/lockstep_ack.hpp"
-#include "unav_renderer/camera.hpp"
+#include "unav_runtime/lockstep_ack.hpp"
+#include "unav_scene/camera.hpp"
 #include "unav_runtime/runtime.hpp"
 
 namespace unav_localization {
@@ -39,12 +39,11 @@ class KltVoNode : public unav::Node {
   explicit KltVoNode(const unav::NodeOptions& options) : Node("klt_vo", options, "rov") {
     const std::string cam = declare_parameter<std::string>("camera", "down", {"camera name", {}, {}, false});
     camera_ = cam;
-    const auto share = unav::launch::find_package_share("unav_resources");
     const std::string cams_path = declare_parameter<std::string>(
-        "cameras_config", share ? *share + "/config/sensors/bluerov2_cameras.yaml" : "", {"camera YAML", {}, {}, false});
+        "cameras_config", unav::common::try_find_resource("config/sensors/bluerov2_cameras.yaml").value_or(""), {"camera YAML", {}, {}, false});
     bool found = false;
     try {
-      for (const auto& c : unav_renderer::load_cameras(cams_path))
+      for (const auto& c : unav::scene::load_cameras(cams_path))
         if (c.name == cam) {
           X_BC_ = c.X_BC;
           found = true;
@@ -62,7 +61,8 @@ class KltVoNode : public unav::Node {
     lockstep_ = declare_parameter<bool>("lockstep", false, {"ack every processed image on /lockstep/ack", {}, {}, false});
     ack_name_ = declare_parameter<std::string>("lockstep_name", "klt_vo", {"participant name in acks", {}, {}, false});
     image_period_ = declare_parameter<double>("image_period", 0.1, {"camera frame period [s] (lockstep acks)", 1e-3, 10.0, false});
-    if (lockstep_) ack_pub_ = create_publisher<unav_msgs::msg::LockstepAck>("/lockstep/ack", unav::QoS::reliable(100));
+    // A frame consumer owes nothing until its next frame: it acks up to 1 ms before it.
+    if (lockstep_) acker_ = std::make_unique<unav::lockstep::Acker>(*this, ack_name_, image_period_ - 1e-3);
     const std::string base = "camera/" + cam;
     odom_pub_ = create_publisher<nav_msgs::msg::Odometry>("localization/klt_vo/odom", unav::QoS::reliable());
     path_pub_ = create_publisher<nav_msgs::msg::Path>("localization/klt_vo/path", unav::QoS::reliable(1));
@@ -149,14 +149,8 @@ class KltVoNode : public unav::Node {
     }
   }
   // Lockstep: after the image at t, acks up to just under the next image (t + image_period).
-  void ack(const std_msgs::msg::dds_::Header_& h) {
-    if (!ack_pub_) return;
-    const unav::Time until{key(h) + static_cast<int64_t>(std::llround((image_period_ - 1e-3) * 1e9))};
-    unav_msgs::msg::LockstepAck a;
-    a.header().stamp().sec(until.sec());
-    a.header().stamp().nanosec(until.nanosec());
-    a.participant(ack_name_);
-    ack_pub_->publish(a);
+  void ack(const std_msgs::msg::Header& h) {
+    if (acker_) acker_->ack(h);
   }
   void publish(const std_msgs::msg::dds_::Header_& h, const Eigen::Isometry3d& T_OB) {
     nav_msgs::msg::Odometry o;
@@ -191,7 +185,7 @@ class KltVoNode : public unav::Node {
   std::string camera_, ack_name_;
   bool lockstep_ = false;
   double image_period_ = 0.1;
-  std::shared_ptr<unav::Publisher<unav_msgs::msg::LockstepAck>> ack_pub_;
+  std::unique_ptr<unav::lockstep::Acker> acker_;
   KltVoOptions options_;
   std::unique_ptr<KltVo> vo_;
   VoStatus last_status_ = VoStatus::kInitializing;

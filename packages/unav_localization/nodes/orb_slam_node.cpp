@@ -24,10 +24,10 @@
 #include "nav_msgs/msg/path.hpp"
 #include "sensor_msgs/msg/camera_info.hpp"
 #include "sensor_msgs/msg/image.hpp"
-#include "unav_launch/package_index.hpp"
+#include "unav_common/resources.hpp"
 #include "unav_localization/mono_slam.hpp"
-#include "unav_msgs/msg/lockstep_ack.hpp"
-#include "unav_renderer/camera.hpp"
+#include "unav_runtime/lockstep_ack.hpp"
+#include "unav_scene/camera.hpp"
 #include "unav_runtime/runtime.hpp"
 
 namespace unav_localization {
@@ -37,11 +37,10 @@ class OrbSlamNode : public unav::Node {
   explicit OrbSlamNode(const unav::NodeOptions& options) : Node("orb_slam", options, "rov") {
     const std::string cam = declare_parameter<std::string>("camera", "down", {"camera name", {}, {}, false});
     camera_ = cam;
-    const auto share = unav::launch::find_package_share("unav_resources");
     const std::string cams_path = declare_parameter<std::string>(
-        "cameras_config", share ? *share + "/config/sensors/bluerov2_cameras.yaml" : "", {"camera YAML (the camera must be in it)", {}, {}, false});
+        "cameras_config", unav::common::try_find_resource("config/sensors/bluerov2_cameras.yaml").value_or(""), {"camera YAML (the camera must be in it)", {}, {}, false});
     const std::string voc_path = declare_parameter<std::string>(
-        "vocabulary", share ? *share + "/config/vocabulary/orb_vocabulary.bin" : "",
+        "vocabulary", unav::common::try_find_resource("config/vocabulary/orb_vocabulary.bin").value_or(""),
         {"bag-of-words vocabulary (unav_train_vocabulary); empty: no loop closing or relocalisation", {}, {}, false});
     options_.orb.features = static_cast<int>(declare_parameter<int64_t>("features", 1000, {"ORB features per image", 100.0, 10000.0, false}));
     options_.loop_closing = declare_parameter<bool>("loop_closing", true, {"detect and close loops", {}, {}, false});
@@ -53,7 +52,7 @@ class OrbSlamNode : public unav::Node {
     if (!options_.IsValid(&msg)) throw unav::ParameterError("node '" + name() + "': " + msg);
     bool found = false;
     try {
-      for (const auto& c : unav_renderer::load_cameras(cams_path))
+      for (const auto& c : unav::scene::load_cameras(cams_path))
         if (c.name == cam) {
           found = true;
         }
@@ -74,7 +73,8 @@ class OrbSlamNode : public unav::Node {
     const std::string base = "camera/" + cam;
     odom_pub_ = create_publisher<nav_msgs::msg::Odometry>("localization/orb_slam/odom", unav::QoS::reliable());
     path_pub_ = create_publisher<nav_msgs::msg::Path>("localization/orb_slam/path", unav::QoS::reliable(1));
-    if (lockstep_) ack_pub_ = create_publisher<unav_msgs::msg::LockstepAck>("/lockstep/ack", unav::QoS::reliable(100));
+    // A frame consumer owes nothing until its next frame: it acks up to 1 ms before it.
+    if (lockstep_) acker_ = std::make_unique<unav::lockstep::Acker>(*this, ack_name_, image_period_ - 1e-3);
     info_sub_ = create_subscription<sensor_msgs::msg::CameraInfo>(
         base + "/camera_info", unav::QoS::reliable(5), [this](const sensor_msgs::msg::CameraInfo& m) { on_info(m); });
     image_sub_ = create_subscription<sensor_msgs::msg::Image>(base + "/image_raw", unav::QoS::reliable(50),
@@ -189,15 +189,8 @@ class OrbSlamNode : public unav::Node {
     path_pub_->publish(path);
   }
 
-  void ack(const std_msgs::msg::dds_::Header_& h) {
-    if (!ack_pub_) return;
-    const double t = unav::Time::from_msg(h.stamp().sec(), h.stamp().nanosec()).seconds();
-    const unav::Time until = unav::Time{static_cast<int64_t>(std::llround((t + image_period_ - 1e-3) * 1e9))};
-    unav_msgs::msg::LockstepAck a;
-    a.header().stamp().sec(until.sec());
-    a.header().stamp().nanosec(until.nanosec());
-    a.participant(ack_name_);
-    ack_pub_->publish(a);
+  void ack(const std_msgs::msg::Header& h) {
+    if (acker_) acker_->ack(h);
   }
 
   MonoSlamOptions options_;
@@ -209,7 +202,7 @@ class OrbSlamNode : public unav::Node {
   double image_period_ = 0.1;
   std::shared_ptr<unav::Publisher<nav_msgs::msg::Odometry>> odom_pub_;
   std::shared_ptr<unav::Publisher<nav_msgs::msg::Path>> path_pub_;
-  std::shared_ptr<unav::Publisher<unav_msgs::msg::LockstepAck>> ack_pub_;
+  std::unique_ptr<unav::lockstep::Acker> acker_;
   std::shared_ptr<unav::Subscription<sensor_msgs::msg::CameraInfo>> info_sub_;
   std::shared_ptr<unav::Subscription<sensor_msgs::msg::Image>> image_sub_;
 };

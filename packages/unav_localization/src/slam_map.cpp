@@ -191,21 +191,13 @@ double Map::MedianDepth(int kf_id) const {
 }
 
 bool EstimateSim3(const Eigen::Matrix3Xd& from, const Eigen::Matrix3Xd& to, bool fix_scale, Sim3* S) {
-  if (from.cols() < 3 || from.cols() != to.cols()) return false;
-  const Eigen::Vector3d mf = from.rowwise().mean(), mt = to.rowwise().mean();
-  const Eigen::Matrix3Xd a = from.colwise() - mf, b = to.colwise() - mt;
-  const double var_from = a.squaredNorm() / static_cast<double>(from.cols());
-  if (!(var_from > 1e-12)) return false;
-  const Eigen::Matrix3d cov = b * a.transpose() / static_cast<double>(from.cols());
-  Eigen::JacobiSVD<Eigen::Matrix3d> svd(cov, Eigen::ComputeFullU | Eigen::ComputeFullV);
-  const Eigen::Vector3d sv = svd.singularValues();
-  if (!(sv(1) > 1e-9 * std::max(1.0, sv(0)))) return false;  // collinear
-  Eigen::Matrix3d D = Eigen::Matrix3d::Identity();
-  if (svd.matrixU().determinant() * svd.matrixV().determinant() < 0) D(2, 2) = -1;
-  S->R = svd.matrixU() * D * svd.matrixV().transpose();
-  S->s = fix_scale ? 1.0 : (sv.asDiagonal() * D).trace() / var_from;
-  S->t = mt - S->s * S->R * mf;
-  return std::isfinite(S->s) && S->s > 0;
+  // The common Umeyama with the SLAM's rules (its defaults): >= 3 points, spread > 1e-12 m^2,
+  // not collinear; a non-positive scale is written but rejected (as before, bit for bit).
+  unav::common::UmeyamaOptions options;
+  options.with_scale = !fix_scale;
+  const unav::common::UmeyamaResult r = unav::common::Umeyama(from, to, options);
+  if (r.status == unav::common::UmeyamaStatus::kOk || r.status == unav::common::UmeyamaStatus::kBadScale) *S = r.S;
+  return r.ok();
 }
 
 }  // namespace unav_localization

@@ -12,9 +12,9 @@
 #include <opencv2/imgproc.hpp>
 
 #include "unav_localization/klt_vo.hpp"
-#include "unav_renderer/camera.hpp"
+#include "unav_scene/camera.hpp"
 #include "unav_renderer/renderer.hpp"
-#include "unav_renderer/world.hpp"
+#include "unav_scene/world.hpp"
 
 using unav_localization::KltVo;
 using unav_localization::KltVoOptions;
@@ -34,9 +34,9 @@ struct Sequence {
 
 const Sequence& rendered_sequence() {
   static const Sequence seq = [] {
-    unav_renderer::World world =
-        unav_renderer::load_world(std::string(UNAV_REPO_ROOT) + "/worlds/pipe_inspection/world.yaml");
-    unav_renderer::CameraModel cam = unav_renderer::CameraModel::from_hfov("down", 320, 180, 90.0 * M_PI / 180.0);
+    unav::scene::World world =
+        unav::scene::load_world(std::string(UNAV_REPO_ROOT) + "/worlds/pipe_inspection/world.yaml");
+    unav::scene::CameraModel cam = unav::scene::CameraModel::from_hfov("down", 320, 180, 90.0 * M_PI / 180.0);
     unav_renderer::RenderOptions ro;
     ro.noise = false;
     ro.marine_snow = false;  // particles move independently of the scene
@@ -98,8 +98,8 @@ KltVoOptions monocular() {
 }  // namespace
 
 TEST(KltVo, RgbdTracksARenderedSequenceWithKnownMotion) {
-  unav_renderer::World world = unav_renderer::load_world(std::string(UNAV_REPO_ROOT) + "/worlds/pipe_inspection/world.yaml");
-  unav_renderer::CameraModel cam = unav_renderer::CameraModel::from_hfov("down", 320, 180, 90.0 * M_PI / 180.0);
+  unav::scene::World world = unav::scene::load_world(std::string(UNAV_REPO_ROOT) + "/worlds/pipe_inspection/world.yaml");
+  unav::scene::CameraModel cam = unav::scene::CameraModel::from_hfov("down", 320, 180, 90.0 * M_PI / 180.0);
   unav_renderer::RenderOptions ro;
   ro.noise = false;
   ro.marine_snow = false;      // particles move independently of the scene

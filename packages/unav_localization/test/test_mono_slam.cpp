@@ -15,9 +15,9 @@
 #include "unav_localization/orb_extractor.hpp"
 #include "unav_localization/sim3.hpp"
 #include "unav_localization/slam_optimizer.hpp"
-#include "unav_renderer/camera.hpp"
+#include "unav_scene/camera.hpp"
 #include "unav_renderer/renderer.hpp"
-#include "unav_renderer/world.hpp"
+#include "unav_scene/world.hpp"
 
 namespace ul = unav_localization;
 
@@ -53,8 +53,8 @@ struct RenderedRun {
 
 // Renders the down camera (640 x 480, 90 deg) along body poses X_WB.
 RenderedRun Render(const std::vector<Eigen::Isometry3d>& X_WB) {
-  unav_renderer::World world = unav_renderer::load_world(std::string(UNAV_REPO_ROOT) + "/worlds/pipe_inspection/world.yaml");
-  unav_renderer::CameraModel cam = unav_renderer::CameraModel::from_hfov("down", 640, 480, 90.0 * M_PI / 180.0);
+  unav::scene::World world = unav::scene::load_world(std::string(UNAV_REPO_ROOT) + "/worlds/pipe_inspection/world.yaml");
+  unav::scene::CameraModel cam = unav::scene::CameraModel::from_hfov("down", 640, 480, 90.0 * M_PI / 180.0);
   unav_renderer::RenderOptions ro;
   ro.marine_snow = false;  // particles move on their own: not part of the static scene
   unav_renderer::Renderer renderer(world, {cam}, ro);

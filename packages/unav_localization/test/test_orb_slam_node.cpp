@@ -2,7 +2,6 @@
 // in; odometry of the camera, the corrected path and lockstep acks out. The camera trajectory
 // matches the ground truth after a Sim(3) alignment (monocular scale).
 #include <gtest/gtest.h>
-#include <unistd.h>
 
 #include <cmath>
 #include <map>
@@ -15,10 +14,11 @@
 #include "sensor_msgs/msg/image.hpp"
 #include "unav_localization/sim3.hpp"
 #include "unav_msgs/msg/lockstep_ack.hpp"
-#include "unav_renderer/camera.hpp"
+#include "unav_scene/camera.hpp"
 #include "unav_renderer/renderer.hpp"
-#include "unav_renderer/world.hpp"
+#include "unav_scene/world.hpp"
 #include "unav_runtime/runtime.hpp"
+#include "unav_runtime/testing.hpp"
 
 #define UNAV_ORB_SLAM_NO_MAIN
 #include "../nodes/orb_slam_node.cpp"
@@ -27,15 +27,13 @@ using namespace std::chrono_literals;
 
 TEST(OrbSlamNode, TracksRenderedImagesOverDdsAndAcksLockstep) {
   const std::string root = UNAV_REPO_ROOT;
-  const auto cams = unav_renderer::load_cameras(root + "/config/sensors/bluerov2_down_vslam.yaml");
-  const auto world = unav_renderer::load_world(root + "/worlds/pipe_inspection/world.yaml");
+  const auto cams = unav::scene::load_cameras(root + "/config/sensors/bluerov2_down_vslam.yaml");
+  const auto world = unav::scene::load_world(root + "/worlds/pipe_inspection/world.yaml");
   unav_renderer::RenderOptions ro;
   ro.marine_snow = false;
   unav_renderer::Renderer renderer(world, cams, ro);
 
-  unav::ContextOptions o;
-  o.domain_id = 120 + static_cast<int>(getpid() % 80);
-  o.handle_signals = false;
+  const unav::ContextOptions o = unav::testing::test_context_options();
   const std::string p_cams = "cameras_config:=" + root + "/config/sensors/bluerov2_down_vslam.yaml";
   const std::string p_voc = "vocabulary:=" + root + "/config/vocabulary/orb_vocabulary.bin";
   const char* argv[] = {"orb_slam", "--ros-args", "-p", p_cams.c_str(), "-p", p_voc.c_str(), "-p", "lockstep:=true"};
@@ -64,14 +62,14 @@ TEST(OrbSlamNode, TracksRenderedImagesOverDdsAndAcksLockstep) {
         acks[ns / 100000000] = ns;
       });
   auto spin = [&](std::chrono::milliseconds d, const std::function<bool()>& done) {
-    const auto end = std::chrono::steady_clock::now() + d;
-    while (!done() && std::chrono::steady_clock::now() < end) {
-      node_ctx.spin_some(1ms);
-      test_ctx.spin_some(1ms);
-    }
-    return done();
+    return unav::testing::spin_until({&node_ctx, &test_ctx}, done, d);
   };
-  ASSERT_TRUE(spin(10s, [&] { return img_pub->subscription_count() > 0 && info_pub->subscription_count() > 0 && ack_sub->publisher_count() > 0; }));
+  // Both sides of every link matched before the first image (see unav_runtime/testing.hpp).
+  using unav::testing::make_link;
+  const std::vector<unav::testing::Link> links = {make_link(*info_pub, *node), make_link(*img_pub, *node),
+                                                  make_link(*node, *odom_sub), make_link(*node, *path_sub),
+                                                  make_link(*node, *ack_sub)};
+  ASSERT_TRUE(unav::testing::wait_for_match({&node_ctx, &test_ctx}, links)) << unav::testing::describe(links);
 
   const int n = 50;
   std::map<int64_t, Eigen::Vector3d> truth;

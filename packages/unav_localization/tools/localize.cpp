@@ -22,7 +22,8 @@
 
 #include "unav_evaluation/report.hpp"
 #include "unav_evaluation/trajectory.hpp"
-#include "unav_launch/package_index.hpp"
+#include "unav_common/errors.hpp"
+#include "unav_common/resources.hpp"
 #include "unav_localization/image_sequence.hpp"
 #include "unav_localization/klt_vo.hpp"
 #include "unav_localization/mono_slam.hpp"
@@ -85,8 +86,7 @@ int main(int argc, char** argv) {
     double depth_scale = 1.0;
     if (method == "orb_slam") {
       if (vocabulary.empty()) {
-        const auto share = unav::launch::find_package_share("unav_resources");
-        if (share) vocabulary = *share + "/config/vocabulary/orb_vocabulary.bin";
+        vocabulary = unav::common::try_find_resource("config/vocabulary/orb_vocabulary.bin").value_or("");
       }
       std::shared_ptr<const ul::BowVocabulary> voc;
       if (!vocabulary.empty()) {
@@ -188,6 +188,9 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "unav_localize: %s\n", e.what());
     return 2;
   } catch (const ue::TrajectoryError& e) {
+    std::fprintf(stderr, "unav_localize: %s\n", e.what());
+    return 2;
+  } catch (const unav::ConfigError& e) {
     std::fprintf(stderr, "unav_localize: %s\n", e.what());
     return 2;
   } catch (const std::invalid_argument& e) {

@@ -9,18 +9,6 @@
 
 namespace unav::physics {
 
-Eigen::Vector3d roll_pitch_yaw(const Eigen::Quaterniond& q_WB) {
-  const Eigen::Matrix3d R = q_WB.normalized().toRotationMatrix();
-  const double pitch = std::asin(std::clamp(-R(2, 0), -1.0, 1.0));
-  return {std::atan2(R(2, 1), R(2, 2)), pitch, std::atan2(R(1, 0), R(0, 0))};
-}
-
-Eigen::Quaterniond quaternion_from_rpy(double roll, double pitch, double yaw) {
-  return Eigen::Quaterniond(Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()) *
-                            Eigen::AngleAxisd(pitch, Eigen::Vector3d::UnitY()) *
-                            Eigen::AngleAxisd(roll, Eigen::Vector3d::UnitX()));
-}
-
 bool parse_integrator(const std::string& name, Integrator* out) {
   if (name == "velocity_verlet") {
     *out = Integrator::kVelocityVerlet;

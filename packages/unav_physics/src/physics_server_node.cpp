@@ -4,7 +4,8 @@
 #include <cmath>
 #include <limits>
 
-#include "unav_launch/package_index.hpp"
+#include "unav_common/resources.hpp"
+#include "unav_runtime/conversions.hpp"
 
 namespace unav::physics {
 namespace {
@@ -27,8 +28,7 @@ int64_t steps_in(double period, double dt, const std::string& name) {
 }  // namespace
 
 PhysicsServer::PhysicsServer(const unav::NodeOptions& options) : Node("physics_server", options, "rov") {
-  const auto share = unav::launch::find_package_share("unav_resources");
-  const std::string default_vehicle = share ? *share + "/config/vehicles/bluerov2_heavy.yaml" : "";
+  const std::string default_vehicle = unav::common::try_find_resource("config/vehicles/bluerov2_heavy.yaml").value_or("");
   const std::string vehicle_path = declare_parameter<std::string>(
       "vehicle_config", default_vehicle, {"vehicle YAML (config/vehicles/*.yaml)", {}, {}, false});
   if (vehicle_path.empty())
@@ -78,6 +78,8 @@ PhysicsServer::PhysicsServer(const unav::NodeOptions& options) : Node("physics_s
   steps_per_publish_ = steps_in(1.0 / publish_rate, so.dt, "publish_rate");
   steps_per_thruster_state_ = steps_in(1.0 / thruster_rate, so.dt, "thruster_state_rate");
   steps_per_barrier_ = steps_in(lockstep_period_, so.dt, "lockstep_period");
+  // Acks are integer-nanosecond stamps; half a physics step absorbs rounding from doubles.
+  barrier_ = std::make_unique<unav::lockstep::Barrier>(participants_, std::llround(0.5 * so.dt * 1e9));
 
   const VehicleParams vehicle = load_vehicle(vehicle_path);
   std::unique_ptr<CurrentModel> current = current_path.empty() ? nullptr : load_current(current_path);
@@ -95,6 +97,8 @@ PhysicsServer::PhysicsServer(const unav::NodeOptions& options) : Node("physics_s
   // Ports.
   clock_pub_ = create_publisher<rosgraph_msgs::msg::Clock>("/clock", unav::QoS::reliable(1));
   odom_pub_ = create_publisher<nav_msgs::msg::Odometry>("ground_truth/odom", unav::QoS::reliable());
+  tf_pub_ = create_publisher<tf2_msgs::msg::TFMessage>("/tf", unav::QoS::reliable(100));
+  tf_.transforms().resize(1);
   thruster_pub_ = create_publisher<unav_msgs::msg::ThrusterState>("thrusters/state", unav::QoS::reliable());
   if (sp.imu.enabled) imu_pub_ = create_publisher<sensor_msgs::msg::Imu>("imu", unav::QoS::sensor_data());
   if (sp.pressure.enabled) {
@@ -137,14 +141,11 @@ void PhysicsServer::fill_header(std_msgs::msg::dds_::Header_& h, double t, const
   h.frame_id(frame);
 }
 
+int64_t PhysicsServer::barrier_ns() const { return std::llround(barrier_t_ * 1e9); }
+
 bool PhysicsServer::barrier_open() const {
   if (barrier_t_ < 0.0) return true;
-  const double eps = 0.5 * sim_->options().dt;  // stamps are rounded to ns
-  for (const auto& p : participants_) {
-    const auto it = last_ack_.find(p);
-    if (it == last_ack_.end() || it->second < barrier_t_ - eps) return false;
-  }
-  return !wait_for_command_ || last_command_stamp_ >= barrier_t_ - eps;
+  return barrier_->open(barrier_ns()) && (!wait_for_command_ || barrier_->meets(last_command_ns_, barrier_ns()));
 }
 
 void PhysicsServer::run_steps() {
@@ -195,11 +196,8 @@ void PhysicsServer::hold_at_barrier() {
   if (now - held_since_ >= 5.0 && now - last_wait_log_ >= 5.0) {
     last_wait_log_ = now;
     std::string missing;
-    for (const auto& p : participants_) {
-      const auto it = last_ack_.find(p);
-      if (it == last_ack_.end() || it->second < barrier_t_ - 0.5 * sim_->options().dt) missing += " " + p;
-    }
-    if (wait_for_command_ && last_command_stamp_ < barrier_t_ - 0.5 * sim_->options().dt) missing += " (thruster command)";
+    for (const auto& p : barrier_->missing(barrier_ns())) missing += " " + p;
+    if (wait_for_command_ && !barrier_->meets(last_command_ns_, barrier_ns())) missing += " (thruster command)";
     logger()->warn("lockstep: holding at t = {:.3f} s for {:.0f} s, waiting for:{}", barrier_t_, now - held_since_,
                    missing);
   }
@@ -235,22 +233,17 @@ void PhysicsServer::publish_state() {
   clock_pub_->publish(clock_);
   const RigidBodyState& x = sim_->state();
   fill_header(odom_.header(), t, world_frame_);
-  auto& pose = odom_.pose().pose();
-  pose.position().x(x.p_WB_W.x());
-  pose.position().y(x.p_WB_W.y());
-  pose.position().z(x.p_WB_W.z());
-  pose.orientation().x(x.q_WB.x());
-  pose.orientation().y(x.q_WB.y());
-  pose.orientation().z(x.q_WB.z());
-  pose.orientation().w(x.q_WB.w());
-  auto& tw = odom_.twist().twist();
-  tw.linear().x(x.v_WB_B.x());
-  tw.linear().y(x.v_WB_B.y());
-  tw.linear().z(x.v_WB_B.z());
-  tw.angular().x(x.w_WB_B.x());
-  tw.angular().y(x.w_WB_B.y());
-  tw.angular().z(x.w_WB_B.z());
+  odom_.pose().pose() = unav::to_msg(x.p_WB_W, x.q_WB);
+  odom_.twist().twist().linear() = unav::to_vector3_msg(x.v_WB_B);
+  odom_.twist().twist().angular() = unav::to_vector3_msg(x.w_WB_B);
   odom_pub_->publish(odom_);
+  // The vehicle on /tf (world_frame -> body_frame), for RViz, Foxglove and tf2 users.
+  auto& tf = tf_.transforms()[0];
+  tf.header() = odom_.header();
+  tf.child_frame_id(body_frame_);
+  tf.transform().translation() = unav::to_vector3_msg(x.p_WB_W);
+  tf.transform().rotation() = odom_.pose().pose().orientation();
+  tf_pub_->publish(tf_);
 }
 
 void PhysicsServer::publish_thruster_state() {
@@ -355,20 +348,15 @@ void PhysicsServer::on_command(const unav_msgs::msg::ThrusterCommand& msg) {
     logger()->info("thruster commands resumed");
     timeout_logged_ = false;
   }
-  last_command_stamp_ = std::max(last_command_stamp_, unav::Time::from_msg(msg.header().stamp().sec(),
-                                                                           msg.header().stamp().nanosec())
-                                                          .seconds());
+  last_command_ns_ = std::max(last_command_ns_, unav::nanoseconds(msg.header()));
   if (lockstep_ && barrier_t_ >= 0.0 && barrier_open()) run_steps();
 }
 
 void PhysicsServer::on_ack(const unav_msgs::msg::LockstepAck& msg) {
   const std::string who = msg.participant();
-  if (std::find(participants_.begin(), participants_.end(), who) == participants_.end()) {
-    if (!last_ack_.count(who)) logger()->warn("lockstep ack from '{}', which is not in lockstep_participants", who);
-  }
-  const double t = unav::Time::from_msg(msg.header().stamp().sec(), msg.header().stamp().nanosec()).seconds();
-  auto it = last_ack_.find(who);
-  if (it == last_ack_.end() || t > it->second) last_ack_[who] = t;
+  const bool known = barrier_->has_acked(who);
+  if (!barrier_->on_ack(who, unav::nanoseconds(msg.header())) && !known)
+    logger()->warn("lockstep ack from '{}', which is not in lockstep_participants", who);
   if (barrier_t_ >= 0.0 && barrier_open()) run_steps();
 }
 

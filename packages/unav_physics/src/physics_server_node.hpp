@@ -5,6 +5,7 @@
 //   sub  /lockstep/ack         unav_msgs/LockstepAck              reliable     (lockstep mode)
 //   pub  /clock                rosgraph_msgs/Clock                reliable     every publish tick
 //   pub  ground_truth/odom     nav_msgs/Odometry                  reliable     publish_rate
+//   pub  /tf                   tf2_msgs/TFMessage                 reliable     publish_rate, world_frame -> body_frame
 //   pub  thrusters/state       unav_msgs/ThrusterState            reliable     thruster_state_rate
 //   pub  imu                   sensor_msgs/Imu                    sensor_data  per vehicle config
 //   pub  pressure              sensor_msgs/FluidPressure          sensor_data
@@ -36,6 +37,8 @@
 
 #include "geometry_msgs/msg/point_stamped.hpp"
 #include "nav_msgs/msg/odometry.hpp"
+#include "tf2_msgs/msg/tf_message.hpp"
+#include "unav_runtime/lockstep.hpp"
 #include "rosgraph_msgs/msg/clock.hpp"
 #include "sensor_msgs/msg/fluid_pressure.hpp"
 #include "sensor_msgs/msg/imu.hpp"
@@ -63,6 +66,7 @@ class PhysicsServer : public unav::Node {
   void on_command(const unav_msgs::msg::ThrusterCommand& msg);
   void on_ack(const unav_msgs::msg::LockstepAck& msg);
   bool barrier_open() const;
+  int64_t barrier_ns() const;
   void hold_at_barrier();
   void step_once();
   void publish_state();
@@ -82,8 +86,8 @@ class PhysicsServer : public unav::Node {
 
   // Lockstep bookkeeping (simulated seconds).
   double barrier_t_ = -1.0;  ///< barrier the server is holding at, < 0 when running
-  std::map<std::string, double> last_ack_;
-  double last_command_stamp_ = -1.0;
+  std::unique_ptr<unav::lockstep::Barrier> barrier_;  ///< who must ack (lockstep mode)
+  int64_t last_command_ns_ = INT64_MIN;              ///< newest thruster command stamp
   double held_since_ = -1.0, last_republish_ = 0.0, last_wait_log_ = 0.0;  ///< wall s
   double wall_start_ = 0.0;  ///< realtime: wall time [s] that maps to simulated time 0
   bool timeout_logged_ = false;
@@ -92,6 +96,7 @@ class PhysicsServer : public unav::Node {
 
   std::shared_ptr<unav::Publisher<rosgraph_msgs::msg::Clock>> clock_pub_;
   std::shared_ptr<unav::Publisher<nav_msgs::msg::Odometry>> odom_pub_;
+  std::shared_ptr<unav::Publisher<tf2_msgs::msg::TFMessage>> tf_pub_;
   std::shared_ptr<unav::Publisher<unav_msgs::msg::ThrusterState>> thruster_pub_;
   std::shared_ptr<unav::Publisher<sensor_msgs::msg::Imu>> imu_pub_;
   std::shared_ptr<unav::Publisher<sensor_msgs::msg::FluidPressure>> pressure_pub_;
@@ -106,6 +111,7 @@ class PhysicsServer : public unav::Node {
 
   // Reused messages (no allocation per publish after the first).
   nav_msgs::msg::Odometry odom_;
+  tf2_msgs::msg::TFMessage tf_;
   rosgraph_msgs::msg::Clock clock_;
   unav_msgs::msg::ThrusterState thruster_state_;
 };

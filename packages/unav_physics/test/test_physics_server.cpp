@@ -1,21 +1,18 @@
 // physics_server over DDS: a server context and a test context in one process, on a domain of
 // the test's own, spun alternately from this thread.
 #include <gtest/gtest.h>
-#include <unistd.h>
 
 #include "physics_server_node.hpp"
+#include "unav_runtime/testing.hpp"
 
 using namespace std::chrono_literals;
 using unav::physics::PhysicsServer;
+using unav::testing::make_link;
 
 namespace {
 
-int domain() { return 100 + static_cast<int>(getpid() % 100); }
-
 std::unique_ptr<unav::Context> make_context(std::vector<std::string> args) {
-  unav::ContextOptions o;
-  o.domain_id = domain();
-  o.handle_signals = false;
+  const unav::ContextOptions o = unav::testing::test_context_options();
   args.insert(args.begin(), {"physics_server", "--ros-args", "-p",
                              std::string("vehicle_config:=") + UNAV_CONFIG_DIR + "/vehicles/bluerov2_heavy.yaml"});
   std::vector<const char*> argv;
@@ -41,10 +38,7 @@ struct Harness {
   explicit Harness(const std::vector<std::string>& params) {
     server_ctx = make_context(params);
     server = std::make_unique<PhysicsServer>(unav::NodeOptions{server_ctx.get()});
-    unav::ContextOptions o;
-    o.domain_id = domain();
-    o.handle_signals = false;
-    test_ctx = std::make_unique<unav::Context>(o);
+    test_ctx = std::make_unique<unav::Context>(unav::testing::test_context_options());
     probe = std::make_unique<unav::Node>("probe", unav::NodeOptions{test_ctx.get()});
     odom_sub = probe->create_subscription<nav_msgs::msg::Odometry>(
         "/rov/ground_truth/odom", unav::QoS::reliable(100), [this](const nav_msgs::msg::Odometry& m) { odoms.push_back(m); });
@@ -54,7 +48,14 @@ struct Harness {
         });
     cmd_pub = probe->create_publisher<unav_msgs::msg::ThrusterCommand>("/rov/thrusters/command", unav::QoS::reliable());
     ack_pub = probe->create_publisher<unav_msgs::msg::LockstepAck>("/lockstep/ack", unav::QoS::reliable(100));
-    EXPECT_TRUE(spin_until([&] { return cmd_pub->subscription_count() > 0 && odom_sub->publisher_count() > 0; }, 10s));
+    // Both sides of every link matched before the test sends or counts anything (the server's
+    // /lockstep/ack reader exists in lockstep mode only).
+    std::vector<unav::testing::Link> links = {make_link(*cmd_pub, *server), make_link(*server, *odom_sub),
+                                              make_link(*server, *clock_sub)};
+    for (const auto* s : server->subscriptions())
+      if (s->topic_name() == ack_pub->topic_name()) links.push_back(make_link(*ack_pub, *s));
+    EXPECT_TRUE(unav::testing::wait_for_match({server_ctx.get(), test_ctx.get()}, links))
+        << unav::testing::describe(links);
   }
   ~Harness() {
     odom_sub.reset();
@@ -67,12 +68,7 @@ struct Harness {
     server_ctx.reset();
   }
   bool spin_until(const std::function<bool()>& done, std::chrono::milliseconds timeout) {
-    const auto end = std::chrono::steady_clock::now() + timeout;
-    while (!done() && std::chrono::steady_clock::now() < end) {
-      server_ctx->spin_some(1ms);
-      test_ctx->spin_some(1ms);
-    }
-    return done();
+    return unav::testing::spin_until({server_ctx.get(), test_ctx.get()}, done, timeout);
   }
   void command(double t, const std::vector<double>& u) {
     unav_msgs::msg::ThrusterCommand c;
@@ -131,10 +127,15 @@ TEST(PhysicsServer, RealtimeFailsafeAndBadCommands) {
   ASSERT_TRUE(h.spin_until([&] { return h.server->simulator().command_stats().rejected_non_finite == 1; }, 5s));
   EXPECT_EQ(h.server->simulator().command_stats().rejected_wrong_length, 1u);
   EXPECT_EQ(h.server->simulator().command_stats().accepted, 1u);
-  // Simulated time follows the wall clock; after > 0.2 s without a command, thrust goes to zero.
-  ASSERT_TRUE(h.spin_until([&] { return h.server->simulator().time() > 1.0; }, 10s));
+  // Simulated time follows the wall clock from the server's start, so the command was applied at
+  // whatever simulated time discovery and matching took (more than the 0.2 s timeout on a loaded
+  // machine): time the failsafe from then, not from t = 0.
+  const double t_command = h.server->simulator().time();  // the command was applied at or before it
+  // After > 0.2 s without a command, thrust goes to zero.
+  ASSERT_TRUE(h.spin_until([&] { return h.server->simulator().time() > t_command + 1.0; }, 10s));
   EXPECT_TRUE(h.server->simulator().command_timed_out());
-  // Thrust decays with the 0.1 s lag after the timeout at 0.2 s: e^-8 of ~40 N by t = 1 s.
+  // Thrust decays with the 0.1 s lag after the timeout 0.2 s after the command: e^-8 of ~40 N
+  // 1 s after the command.
   EXPECT_LT(h.server->simulator().thrusters().thrust().cwiseAbs().maxCoeff(), 0.1);
   EXPECT_FALSE(h.odoms.empty());
 }

@@ -15,7 +15,6 @@
 #include "raw_type.hpp"
 #include "unav_introspection/cdr_codec.hpp"
 #include "unav_introspection/type_registry.hpp"
-#include "unav_evaluation/metrics.hpp"
 #include "unav_launch/launch_description.hpp"
 #include "unav_launch/package_index.hpp"
 #include "unav_launch/supervisor.hpp"
@@ -271,63 +270,6 @@ int node_list() {
   return 0;
 }
 
-struct EvalOptions {
-  std::string ref, est, align = "sim3", relation = "trans", delta_unit = "f";
-  double max_diff = 0.01, offset = 0.0, delta = 1.0;
-  bool all_pairs = false;
-};
-
-unav_evaluation::PoseRelation relation_from(const std::string& r) {
-  using unav_evaluation::PoseRelation;
-  if (r == "trans" || r == "trans_part") return PoseRelation::kTranslation;
-  if (r == "angle_rad") return PoseRelation::kRotationAngleRad;
-  if (r == "angle_deg") return PoseRelation::kRotationAngleDeg;
-  if (r == "full") return PoseRelation::kFull;
-  throw UsageError("--pose_relation '" + r + "': expected trans, angle_rad, angle_deg or full");
-}
-
-// `unav eval ape|rpe`: evo_ape / evo_rpe on two TUM files, printed like evo.
-int eval(bool is_ape, const EvalOptions& o) {
-  namespace ev = unav_evaluation;
-  try {
-    const ev::Trajectory ref_all = ev::read_tum(o.ref);
-    const ev::Trajectory est_all = ev::read_tum(o.est);
-    auto [ref, est] = ev::associate(ref_all, est_all, o.max_diff, o.offset);
-    const ev::Alignment mode = ev::alignment_from_string(o.align);
-    ev::align(est, ref, mode);
-    const ev::PoseRelation rel = relation_from(o.relation);
-    ev::RpeOptions ro;
-    ro.delta = o.delta;
-    ro.all_pairs = o.all_pairs;
-    if (o.delta_unit == "m")
-      ro.unit = ev::DeltaUnit::kMeters;
-    else if (o.delta_unit != "f")
-      throw UsageError("--delta_unit '" + o.delta_unit + "': expected f (frames) or m (meters)");
-    const auto errors = is_ape ? ev::ape(ref, est, rel) : ev::rpe(ref, est, rel, ro);
-    const ev::Statistics st = ev::statistics(errors);
-    const char* what = rel == ev::PoseRelation::kTranslation         ? "translation part (m)"
-                       : rel == ev::PoseRelation::kRotationAngleRad  ? "rotation angle in radians"
-                       : rel == ev::PoseRelation::kRotationAngleDeg  ? "rotation angle in degrees"
-                                                                      : "full transformation (unit-less)";
-    std::printf("%s w.r.t. %s", is_ape ? "APE" : "RPE", what);
-    if (!is_ape) std::printf(" for delta = %g (%s) using %s pairs", o.delta, o.delta_unit == "m" ? "m" : "frames",
-                             o.all_pairs ? "all" : "consecutive");
-    const char* align_text = mode == ev::Alignment::kSim3 ? "\n(with Sim(3) Umeyama alignment)"
-                             : mode == ev::Alignment::kSE3 ? "\n(with SE(3) Umeyama alignment)"
-                             : mode == ev::Alignment::kScaleOnly ? "\n(scale corrected)"
-                                                                  : "\n(not aligned)";
-    std::printf("%s\n\n", align_text);
-    std::printf("       max\t%f\n      mean\t%f\n    median\t%f\n       min\t%f\n      rmse\t%f\n       sse\t%f\n"
-                "       std\t%f\n",
-                st.max, st.mean, st.median, st.min, st.rmse, st.sse, st.std);
-    std::printf("(%zu pose pairs of %zu reference and %zu estimated poses)\n", st.count, ref_all.size(),
-                est_all.size());
-    return 0;
-  } catch (const ev::TrajectoryError& e) {
-    throw UsageError(e.what());
-  }
-}
-
 int launch(const std::string& file, const std::vector<std::string>& args) {
   unav::launch::LaunchDescription desc;
   try {
@@ -341,14 +283,16 @@ int launch(const std::string& file, const std::vector<std::string>& args) {
 }  // namespace
 }  // namespace unav_cli
 
-// `unav localize ...` runs unav_localization's offline runner with the same arguments.
-int localize(int argc, char** argv) {
+// `unav localize ...` and `unav eval ...` run a capability package's tool with the same
+// arguments (as `ros2 <verb>` extensions do), so the framework links no capability.
+int run_package_tool(const char* package, const char* executable, int argc, char** argv) {
   std::vector<std::string> searched;
-  const auto exe = unav::launch::find_executable("unav_localization", "unav_localize", &searched);
+  const auto exe = unav::launch::find_executable(package, executable, &searched);
   if (!exe) {
     std::string dirs;
     for (const auto& d : searched) dirs += " " + d;
-    std::cerr << "unav: error: unav_localize not found (package unav_localization; searched:" << dirs << ")" << std::endl;
+    std::cerr << "unav: error: " << executable << " not found (package " << package << "; searched:" << dirs << ")"
+              << std::endl;
     return 2;
   }
   std::vector<char*> args{const_cast<char*>(exe->c_str())};
@@ -361,7 +305,9 @@ int localize(int argc, char** argv) {
 
 int main(int argc, char** argv) {
   using namespace unav_cli;
-  if (argc >= 2 && std::string(argv[1]) == "localize") return localize(argc, argv);
+  if (argc >= 2 && std::string(argv[1]) == "localize")
+    return run_package_tool("unav_localization", "unav_localize", argc, argv);
+  if (argc >= 2 && std::string(argv[1]) == "eval") return run_package_tool("unav_evaluation", "unav_eval", argc, argv);
   CLI::App app{"unav: command-line tool of UNav-Sim (like ros2)", "unav"};
   app.require_subcommand(1);
 
@@ -415,22 +361,7 @@ int main(int argc, char** argv) {
 
   app.add_subcommand("localize", "run a visual localization estimator on an image folder (unav localize --help)");
 
-  EvalOptions eval_opts;
-  auto* eval_cmd = app.add_subcommand("eval", "trajectory metrics on TUM files, as evo computes them");
-  eval_cmd->require_subcommand(1);
-  CLI::App* eval_ape = eval_cmd->add_subcommand("ape", "absolute pose error (evo_ape)");
-  CLI::App* eval_rpe = eval_cmd->add_subcommand("rpe", "relative pose error (evo_rpe)");
-  for (CLI::App* c : {eval_ape, eval_rpe}) {
-    c->add_option("ref", eval_opts.ref, "reference trajectory (TUM)")->required();
-    c->add_option("est", eval_opts.est, "estimated trajectory (TUM)")->required();
-    c->add_option("-a,--align", eval_opts.align, "none, se3, sim3 (default), scale");
-    c->add_option("-r,--pose_relation", eval_opts.relation, "trans (default), angle_rad, angle_deg, full");
-    c->add_option("--t_max_diff", eval_opts.max_diff, "max timestamp difference for association [s] (0.01)");
-    c->add_option("--t_offset", eval_opts.offset, "time offset added to est [s]");
-  }
-  eval_rpe->add_option("-d,--delta", eval_opts.delta, "delta between pose pairs (1)");
-  eval_rpe->add_option("-u,--delta_unit", eval_opts.delta_unit, "f (frames, default) or m (meters)");
-  eval_rpe->add_flag("--all_pairs", eval_opts.all_pairs, "use all pairs, not only consecutive ones");
+  app.add_subcommand("eval", "trajectory metrics on TUM files, as evo computes them (unav eval --help)");
 
   CLI11_PARSE(app, argc, argv);
   if (full_length) echo_opts.truncate_length = intro::EchoOptions::kFullLength;
@@ -442,8 +373,6 @@ int main(int argc, char** argv) {
     if (pub->parsed()) return topic_pub(topic_name, type_name, values, rate, once, times, wait_matching);
     if (node_list_cmd->parsed()) return node_list();
     if (launch_cmd->parsed()) return launch(launch_file, launch_args);
-    if (eval_ape->parsed()) return eval(true, eval_opts);
-    if (eval_rpe->parsed()) return eval(false, eval_opts);
   } catch (const UsageError& e) {
     std::cerr << "unav: error: " << e.what() << std::endl;
     return 2;

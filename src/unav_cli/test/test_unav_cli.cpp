@@ -11,12 +11,11 @@
 
 #include "unav_msgs/msg/thruster_command.hpp"
 #include "unav_runtime/runtime.hpp"
+#include "unav_runtime/testing.hpp"
 
 using namespace std::chrono_literals;
 
 namespace {
-
-int domain() { return 100 + static_cast<int>(getpid() % 100); }
 
 struct Result {
   int code = -1;
@@ -27,8 +26,8 @@ struct Result {
 // Runs `unav ARGS` with this test's domain; stdout and stderr captured separately.
 Result run_unav(const std::string& args, const std::string& spin_time = "1.5") {
   const std::string err_file = ::testing::TempDir() + "unav_err_" + std::to_string(getpid());
-  const std::string cmd = "ROS_DOMAIN_ID=" + std::to_string(domain()) + " UNAV_SPIN_TIME=" + spin_time + " timeout -s INT 30 " +
-                          UNAV_EXE + " " + args + " 2>" + err_file;
+  const std::string cmd = "ROS_DOMAIN_ID=" + std::to_string(unav::testing::unique_domain_id()) +
+                          " UNAV_SPIN_TIME=" + spin_time + " timeout -s INT 30 " + UNAV_EXE + " " + args + " 2>" + err_file;
   Result r;
   FILE* p = popen(cmd.c_str(), "r");
   std::array<char, 4096> buf;
@@ -51,10 +50,7 @@ Result run_unav_while_spinning(unav::Context& ctx, const std::string& args, cons
 class CliTest : public ::testing::Test {
  protected:
   CliTest() {
-    unav::ContextOptions o;
-    o.domain_id = domain();
-    o.handle_signals = false;
-    ctx_ = std::make_unique<unav::Context>(o);
+    ctx_ = std::make_unique<unav::Context>(unav::testing::test_context_options());
     node_ = std::make_unique<unav::Node>("talker", unav::NodeOptions{ctx_.get()}, "cli_test");
     pub_ = node_->create_publisher<unav_msgs::msg::ThrusterCommand>("cmd", unav::QoS::reliable());
     timer_ = node_->create_wall_timer(50ms, [this] {
@@ -94,7 +90,11 @@ TEST_F(CliTest, PubOnceIsReceived) {
   std::vector<double> got;
   auto sub = node_->create_subscription<unav_msgs::msg::ThrusterCommand>(
       "/cli_test/in", unav::QoS::reliable(), [&](const unav_msgs::msg::ThrusterCommand& m) { got = m.u(); });
-  const Result r = run_unav_while_spinning(*ctx_, "topic pub /cli_test/in unav_msgs/msg/ThrusterCommand '{u: [0.25, 1]}' --once");
+  // `topic pub --once` waits (up to the spin time) until its writer matched this reader, then
+  // waits for the reliable acknowledgement: a generous spin time only bounds the wait for
+  // discovery on a loaded machine; it costs nothing when discovery is quick.
+  const Result r = run_unav_while_spinning(
+      *ctx_, "topic pub /cli_test/in unav_msgs/msg/ThrusterCommand '{u: [0.25, 1]}' --once", "15");
   EXPECT_EQ(r.code, 0) << r.err;
   ctx_->spin_until([&] { return !got.empty(); }, 5s);
   EXPECT_EQ(got, (std::vector<double>{0.25, 1.0}));

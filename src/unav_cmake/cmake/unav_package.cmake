@@ -61,3 +61,17 @@ function(unav_forbid_dds target)
     endforeach()
   endif()
 endfunction()
+
+# unav_forbid_gl(target): fail the configure step if a library links OpenGL/EGL. Only the renderer
+# draws; the scene, physics, control, localization, evaluation and datagen cores run without a GPU
+# stack (DESIGN.md section 8).
+function(unav_forbid_gl target)
+  get_target_property(_libs ${target} LINK_LIBRARIES)
+  if(_libs)
+    foreach(_l IN LISTS _libs)
+      if(_l MATCHES "EPOXY|epoxy|OpenGL|EGL|GLESv|unav_renderer::unav_renderer")
+        message(FATAL_ERROR "${target} must not link ${_l}: only the renderer uses OpenGL (DESIGN.md section 8)")
+      endif()
+    endforeach()
+  endif()
+endfunction()

@@ -4,16 +4,13 @@
 #include <string>
 #include <vector>
 
+#include "unav_common/sim3.hpp"
 #include "unav_evaluation/trajectory.hpp"
 
 namespace unav_evaluation {
 
-/// y = s * R * x + t
-struct Sim3 {
-  Eigen::Matrix3d R = Eigen::Matrix3d::Identity();
-  Eigen::Vector3d t = Eigen::Vector3d::Zero();
-  double s = 1.0;
-};
+/// y = s * R * x + t (the workspace's one Sim(3), unav_common/sim3.hpp).
+using Sim3 = unav::common::Sim3;
 
 /// Least-squares similarity (Umeyama 1991) mapping points `src` onto `dst` (columns are
 /// points, at least 3 non-collinear for a unique rotation). With `with_scale` false, s = 1.

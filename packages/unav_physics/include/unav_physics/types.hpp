@@ -10,6 +10,8 @@
 // (Fossen's [u v w p q r]). SI units everywhere: m, s, kg, N, N m, rad, Pa, T.
 #pragma once
 
+#include "unav_common/errors.hpp"
+#include "unav_common/frames.hpp"
 #include <cstddef>
 #include <stdexcept>
 #include <string>
@@ -30,9 +32,8 @@ using ThrusterMatrix = Eigen::Matrix<double, 6, Eigen::Dynamic, 0, 6, kMaxThrust
 /// Thrown at configure time for a bad configuration value. The message names the source (file
 /// path or "<in-memory>"), the key, the value and the rule it broke, e.g.
 /// "config/vehicles/x.yaml: thrusters[3].direction has zero length (got [0, 0, 0])".
-struct ConfigError : std::runtime_error {
-  using std::runtime_error::runtime_error;
-};
+/// Bad configuration (file, key, value, rule): the one error type of the workspace.
+using ConfigError = unav::ConfigError;
 
 /// Skew-symmetric matrix S(a) with S(a) b = a x b.
 inline Eigen::Matrix3d skew(const Eigen::Vector3d& a) {
@@ -63,10 +64,9 @@ struct RigidBodyState {
   Eigen::Vector3d v_WB_W() const { return q_WB * v_WB_B; }
 };
 
-/// Roll, pitch, yaw (ZYX convention, rad) of an attitude; for display and tests only.
-Eigen::Vector3d roll_pitch_yaw(const Eigen::Quaterniond& q_WB);
-/// Attitude from roll, pitch, yaw (ZYX convention, rad).
-Eigen::Quaterniond quaternion_from_rpy(double roll, double pitch, double yaw);
+// Roll, pitch, yaw (ZYX convention, rad) <-> attitude: one implementation, on the common floor.
+using unav::common::quaternion_from_rpy;
+using unav::common::roll_pitch_yaw;
 
 /// World properties shared by the dynamics and the sensors.
 struct EnvironmentParams {
