@@ -2,6 +2,8 @@
 // marked failed at run time gets zero and the wrench is still produced.
 #include <gtest/gtest.h>
 
+#include <fstream>
+
 #include "control_nodes.hpp"
 #include "unav_control/config.hpp"
 #include "unav_runtime/testing.hpp"
@@ -65,4 +67,35 @@ TEST(ControlAllocatorNode, WrenchInCommandOutAndRuntimeFailure) {
     return cmds.back().u()[2] == 0.0;
   }));
   check(cmds.back());  // the remaining seven thrusters still produce the wrench
+}
+
+TEST(MpcControllerNode, OneParameterSystemFileThenParamsFileThenCommandLine) {
+  // The MPC's schema is read from its config file; a params file and -p override single keys,
+  // with the schema's rules (the file says horizon_steps 20, dt 0.05).
+  const std::string cfg_file = std::string(UNAV_CONFIG_DIR) + "/controllers/mpc.yaml";
+  const std::string params = ::testing::TempDir() + "mpc_params.yaml";
+  std::ofstream(params) << "mpc_controller:\n  ros__parameters:\n    dt: 0.04\n    position_weights: [1.0, 2.0, 3.0]\n";
+  const std::string c = "config_file:=" + cfg_file;
+  const char* argv[] = {"mpc_controller", "--ros-args", "-p", c.c_str(), "--params-file", params.c_str(),
+                        "-p", "horizon_steps:=30"};
+  unav::Context ctx(8, argv, unav::testing::test_context_options());
+  unav::control::MpcControllerNode node({&ctx});
+  EXPECT_EQ(node.parameters().at("horizon_steps").as<int>(), 30);
+  EXPECT_DOUBLE_EQ(node.parameters().at("dt").as<double>(), 0.04);
+  EXPECT_DOUBLE_EQ(node.parameters().at("position_weights")[2].as<double>(), 3.0);
+  EXPECT_EQ(node.parameters().at("control_blocks").as<int>(), 5);  // from the file
+  bool listed = false;
+  for (const auto& row : node.parameter_table()) listed = listed || (row.name == "horizon_steps" && row.rule == "[1, 500]");
+  EXPECT_TRUE(listed);
+
+  // Out of range and unknown keys are errors naming the source, key, value and rule.
+  const char* bad[] = {"mpc_controller", "--ros-args", "-p", c.c_str(), "-p", "horizon_steps:=0"};
+  unav::Context bad_ctx(6, bad, unav::testing::test_context_options());
+  try {
+    unav::control::MpcControllerNode n({&bad_ctx});
+    ADD_FAILURE() << "horizon_steps 0 accepted";
+  } catch (const unav::ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("'-p horizon_steps:=0'"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("horizon_steps = 0: must be in [1, 500]"), std::string::npos) << e.what();
+  }
 }

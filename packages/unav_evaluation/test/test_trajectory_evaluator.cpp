@@ -11,6 +11,7 @@
 
 #include "nav_msgs/msg/path.hpp"
 #include "trajectory_evaluator.hpp"
+#include "unav_runtime/conversions.hpp"
 #include "unav_runtime/testing.hpp"
 #include "unav_scene/camera.hpp"
 
@@ -83,7 +84,9 @@ TEST(TrajectoryEvaluator, WritesTableTumAndPlotOnShutdown) {
 // the camera with the camera's mount, so the APE is ~0, and results.json holds both rows.
 namespace {
 
-void RunCombined(const std::string& out, const std::string& run, int domain) {
+// mount_on_tf: the camera mount comes from /tf_static (as the renderer publishes it) instead of
+// the camera YAML; the results must be the same.
+void RunCombined(const std::string& out, const std::string& run, int domain, bool mount_on_tf) {
   const std::string root = UNAV_REPO_ROOT;
   const std::string cams = root + "/config/sensors/bluerov2_down_vslam.yaml";
   Eigen::Isometry3d X_BC = Eigen::Isometry3d::Identity();
@@ -95,7 +98,7 @@ void RunCombined(const std::string& out, const std::string& run, int domain) {
   const std::string p_out = "output_dir:=" + out, p_run = "trajectory_name:=" + run, p_cams = "cameras_config:=" + cams;
   const char* argv[] = {"trajectory_evaluator", "--ros-args", "-p", p_out.c_str(), "-p", "estimates:=[mono]", "-p", p_run.c_str(),
                         "-p", "combine:=true", "-p", "camera:=down", "-p", p_cams.c_str()};
-  unav::Context node_ctx(14, argv, o);
+  unav::Context node_ctx(mount_on_tf ? 12 : 14, argv, o);
   auto node = std::make_unique<unav_evaluation::TrajectoryEvaluator>(unav::NodeOptions{&node_ctx});
   unav::Context test_ctx(o);
   unav::Node probe("probe", {&test_ctx});
@@ -105,8 +108,16 @@ void RunCombined(const std::string& out, const std::string& run, int domain) {
   auto spin = [&](std::chrono::milliseconds d, const std::function<bool()>& done) {
     return unav::testing::spin_until({&node_ctx, &test_ctx}, done, d);
   };
-  const std::vector<unav::testing::Link> links = {make_link(*gt_pub, *node), make_link(*est_pub, *node),
-                                                  make_link(*path_pub, *node)};
+  std::vector<unav::testing::Link> links = {make_link(*gt_pub, *node), make_link(*est_pub, *node),
+                                            make_link(*path_pub, *node)};
+  std::shared_ptr<unav::Publisher<tf2_msgs::msg::TFMessage>> tf_pub;
+  if (mount_on_tf) {
+    tf_pub = probe.create_publisher<tf2_msgs::msg::TFMessage>("/tf_static", unav::QoS::static_latched());
+    tf2_msgs::msg::TFMessage mounts;
+    mounts.transforms().push_back(unav::to_transform_stamped(X_BC, 0.0, "base_link_frd", "down_optical"));
+    tf_pub->publish(mounts);  // before matching: latched, the evaluator gets it when it matches
+    links.push_back(make_link(*tf_pub, *node));
+  }
   ASSERT_TRUE(unav::testing::wait_for_match({&node_ctx, &test_ctx}, links)) << unav::testing::describe(links);
   auto pose_msg = [](double t, const Eigen::Isometry3d& X) {
     nav_msgs::msg::Odometry m;
@@ -160,8 +171,8 @@ TEST(TrajectoryEvaluator, CombinesRunsPrefersPathsAndComparesInTheCameraFrame) {
   const std::string out = ::testing::TempDir() + "eval_node_combined";
   std::filesystem::remove_all(out);
   const int domain = unav::testing::unique_domain_id();
-  RunCombined(out, "linear", domain);
-  RunCombined(out, "with_loop", domain);
+  RunCombined(out, "linear", domain, false);
+  RunCombined(out, "with_loop", domain, true);
   for (const char* f : {"linear_ground_truth.tum", "linear_mono.tum", "linear_top_view.png", "with_loop_mono.tum",
                         "with_loop_top_view.png", "rows/linear.tsv", "rows/with_loop.tsv", "results.md", "results.json"})
     EXPECT_TRUE(std::filesystem::exists(out + "/" + f)) << f;

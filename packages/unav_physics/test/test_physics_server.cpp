@@ -32,6 +32,8 @@ struct Harness {
   std::vector<double> clocks;
   std::shared_ptr<unav::Subscription<nav_msgs::msg::Odometry>> odom_sub;
   std::shared_ptr<unav::Subscription<rosgraph_msgs::msg::Clock>> clock_sub;
+  std::vector<tf2_msgs::msg::TFMessage> tfs;
+  std::shared_ptr<unav::Subscription<tf2_msgs::msg::TFMessage>> tf_sub;
   std::shared_ptr<unav::Publisher<unav_msgs::msg::ThrusterCommand>> cmd_pub;
   std::shared_ptr<unav::Publisher<unav_msgs::msg::LockstepAck>> ack_pub;
 
@@ -46,12 +48,14 @@ struct Harness {
         "/clock", unav::QoS::reliable(100), [this](const rosgraph_msgs::msg::Clock& c) {
           clocks.push_back(unav::Time::from_msg(c.clock().sec(), c.clock().nanosec()).seconds());
         });
+    tf_sub = probe->create_subscription<tf2_msgs::msg::TFMessage>(
+        "/tf", unav::QoS::reliable(100), [this](const tf2_msgs::msg::TFMessage& m) { tfs.push_back(m); });
     cmd_pub = probe->create_publisher<unav_msgs::msg::ThrusterCommand>("/rov/thrusters/command", unav::QoS::reliable());
     ack_pub = probe->create_publisher<unav_msgs::msg::LockstepAck>("/lockstep/ack", unav::QoS::reliable(100));
     // Both sides of every link matched before the test sends or counts anything (the server's
     // /lockstep/ack reader exists in lockstep mode only).
     std::vector<unav::testing::Link> links = {make_link(*cmd_pub, *server), make_link(*server, *odom_sub),
-                                              make_link(*server, *clock_sub)};
+                                              make_link(*server, *clock_sub), make_link(*server, *tf_sub)};
     for (const auto* s : server->subscriptions())
       if (s->topic_name() == ack_pub->topic_name()) links.push_back(make_link(*ack_pub, *s));
     EXPECT_TRUE(unav::testing::wait_for_match({server_ctx.get(), test_ctx.get()}, links))
@@ -60,6 +64,7 @@ struct Harness {
   ~Harness() {
     odom_sub.reset();
     clock_sub.reset();
+    tf_sub.reset();
     cmd_pub.reset();
     ack_pub.reset();
     probe.reset();
@@ -105,6 +110,14 @@ TEST(PhysicsServer, LockstepHoldsEachBarrierUntilTheCommandArrives) {
   EXPECT_GT(p.x(), 0.05) << "surge thrust must move the vehicle forward (north)";
   EXPECT_EQ(h.odoms.back().header().frame_id(), "world_ned");
   EXPECT_EQ(h.odoms.back().child_frame_id(), "base_link_frd");
+  // The same state on /tf (world_ned -> base_link_frd), one transform per published state.
+  ASSERT_TRUE(h.spin_until([&] { return h.tfs.size() >= h.odoms.size(); }, 10s)) << h.tfs.size() << " tf messages";
+  const auto& t = h.tfs.back().transforms().at(0);
+  EXPECT_EQ(t.header().frame_id(), "world_ned");
+  EXPECT_EQ(t.child_frame_id(), "base_link_frd");
+  EXPECT_EQ(stamp_s(t.header()), stamp_s(h.odoms.back().header()));
+  EXPECT_EQ(t.transform().translation().x(), p.x());
+  EXPECT_EQ(t.transform().rotation().w(), h.odoms.back().pose().pose().orientation().w());
 }
 
 TEST(PhysicsServer, LockstepWaitsForEveryParticipantAck) {

@@ -5,7 +5,9 @@
 #include <fstream>
 
 #include "underwater_renderer_node.hpp"
+#include "unav_runtime/conversions.hpp"
 #include "unav_runtime/testing.hpp"
+#include "unav_scene/camera.hpp"
 
 using namespace std::chrono_literals;
 using unav::testing::make_link;
@@ -90,4 +92,31 @@ TEST(UnderwaterRendererNode, PublishesImagesStampedWithThePoseTimeAndAcks) {
   // Every pixel sees the seabed or the pipe: classes 1 (seabed) and 2 (pipeline) only... plus
   // rocks (3) possibly; never water (0) looking down from 2 m.
   for (uint8_t c : segs[0].data()) EXPECT_NE(c, 0);
+}
+
+TEST(UnderwaterRendererNode, PublishesCameraMountsOnTfStaticForLateJoiners) {
+  // The mount is published once, latched: a subscriber that joins after the node started still
+  // receives base_link_frd -> down_optical, equal to the camera YAML's mount (what the
+  // evaluator and estimators look up instead of reading the YAML).
+  const std::string world = std::string("world:=") + UNAV_REPO_ROOT + "/worlds/pipe_inspection/world.yaml";
+  const std::string cams_path = small_cameras();
+  const std::string cams = "cameras_config:=" + cams_path;
+  const char* argv[] = {"underwater_renderer", "--ros-args", "-p", world.c_str(), "-p", cams.c_str()};
+  unav::Context node_ctx(6, argv, unav::testing::test_context_options());
+  unav_renderer::UnderwaterRendererNode node({&node_ctx});
+  unav::Context test_ctx(unav::testing::test_context_options());
+  unav::Node probe("probe", {&test_ctx});
+  std::vector<tf2_msgs::msg::TFMessage> got;
+  auto sub = probe.create_subscription<tf2_msgs::msg::TFMessage>(
+      "/tf_static", unav::QoS::static_latched(), [&](const tf2_msgs::msg::TFMessage& m) { got.push_back(m); });
+  ASSERT_TRUE(unav::testing::spin_until({&node_ctx, &test_ctx}, [&] { return !got.empty(); }));
+  ASSERT_EQ(got[0].transforms().size(), 1u);
+  const auto& t = got[0].transforms()[0];
+  EXPECT_EQ(t.header().frame_id(), "base_link_frd");
+  EXPECT_EQ(t.child_frame_id(), "down_optical");
+  const Eigen::Isometry3d X_BC = unav::scene::load_cameras(cams_path)[0].X_BC;
+  EXPECT_LT((unav::from_msg(t.transform()).matrix() - X_BC.matrix()).norm(), 1e-12);
+  // A downward camera: its optical axis (z) is body down (+z), image top (-y) is body forward.
+  EXPECT_NEAR((X_BC.linear() * Eigen::Vector3d::UnitZ()).z(), 1.0, 1e-12);
+  EXPECT_NEAR((X_BC.linear() * -Eigen::Vector3d::UnitY()).x(), 1.0, 1e-12);
 }
