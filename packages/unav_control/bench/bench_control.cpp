@@ -11,6 +11,7 @@
 
 #include "../test/closed_loop.hpp"
 #include "unav_control/config.hpp"
+#include "unav_common/resources.hpp"
 
 using namespace unav;
 using namespace unav::control;
@@ -23,7 +24,7 @@ double pct(std::vector<double> v, double p) {
 }  // namespace
 
 int main() {
-  const MpcConfig cfg = load_mpc_config(std::string(UNAV_CONFIG_DIR) + "/controllers/mpc.yaml");
+  const MpcConfig cfg = load_mpc_config(unav::common::find_resource("config/controllers/mpc.yaml"));
   testing::LoopSetup s;
   s.plant = physics::bluerov2_heavy_params();
   s.model = cfg.model;
@@ -76,7 +77,7 @@ int main() {
   }
 
   // Allocation: random wrenches over twice the achievable box (about half saturate).
-  const AllocatorConfig acfg = load_allocator_config(std::string(UNAV_CONFIG_DIR) + "/controllers/allocator.yaml");
+  const AllocatorConfig acfg = load_allocator_config(unav::common::find_resource("config/controllers/allocator.yaml"));
   for (AllocationMode mode : {AllocationMode::kPseudoInverse, AllocationMode::kRedistributed}) {
     AllocatorOptions ao = acfg.options;
     ao.mode = mode;

@@ -20,6 +20,7 @@
 #include "unav_scene/camera.hpp"
 #include "unav_renderer/renderer.hpp"
 #include "unav_scene/world.hpp"
+#include "unav_common/resources.hpp"
 
 namespace ul = unav_localization;
 
@@ -52,7 +53,7 @@ int main(int argc, char** argv) {
     }
     source = argv[1];
   } else {
-    const auto world = unav::scene::load_world(std::string(UNAV_REPO_ROOT) + "/worlds/pipe_inspection/world.yaml");
+    const auto world = unav::scene::load_world(unav::common::find_resource("worlds/pipe_inspection/world.yaml"));
     const auto model = unav::scene::CameraModel::from_hfov("down", 640, 480, 90.0 * M_PI / 180.0);
     unav_renderer::Renderer renderer(world, {model}, {});
     for (int k = 0; k < 300; ++k) {
@@ -71,7 +72,7 @@ int main(int argc, char** argv) {
   std::printf("bench_mono_slam: %zu frames of %dx%d from %s, one thread\n", frames.size(), cam.width, cam.height, source.c_str());
 
   std::shared_ptr<const ul::BowVocabulary> voc;
-  const std::string voc_path = std::string(UNAV_REPO_ROOT) + "/config/vocabulary/orb_vocabulary.bin";
+  const std::string voc_path = unav::common::find_resource("config/vocabulary/orb_vocabulary.bin");
   if (std::filesystem::exists(voc_path)) voc = std::make_shared<ul::BowVocabulary>(ul::BowVocabulary::Load(voc_path));
   ul::MonoSlam slam(cam, {}, {}, voc);
   std::vector<double> track, total, kf_mapping;

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "unav_renderer/renderer.hpp"
+#include "unav_common/resources.hpp"
 
 using namespace unav_renderer;
 using Clock = std::chrono::steady_clock;
@@ -54,7 +55,7 @@ Result measure(Renderer& r, const std::string& cam, int frames) {
 int main(int argc, char** argv) {
   const int frames = argc > 1 ? std::atoi(argv[1]) : 40;
   const std::string world_path =
-      argc > 2 ? argv[2] : std::string(UNAV_REPO_ROOT) + "/worlds/pipe_inspection/world.yaml";
+      argc > 2 ? argv[2] : unav::common::find_resource("worlds/pipe_inspection/world.yaml");
   World world = load_world(world_path);
   CameraModel small = CameraModel::from_hfov("w320x180", 320, 180, 90.0 * M_PI / 180.0);
   small.X_BC.linear() = rotation_from_rpy(0, -M_PI / 2, 0) * R_camera_body_to_optical();

@@ -75,3 +75,30 @@ function(unav_forbid_gl target)
     endforeach()
   endif()
 endfunction()
+
+# unav_install_library(TARGETS t... [DEPENDENCIES dep...] [EXTRA code]): the one export block of a library
+# package. Installs the targets (lib/, bin/), the headers of include/, an export set
+# <PROJECT_NAME>Targets in namespace <PROJECT_NAME>:: and a <PROJECT_NAME>Config.cmake that
+# calls find_dependency() for each DEPENDENCIES entry (e.g. "Eigen3 3.3 NO_MODULE",
+# "unav_common", "OpenCV COMPONENTS core imgcodecs"; a static library also needs its private
+# dependencies there), plus package.xml. Consumers: find_package(<pkg>) + <pkg>::<target>.
+function(unav_install_library)
+  cmake_parse_arguments(ARG "" "EXTRA" "TARGETS;DEPENDENCIES" ${ARGN})
+  install(TARGETS ${ARG_TARGETS} EXPORT ${PROJECT_NAME}Targets
+    ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR}
+    LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR}
+    RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
+  install(DIRECTORY include/ DESTINATION include)
+  install(EXPORT ${PROJECT_NAME}Targets NAMESPACE ${PROJECT_NAME}:: DESTINATION share/${PROJECT_NAME}/cmake)
+  set(_config "include(CMakeFindDependencyMacro)\n")
+  foreach(_dep IN LISTS ARG_DEPENDENCIES)
+    string(APPEND _config "find_dependency(${_dep})\n")
+  endforeach()
+  if(ARG_EXTRA)
+    string(APPEND _config "${ARG_EXTRA}\n")  # raw CMake, e.g. pkg_check_modules() for an imported target
+  endif()
+  string(APPEND _config "include(\"\${CMAKE_CURRENT_LIST_DIR}/${PROJECT_NAME}Targets.cmake\")\n")
+  file(WRITE ${CMAKE_CURRENT_BINARY_DIR}/${PROJECT_NAME}Config.cmake "${_config}")
+  install(FILES ${CMAKE_CURRENT_BINARY_DIR}/${PROJECT_NAME}Config.cmake DESTINATION share/${PROJECT_NAME}/cmake)
+  install(FILES package.xml DESTINATION share/${PROJECT_NAME})
+endfunction()
