@@ -1,0 +1,189 @@
+// Internal: the state and steps of MonoSlam (one file per stage: mono_slam_features.cpp,
+// mono_slam_initializer.cpp, mono_slam_tracking.cpp, mono_slam_local_mapping.cpp,
+// mono_slam_loop_closing.cpp; mono_slam.cpp: bookkeeping and the public API).
+#pragma once
+
+#include "unav_localization/mono_slam.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <functional>
+#include <cmath>
+#include <random>
+#include <set>
+#include <stdexcept>
+#include <opencv2/calib3d.hpp>
+#include <opencv2/core/eigen.hpp>
+#include <opencv2/imgproc.hpp>
+#include "unav_localization/sim3.hpp"
+#include "unav_localization/slam_optimizer.hpp"
+
+namespace unav_localization {
+
+namespace slam_internal {
+constexpr int kThHigh = 100;  // descriptor distance accepted when projection already constrains
+constexpr int kThLow = 50;    // descriptor distance accepted for matching by appearance only
+constexpr double kChi2Mono = 5.991;
+using Clock = std::chrono::steady_clock;
+inline double Ms(Clock::time_point a) { return std::chrono::duration<double, std::milli>(Clock::now() - a).count(); }
+
+// The two smallest descriptor distances seen, for best-match plus ratio tests.
+struct BestTwo {
+  int best = 256, second = 256, index = -1, best_level = -1, second_level = -1;
+  void Add(int d, int i, int level = -1) {
+    if (d < best) {
+      second = best;
+      second_level = best_level;
+      best = d;
+      index = i;
+      best_level = level;
+    } else if (d < second) {
+      second = d;
+      second_level = level;
+    }
+  }
+};
+}  // namespace slam_internal
+
+struct MonoSlam::Impl {
+  struct Frame {
+    int index = -1;
+    double stamp = 0;
+    Features f;
+    std::vector<int> points;     ///< feature -> map point (-1)
+    std::vector<bool> outlier;
+    Eigen::Isometry3d T_cw = Eigen::Isometry3d::Identity();
+  };
+  struct TrajEntry {
+    double stamp;
+    int ref_kf;
+    Eigen::Isometry3d T_cr;
+  };
+
+  MonoSlamOptions opt;
+  PinholeCamera cam;
+  cv::Mat K, D;
+  std::unique_ptr<OrbExtractor> orb, orb_init;
+  std::shared_ptr<const BowVocabulary> voc;
+  std::vector<double> scales, sigma2;
+  double log_scale = 0;
+
+  std::unique_ptr<Map> map = std::make_unique<Map>();
+  BowDatabase db;
+  bool initialized = false;
+  std::unique_ptr<Frame> init_ref;
+  Frame cur, last;
+  bool last_tracked = false;
+  bool has_velocity = false;
+  Eigen::Isometry3d velocity = Eigen::Isometry3d::Identity();
+  int frame_index = 0;
+  int ref_kf = -1, last_kf_frame = -1, last_reloc_frame = -1000;
+  int lost_frames_in_row = 0;
+  std::vector<int> local_kfs, local_points;
+  std::vector<int> recent_points;
+  std::vector<std::pair<std::set<int>, int>> consistent_groups;
+  std::string loop_log;  ///< verified loop candidates of the current keyframe (summary message)
+  std::vector<TrajEntry> traj;
+  std::vector<StampedPose> frozen;  ///< trajectories of earlier maps, in the global frame
+  Sim3 G;                          ///< current map's world -> global frame
+  int map_number = 0;
+  Eigen::Isometry3d last_good_T_wc_global = Eigen::Isometry3d::Identity();
+  int last_good_ref_kf = -1;  ///< reference keyframe of the last tracked frame
+  SlamStats stats;
+  std::mt19937 rng{12345};
+
+  // ---------------------------------------------------------------- features
+  void ExtractFeatures(const cv::Mat& gray, const OrbExtractor& extractor, Frame* f);
+  void ComputeBow(Features* f) const;
+  double InvSigma2(const Features& f, int i) const { return 1.0 / sigma2[static_cast<size_t>(f.keypoints[static_cast<size_t>(i)].octave)]; }
+
+  int PredictLevel(const MapPoint& p, double dist) const;
+
+  // Matches features of a (filtered) to features of b (filtered) by appearance: within the same
+  // vocabulary node when both have feature vectors, else all pairs. Best distance <= th and a
+  // ratio test against the second best.
+  std::vector<std::pair<int, int>> MatchByAppearance(const Features& a, const std::function<bool(int)>& use_a, const Features& b,
+                                                     const std::function<bool(int)>& use_b, int th, double ratio) const;
+
+  // --------------------------------------------------------------- initialisation
+  struct Reconstruction {
+    Eigen::Matrix3d R;
+    Eigen::Vector3d t;
+    std::vector<std::pair<int, Eigen::Vector3d>> points;  ///< match index -> X in camera 1
+    double parallax_deg = 0;
+  };
+
+  static bool Triangulate(const Eigen::Matrix<double, 3, 4>& P1, const Eigen::Matrix<double, 3, 4>& P2, const Eigen::Vector2d& x1,
+                          const Eigen::Vector2d& x2, Eigen::Vector3d* X);
+
+  // Triangulates the matched pairs for motion (R, t) of camera 2 w.r.t. camera 1 and keeps the
+  // points in front of both cameras that reproject within the gate.
+  Reconstruction CheckMotion(const Eigen::Matrix3d& R, const Eigen::Vector3d& t, const Features& f1, const Features& f2,
+                             const std::vector<std::pair<int, int>>& matches, const std::vector<uchar>& inlier) const;
+
+  SlamFrameSummary TryInitialize(SlamFrameSummary s);
+
+  int NewKeyFrame(const Frame& f);
+
+  void CreateInitialMap(const Reconstruction& rec, const std::vector<std::pair<int, int>>& matches);
+
+  // --------------------------------------------------------------------- tracking
+  bool Visible(const MapPoint& p, const Eigen::Isometry3d& T_cw, Eigen::Vector2d* uv, int* level, double* view_cos) const;
+
+  // Searches each point's projection for the best unmatched feature. Returns new matches.
+  int SearchByProjection(Frame* f, const std::vector<int>& pts, double radius_factor, bool count_visible, int th);
+
+  int Optimize(Frame* f);
+
+  bool TrackWithMotionModel();
+
+  bool TrackReferenceKeyFrame();
+
+  void UpdateLocalMap();
+
+  int TrackLocalMap();
+
+  bool Relocalize();
+
+  // --------------------------------------------------------------------- mapping
+  bool NeedKeyFrame(int inliers) const;
+
+  void Fuse(int kf_id, const std::vector<int>& pts);
+
+  void CullRecentPoints(int kf_id);
+
+  void CreateNewMapPoints(int kf_id);
+
+  void SearchInNeighbors(int kf_id);
+
+  void InsertKeyFrame();
+
+  // ------------------------------------------------------------------ loop closing
+  struct LoopCandidate {
+    int kf;
+    Sim3 S_cm;
+    std::vector<std::pair<int, int>> matches;  ///< current feature -> loop map point
+  };
+
+  std::vector<int> DetectLoopCandidates(int kid);
+
+  bool ComputeSim3(int kid, int cand, LoopCandidate* lc);
+
+  void CorrectLoop(int kid, const LoopCandidate& lc);
+
+  bool LoopClosing(int kid);
+
+  // ----------------------------------------------------------------- bookkeeping
+  Eigen::Isometry3d ToGlobal(const Eigen::Isometry3d& T_wc) const;
+
+  std::vector<StampedPose> CurrentTrajectory() const;
+
+  void ResetForReinitialization();
+
+  SlamFrameSummary Track(const cv::Mat& gray, double stamp);
+
+  void UpdateGoodPose();
+};
+
+}  // namespace unav_localization

@@ -1,0 +1,220 @@
+// MonoSlam, two-view initialisation: essential / homography candidates, triangulation, initial map.
+#include "mono_slam_impl.hpp"
+
+namespace unav_localization {
+
+using namespace slam_internal;  // NOLINT(google-build-using-namespace): the SLAM's own constants
+
+auto MonoSlam::Impl::Triangulate(const Eigen::Matrix<double, 3, 4>& P1, const Eigen::Matrix<double, 3, 4>& P2, const Eigen::Vector2d& x1, const Eigen::Vector2d& x2, Eigen::Vector3d* X) -> bool {
+  Eigen::Matrix4d A;
+  A.row(0) = x1.x() * P1.row(2) - P1.row(0);
+  A.row(1) = x1.y() * P1.row(2) - P1.row(1);
+  A.row(2) = x2.x() * P2.row(2) - P2.row(0);
+  A.row(3) = x2.y() * P2.row(2) - P2.row(1);
+  Eigen::JacobiSVD<Eigen::Matrix4d> svd(A, Eigen::ComputeFullV);
+  const Eigen::Vector4d h = svd.matrixV().col(3);
+  if (std::abs(h(3)) < 1e-12) return false;
+  *X = h.head<3>() / h(3);
+  return X->allFinite();
+}
+
+auto MonoSlam::Impl::CheckMotion(const Eigen::Matrix3d& R, const Eigen::Vector3d& t, const Features& f1, const Features& f2, const std::vector<std::pair<int, int>>& matches, const std::vector<uchar>& inlier) const -> Reconstruction {
+  Reconstruction rec;
+  rec.R = R;
+  rec.t = t;
+  Eigen::Matrix<double, 3, 4> P1, P2;
+  const Eigen::Matrix3d Km = cam.K();
+  P1 << Km, Eigen::Vector3d::Zero();
+  P2 << Km * R, Km * t;
+  const Eigen::Vector3d O2 = -R.transpose() * t;
+  std::vector<double> parallaxes;
+  for (size_t m = 0; m < matches.size(); ++m) {
+    if (!inlier[m]) continue;
+    const auto& x1 = f1.un[static_cast<size_t>(matches[m].first)];
+    const auto& x2 = f2.un[static_cast<size_t>(matches[m].second)];
+    Eigen::Vector3d X;
+    if (!Triangulate(P1, P2, x1, x2, &X)) continue;
+    const Eigen::Vector3d X2 = R * X + t;
+    if (X.z() <= 0 || X2.z() <= 0) continue;
+    const double cos_par = X.normalized().dot((X - O2).normalized());
+    if ((cam.Project(X) - x1).squaredNorm() > 4.0 * kChi2Mono) continue;
+    if ((cam.Project(X2) - x2).squaredNorm() > 4.0 * kChi2Mono) continue;
+    parallaxes.push_back(std::acos(std::clamp(cos_par, -1.0, 1.0)) * 180.0 / M_PI);
+    if (cos_par < 0.99998) rec.points.emplace_back(static_cast<int>(m), X);
+  }
+  if (!parallaxes.empty()) {
+    std::sort(parallaxes.begin(), parallaxes.end());
+    rec.parallax_deg = parallaxes[parallaxes.size() / 2];
+  }
+  return rec;
+}
+
+auto MonoSlam::Impl::TryInitialize(SlamFrameSummary s) -> SlamFrameSummary {
+  s.state = SlamState::kInitializing;
+  if (!init_ref || static_cast<int>(cur.f.size()) < 100 || cur.index - init_ref->index > opt.init_max_frames) {
+    if (static_cast<int>(cur.f.size()) >= 100) init_ref = std::make_unique<Frame>(cur);
+    else init_ref.reset();
+    s.message = "waiting for a reference frame with enough features";
+    return s;
+  }
+  // Window search around the same pixel: the camera moved little.
+  std::vector<std::pair<int, int>> matches;
+  std::vector<int> taken(cur.f.size(), -1), taken_dist(cur.f.size(), 256);
+  for (size_t i = 0; i < init_ref->f.size(); ++i) {
+    if (init_ref->f.keypoints[i].octave > 1) continue;
+    const auto cands = cur.f.InArea(init_ref->f.un[i], 0.15 * cam.width, 0, 2);
+    BestTwo m;
+    for (int j : cands) m.Add(DescriptorDistance(init_ref->f.desc(static_cast<int>(i)), cur.f.desc(j)), j);
+    const int best = m.best, bj = m.index;
+    if (bj < 0 || best > kThLow || best > 0.9 * m.second) continue;
+    if (best < taken_dist[static_cast<size_t>(bj)]) {
+      taken_dist[static_cast<size_t>(bj)] = best;
+      taken[static_cast<size_t>(bj)] = static_cast<int>(i);
+    }
+  }
+  for (size_t j = 0; j < taken.size(); ++j)
+    if (taken[j] >= 0) matches.emplace_back(taken[j], static_cast<int>(j));
+  s.inliers = static_cast<int>(matches.size());
+  if (static_cast<int>(matches.size()) < opt.init_min_points) {
+    if (matches.size() < 40) init_ref = std::make_unique<Frame>(cur);  // lost the reference view
+    s.message = "initialisation: " + std::to_string(matches.size()) + " matches";
+    return s;
+  }
+  std::vector<cv::Point2f> p1, p2;
+  double median_flow = 0;
+  {
+    std::vector<double> flow;
+    for (const auto& [i, j] : matches) {
+      p1.emplace_back(static_cast<float>(init_ref->f.un[static_cast<size_t>(i)].x()), static_cast<float>(init_ref->f.un[static_cast<size_t>(i)].y()));
+      p2.emplace_back(static_cast<float>(cur.f.un[static_cast<size_t>(j)].x()), static_cast<float>(cur.f.un[static_cast<size_t>(j)].y()));
+      flow.push_back(cv::norm(p1.back() - p2.back()));
+    }
+    std::sort(flow.begin(), flow.end());
+    median_flow = flow[flow.size() / 2];
+  }
+  if (median_flow < 0.03 * cam.width) {
+    s.message = "initialisation: waiting for parallax";
+    return s;
+  }
+  cv::Mat Kcv;
+  cv::eigen2cv(cam.K(), Kcv);
+  std::vector<Reconstruction> candidates;
+  std::vector<uchar> maskE;
+  const cv::Mat E = cv::findEssentialMat(p1, p2, Kcv, cv::RANSAC, 0.999, 1.0, maskE);
+  if (E.rows == 3 && E.cols == 3) {
+    cv::Mat Rc, tc;
+    cv::recoverPose(E, p1, p2, Kcv, Rc, tc, maskE);
+    Eigen::Matrix3d R;
+    Eigen::Vector3d t;
+    cv::cv2eigen(Rc, R);
+    cv::cv2eigen(tc, t);
+    candidates.push_back(CheckMotion(R, t.normalized(), init_ref->f, cur.f, matches, maskE));
+  }
+  std::vector<uchar> maskH;
+  const cv::Mat H = cv::findHomography(p1, p2, cv::RANSAC, 1.5, maskH);
+  if (!H.empty()) {
+    std::vector<cv::Mat> Rs, ts, ns;
+    cv::decomposeHomographyMat(H, Kcv, Rs, ts, ns);
+    for (size_t k = 0; k < Rs.size(); ++k) {
+      Eigen::Matrix3d R;
+      Eigen::Vector3d t;
+      cv::cv2eigen(Rs[k], R);
+      cv::cv2eigen(ts[k], t);
+      if (t.norm() < 1e-9) continue;
+      candidates.push_back(CheckMotion(R, t.normalized(), init_ref->f, cur.f, matches, maskH));
+    }
+  }
+  std::sort(candidates.begin(), candidates.end(), [](const auto& a, const auto& b) { return a.points.size() > b.points.size(); });
+  if (candidates.empty() || static_cast<int>(candidates[0].points.size()) < opt.init_min_points ||
+      candidates[0].parallax_deg < opt.init_min_parallax_deg) {
+    s.message = "initialisation: not enough parallax or points";
+    return s;
+  }
+  // A second, different motion explaining almost as many points: ambiguous, wait.
+  for (size_t k = 1; k < candidates.size(); ++k) {
+    const double dR = Eigen::AngleAxisd(candidates[k].R.transpose() * candidates[0].R).angle();
+    const double dt = std::acos(std::clamp(candidates[k].t.dot(candidates[0].t), -1.0, 1.0));
+    if ((dR > 0.05 || dt > 0.2) && candidates[k].points.size() > 0.75 * candidates[0].points.size()) {
+      s.message = "initialisation: ambiguous two-view motion";
+      return s;
+    }
+  }
+  CreateInitialMap(candidates[0], matches);
+  if (!initialized) {
+    s.message = "initialisation: map rejected after bundle adjustment";
+    return s;
+  }
+  s.state = SlamState::kTracking;
+  s.keyframe = true;
+  s.inliers = static_cast<int>(std::count_if(cur.points.begin(), cur.points.end(), [](int p) { return p >= 0; }));
+  s.message = "map initialised with " + std::to_string(map->GoodPoints()) + " points";
+  return s;
+}
+
+auto MonoSlam::Impl::NewKeyFrame(const Frame& f) -> int {
+  auto kf = std::make_unique<KeyFrame>();
+  kf->id = static_cast<int>(map->keyframes.size());
+  kf->frame_index = f.index;
+  kf->stamp = f.stamp;
+  kf->T_cw = f.T_cw;
+  kf->f = f.f;
+  kf->points.assign(f.f.size(), -1);
+  ComputeBow(&kf->f);
+  map->keyframes.push_back(std::move(kf));
+  return map->keyframes.back()->id;
+}
+
+auto MonoSlam::Impl::CreateInitialMap(const Reconstruction& rec, const std::vector<std::pair<int, int>>& matches) -> void {
+  map = std::make_unique<Map>();
+  db = BowDatabase();
+  recent_points.clear();
+  consistent_groups.clear();
+  init_ref->T_cw = Eigen::Isometry3d::Identity();
+  cur.T_cw = Eigen::Isometry3d::Identity();
+  cur.T_cw.linear() = rec.R;
+  cur.T_cw.translation() = rec.t;
+  const int k0 = NewKeyFrame(*init_ref);
+  const int k1 = NewKeyFrame(cur);
+  for (const auto& [m, X] : rec.points) {
+    const int p = map->AddPoint(X, k0);
+    map->AddObservation(p, k0, matches[static_cast<size_t>(m)].first);
+    map->AddObservation(p, k1, matches[static_cast<size_t>(m)].second);
+    map->UpdatePoint(p, scales);
+  }
+  map->UpdateConnections(k0);
+  map->UpdateConnections(k1);
+  GlobalBundleAdjustment(map.get(), cam, sigma2, 20);
+  const double median = map->MedianDepth(k0);
+  int tracked = 0;
+  for (int p : map->kf(k1).points) tracked += p >= 0 && !map->mp(p).bad ? 1 : 0;
+  if (!(median > 0) || tracked < opt.init_min_points * 3 / 4) {
+    map = std::make_unique<Map>();
+    init_ref.reset();
+    return;
+  }
+  // Scale: median depth of the first keyframe = 1.
+  map->kf(k1).T_cw.translation() /= median;
+  for (auto& p : map->points) {
+    p->X_w /= median;
+    if (!p->bad) map->UpdatePoint(p->id, scales);
+  }
+  if (voc) {
+    db.Add(k0, map->kf(k0).f.bow);
+    db.Add(k1, map->kf(k1).f.bow);
+  }
+  initialized = true;
+  cur.T_cw = map->kf(k1).T_cw;
+  cur.points = map->kf(k1).points;
+  cur.outlier.assign(cur.f.size(), false);
+  // The reference frame's pose joins the trajectory too.
+  traj.push_back({init_ref->stamp, k0, Eigen::Isometry3d::Identity()});
+  ref_kf = k1;
+  last_kf_frame = cur.index;
+  has_velocity = false;
+  local_kfs = {k0, k1};
+  for (const auto& p : map->points)
+    if (!p->bad) recent_points.push_back(p->id);
+  init_ref.reset();
+}
+
+}  // namespace unav_localization
