@@ -8,7 +8,7 @@ set -euo pipefail
 trap 'echo "FAIL: unexpected exit at line $LINENO: $BASH_COMMAND"' ERR
 ws="$1"
 set +u; source "$ws/install/setup.bash"; set -u
-export ROS_DOMAIN_ID=$((150 + $$ % 50))
+source "$(dirname "$0")/test_domain.sh"  # a domain of our own (flock)
 out=$(mktemp -d)
 trap 'rm -rf "$out"' EXIT
 fail() { echo "FAIL: $*"; for r in a b; do echo "--- run $r:"; tail -15 "$out/$r.log"; done; exit 1; }

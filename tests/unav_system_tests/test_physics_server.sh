@@ -5,7 +5,7 @@ set -euo pipefail
 trap 'echo "FAIL: unexpected exit at line $LINENO: $BASH_COMMAND"; [ -n "${log:-}" ] && [ -f "$log" ] && grep -v "Publishing\|I heard" "$log" | tail -30' ERR
 ws="$1"
 set +u; source "$ws/install/setup.bash"; set -u
-export ROS_DOMAIN_ID=$((100 + $$ % 50))
+source "$(dirname "$0")/test_domain.sh"  # a domain of our own (flock)
 export UNAV_SPIN_TIME=3
 log=$(mktemp)
 fail() { echo "FAIL: $*"; echo "--- launch log:"; cat "$log"; kill -INT "$launch_pid" 2>/dev/null || true; exit 1; }

@@ -8,7 +8,7 @@ set -euo pipefail
 trap 'echo "FAIL: unexpected exit at line $LINENO: $BASH_COMMAND"; [ -n "${log:-}" ] && [ -f "$log" ] && tail -30 "$log"' ERR
 ws="$1"
 set +u; source "$ws/install/setup.bash"; set -u
-export ROS_DOMAIN_ID=$((150 + $$ % 50))
+source "$(dirname "$0")/test_domain.sh"  # a domain of our own (flock)
 out=$(mktemp -d)
 log="$out/launch.log"
 fail() { echo "FAIL: $*"; echo "--- launch log:"; tail -40 "$log"; exit 1; }
