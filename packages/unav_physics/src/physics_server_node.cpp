@@ -5,6 +5,8 @@
 #include <limits>
 
 #include "unav_common/resources.hpp"
+#include <fastdds/dds/publisher/DataWriter.hpp>
+
 #include "unav_runtime/conversions.hpp"
 
 namespace unav::physics {
@@ -149,6 +151,10 @@ bool PhysicsServer::barrier_open() const {
 }
 
 void PhysicsServer::run_steps() {
+  if (finishing_) {
+    finish();
+    return;
+  }
   if (lockstep_) {
     // Step until a barrier holds or this call's wall budget is spent (keeps the executor
     // responsive to acks and commands).
@@ -163,6 +169,7 @@ void PhysicsServer::run_steps() {
         held_since_ = -1.0;
       }
       step_once();
+      if (finishing_) return;  // max_sim_time: finish() takes over
       if (sim_->steps() % steps_per_barrier_ == 0) {
         barrier_t_ = sim_->time();
         if (sim_->steps() % steps_per_publish_ != 0) publish_state();  // the barrier's state is always published
@@ -178,7 +185,7 @@ void PhysicsServer::run_steps() {
     wall_start_ = wall_now_s() - sim_->time() / real_time_factor_;
     return;
   }
-  while (sim_->time() + 0.5 * sim_->options().dt < target && context().ok()) step_once();
+  while (sim_->time() + 0.5 * sim_->options().dt < target && context().ok() && !finishing_) step_once();
 }
 
 void PhysicsServer::hold_at_barrier() {
@@ -218,11 +225,30 @@ void PhysicsServer::step_once() {
     logger()->info("max_sim_time reached: t = {:.3f} s, position NED [{:.4f}, {:.4f}, {:.4f}] m, rpy [{:.4f}, {:.4f}, "
                    "{:.4f}] rad",
                    sim_->time(), x.p_WB_W.x(), x.p_WB_W.y(), x.p_WB_W.z(), rpy.x(), rpy.y(), rpy.z());
-    context().shutdown();
+    // The last state is a barrier too: stop only when every participant answered it and our own
+    // samples reached their readers, so every run ends on the same instant with nothing lost.
+    finishing_ = true;
+    finish_started_ = wall_now_s();
+    barrier_t_ = sim_->time();
+    finish();
     return;
   }
   if (n % steps_per_publish_ == 0) publish_state();
   if (n % steps_per_thruster_state_ == 0) publish_thruster_state();
+}
+
+void PhysicsServer::finish() {
+  const bool acked = !lockstep_ || barrier_->open(barrier_ns());
+  if (!acked && wall_now_s() - finish_started_ < 10.0) return;  // spin on: acks are on their way
+  if (!acked) {
+    std::string missing;
+    for (const auto& p : barrier_->missing(barrier_ns())) missing += " " + p;
+    logger()->warn("lockstep: the last state was not acked within 10 s by:{}", missing);
+  }
+  const eprosima::fastrtps::Duration_t wait(2, 0);
+  for (auto* w : {odom_pub_->writer(), tf_pub_->writer(), clock_pub_->writer()}) w->wait_for_acknowledgments(wait);
+  finishing_ = false;
+  context().shutdown();
 }
 
 void PhysicsServer::publish_state() {

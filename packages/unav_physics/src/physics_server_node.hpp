@@ -91,6 +91,9 @@ class PhysicsServer : public unav::Node {
   double held_since_ = -1.0, last_republish_ = 0.0, last_wait_log_ = 0.0;  ///< wall s
   double wall_start_ = 0.0;  ///< realtime: wall time [s] that maps to simulated time 0
   bool timeout_logged_ = false;
+  bool finishing_ = false;      ///< max_sim_time reached: waiting for the last acks, then exit
+  double finish_started_ = 0.0;  ///< wall time [s] the finishing began
+  void finish();
   std::uint64_t rejected_logged_ = 0;
   std::uint64_t last_seq_[6] = {0, 0, 0, 0, 0, 0};
 

@@ -187,6 +187,13 @@ struct Renderer::Impl {
   void upload_snow();
   GLuint texture(const std::string& name);
   Targets& targets_for(const CameraModel& c);
+  struct FrameSetup;
+  FrameSetup setup_frame(const Pose& X_WB, const CameraModel& c) const;
+  void scene_pass(const Targets& t, const FrameSetup& f);
+  void snow_pass(const FrameSetup& f, const CameraModel& c, double stamp_s);
+  bool inscatter_pass(const Targets& t, const FrameSetup& f, const CameraModel& c, float* march_max_m);
+  void post_pass(const Targets& t, const FrameSetup& f, const CameraModel& c, std::uint64_t seq, bool do_inscatter,
+                 float march_max_m);
   void draw(const Pose& X_WB, const CameraModel& c, double stamp_s, std::uint64_t seq);
   void start_readback(Slot& s, const Targets& t);
   Frame finish_readback(Slot& s);
@@ -374,42 +381,46 @@ Targets& Renderer::Impl::targets_for(const CameraModel& c) {
   return targets.emplace(c.name, t).first->second;
 }
 
-void Renderer::Impl::draw(const Pose& X_WB, const CameraModel& out_cam, double stamp_s, std::uint64_t seq) {
-  Targets& t = targets_for(out_cam);
-  const CameraModel& c = t.internal;
-  const Pose X_WC = X_WB * c.X_BC;
-  const Pose X_CW = X_WC.inverse();
-  const Eigen::Matrix4f view = X_CW.matrix().cast<float>();
-  const Eigen::Matrix4f proj = projection_from_K(c);
-  const Eigen::Vector3d cam_W = X_WC.translation();
-  auto tp = Clock::now();
-  auto lap = [&](double* out) {
-    if (!options.profile_passes) return;
-    glFinish();
-    *out = ms_since(tp);
-    tp = Clock::now();
-  };
-
-  // Lamps in world and camera frames.
-  const int nl = options.lamps ? static_cast<int>(std::min<std::size_t>(4, world.lamps.size())) : 0;
+// Per-frame camera and lamp quantities shared by the passes.
+struct Renderer::Impl::FrameSetup {
+  Pose X_WB, X_WC, X_CW;
+  Eigen::Matrix4f view, proj;
+  Eigen::Vector3d cam_W;
+  int nl = 0;  ///< lamps used (at most 4)
   float lamp_pos_W[12], lamp_dir_W[12], lamp_pos_C[12], lamp_dir_C[12], lamp_I[12], lamp_cos[8];
-  for (int i = 0; i < nl; ++i) {
+};
+
+Renderer::Impl::FrameSetup Renderer::Impl::setup_frame(const Pose& X_WB, const CameraModel& c) const {
+  FrameSetup f;
+  f.X_WB = X_WB;
+  f.X_WC = X_WB * c.X_BC;
+  f.X_CW = f.X_WC.inverse();
+  f.view = f.X_CW.matrix().cast<float>();
+  f.proj = projection_from_K(c);
+  f.cam_W = f.X_WC.translation();
+  // Lamps in world and camera frames.
+  f.nl = options.lamps ? static_cast<int>(std::min<std::size_t>(4, world.lamps.size())) : 0;
+  for (int i = 0; i < f.nl; ++i) {
     const Lamp& L = world.lamps[i];
-    const Pose X_WL = X_WB * L.X_BL;
+    const Pose X_WL = f.X_WB * L.X_BL;
     const Eigen::Vector3d pW = X_WL.translation(), dW = X_WL.linear().col(0).normalized();
-    const Eigen::Vector3d pC = X_CW * pW, dC = X_CW.linear() * dW;
+    const Eigen::Vector3d pC = f.X_CW * pW, dC = f.X_CW.linear() * dW;
     for (int k = 0; k < 3; ++k) {
-      lamp_pos_W[3 * i + k] = static_cast<float>(pW[k]);
-      lamp_dir_W[3 * i + k] = static_cast<float>(dW[k]);
-      lamp_pos_C[3 * i + k] = static_cast<float>(pC[k]);
-      lamp_dir_C[3 * i + k] = static_cast<float>(dC[k]);
-      lamp_I[3 * i + k] = static_cast<float>(L.intensity[k]);
+      f.lamp_pos_W[3 * i + k] = static_cast<float>(pW[k]);
+      f.lamp_dir_W[3 * i + k] = static_cast<float>(dW[k]);
+      f.lamp_pos_C[3 * i + k] = static_cast<float>(pC[k]);
+      f.lamp_dir_C[3 * i + k] = static_cast<float>(dC[k]);
+      f.lamp_I[3 * i + k] = static_cast<float>(L.intensity[k]);
     }
-    lamp_cos[2 * i] = static_cast<float>(std::cos(L.cone_half_angle_rad));
-    lamp_cos[2 * i + 1] = static_cast<float>(std::cos(0.55 * L.cone_half_angle_rad));
+    f.lamp_cos[2 * i] = static_cast<float>(std::cos(L.cone_half_angle_rad));
+    f.lamp_cos[2 * i + 1] = static_cast<float>(std::cos(0.55 * L.cone_half_angle_rad));
   }
 
-  // ---- scene pass
+  return f;
+}
+
+// Scene geometry into colour (direct signal), camera-space depth and segmentation.
+void Renderer::Impl::scene_pass(const Targets& t, const FrameSetup& f) {
   glBindFramebuffer(GL_FRAMEBUFFER, t.scene_fbo);
   glViewport(0, 0, t.width, t.height);
   const float zero[4] = {0, 0, 0, 0};
@@ -427,20 +438,20 @@ void Renderer::Impl::draw(const Pose& X_WB, const CameraModel& out_cam, double s
   glDisable(GL_CULL_FACE);
   glDisable(GL_BLEND);
   scene.use();
-  glUniformMatrix4fv(scene["u_view"], 1, GL_FALSE, view.data());
-  glUniformMatrix4fv(scene["u_proj"], 1, GL_FALSE, proj.data());
-  set3(scene["u_cam_W"], cam_W);
+  glUniformMatrix4fv(scene["u_view"], 1, GL_FALSE, f.view.data());
+  glUniformMatrix4fv(scene["u_proj"], 1, GL_FALSE, f.proj.data());
+  set3(scene["u_cam_W"], f.cam_W);
   set3(scene["u_sun_dir_W"], world.sun.direction_W);
   set3(scene["u_E0"], world.sun.surface_irradiance);
   glUniform1f(scene["u_ambient"], static_cast<float>(world.sun.ambient_fraction));
   set3(scene["u_Kd"], water.K_d);
   set3(scene["u_betaD"], water.beta_D);
-  glUniform1i(scene["u_nlamps"], nl);
-  if (nl > 0) {
-    glUniform3fv(scene["u_lamp_pos_W[0]"], nl, lamp_pos_W);
-    glUniform3fv(scene["u_lamp_dir_W[0]"], nl, lamp_dir_W);
-    glUniform3fv(scene["u_lamp_I[0]"], nl, lamp_I);
-    glUniform2fv(scene["u_lamp_cos[0]"], nl, lamp_cos);
+  glUniform1i(scene["u_nlamps"], f.nl);
+  if (f.nl > 0) {
+    glUniform3fv(scene["u_lamp_pos_W[0]"], f.nl, f.lamp_pos_W);
+    glUniform3fv(scene["u_lamp_dir_W[0]"], f.nl, f.lamp_dir_W);
+    glUniform3fv(scene["u_lamp_I[0]"], f.nl, f.lamp_I);
+    glUniform2fv(scene["u_lamp_cos[0]"], f.nl, f.lamp_cos);
   }
   glUniform1i(scene["u_tex"], 0);
   glActiveTexture(GL_TEXTURE0);
@@ -456,13 +467,15 @@ void Renderer::Impl::draw(const Pose& X_WB, const CameraModel& out_cam, double s
     glDrawElements(GL_TRIANGLES, m.index_count, GL_UNSIGNED_INT, nullptr);
   }
 
-  lap(&timings.scene_pass_ms);
-  // ---- marine snow: additive into the colour only (depth and segmentation untouched)
+}
+
+// Marine snow: additive into the colour only (depth and segmentation untouched).
+void Renderer::Impl::snow_pass(const FrameSetup& f, const CameraModel& c, double stamp_s) {
   if (options.marine_snow && snow_count > 0) {
     snow.use();
-    glUniformMatrix4fv(snow["u_view"], 1, GL_FALSE, view.data());
-    glUniformMatrix4fv(snow["u_proj"], 1, GL_FALSE, proj.data());
-    set3(snow["u_cam_W"], cam_W);
+    glUniformMatrix4fv(snow["u_view"], 1, GL_FALSE, f.view.data());
+    glUniformMatrix4fv(snow["u_proj"], 1, GL_FALSE, f.proj.data());
+    set3(snow["u_cam_W"], f.cam_W);
     glUniform1f(snow["u_box"], static_cast<float>(world.marine_snow.box_m));
     glUniform1f(snow["u_time"], static_cast<float>(std::fmod(stamp_s, 1.0e4)));
     glUniform1f(snow["u_size_m"], static_cast<float>(world.marine_snow.size_m));
@@ -470,12 +483,12 @@ void Renderer::Impl::draw(const Pose& X_WB, const CameraModel& out_cam, double s
     set3(snow["u_E0"], world.sun.surface_irradiance);
     set3(snow["u_Kd"], water.K_d);
     set3(snow["u_betaD"], water.beta_D);
-    glUniform1i(snow["u_nlamps"], nl);
-    if (nl > 0) {
-      glUniform3fv(snow["u_lamp_pos_W[0]"], nl, lamp_pos_W);
-      glUniform3fv(snow["u_lamp_dir_W[0]"], nl, lamp_dir_W);
-      glUniform3fv(snow["u_lamp_I[0]"], nl, lamp_I);
-      glUniform2fv(snow["u_lamp_cos[0]"], nl, lamp_cos);
+    glUniform1i(snow["u_nlamps"], f.nl);
+    if (f.nl > 0) {
+      glUniform3fv(snow["u_lamp_pos_W[0]"], f.nl, f.lamp_pos_W);
+      glUniform3fv(snow["u_lamp_dir_W[0]"], f.nl, f.lamp_dir_W);
+      glUniform3fv(snow["u_lamp_I[0]"], f.nl, f.lamp_I);
+      glUniform2fv(snow["u_lamp_cos[0]"], f.nl, f.lamp_cos);
     }
     glEnable(GL_PROGRAM_POINT_SIZE);
     glDepthMask(GL_FALSE);
@@ -491,10 +504,13 @@ void Renderer::Impl::draw(const Pose& X_WB, const CameraModel& out_cam, double s
     glDepthMask(GL_TRUE);
   }
 
-  lap(&timings.snow_pass_ms);
-  // ---- lamp in-scattering at low resolution
+}
+
+// Lamp in-scattering at low resolution (and the forward-scatter mip chain). Returns whether
+// in-scattering was drawn; *march_max_m: the march length the post pass must use too.
+bool Renderer::Impl::inscatter_pass(const Targets& t, const FrameSetup& f, const CameraModel& c, float* march_max_out) {
   const int nsamples = std::max(0, options.lamp_scatter_samples);
-  const bool do_inscatter = nl > 0 && nsamples > 0;
+  const bool do_inscatter = f.nl > 0 && nsamples > 0;
   // March until the lamp light has dropped to ~3% (3.5 attenuation lengths).
   const auto march_max_m = static_cast<float>(std::min(30.0, 3.5 / std::max(1e-3, water.beta_D.minCoeff())));
   glDisable(GL_DEPTH_TEST);
@@ -514,11 +530,11 @@ void Renderer::Impl::draw(const Pose& X_WB, const CameraModel& out_cam, double s
     glUniform2i(inscatter["u_size"], t.width, t.height);
     glUniform1f(inscatter["u_scale"], static_cast<float>(t.is_scale));
     set3(inscatter["u_betaD"], water.beta_D);
-    glUniform1i(inscatter["u_nlamps"], nl);
-    glUniform3fv(inscatter["u_lamp_pos_C[0]"], nl, lamp_pos_C);
-    glUniform3fv(inscatter["u_lamp_dir_C[0]"], nl, lamp_dir_C);
-    glUniform3fv(inscatter["u_lamp_I[0]"], nl, lamp_I);
-    glUniform2fv(inscatter["u_lamp_cos[0]"], nl, lamp_cos);
+    glUniform1i(inscatter["u_nlamps"], f.nl);
+    glUniform3fv(inscatter["u_lamp_pos_C[0]"], f.nl, f.lamp_pos_C);
+    glUniform3fv(inscatter["u_lamp_dir_C[0]"], f.nl, f.lamp_dir_C);
+    glUniform3fv(inscatter["u_lamp_I[0]"], f.nl, f.lamp_I);
+    glUniform2fv(inscatter["u_lamp_cos[0]"], f.nl, f.lamp_cos);
     set3(inscatter["u_b_scatter"], water.b_scatter);
     glUniform1f(inscatter["u_schlick_k"], static_cast<float>(water.schlick_k()));
     glUniform1f(inscatter["u_back_frac"], static_cast<float>(water.phase_backscatter_fraction));
@@ -532,8 +548,13 @@ void Renderer::Impl::draw(const Pose& X_WB, const CameraModel& out_cam, double s
     glBindTexture(GL_TEXTURE_2D, t.scene_color);
     glGenerateMipmap(GL_TEXTURE_2D);
   }
-  lap(&timings.inscatter_pass_ms);
-  // ---- post pass: forward scatter, backscatter, + in-scatter, distortion, noise, encoding
+  *march_max_out = march_max_m;
+  return do_inscatter;
+}
+
+// Post pass: forward scatter, backscatter, + in-scatter, distortion, noise, encoding.
+void Renderer::Impl::post_pass(const Targets& t, const FrameSetup& f, const CameraModel& c, std::uint64_t seq,
+                               bool do_inscatter, float march_max_m) {
   glBindFramebuffer(GL_FRAMEBUFFER, t.post_fbo);
   glViewport(0, 0, t.out_width, t.out_height);
   post.use();
@@ -550,7 +571,7 @@ void Renderer::Impl::draw(const Pose& X_WB, const CameraModel& out_cam, double s
   glUniform1i(post["u_depth"], 1);
   glUniform1i(post["u_distmap"], 2);
   glUniform1i(post["u_inscatter"], 3);
-  glUniform1i(post["u_nlamps_scatter"], do_inscatter ? nl : 0);
+  glUniform1i(post["u_nlamps_scatter"], do_inscatter ? f.nl : 0);
   glUniform1f(post["u_march_max_m"], march_max_m);
   glUniform1i(post["u_use_distmap"], t.distmap ? 1 : 0);
   glUniform4f(post["u_K"], static_cast<float>(c.fx), static_cast<float>(c.fy), static_cast<float>(c.cx),
@@ -558,16 +579,16 @@ void Renderer::Impl::draw(const Pose& X_WB, const CameraModel& out_cam, double s
   glUniform2i(post["u_size"], t.width, t.height);
   set3(post["u_betaD"], water.beta_D);
   set3(post["u_betaB"], water.beta_B);
-  set3(post["u_Binf"], water.veiling_light_at(cam_W.z(), world.sun.surface_irradiance));
+  set3(post["u_Binf"], water.veiling_light_at(f.cam_W.z(), world.sun.surface_irradiance));
   glUniform1f(post["u_veil_gradient"], static_cast<float>(water.veiling_light_gradient));
-  const Eigen::Matrix3f R_WC = X_WC.linear().cast<float>();
+  const Eigen::Matrix3f R_WC = f.X_WC.linear().cast<float>();
   glUniformMatrix3fv(post["u_R_WC"], 1, GL_FALSE, R_WC.data());
   glUniform1i(post["u_fwd"], options.forward_scatter ? 1 : 0);
   glUniform1f(post["u_fwd_per_m"], static_cast<float>(water.forward_scatter_per_m));
   glUniform1f(post["u_blur_px_per_m"], static_cast<float>(water.forward_blur_rad_per_m * c.fx));
   double gain = c.exposure;
   if (options.auto_exposure) {
-    const Eigen::Vector3d Ed = (world.sun.surface_irradiance.array() * (-water.K_d.array() * std::max(0.0, cam_W.z())).exp()).matrix();
+    const Eigen::Vector3d Ed = (world.sun.surface_irradiance.array() * (-water.K_d.array() * std::max(0.0, f.cam_W.z())).exp()).matrix();
     gain *= std::clamp(0.45 / std::max(luminance(Ed), 1e-6), 0.25, 5.0);
   }
   glUniform1f(post["u_gain"], static_cast<float>(gain));
@@ -577,6 +598,27 @@ void Renderer::Impl::draw(const Pose& X_WB, const CameraModel& out_cam, double s
   glUniform1i(post["u_srgb"], options.srgb_output ? 1 : 0);
   glBindVertexArray(empty_vao);
   glDrawArrays(GL_TRIANGLES, 0, 3);
+}
+
+void Renderer::Impl::draw(const Pose& X_WB, const CameraModel& out_cam, double stamp_s, std::uint64_t seq) {
+  Targets& t = targets_for(out_cam);
+  const CameraModel& c = t.internal;
+  const FrameSetup f = setup_frame(X_WB, c);
+  auto tp = Clock::now();
+  auto lap = [&](double* out) {
+    if (!options.profile_passes) return;
+    glFinish();
+    *out = ms_since(tp);
+    tp = Clock::now();
+  };
+  scene_pass(t, f);
+  lap(&timings.scene_pass_ms);
+  snow_pass(f, c, stamp_s);  // when marine snow is on
+  lap(&timings.snow_pass_ms);
+  float march_max_m = 0.0f;
+  const bool do_inscatter = inscatter_pass(t, f, c, &march_max_m);
+  lap(&timings.inscatter_pass_ms);
+  post_pass(t, f, c, seq, do_inscatter, march_max_m);
   lap(&timings.post_pass_ms);
 }
 

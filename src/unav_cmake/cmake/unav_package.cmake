@@ -49,31 +49,29 @@ function(unav_add_gtest name)
     PROPERTIES TIMEOUT ${ARG_TIMEOUT} ENVIRONMENT "${ARG_ENV}")
 endfunction()
 
-# unav_forbid_dds(target): fail the configure step if a core library links Fast DDS.
-# Algorithms stay free of middleware (DESIGN.md section 1).
-function(unav_forbid_dds target)
+# unav_forbid_links(target REASON text PATTERN regex): fail the configure step if `target` links
+# a library matching `regex` (layering rules checked where the link is made).
+function(unav_forbid_links target)
+  cmake_parse_arguments(ARG "" "REASON;PATTERN" "" ${ARGN})
   get_target_property(_libs ${target} LINK_LIBRARIES)
-  if(_libs)
-    foreach(_l IN LISTS _libs)
-      if(_l MATCHES "fastrtps|fastcdr|fastdds|_msgs|unav_runtime")
-        message(FATAL_ERROR "${target} is a core library and must not link ${_l} (DESIGN.md section 1)")
-      endif()
-    endforeach()
-  endif()
+  foreach(_l IN LISTS _libs)
+    if(_l MATCHES "${ARG_PATTERN}")
+      message(FATAL_ERROR "${target} must not link ${_l}: ${ARG_REASON}")
+    endif()
+  endforeach()
 endfunction()
 
-# unav_forbid_gl(target): fail the configure step if a library links OpenGL/EGL. Only the renderer
-# draws; the scene, physics, control, localization, evaluation and datagen cores run without a GPU
-# stack (DESIGN.md section 8).
+# unav_forbid_dds(target): a core library stays free of middleware (DESIGN.md section 1).
+function(unav_forbid_dds target)
+  unav_forbid_links(${target} PATTERN "fastrtps|fastcdr|fastdds|_msgs|unav_runtime"
+    REASON "it is a core library (DDS-free, DESIGN.md section 1)")
+endfunction()
+
+# unav_forbid_gl(target): only the renderer draws; the scene, physics, control, localization,
+# evaluation and datagen cores run without a GPU stack (DESIGN.md section 8).
 function(unav_forbid_gl target)
-  get_target_property(_libs ${target} LINK_LIBRARIES)
-  if(_libs)
-    foreach(_l IN LISTS _libs)
-      if(_l MATCHES "EPOXY|epoxy|OpenGL|EGL|GLESv|unav_renderer::unav_renderer")
-        message(FATAL_ERROR "${target} must not link ${_l}: only the renderer uses OpenGL (DESIGN.md section 8)")
-      endif()
-    endforeach()
-  endif()
+  unav_forbid_links(${target} PATTERN "EPOXY|epoxy|OpenGL|EGL|GLESv|unav_renderer::unav_renderer"
+    REASON "only the renderer uses OpenGL (DESIGN.md section 8)")
 endfunction()
 
 # unav_install_library(TARGETS t... [DEPENDENCIES dep...] [EXTRA code]): the one export block of a library
