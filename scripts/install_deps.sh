@@ -12,6 +12,7 @@ PKGS=(
   libegl-dev libgles-dev libgl-dev libegl-mesa0 libgbm-dev libepoxy-dev
   libyaml-cpp-dev libcli11-dev libspdlog-dev nlohmann-json3-dev
   libgtest-dev libgmock-dev libbenchmark-dev libsqlite3-dev
+  clang-format clang-tidy
 )
 missing=()
 for p in "${PKGS[@]}"; do

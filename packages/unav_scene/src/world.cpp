@@ -162,17 +162,10 @@ SegClass parse_class(const YamlCtx& c, const std::string& key, const std::string
 
 }  // namespace
 
-World load_world(const std::string& path) {
-  YamlCtx c{path};
-  const YAML::Node root = detail::load_yaml_file(path);
-  check_keys(c, root, "", {"name", "description", "water", "seabed", "pipelines", "rocks",
-                           "rock_field", "objects", "lights"});
-  World w;
-  w.file = path;
-  w.dir = fs::path(path).parent_path().string();
-  w.name = get_string(c, root, "", "name", fs::path(path).parent_path().filename().string());
+namespace {
 
-  // --- water
+// Water.
+void parse_water_section(const YamlCtx& c, const YAML::Node& root, World& w) {
   if (const YAML::Node wn = root["water"]) {
     if (wn["file"]) {
       const std::string f = resolve(w.dir, get_string(c, wn, "water", "file", ""));
@@ -194,8 +187,10 @@ World load_world(const std::string& path) {
       if (!(ms.size_m > 0.0) || !(ms.box_m > 0.0)) c.fail("water.marine_snow", "size_m and box_m must be > 0");
     }
   }
+}
 
-  // --- seabed
+// Seabed.
+void parse_seabed(const YamlCtx& c, const YAML::Node& root, World& w) {
   if (const YAML::Node s = root["seabed"]) {
     const std::string p = "seabed";
     check_keys(c, s, p, {"enabled", "depth_m", "center_ne", "size_m", "resolution_m", "far_extent_m", "relief",
@@ -237,8 +232,10 @@ World load_world(const std::string& path) {
     }
     sb.material = parse_material(c, s["material"], "seabed.material", sb.material);
   }
+}
 
-  // --- pipelines
+// Pipelines.
+void parse_pipelines(const YamlCtx& c, const YAML::Node& root, World& w) {
   if (const YAML::Node pl = root["pipelines"]) {
     if (!pl.IsSequence()) c.fail("pipelines", "expected a list");
     for (std::size_t i = 0; i < pl.size(); ++i) {
@@ -265,8 +262,10 @@ World load_world(const std::string& path) {
       w.pipelines.push_back(std::move(pipe));
     }
   }
+}
 
-  // --- rocks (explicit) and rock_field (seeded scatter)
+// Rocks (explicit) and rock_field (seeded scatter).
+void parse_rocks(const YamlCtx& c, const YAML::Node& root, World& w) {
   auto rock_on_seabed = [&](double n_m, double e_m, const Eigen::Vector3d& radii) {
     return Eigen::Vector3d(n_m, e_m, w.seabed.depth_at(n_m, e_m) - 0.45 * radii.z());
   };
@@ -332,8 +331,10 @@ World load_world(const std::string& path) {
       ++placed;
     }
   }
+}
 
-  // --- objects (mesh files or primitive shapes)
+// Objects (mesh files or primitive shapes).
+void parse_objects(const YamlCtx& c, const YAML::Node& root, World& w) {
   if (const YAML::Node ol = root["objects"]) {
     if (!ol.IsSequence()) c.fail("objects", "expected a list");
     for (std::size_t i = 0; i < ol.size(); ++i) {
@@ -361,8 +362,10 @@ World load_world(const std::string& path) {
       w.objects.push_back(o);
     }
   }
+}
 
-  // --- lights
+// Lights.
+void parse_lights(const YamlCtx& c, const YAML::Node& root, World& w) {
   if (const YAML::Node l = root["lights"]) {
     check_keys(c, l, "lights", {"sun", "lamps"});
     if (const YAML::Node s = l["sun"]) {
@@ -396,6 +399,26 @@ World load_world(const std::string& path) {
       if (w.lamps.size() > 4) c.fail("lights.lamps", "at most 4 lamps are supported");
     }
   }
+}
+
+}  // namespace
+
+World load_world(const std::string& path) {
+  YamlCtx c{path};
+  const YAML::Node root = detail::load_yaml_file(path);
+  check_keys(c, root, "", {"name", "description", "water", "seabed", "pipelines", "rocks",
+                           "rock_field", "objects", "lights"});
+  World w;
+  w.file = path;
+  w.dir = fs::path(path).parent_path().string();
+  w.name = get_string(c, root, "", "name", fs::path(path).parent_path().filename().string());
+
+  parse_water_section(c, root, w);
+  parse_seabed(c, root, w);
+  parse_pipelines(c, root, w);
+  parse_rocks(c, root, w);
+  parse_objects(c, root, w);
+  parse_lights(c, root, w);
   return w;
 }
 
