@@ -51,21 +51,23 @@ int eval(bool is_ape, const EvalOptions& o) {
       throw UsageError("--delta_unit '" + o.delta_unit + "': expected f (frames) or m (meters)");
     const auto errors = is_ape ? ev::ape(ref, est, rel) : ev::rpe(ref, est, rel, ro);
     const ev::Statistics st = ev::statistics(errors);
-    const char* what = rel == ev::PoseRelation::kTranslation         ? "translation part (m)"
-                       : rel == ev::PoseRelation::kRotationAngleRad  ? "rotation angle in radians"
-                       : rel == ev::PoseRelation::kRotationAngleDeg  ? "rotation angle in degrees"
-                                                                      : "full transformation (unit-less)";
+    const char* what = rel == ev::PoseRelation::kTranslation        ? "translation part (m)"
+                       : rel == ev::PoseRelation::kRotationAngleRad ? "rotation angle in radians"
+                       : rel == ev::PoseRelation::kRotationAngleDeg ? "rotation angle in degrees"
+                                                                    : "full transformation (unit-less)";
     std::printf("%s w.r.t. %s", is_ape ? "APE" : "RPE", what);
-    if (!is_ape) std::printf(" for delta = %g (%s) using %s pairs", o.delta, o.delta_unit == "m" ? "m" : "frames",
-                             o.all_pairs ? "all" : "consecutive");
-    const char* align_text = mode == ev::Alignment::kSim3 ? "\n(with Sim(3) Umeyama alignment)"
-                             : mode == ev::Alignment::kSE3 ? "\n(with SE(3) Umeyama alignment)"
+    if (!is_ape)
+      std::printf(" for delta = %g (%s) using %s pairs", o.delta, o.delta_unit == "m" ? "m" : "frames",
+                  o.all_pairs ? "all" : "consecutive");
+    const char* align_text = mode == ev::Alignment::kSim3        ? "\n(with Sim(3) Umeyama alignment)"
+                             : mode == ev::Alignment::kSE3       ? "\n(with SE(3) Umeyama alignment)"
                              : mode == ev::Alignment::kScaleOnly ? "\n(scale corrected)"
-                                                                  : "\n(not aligned)";
+                                                                 : "\n(not aligned)";
     std::printf("%s\n\n", align_text);
-    std::printf("       max\t%f\n      mean\t%f\n    median\t%f\n       min\t%f\n      rmse\t%f\n       sse\t%f\n"
-                "       std\t%f\n",
-                st.max, st.mean, st.median, st.min, st.rmse, st.sse, st.std);
+    std::printf(
+        "       max\t%f\n      mean\t%f\n    median\t%f\n       min\t%f\n      rmse\t%f\n       sse\t%f\n"
+        "       std\t%f\n",
+        st.max, st.mean, st.median, st.min, st.rmse, st.sse, st.std);
     std::printf("(%zu pose pairs of %zu reference and %zu estimated poses)\n", st.count, ref_all.size(),
                 est_all.size());
     return 0;

@@ -1,13 +1,13 @@
 // KltVo, monocular mode: two-view initialisation (essential matrix / homography), PnP tracking
 // of triangulated points, keyframe triangulation, re-initialisation keeping pose and scale.
 // The RGB-D mode and the shared parts are in klt_vo.cpp.
-#include "unav_localization/klt_vo.hpp"
 #include <algorithm>
 #include <cmath>
-#include <stdexcept>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgproc.hpp>
 #include <opencv2/video/tracking.hpp>
+#include <stdexcept>
+#include "unav_localization/klt_vo.hpp"
 
 namespace unav_localization {
 
@@ -120,7 +120,8 @@ void KltVo::mono_detect(const cv::Mat& gray) {
   const int want = options_.max_features - static_cast<int>(tracks_.size());
   if (want <= 0) return;
   cv::Mat mask(gray.size(), CV_8UC1, cv::Scalar(255));
-  for (const auto& t : tracks_) cv::circle(mask, t.px, static_cast<int>(options_.min_corner_distance), cv::Scalar(0), -1);
+  for (const auto& t : tracks_)
+    cv::circle(mask, t.px, static_cast<int>(options_.min_corner_distance), cv::Scalar(0), -1);
   std::vector<cv::Point2f> all;
   cv::goodFeaturesToTrack(gray, all, 4 * want, 0.01, options_.min_corner_distance, mask, 5);
   const int cells = options_.grid_cols * options_.grid_rows;
@@ -153,8 +154,8 @@ void KltVo::mono_start_reference(const cv::Mat& gray) {
   tracks_.clear();
   T_C0C_ = T_C0R_;
   mono_detect(gray);
-  mono_state_ = static_cast<int>(tracks_.size()) >= options_.min_init_tracks ? MonoState::kInitializing
-                                                                             : MonoState::kNoReference;
+  mono_state_ =
+      static_cast<int>(tracks_.size()) >= options_.min_init_tracks ? MonoState::kInitializing : MonoState::kNoReference;
 }
 
 double KltVo::median_depth() const {

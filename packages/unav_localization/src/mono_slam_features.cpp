@@ -11,8 +11,10 @@ auto MonoSlam::Impl::ExtractFeatures(const cv::Mat& gray, const OrbExtractor& ex
   if (!f->f.keypoints.empty()) {
     std::vector<cv::Point2f> pts, und;
     for (const auto& k : f->f.keypoints) pts.push_back(k.pt);
-    if (!D.empty()) cv::undistortPoints(pts, und, K, D, cv::noArray(), K);
-    else und = pts;
+    if (!D.empty())
+      cv::undistortPoints(pts, und, K, D, cv::noArray(), K);
+    else
+      und = pts;
     for (size_t i = 0; i < und.size(); ++i) f->f.un[i] = Eigen::Vector2d(und[i].x, und[i].y);
   }
   f->f.BuildGrid(cam.width, cam.height, 16.0);
@@ -21,7 +23,8 @@ auto MonoSlam::Impl::ExtractFeatures(const cv::Mat& gray, const OrbExtractor& ex
 }
 
 auto MonoSlam::Impl::ComputeBow(Features* f) const -> void {
-  if (voc && f->bow.empty() && !f->descriptors.empty()) voc->Transform(f->descriptors, &f->bow, &f->feature_vector, std::max(0, voc->levels() - 1));
+  if (voc && f->bow.empty() && !f->descriptors.empty())
+    voc->Transform(f->descriptors, &f->bow, &f->feature_vector, std::max(0, voc->levels() - 1));
 }
 
 auto MonoSlam::Impl::PredictLevel(const MapPoint& p, double dist) const -> int {
@@ -30,7 +33,9 @@ auto MonoSlam::Impl::PredictLevel(const MapPoint& p, double dist) const -> int {
   return std::clamp(level, 0, opt.orb.levels - 1);
 }
 
-auto MonoSlam::Impl::MatchByAppearance(const Features& a, const std::function<bool(int)>& use_a, const Features& b, const std::function<bool(int)>& use_b, int th, double ratio) const -> std::vector<std::pair<int, int>> {
+auto MonoSlam::Impl::MatchByAppearance(const Features& a, const std::function<bool(int)>& use_a, const Features& b,
+                                       const std::function<bool(int)>& use_b, int th, double ratio) const
+    -> std::vector<std::pair<int, int>> {
   std::vector<std::pair<int, int>> out;
   std::vector<int> best_for_b(b.size(), -1), best_dist_b(b.size(), 256);
   auto match_sets = [&](const std::vector<int>& ia, const std::vector<int>& ib) {

@@ -7,15 +7,15 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <functional>
-#include <cmath>
-#include <random>
-#include <set>
-#include <stdexcept>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/core/eigen.hpp>
 #include <opencv2/imgproc.hpp>
+#include <random>
+#include <set>
+#include <stdexcept>
 #include "unav_localization/sim3.hpp"
 #include "unav_localization/slam_optimizer.hpp"
 
@@ -51,7 +51,7 @@ struct MonoSlam::Impl {
     int index = -1;
     double stamp = 0;
     Features f;
-    std::vector<int> points;     ///< feature -> map point (-1)
+    std::vector<int> points;  ///< feature -> map point (-1)
     std::vector<bool> outlier;
     Eigen::Isometry3d T_cw = Eigen::Isometry3d::Identity();
   };
@@ -86,7 +86,7 @@ struct MonoSlam::Impl {
   std::string loop_log;  ///< verified loop candidates of the current keyframe (summary message)
   std::vector<TrajEntry> traj;
   std::vector<StampedPose> frozen;  ///< trajectories of earlier maps, in the global frame
-  Sim3 G;                          ///< current map's world -> global frame
+  Sim3 G;                           ///< current map's world -> global frame
   int map_number = 0;
   Eigen::Isometry3d last_good_T_wc_global = Eigen::Isometry3d::Identity();
   int last_good_ref_kf = -1;  ///< reference keyframe of the last tracked frame
@@ -96,15 +96,18 @@ struct MonoSlam::Impl {
   // ---------------------------------------------------------------- features
   void ExtractFeatures(const cv::Mat& gray, const OrbExtractor& extractor, Frame* f);
   void ComputeBow(Features* f) const;
-  double InvSigma2(const Features& f, int i) const { return 1.0 / sigma2[static_cast<size_t>(f.keypoints[static_cast<size_t>(i)].octave)]; }
+  double InvSigma2(const Features& f, int i) const {
+    return 1.0 / sigma2[static_cast<size_t>(f.keypoints[static_cast<size_t>(i)].octave)];
+  }
 
   int PredictLevel(const MapPoint& p, double dist) const;
 
   // Matches features of a (filtered) to features of b (filtered) by appearance: within the same
   // vocabulary node when both have feature vectors, else all pairs. Best distance <= th and a
   // ratio test against the second best.
-  std::vector<std::pair<int, int>> MatchByAppearance(const Features& a, const std::function<bool(int)>& use_a, const Features& b,
-                                                     const std::function<bool(int)>& use_b, int th, double ratio) const;
+  std::vector<std::pair<int, int>> MatchByAppearance(const Features& a, const std::function<bool(int)>& use_a,
+                                                     const Features& b, const std::function<bool(int)>& use_b, int th,
+                                                     double ratio) const;
 
   // --------------------------------------------------------------- initialisation
   struct Reconstruction {
@@ -114,8 +117,8 @@ struct MonoSlam::Impl {
     double parallax_deg = 0;
   };
 
-  static bool Triangulate(const Eigen::Matrix<double, 3, 4>& P1, const Eigen::Matrix<double, 3, 4>& P2, const Eigen::Vector2d& x1,
-                          const Eigen::Vector2d& x2, Eigen::Vector3d* X);
+  static bool Triangulate(const Eigen::Matrix<double, 3, 4>& P1, const Eigen::Matrix<double, 3, 4>& P2,
+                          const Eigen::Vector2d& x1, const Eigen::Vector2d& x2, Eigen::Vector3d* X);
 
   // Triangulates the matched pairs for motion (R, t) of camera 2 w.r.t. camera 1 and keeps the
   // points in front of both cameras that reproject within the gate.
@@ -129,7 +132,8 @@ struct MonoSlam::Impl {
   void CreateInitialMap(const Reconstruction& rec, const std::vector<std::pair<int, int>>& matches);
 
   // --------------------------------------------------------------------- tracking
-  bool Visible(const MapPoint& p, const Eigen::Isometry3d& T_cw, Eigen::Vector2d* uv, int* level, double* view_cos) const;
+  bool Visible(const MapPoint& p, const Eigen::Isometry3d& T_cw, Eigen::Vector2d* uv, int* level,
+               double* view_cos) const;
 
   // Searches each point's projection for the best unmatched feature. Returns new matches.
   int SearchByProjection(Frame* f, const std::vector<int>& pts, double radius_factor, bool count_visible, int th);

@@ -5,7 +5,8 @@ namespace unav_localization {
 
 using namespace slam_internal;  // NOLINT(google-build-using-namespace): the SLAM's own constants
 
-auto MonoSlam::Impl::Triangulate(const Eigen::Matrix<double, 3, 4>& P1, const Eigen::Matrix<double, 3, 4>& P2, const Eigen::Vector2d& x1, const Eigen::Vector2d& x2, Eigen::Vector3d* X) -> bool {
+auto MonoSlam::Impl::Triangulate(const Eigen::Matrix<double, 3, 4>& P1, const Eigen::Matrix<double, 3, 4>& P2,
+                                 const Eigen::Vector2d& x1, const Eigen::Vector2d& x2, Eigen::Vector3d* X) -> bool {
   Eigen::Matrix4d A;
   A.row(0) = x1.x() * P1.row(2) - P1.row(0);
   A.row(1) = x1.y() * P1.row(2) - P1.row(1);
@@ -18,7 +19,9 @@ auto MonoSlam::Impl::Triangulate(const Eigen::Matrix<double, 3, 4>& P1, const Ei
   return X->allFinite();
 }
 
-auto MonoSlam::Impl::CheckMotion(const Eigen::Matrix3d& R, const Eigen::Vector3d& t, const Features& f1, const Features& f2, const std::vector<std::pair<int, int>>& matches, const std::vector<uchar>& inlier) const -> Reconstruction {
+auto MonoSlam::Impl::CheckMotion(const Eigen::Matrix3d& R, const Eigen::Vector3d& t, const Features& f1,
+                                 const Features& f2, const std::vector<std::pair<int, int>>& matches,
+                                 const std::vector<uchar>& inlier) const -> Reconstruction {
   Reconstruction rec;
   rec.R = R;
   rec.t = t;
@@ -52,8 +55,10 @@ auto MonoSlam::Impl::CheckMotion(const Eigen::Matrix3d& R, const Eigen::Vector3d
 auto MonoSlam::Impl::TryInitialize(SlamFrameSummary s) -> SlamFrameSummary {
   s.state = SlamState::kInitializing;
   if (!init_ref || static_cast<int>(cur.f.size()) < 100 || cur.index - init_ref->index > opt.init_max_frames) {
-    if (static_cast<int>(cur.f.size()) >= 100) init_ref = std::make_unique<Frame>(cur);
-    else init_ref.reset();
+    if (static_cast<int>(cur.f.size()) >= 100)
+      init_ref = std::make_unique<Frame>(cur);
+    else
+      init_ref.reset();
     s.message = "waiting for a reference frame with enough features";
     return s;
   }
@@ -85,8 +90,10 @@ auto MonoSlam::Impl::TryInitialize(SlamFrameSummary s) -> SlamFrameSummary {
   {
     std::vector<double> flow;
     for (const auto& [i, j] : matches) {
-      p1.emplace_back(static_cast<float>(init_ref->f.un[static_cast<size_t>(i)].x()), static_cast<float>(init_ref->f.un[static_cast<size_t>(i)].y()));
-      p2.emplace_back(static_cast<float>(cur.f.un[static_cast<size_t>(j)].x()), static_cast<float>(cur.f.un[static_cast<size_t>(j)].y()));
+      p1.emplace_back(static_cast<float>(init_ref->f.un[static_cast<size_t>(i)].x()),
+                      static_cast<float>(init_ref->f.un[static_cast<size_t>(i)].y()));
+      p2.emplace_back(static_cast<float>(cur.f.un[static_cast<size_t>(j)].x()),
+                      static_cast<float>(cur.f.un[static_cast<size_t>(j)].y()));
       flow.push_back(cv::norm(p1.back() - p2.back()));
     }
     std::sort(flow.begin(), flow.end());
@@ -124,7 +131,8 @@ auto MonoSlam::Impl::TryInitialize(SlamFrameSummary s) -> SlamFrameSummary {
       candidates.push_back(CheckMotion(R, t.normalized(), init_ref->f, cur.f, matches, maskH));
     }
   }
-  std::sort(candidates.begin(), candidates.end(), [](const auto& a, const auto& b) { return a.points.size() > b.points.size(); });
+  std::sort(candidates.begin(), candidates.end(),
+            [](const auto& a, const auto& b) { return a.points.size() > b.points.size(); });
   if (candidates.empty() || static_cast<int>(candidates[0].points.size()) < opt.init_min_points ||
       candidates[0].parallax_deg < opt.init_min_parallax_deg) {
     s.message = "initialisation: not enough parallax or points";
@@ -164,7 +172,8 @@ auto MonoSlam::Impl::NewKeyFrame(const Frame& f) -> int {
   return map->keyframes.back()->id;
 }
 
-auto MonoSlam::Impl::CreateInitialMap(const Reconstruction& rec, const std::vector<std::pair<int, int>>& matches) -> void {
+auto MonoSlam::Impl::CreateInitialMap(const Reconstruction& rec, const std::vector<std::pair<int, int>>& matches)
+    -> void {
   map = std::make_unique<Map>();
   db = BowDatabase();
   recent_points.clear();

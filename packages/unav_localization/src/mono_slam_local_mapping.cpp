@@ -39,8 +39,10 @@ auto MonoSlam::Impl::Fuse(int kf_id, const std::vector<int>& pts) -> void {
     if (bi < 0 || best > kThLow) continue;
     const int q = kf.points[static_cast<size_t>(bi)];
     if (q >= 0 && !map->mp(q).bad) {
-      if (map->mp(q).obs.size() >= p.obs.size()) map->Replace(pid, q);
-      else map->Replace(q, pid);
+      if (map->mp(q).obs.size() >= p.obs.size())
+        map->Replace(pid, q);
+      else
+        map->Replace(q, pid);
     } else {
       map->AddObservation(pid, kf_id, bi);
     }
@@ -80,8 +82,8 @@ auto MonoSlam::Impl::CreateNewMapPoints(int kf_id) -> void {
     const Eigen::Matrix3d F12 = Km.transpose().inverse() * tx * T12.linear() * Km.inverse();
     const Eigen::Vector2d ep2 = cam.Project(k2.T_cw * O1);  // epipole of camera 1 in image 2
     const auto matches = MatchByAppearance(
-        k1.f, [&](int i) { return k1.points[static_cast<size_t>(i)] < 0; }, k2.f, [&](int j) { return k2.points[static_cast<size_t>(j)] < 0; },
-        kThLow, 0.6);
+        k1.f, [&](int i) { return k1.points[static_cast<size_t>(i)] < 0; }, k2.f,
+        [&](int j) { return k2.points[static_cast<size_t>(j)] < 0; }, kThLow, 0.6);
     Eigen::Matrix<double, 3, 4> P1, P2;
     P1 << Km * k1.T_cw.linear(), Km * k1.T_cw.translation();
     P2 << Km * k2.T_cw.linear(), Km * k2.T_cw.translation();
@@ -108,7 +110,8 @@ auto MonoSlam::Impl::CreateNewMapPoints(int kf_id) -> void {
       if ((cam.Project(c2) - x2).squaredNorm() / sigma2[static_cast<size_t>(l2)] > kChi2Mono) continue;
       const double d1 = (X - O1).norm(), d2 = (X - O2).norm();
       const double ratio_dist = d2 / d1, ratio_oct = scales[static_cast<size_t>(l1)] / scales[static_cast<size_t>(l2)];
-      if (ratio_dist * 1.5 * opt.orb.scale_factor < ratio_oct || ratio_dist > ratio_oct * 1.5 * opt.orb.scale_factor) continue;
+      if (ratio_dist * 1.5 * opt.orb.scale_factor < ratio_oct || ratio_dist > ratio_oct * 1.5 * opt.orb.scale_factor)
+        continue;
       const int p = map->AddPoint(X, kf_id);
       map->AddObservation(p, kf_id, i);
       map->AddObservation(p, nid, j);
@@ -155,7 +158,8 @@ auto MonoSlam::Impl::InsertKeyFrame() -> void {
   CullRecentPoints(kid);
   CreateNewMapPoints(kid);
   SearchInNeighbors(kid);
-  if (map->keyframes.size() > 2) LocalBundleAdjustment(map.get(), cam, sigma2, kid, opt.local_ba_keyframes, opt.local_ba_iterations);
+  if (map->keyframes.size() > 2)
+    LocalBundleAdjustment(map.get(), cam, sigma2, kid, opt.local_ba_keyframes, opt.local_ba_iterations);
 }
 
 }  // namespace unav_localization

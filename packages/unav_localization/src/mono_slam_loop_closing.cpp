@@ -10,7 +10,8 @@ auto MonoSlam::Impl::DetectLoopCandidates(int kid) -> std::vector<int> {
   std::vector<int> out;
   if (!voc || kf.f.bow.empty()) return out;
   double min_score = 1.0;
-  for (const auto& [n, w] : kf.covisibility) min_score = std::min(min_score, BowVocabulary::Score(kf.f.bow, map->kf(n).f.bow));
+  for (const auto& [n, w] : kf.covisibility)
+    min_score = std::min(min_score, BowVocabulary::Score(kf.f.bow, map->kf(n).f.bow));
   std::set<int> exclude{kid};
   for (const auto& [n, w] : kf.covisibility) exclude.insert(n);
   for (int k = std::max(0, kid - opt.loop_min_keyframe_gap); k < kid; ++k) exclude.insert(k);
@@ -40,7 +41,8 @@ auto MonoSlam::Impl::ComputeSim3(int kid, int cand, LoopCandidate* lc) -> bool {
   const KeyFrame& c = map->kf(kid);
   const KeyFrame& m = map->kf(cand);
   const auto has_point = [&](const KeyFrame& k) {
-    return [&](int i) { return k.points[static_cast<size_t>(i)] >= 0 && !map->mp(k.points[static_cast<size_t>(i)]).bad; };
+    return
+        [&](int i) { return k.points[static_cast<size_t>(i)] >= 0 && !map->mp(k.points[static_cast<size_t>(i)]).bad; };
   };
   const auto matches = MatchByAppearance(c.f, has_point(c), m.f, has_point(m), kThLow, 0.75);
   if (matches.size() < 20) return false;
@@ -62,7 +64,8 @@ auto MonoSlam::Impl::ComputeSim3(int kid, int cand, LoopCandidate* lc) -> bool {
     const Sim3 Si = S.inverse();
     for (size_t k = 0; k < sm.size(); ++k) {
       const Eigen::Vector3d p1 = S * sm[k].X2_c2, p2 = Si * sm[k].X1_c1;
-      const bool ok = p1.z() > 0 && p2.z() > 0 && (cam.Project(p1) - sm[k].uv1).squaredNorm() * sm[k].inv_sigma2_1 < gate &&
+      const bool ok = p1.z() > 0 && p2.z() > 0 &&
+                      (cam.Project(p1) - sm[k].uv1).squaredNorm() * sm[k].inv_sigma2_1 < gate &&
                       (cam.Project(p2) - sm[k].uv2).squaredNorm() * sm[k].inv_sigma2_2 < gate;
       (*in)[k] = ok;
       n += ok ? 1 : 0;
@@ -137,7 +140,8 @@ auto MonoSlam::Impl::ComputeSim3(int kid, int cand, LoopCandidate* lc) -> bool {
   }
   const double correction = (T_cw_loop.inverse().translation() - c.Center()).norm();
   char text[200];
-  std::snprintf(text, sizeof(text), "keyframe %d <-> %d: scale %.3f, %zu matches, correction %.3f over a path of %.3f (map units)", kid,
+  std::snprintf(text, sizeof(text),
+                "keyframe %d <-> %d: scale %.3f, %zu matches, correction %.3f over a path of %.3f (map units)", kid,
                 cand, best.s, lc->matches.size(), correction, path);
   loop_log += (loop_log.empty() ? "" : "; ") + std::string(text);
   if (correction > opt.loop_max_correction_ratio * path) {
@@ -183,8 +187,10 @@ auto MonoSlam::Impl::CorrectLoop(int kid, const LoopCandidate& lc) -> void {
   for (const auto& [i, pid] : lc.matches) {
     if (map->mp(pid).bad) continue;
     const int q = c.points[static_cast<size_t>(i)];
-    if (q >= 0 && !map->mp(q).bad) map->Replace(q, pid);
-    else if (!map->mp(pid).obs.count(kid)) map->AddObservation(pid, kid, i);
+    if (q >= 0 && !map->mp(q).bad)
+      map->Replace(q, pid);
+    else if (!map->mp(pid).obs.count(kid))
+      map->AddObservation(pid, kid, i);
   }
   std::vector<int> loop_points;
   {

@@ -5,7 +5,8 @@ namespace unav_localization {
 
 using namespace slam_internal;  // NOLINT(google-build-using-namespace): the SLAM's own constants
 
-auto MonoSlam::Impl::Visible(const MapPoint& p, const Eigen::Isometry3d& T_cw, Eigen::Vector2d* uv, int* level, double* view_cos) const -> bool {
+auto MonoSlam::Impl::Visible(const MapPoint& p, const Eigen::Isometry3d& T_cw, Eigen::Vector2d* uv, int* level,
+                             double* view_cos) const -> bool {
   const Eigen::Vector3d pc = T_cw * p.X_w;
   if (pc.z() <= 0) return false;
   *uv = cam.Project(pc);
@@ -20,7 +21,8 @@ auto MonoSlam::Impl::Visible(const MapPoint& p, const Eigen::Isometry3d& T_cw, E
   return true;
 }
 
-auto MonoSlam::Impl::SearchByProjection(Frame* f, const std::vector<int>& pts, double radius_factor, bool count_visible, int th) -> int {
+auto MonoSlam::Impl::SearchByProjection(Frame* f, const std::vector<int>& pts, double radius_factor, bool count_visible,
+                                        int th) -> int {
   int n = 0;
   for (int pid : pts) {
     MapPoint& p = map->mp(pid);
@@ -36,7 +38,8 @@ auto MonoSlam::Impl::SearchByProjection(Frame* f, const std::vector<int>& pts, d
     for (int i : cands) {
       const int q = f->points[static_cast<size_t>(i)];
       if (q >= 0 && !map->mp(q).bad && !f->outlier[static_cast<size_t>(i)]) continue;
-      m.Add(DescriptorDistance(p.descriptor.ptr<uint8_t>(), f->f.desc(i)), i, f->f.keypoints[static_cast<size_t>(i)].octave);
+      m.Add(DescriptorDistance(p.descriptor.ptr<uint8_t>(), f->f.desc(i)), i,
+            f->f.keypoints[static_cast<size_t>(i)].octave);
     }
     const int best = m.best, bi = m.index, best_level = m.best_level, second_level = m.second_level, second = m.second;
     if (bi < 0 || best > th) continue;
@@ -95,8 +98,9 @@ auto MonoSlam::Impl::TrackReferenceKeyFrame() -> bool {
   const KeyFrame& kf = map->kf(ref_kf);
   ComputeBow(&cur.f);
   const auto m = MatchByAppearance(
-      kf.f, [&](int i) { return kf.points[static_cast<size_t>(i)] >= 0 && !map->mp(kf.points[static_cast<size_t>(i)]).bad; }, cur.f,
-      [](int) { return true; }, kThHigh, 0.7);
+      kf.f,
+      [&](int i) { return kf.points[static_cast<size_t>(i)] >= 0 && !map->mp(kf.points[static_cast<size_t>(i)]).bad; },
+      cur.f, [](int) { return true; }, kThHigh, 0.7);
   if (m.size() < 15) return false;
   for (const auto& [i, j] : m) cur.points[static_cast<size_t>(j)] = kf.points[static_cast<size_t>(i)];
   cur.T_cw = last.T_cw;
@@ -156,19 +160,24 @@ auto MonoSlam::Impl::Relocalize() -> bool {
     const KeyFrame& kf = map->kf(kid);
     if (kf.bad) continue;
     const auto m = MatchByAppearance(
-        kf.f, [&](int i) { return kf.points[static_cast<size_t>(i)] >= 0 && !map->mp(kf.points[static_cast<size_t>(i)]).bad; }, cur.f,
-        [](int) { return true; }, kThHigh, 0.75);
+        kf.f,
+        [&](int i) {
+          return kf.points[static_cast<size_t>(i)] >= 0 && !map->mp(kf.points[static_cast<size_t>(i)]).bad;
+        },
+        cur.f, [](int) { return true; }, kThHigh, 0.75);
     if (m.size() < 15) continue;
     std::vector<cv::Point3f> obj;
     std::vector<cv::Point2f> img;
     for (const auto& [i, j] : m) {
       const auto& X = map->mp(kf.points[static_cast<size_t>(i)]).X_w;
       obj.emplace_back(static_cast<float>(X.x()), static_cast<float>(X.y()), static_cast<float>(X.z()));
-      img.emplace_back(static_cast<float>(cur.f.un[static_cast<size_t>(j)].x()), static_cast<float>(cur.f.un[static_cast<size_t>(j)].y()));
+      img.emplace_back(static_cast<float>(cur.f.un[static_cast<size_t>(j)].x()),
+                       static_cast<float>(cur.f.un[static_cast<size_t>(j)].y()));
     }
     cv::Mat rvec, tvec;
     std::vector<int> inl;
-    if (!cv::solvePnPRansac(obj, img, Kcv, cv::noArray(), rvec, tvec, false, 200, 2.0f, 0.99, inl, cv::SOLVEPNP_EPNP)) continue;
+    if (!cv::solvePnPRansac(obj, img, Kcv, cv::noArray(), rvec, tvec, false, 200, 2.0f, 0.99, inl, cv::SOLVEPNP_EPNP))
+      continue;
     if (inl.size() < 10) continue;
     cv::Mat Rc;
     cv::Rodrigues(rvec, Rc);
@@ -179,7 +188,9 @@ auto MonoSlam::Impl::Relocalize() -> bool {
     cur.T_cw.linear() = R;
     cur.T_cw.translation() = t;
     std::fill(cur.points.begin(), cur.points.end(), -1);
-    for (int k : inl) cur.points[static_cast<size_t>(m[static_cast<size_t>(k)].second)] = kf.points[static_cast<size_t>(m[static_cast<size_t>(k)].first)];
+    for (int k : inl)
+      cur.points[static_cast<size_t>(m[static_cast<size_t>(k)].second)] =
+          kf.points[static_cast<size_t>(m[static_cast<size_t>(k)].first)];
     if (Optimize(&cur) < 10) continue;
     ref_kf = kid;
     last_reloc_frame = cur.index;

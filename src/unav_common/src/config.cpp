@@ -48,8 +48,8 @@ std::string StringText(const std::string& s) {
     } catch (const YAML::Exception&) {
       plain = false;
     }
-    static const char* const kWords[] = {"true", "True", "TRUE", "false", "False", "FALSE", "yes", "Yes", "YES",
-                                         "no",   "No",   "NO",   "on",    "On",    "ON",    "off", "Off", "OFF",
+    static const char* const kWords[] = {"true", "True", "TRUE", "false", "False", "FALSE", "yes",  "Yes", "YES",
+                                         "no",   "No",   "NO",   "on",    "On",    "ON",    "off",  "Off", "OFF",
                                          "y",    "Y",    "n",    "N",     "null",  "Null",  "NULL", "~"};
     for (const char* w : kWords) plain = plain && s != w;
     char* end = nullptr;
@@ -119,17 +119,28 @@ std::string ValueText(ValueRef v) {
 
 const char* TypeName(ValueType t) {
   switch (t) {
-    case ValueType::kBool: return "bool";
-    case ValueType::kInt: return "int";
-    case ValueType::kInt64: return "int64";
-    case ValueType::kUint32: return "uint32";
-    case ValueType::kDouble: return "double";
-    case ValueType::kString: return "string";
-    case ValueType::kDoubleList: return "double[]";
-    case ValueType::kIntList: return "int[]";
-    case ValueType::kStringList: return "string[]";
-    case ValueType::kVector2: return "double[2]";
-    case ValueType::kVector3: return "double[3]";
+    case ValueType::kBool:
+      return "bool";
+    case ValueType::kInt:
+      return "int";
+    case ValueType::kInt64:
+      return "int64";
+    case ValueType::kUint32:
+      return "uint32";
+    case ValueType::kDouble:
+      return "double";
+    case ValueType::kString:
+      return "string";
+    case ValueType::kDoubleList:
+      return "double[]";
+    case ValueType::kIntList:
+      return "int[]";
+    case ValueType::kStringList:
+      return "string[]";
+    case ValueType::kVector2:
+      return "double[2]";
+    case ValueType::kVector3:
+      return "double[3]";
   }
   return "";
 }
@@ -260,24 +271,27 @@ bool ParseDouble(const std::string& text, double* out) {
 
 const char* IntegerRule(ValueType t) {
   switch (t) {
-    case ValueType::kUint32: return "must be an integer in [0, 4294967295]";
-    case ValueType::kInt64: return "must be an integer in [-9223372036854775808, 9223372036854775807]";
-    default: return "must be an integer in [-2147483648, 2147483647]";
+    case ValueType::kUint32:
+      return "must be an integer in [0, 4294967295]";
+    case ValueType::kInt64:
+      return "must be an integer in [-9223372036854775808, 9223372036854775807]";
+    default:
+      return "must be an integer in [-2147483648, 2147483647]";
   }
 }
 
 /// Reads an integer of type `t` (kInt, kInt64, kUint32) and checks the rule.
-int64_t ReadInteger(const Reporter& r, const FieldSpec& s, const YAML::Node& n, ValueType t,
-                    const std::string& path) {
+int64_t ReadInteger(const Reporter& r, const FieldSpec& s, const YAML::Node& n, ValueType t, const std::string& path) {
   std::string text;
   int64_t v = 0;
   bool overflow = false;
   if (!PlainScalar(n, &text) || !ParseInt64(text, &v, &overflow)) {
     r.Fail(path, Written(n), overflow ? IntegerRule(t) : "must be an integer");
   }
-  const bool fits = t == ValueType::kInt64 ||
-                    (t == ValueType::kUint32 ? v >= 0 && v <= int64_t{std::numeric_limits<uint32_t>::max()}
-                                             : v >= std::numeric_limits<int>::min() && v <= std::numeric_limits<int>::max());
+  const bool fits =
+      t == ValueType::kInt64 ||
+      (t == ValueType::kUint32 ? v >= 0 && v <= int64_t{std::numeric_limits<uint32_t>::max()}
+                               : v >= std::numeric_limits<int>::min() && v <= std::numeric_limits<int>::max());
   if (!fits) r.Fail(path, text, IntegerRule(t));
   CheckNumber(r, s, static_cast<double>(v), false, path, text);
   return v;
@@ -315,30 +329,44 @@ bool IsListType(ValueType t) {
 
 const char* ListRule(ValueType t) {
   switch (t) {
-    case ValueType::kIntList: return "must be a list of integers";
-    case ValueType::kStringList: return "must be a list of strings";
-    case ValueType::kVector2: return "must be a list of 2 numbers";
-    case ValueType::kVector3: return "must be a list of 3 numbers";
-    default: return "must be a list of numbers";
+    case ValueType::kIntList:
+      return "must be a list of integers";
+    case ValueType::kStringList:
+      return "must be a list of strings";
+    case ValueType::kVector2:
+      return "must be a list of 2 numbers";
+    case ValueType::kVector3:
+      return "must be a list of 3 numbers";
+    default:
+      return "must be a list of numbers";
   }
 }
 
 const char* ElementRule(ValueType t) {
   switch (t) {
-    case ValueType::kIntList: return "must be an integer";
-    case ValueType::kStringList: return "must be a string";
-    default: return "must be a number";
+    case ValueType::kIntList:
+      return "must be an integer";
+    case ValueType::kStringList:
+      return "must be a string";
+    default:
+      return "must be a number";
   }
 }
 
 std::size_t ListSize(ValueRef v) {
   switch (v.type) {
-    case ValueType::kDoubleList: return static_cast<const std::vector<double>*>(v.ptr)->size();
-    case ValueType::kIntList: return static_cast<const std::vector<int>*>(v.ptr)->size();
-    case ValueType::kStringList: return static_cast<const std::vector<std::string>*>(v.ptr)->size();
-    case ValueType::kVector2: return 2;
-    case ValueType::kVector3: return 3;
-    default: return 0;
+    case ValueType::kDoubleList:
+      return static_cast<const std::vector<double>*>(v.ptr)->size();
+    case ValueType::kIntList:
+      return static_cast<const std::vector<int>*>(v.ptr)->size();
+    case ValueType::kStringList:
+      return static_cast<const std::vector<std::string>*>(v.ptr)->size();
+    case ValueType::kVector2:
+      return 2;
+    case ValueType::kVector3:
+      return 3;
+    default:
+      return 0;
   }
 }
 
@@ -369,10 +397,17 @@ void ReadElement(const Reporter& r, const FieldSpec& s, const YAML::Node& n, Val
 /// Resizes a variable-length list (fixed-size vectors ignore it).
 void ResizeList(ValueRef v, std::size_t size) {
   switch (v.type) {
-    case ValueType::kDoubleList: static_cast<std::vector<double>*>(v.ptr)->assign(size, 0.0); break;
-    case ValueType::kIntList: static_cast<std::vector<int>*>(v.ptr)->assign(size, 0); break;
-    case ValueType::kStringList: static_cast<std::vector<std::string>*>(v.ptr)->assign(size, ""); break;
-    default: break;
+    case ValueType::kDoubleList:
+      static_cast<std::vector<double>*>(v.ptr)->assign(size, 0.0);
+      break;
+    case ValueType::kIntList:
+      static_cast<std::vector<int>*>(v.ptr)->assign(size, 0);
+      break;
+    case ValueType::kStringList:
+      static_cast<std::vector<std::string>*>(v.ptr)->assign(size, "");
+      break;
+    default:
+      break;
   }
 }
 
@@ -387,22 +422,49 @@ struct ListCopy {
 
   explicit ListCopy(ValueRef v) : ref{v.type, nullptr} {
     switch (v.type) {
-      case ValueType::kDoubleList: d = *static_cast<const std::vector<double>*>(v.ptr); ref.ptr = &d; break;
-      case ValueType::kIntList: i = *static_cast<const std::vector<int>*>(v.ptr); ref.ptr = &i; break;
-      case ValueType::kStringList: s = *static_cast<const std::vector<std::string>*>(v.ptr); ref.ptr = &s; break;
-      case ValueType::kVector2: v2 = *static_cast<const Eigen::Vector2d*>(v.ptr); ref.ptr = &v2; break;
-      case ValueType::kVector3: v3 = *static_cast<const Eigen::Vector3d*>(v.ptr); ref.ptr = &v3; break;
-      default: break;
+      case ValueType::kDoubleList:
+        d = *static_cast<const std::vector<double>*>(v.ptr);
+        ref.ptr = &d;
+        break;
+      case ValueType::kIntList:
+        i = *static_cast<const std::vector<int>*>(v.ptr);
+        ref.ptr = &i;
+        break;
+      case ValueType::kStringList:
+        s = *static_cast<const std::vector<std::string>*>(v.ptr);
+        ref.ptr = &s;
+        break;
+      case ValueType::kVector2:
+        v2 = *static_cast<const Eigen::Vector2d*>(v.ptr);
+        ref.ptr = &v2;
+        break;
+      case ValueType::kVector3:
+        v3 = *static_cast<const Eigen::Vector3d*>(v.ptr);
+        ref.ptr = &v3;
+        break;
+      default:
+        break;
     }
   }
   void StoreInto(ValueRef v) {
     switch (v.type) {
-      case ValueType::kDoubleList: *static_cast<std::vector<double>*>(v.ptr) = std::move(d); break;
-      case ValueType::kIntList: *static_cast<std::vector<int>*>(v.ptr) = std::move(i); break;
-      case ValueType::kStringList: *static_cast<std::vector<std::string>*>(v.ptr) = std::move(s); break;
-      case ValueType::kVector2: *static_cast<Eigen::Vector2d*>(v.ptr) = v2; break;
-      case ValueType::kVector3: *static_cast<Eigen::Vector3d*>(v.ptr) = v3; break;
-      default: break;
+      case ValueType::kDoubleList:
+        *static_cast<std::vector<double>*>(v.ptr) = std::move(d);
+        break;
+      case ValueType::kIntList:
+        *static_cast<std::vector<int>*>(v.ptr) = std::move(i);
+        break;
+      case ValueType::kStringList:
+        *static_cast<std::vector<std::string>*>(v.ptr) = std::move(s);
+        break;
+      case ValueType::kVector2:
+        *static_cast<Eigen::Vector2d*>(v.ptr) = v2;
+        break;
+      case ValueType::kVector3:
+        *static_cast<Eigen::Vector3d*>(v.ptr) = v3;
+        break;
+      default:
+        break;
     }
   }
 };
@@ -411,8 +473,7 @@ struct ListCopy {
 const char* kIndexTag = "!unav_index";
 
 bool ParseIndex(const std::string& text, std::size_t* out) {
-  if (text.empty() || !std::all_of(text.begin(), text.end(), [](char c) { return c >= '0' && c <= '9'; }))
-    return false;
+  if (text.empty() || !std::all_of(text.begin(), text.end(), [](char c) { return c >= '0' && c <= '9'; })) return false;
   const auto r = std::from_chars(text.data(), text.data() + text.size(), *out);
   return r.ec == std::errc() && r.ptr == text.data() + text.size();
 }
@@ -421,7 +482,8 @@ bool ParseIndex(const std::string& text, std::size_t* out) {
 void ReadValue(const Reporter& r, const FieldSpec& s, const YAML::Node& n, ValueRef v, const std::string& path,
                bool allow_index_map) {
   const bool index_map = allow_index_map && n.IsMap() && n.Tag() == kIndexTag;
-  if (index_map && !IsListType(v.type)) r.Fail(path, "", "is a " + std::string(TypeName(v.type)) + ", not a list: it has no elements to index");
+  if (index_map && !IsListType(v.type))
+    r.Fail(path, "", "is a " + std::string(TypeName(v.type)) + ", not a list: it has no elements to index");
   if (IsListType(v.type)) {
     ListCopy copy(v);
     if (index_map) {  // override of single elements: name[i]
@@ -430,7 +492,8 @@ void ReadValue(const Reporter& r, const FieldSpec& s, const YAML::Node& n, Value
         std::size_t i = 0;
         ParseIndex(kv.first.Scalar(), &i);
         const std::string p = IndexPath(path, i);
-        if (i >= size) r.Fail(p, Written(kv.second), "index out of range (the list has " + std::to_string(size) + " elements)");
+        if (i >= size)
+          r.Fail(p, Written(kv.second), "index out of range (the list has " + std::to_string(size) + " elements)");
         if (!kv.second.IsScalar()) r.Fail(p, Written(kv.second), ElementRule(v.type));
         ReadElement(r, s, kv.second, copy.ref, i, p);
       }
@@ -560,13 +623,20 @@ YAML::Node ValueNode(ValueRef v) {
     return seq;
   }
   switch (v.type) {
-    case ValueType::kBool: return YAML::Node(*static_cast<const bool*>(v.ptr));
-    case ValueType::kInt: return YAML::Node(*static_cast<const int*>(v.ptr));
-    case ValueType::kInt64: return YAML::Node(std::to_string(*static_cast<const int64_t*>(v.ptr)));
-    case ValueType::kUint32: return YAML::Node(std::to_string(*static_cast<const uint32_t*>(v.ptr)));
-    case ValueType::kDouble: return YAML::Node(DoubleText(*static_cast<const double*>(v.ptr)));
-    case ValueType::kString: return YAML::Node(*static_cast<const std::string*>(v.ptr));
-    default: return YAML::Node();
+    case ValueType::kBool:
+      return YAML::Node(*static_cast<const bool*>(v.ptr));
+    case ValueType::kInt:
+      return YAML::Node(*static_cast<const int*>(v.ptr));
+    case ValueType::kInt64:
+      return YAML::Node(std::to_string(*static_cast<const int64_t*>(v.ptr)));
+    case ValueType::kUint32:
+      return YAML::Node(std::to_string(*static_cast<const uint32_t*>(v.ptr)));
+    case ValueType::kDouble:
+      return YAML::Node(DoubleText(*static_cast<const double*>(v.ptr)));
+    case ValueType::kString:
+      return YAML::Node(*static_cast<const std::string*>(v.ptr));
+    default:
+      return YAML::Node();
   }
 }
 

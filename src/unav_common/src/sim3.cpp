@@ -9,12 +9,18 @@ namespace unav::common {
 
 const char* to_string(UmeyamaStatus status) {
   switch (status) {
-    case UmeyamaStatus::kOk: return "ok";
-    case UmeyamaStatus::kSizeMismatch: return "size mismatch";
-    case UmeyamaStatus::kTooFewPoints: return "too few points";
-    case UmeyamaStatus::kNoSpread: return "source points have no spread";
-    case UmeyamaStatus::kCollinear: return "points are collinear";
-    case UmeyamaStatus::kBadScale: return "scale is not finite and positive";
+    case UmeyamaStatus::kOk:
+      return "ok";
+    case UmeyamaStatus::kSizeMismatch:
+      return "size mismatch";
+    case UmeyamaStatus::kTooFewPoints:
+      return "too few points";
+    case UmeyamaStatus::kNoSpread:
+      return "source points have no spread";
+    case UmeyamaStatus::kCollinear:
+      return "points are collinear";
+    case UmeyamaStatus::kBadScale:
+      return "scale is not finite and positive";
   }
   return "unknown";
 }

@@ -182,7 +182,7 @@ thrusters:
 TEST(Config, MissingKeysKeepDefaults) {
   const MpcParams d;
   EXPECT_TRUE(Same(Load("{}"), d));
-  EXPECT_TRUE(Same(Load(""), d));       // empty document
+  EXPECT_TRUE(Same(Load(""), d));          // empty document
   EXPECT_TRUE(Same(Load("current:"), d));  // empty section
   const MpcParams p = Load("dt: 0.2\ncurrent: {speed: 1.0}");
   EXPECT_EQ(p.dt, 0.2);
@@ -219,7 +219,7 @@ TEST(Config, OutOfRangeNamesValueAndRule) {
   ConfigError e = LoadError("horizon_steps: -3");
   EXPECT_STREQ(e.what(), "config/mpc.yaml: horizon_steps = -3: must be in [1, 500]");
   EXPECT_STREQ(LoadError("horizon_steps: 501").what(), "config/mpc.yaml: horizon_steps = 501: must be in [1, 500]");
-  EXPECT_EQ(Load("horizon_steps: 500").horizon_steps, 500);  // inclusive
+  EXPECT_EQ(Load("horizon_steps: 500").horizon_steps, 500);                         // inclusive
   EXPECT_STREQ(LoadError("dt: 0").what(), "config/mpc.yaml: dt = 0: must be > 0");  // exclusive
   EXPECT_STREQ(LoadError("dt: -0.5").what(), "config/mpc.yaml: dt = -0.5: must be > 0");
   EXPECT_STREQ(LoadError("gain: 1.5").what(), "config/mpc.yaml: gain = 1.5: must be in (0, 1]");
@@ -441,11 +441,26 @@ TEST(Config, DescribeListsEveryFieldWithTypeDefaultRuleUnitDoc) {
   const std::vector<uc::FieldInfo> rows = uc::Describe(MpcParams{});
   std::vector<std::string> names;
   for (const auto& r : rows) names.push_back(r.name);
-  EXPECT_EQ(names, (std::vector<std::string>{
-                       "enabled", "horizon_steps", "seed", "count", "dt", "gain", "model_vehicle_config", "waypoints",
-                       "ids", "names", "xy", "position_weights", "current", "current.model", "current.speed",
-                       "current.direction_ne", "thrusters", "thrusters[i].name", "thrusters[i].position",
-                       "thrusters[i].direction"}));
+  EXPECT_EQ(names, (std::vector<std::string>{"enabled",
+                                             "horizon_steps",
+                                             "seed",
+                                             "count",
+                                             "dt",
+                                             "gain",
+                                             "model_vehicle_config",
+                                             "waypoints",
+                                             "ids",
+                                             "names",
+                                             "xy",
+                                             "position_weights",
+                                             "current",
+                                             "current.model",
+                                             "current.speed",
+                                             "current.direction_ne",
+                                             "thrusters",
+                                             "thrusters[i].name",
+                                             "thrusters[i].position",
+                                             "thrusters[i].direction"}));
   auto row = [&](const std::string& name) {
     for (const auto& r : rows)
       if (r.name == name) return r;
@@ -507,8 +522,8 @@ TEST(Config, DescribeListsEveryFieldWithTypeDefaultRuleUnitDoc) {
   std::istringstream cells(h_line);
   std::vector<std::string> words;
   for (std::string w; cells >> w;) words.push_back(w);
-  EXPECT_EQ(words, (std::vector<std::string>{"horizon_steps", "int", "20", "[1,", "500]", "-", "N,", "prediction",
-                                             "steps"}));
+  EXPECT_EQ(words,
+            (std::vector<std::string>{"horizon_steps", "int", "20", "[1,", "500]", "-", "N,", "prediction", "steps"}));
   const std::string one = uc::FormatHelp({row("horizon_steps")});
   EXPECT_EQ(one, "  horizon_steps  int  20  [1, 500]  -  N, prediction steps\n");
 }

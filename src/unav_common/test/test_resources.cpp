@@ -119,8 +119,9 @@ TEST_F(Resources, FindResourceSearchesResourcePathThenUnavResources) {
 TEST_F(Resources, FindResourceSaysWhenUnavResourcesIsNotInstalled) {
   EXPECT_TRUE(uc::resource_roots().empty());
   const std::string e = ErrorOf("config/controllers/mpc.yaml");
-  EXPECT_EQ(e, "resource = config/controllers/mpc.yaml: not found; looked in: nothing (unav_resources is not "
-               "installed: source install/setup.bash or set UNAV_RESOURCE_PATH)");
+  EXPECT_EQ(e,
+            "resource = config/controllers/mpc.yaml: not found; looked in: nothing (unav_resources is not "
+            "installed: source install/setup.bash or set UNAV_RESOURCE_PATH)");
   Write(root_ + "/data/config/a.yaml");
   ::setenv("UNAV_RESOURCE_PATH", (root_ + "/data").c_str(), 1);
   EXPECT_EQ(uc::find_resource("config/a.yaml"), root_ + "/data/config/a.yaml");

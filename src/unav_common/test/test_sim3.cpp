@@ -10,8 +10,8 @@
 #include <stdexcept>
 #include <string>
 
-#include <Eigen/SVD>
 #include <gtest/gtest.h>
+#include <Eigen/SVD>
 
 namespace uc = unav::common;
 
@@ -156,8 +156,7 @@ void RandomPairs(std::mt19937_64& rng, int trial, Eigen::Matrix3Xd* from, Eigen:
   const Eigen::Vector3d t(5 * u(rng), 5 * u(rng), 5 * u(rng));
   const double noise = trial % 4 == 0 ? 0.0 : spread * 0.05 * std::abs(u(rng));
   to->resize(3, n);
-  for (int i = 0; i < n; ++i)
-    to->col(i) = s * (R * from->col(i)) + t + noise * Eigen::Vector3d(g(rng), g(rng), g(rng));
+  for (int i = 0; i < n; ++i) to->col(i) = s * (R * from->col(i)) + t + noise * Eigen::Vector3d(g(rng), g(rng), g(rng));
   if (trial % 5 == 1) to->row(2) *= -1.0;  // a mirror image: det(U) det(V) < 0
 }
 

@@ -31,9 +31,8 @@ class Reader {
 
   void need(size_t n, const std::string& path) const {
     if (pos_ > size_ || size_ - pos_ < n) {
-      throw CodecError(show_path(path) + ": truncated data: need " + std::to_string(n) +
-                       " bytes at offset " + std::to_string(pos_) + ", sample has " +
-                       std::to_string(size_) + " bytes");
+      throw CodecError(show_path(path) + ": truncated data: need " + std::to_string(n) + " bytes at offset " +
+                       std::to_string(pos_) + ", sample has " + std::to_string(size_) + " bytes");
     }
   }
 
@@ -90,9 +89,12 @@ size_t min_wire_size(const StructType& type) {
 
 size_t min_wire_size(const ElementType& type) {
   switch (type.kind) {
-    case ElementType::Kind::kPrimitive: return primitive_size(type.primitive);
-    case ElementType::Kind::kString: return 4;
-    case ElementType::Kind::kStruct: return min_wire_size(*type.struct_type);
+    case ElementType::Kind::kPrimitive:
+      return primitive_size(type.primitive);
+    case ElementType::Kind::kString:
+      return 4;
+    case ElementType::Kind::kStruct:
+      return min_wire_size(*type.struct_type);
   }
   return 1;
 }
@@ -100,16 +102,14 @@ size_t min_wire_size(const ElementType& type) {
 class Decoder {
  public:
   // `echo` null: plain decoding for decode(); otherwise ros2 topic echo conversions.
-  Decoder(const uint8_t* data, size_t size, const EchoOptions* echo)
-      : reader_(data, size), echo_(echo) {}
+  Decoder(const uint8_t* data, size_t size, const EchoOptions* echo) : reader_(data, size), echo_(echo) {}
 
   Value run(const StructType& type) {
     Value v = decode_struct(type, "");
     // Fast DDS may pad the payload to a multiple of 4 bytes; anything beyond is not this type.
     if (reader_.remaining() > 3) {
-      throw CodecError("(message): " + std::to_string(reader_.remaining()) +
-                       " unexpected bytes after the end of " + type_display_name(type) +
-                       " at offset " + std::to_string(reader_.position()) +
+      throw CodecError("(message): " + std::to_string(reader_.remaining()) + " unexpected bytes after the end of " +
+                       type_display_name(type) + " at offset " + std::to_string(reader_.position()) +
                        " (wrong type for this data?)");
     }
     return v;
@@ -138,22 +138,19 @@ class Decoder {
       }
       const size_t min_size = std::max<size_t>(1, min_wire_size(field.type));
       if (count > reader_.remaining() / min_size) {
-        throw CodecError(show_path(path) + ": truncated data: sequence claims " +
-                         std::to_string(count) + " elements but only " +
-                         std::to_string(reader_.remaining()) + " bytes remain");
+        throw CodecError(show_path(path) + ": truncated data: sequence claims " + std::to_string(count) +
+                         " elements but only " + std::to_string(reader_.remaining()) + " bytes remain");
       }
     }
     if (echo_ && echo_->no_arr) {
       skip_elements(field.type, count, 0, path);
-      const std::string element = field.type.kind == ElementType::Kind::kString
-                                      ? std::string("string")
-                                      : element_type_string(field.type);
+      const std::string element =
+          field.type.kind == ElementType::Kind::kString ? std::string("string") : element_type_string(field.type);
       if (field.container == Field::Container::kArray) {
         return Value::string("<array type: " + element + "[" + std::to_string(count) + "]>");
       }
       if (field.sequence_bound) {
-        return Value::string("<sequence type: " + element + "[" +
-                             std::to_string(field.sequence_bound) +
+        return Value::string("<sequence type: " + element + "[" + std::to_string(field.sequence_bound) +
                              "], length: " + std::to_string(count) + ">");
       }
       return Value::string("<sequence type: " + element + ", length: " + std::to_string(count) + ">");
@@ -214,8 +211,8 @@ class Decoder {
     switch (kind) {
       case PrimitiveKind::kBool:
         if (raw > 1) {
-          throw CodecError(show_path(path) + ": malformed data: boolean byte " +
-                           std::to_string(raw) + " is neither 0 nor 1");
+          throw CodecError(show_path(path) + ": malformed data: boolean byte " + std::to_string(raw) +
+                           " is neither 0 nor 1");
         }
         return Value::plain(raw ? "true" : "false");
       case PrimitiveKind::kChar:
@@ -281,8 +278,7 @@ YAML::Node decode(const StructType& type, const uint8_t* data, size_t size) {
   return to_yaml_node(Decoder(data, size, nullptr).run(type));
 }
 
-Value cdr_detail::decode_value(const StructType& type, const uint8_t* data, size_t size,
-                               const EchoOptions* echo) {
+Value cdr_detail::decode_value(const StructType& type, const uint8_t* data, size_t size, const EchoOptions* echo) {
   return Decoder(data, size, echo).run(type);
 }
 

@@ -13,13 +13,10 @@ namespace {
 
 bool is_break(char32_t c) { return c == U'\n' || c == 0x85 || c == 0x2028 || c == 0x2029; }
 
-bool is_blank_or_break(char32_t c) {
-  return c == 0 || c == U' ' || c == U'\t' || c == U'\r' || is_break(c);
-}
+bool is_blank_or_break(char32_t c) { return c == 0 || c == U' ' || c == U'\t' || c == U'\r' || is_break(c); }
 
 bool is_printable_unicode(char32_t c) {
-  return c == 0x85 || (c >= 0xA0 && c <= 0xD7FF) || (c >= 0xE000 && c <= 0xFFFD) ||
-         (c >= 0x10000 && c < 0x10FFFF);
+  return c == 0x85 || (c >= 0xA0 && c <= 0xD7FF) || (c >= 0xE000 && c <= 0xFFFD) || (c >= 0x10000 && c < 0x10FFFF);
 }
 
 struct ScalarAnalysis {
@@ -149,16 +146,13 @@ void write_single_quoted(std::string& out, const std::u32string& s, size_t inden
 
 void write_double_quoted(std::string& out, const std::u32string& s) {
   static const std::map<char32_t, const char*> kEscapes = {
-      {0x00, "0"}, {0x07, "a"}, {0x08, "b"}, {0x09, "t"},  {0x0A, "n"},    {0x0B, "v"},
-      {0x0C, "f"}, {0x0D, "r"}, {0x1B, "e"}, {U'"', "\""}, {U'\\', "\\"}, {0x85, "N"},
-      {0xA0, "_"}, {0x2028, "L"}, {0x2029, "P"},
+      {0x00, "0"}, {0x07, "a"},  {0x08, "b"},   {0x09, "t"}, {0x0A, "n"}, {0x0B, "v"},   {0x0C, "f"},   {0x0D, "r"},
+      {0x1B, "e"}, {U'"', "\""}, {U'\\', "\\"}, {0x85, "N"}, {0xA0, "_"}, {0x2028, "L"}, {0x2029, "P"},
   };
   out += '"';
   for (const char32_t ch : s) {
-    const bool printable = (ch >= 0x20 && ch <= 0x7E) || (ch >= 0xA0 && ch <= 0xD7FF) ||
-                           (ch >= 0xE000 && ch <= 0xFFFD);
-    if (printable && ch != U'"' && ch != U'\\' && ch != 0x2028 && ch != 0x2029 &&
-        ch != 0xFEFF) {
+    const bool printable = (ch >= 0x20 && ch <= 0x7E) || (ch >= 0xA0 && ch <= 0xD7FF) || (ch >= 0xE000 && ch <= 0xFFFD);
+    if (printable && ch != U'"' && ch != U'\\' && ch != 0x2028 && ch != 0x2029 && ch != 0xFEFF) {
       out += utf8_of(ch);
       continue;
     }
@@ -183,8 +177,7 @@ void write_double_quoted(std::string& out, const std::u32string& s) {
 void write_string(std::string& out, const std::string& text, size_t indent, bool simple_key) {
   const std::u32string s = decode_utf8(text);
   const ScalarAnalysis a = analyze_scalar(s);
-  if (!s.empty() && a.allow_block_plain && !(simple_key && a.multiline) &&
-      !resolves_to_non_string(text)) {
+  if (!s.empty() && a.allow_block_plain && !(simple_key && a.multiline) && !resolves_to_non_string(text)) {
     out += text;
   } else if (a.allow_single_quoted && !(simple_key && a.multiline)) {
     write_single_quoted(out, s, indent);
@@ -258,8 +251,7 @@ void write_list(std::string& out, const Value& list, size_t indent, bool first_i
 
 }  // namespace
 
-std::string to_echo_yaml(const StructType& type, const uint8_t* data, size_t size,
-                         const EchoOptions& options) {
+std::string to_echo_yaml(const StructType& type, const uint8_t* data, size_t size, const EchoOptions& options) {
   const Value root = decode_value(type, data, size, &options);
   if (root.fields.empty()) return "{}\n";
   std::string out;

@@ -73,10 +73,9 @@ bool parse_int(std::string text, ParsedInt& out) {
 
 bool parse_float(const std::string& text, double& out) {
   static const std::map<std::string, double> kSpecial = {
-      {".inf", HUGE_VAL},  {".Inf", HUGE_VAL},   {".INF", HUGE_VAL},   {"+.inf", HUGE_VAL},
-      {"+.Inf", HUGE_VAL}, {"+.INF", HUGE_VAL},  {"-.inf", -HUGE_VAL}, {"-.Inf", -HUGE_VAL},
-      {"-.INF", -HUGE_VAL}, {".nan", NAN},       {".NaN", NAN},        {".NAN", NAN},
-      {"inf", HUGE_VAL},   {"-inf", -HUGE_VAL},  {"nan", NAN},
+      {".inf", HUGE_VAL},  {".Inf", HUGE_VAL},   {".INF", HUGE_VAL},   {"+.inf", HUGE_VAL},  {"+.Inf", HUGE_VAL},
+      {"+.INF", HUGE_VAL}, {"-.inf", -HUGE_VAL}, {"-.Inf", -HUGE_VAL}, {"-.INF", -HUGE_VAL}, {".nan", NAN},
+      {".NaN", NAN},       {".NAN", NAN},        {"inf", HUGE_VAL},    {"-inf", -HUGE_VAL},  {"nan", NAN},
   };
   const auto it = kSpecial.find(text);
   if (it != kSpecial.end()) {
@@ -124,8 +123,7 @@ class Encoder {
         if (!known) {
           std::string names;
           for (const Field& f : type.fields) names += (names.empty() ? "" : ", ") + f.name;
-          fail(member_path(path, key),
-               "unknown field of " + type_display_name(type) + " (fields: " + names + ")");
+          fail(member_path(path, key), "unknown field of " + type_display_name(type) + " (fields: " + names + ")");
         }
         given[key] = kv.second;
       }
@@ -159,8 +157,8 @@ class Encoder {
         return;
       }
       if (count != field.array_size) {
-        fail(path, "expected exactly " + std::to_string(field.array_size) + " elements for " +
-                       type_text + ", got " + std::to_string(count));
+        fail(path, "expected exactly " + std::to_string(field.array_size) + " elements for " + type_text + ", got " +
+                       std::to_string(count));
       }
     } else {
       if (field.sequence_bound && count > field.sequence_bound) {
@@ -186,8 +184,8 @@ class Encoder {
           text = value.Scalar();
         }
         if (type.string_bound && text.size() > type.string_bound) {
-          fail(path, "string of " + std::to_string(text.size()) + " bytes exceeds the bound of " +
-                         element_type_string(type));
+          fail(path,
+               "string of " + std::to_string(text.size()) + " bytes exceeds the bound of " + element_type_string(type));
         }
         if (text.find('\0') != std::string::npos) fail(path, "strings cannot contain NUL");
         writer_.put_unsigned(text.size() + 1, 4);
@@ -213,10 +211,9 @@ class Encoder {
     switch (kind) {
       case PrimitiveKind::kBool: {
         static const std::map<std::string, bool> kWords = {
-            {"true", true},  {"True", true},   {"TRUE", true},   {"yes", true},  {"Yes", true},
-            {"YES", true},   {"on", true},     {"On", true},     {"ON", true},   {"false", false},
-            {"False", false}, {"FALSE", false}, {"no", false},    {"No", false},  {"NO", false},
-            {"off", false},  {"Off", false},   {"OFF", false},
+            {"true", true}, {"True", true}, {"TRUE", true}, {"yes", true},    {"Yes", true},    {"YES", true},
+            {"on", true},   {"On", true},   {"ON", true},   {"false", false}, {"False", false}, {"FALSE", false},
+            {"no", false},  {"No", false},  {"NO", false},  {"off", false},   {"Off", false},   {"OFF", false},
         };
         const auto it = kWords.find(text);
         if (it == kWords.end()) fail(path, "value '" + text + "' is not a boolean (true or false)");
@@ -265,14 +262,12 @@ class Encoder {
     const bool is_signed = kind == PrimitiveKind::kInt8 || kind == PrimitiveKind::kInt16 ||
                            kind == PrimitiveKind::kInt32 || kind == PrimitiveKind::kInt64;
     const unsigned bits = static_cast<unsigned>(size * 8);
-    const unsigned long long max_pos =
-        is_signed ? (1ULL << (bits - 1)) - 1 : (bits == 64 ? ~0ULL : (1ULL << bits) - 1);
+    const unsigned long long max_pos = is_signed ? (1ULL << (bits - 1)) - 1 : (bits == 64 ? ~0ULL : (1ULL << bits) - 1);
     const unsigned long long max_neg = is_signed ? (1ULL << (bits - 1)) : 0;
-    if ((parsed.negative && parsed.magnitude > max_neg) ||
-        (!parsed.negative && parsed.magnitude > max_pos)) {
+    if ((parsed.negative && parsed.magnitude > max_neg) || (!parsed.negative && parsed.magnitude > max_pos)) {
       const std::string low = is_signed ? "-" + std::to_string(max_neg) : "0";
-      fail(path, "value '" + text + "' is out of range for " + name + " [" + low + ", " +
-                     std::to_string(max_pos) + "]");
+      fail(path,
+           "value '" + text + "' is out of range for " + name + " [" + low + ", " + std::to_string(max_pos) + "]");
     }
     const uint64_t raw = parsed.negative ? ~parsed.magnitude + 1 : parsed.magnitude;
     writer_.put_unsigned(raw, size);
@@ -283,8 +278,6 @@ class Encoder {
 
 }  // namespace
 
-std::vector<uint8_t> encode(const StructType& type, const YAML::Node& value) {
-  return Encoder().run(type, value);
-}
+std::vector<uint8_t> encode(const StructType& type, const YAML::Node& value) { return Encoder().run(type, value); }
 
 }  // namespace unav_introspection

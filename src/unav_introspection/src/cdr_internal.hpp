@@ -2,23 +2,22 @@
 // and the decoded value tree the echo printer formats.
 #pragma once
 
-#include "unav_introspection/cdr_codec.hpp"
 #include <algorithm>
 #include <cerrno>
 #include <charconv>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <limits>
-#include <cstdio>
 #include <map>
 #include <regex>
 #include <string_view>
 #include <utility>
+#include "unav_introspection/cdr_codec.hpp"
 #include "unav_introspection/type_registry.hpp"
 
 namespace unav_introspection::cdr_detail {
-
 
 constexpr size_t kHeaderSize = 4;
 constexpr const char* kDummyMember = "structure_needs_at_least_one_member";
@@ -42,8 +41,6 @@ inline std::string type_display_name(const StructType& type) {
 inline bool is_empty_message(const StructType& type) {
   return type.fields.size() == 1 && type.fields[0].name == kDummyMember;
 }
-
-
 
 // Decoded value, kept with enough kind information to print it like PyYAML.
 struct Value {

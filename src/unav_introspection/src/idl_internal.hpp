@@ -23,7 +23,6 @@ namespace fs = std::filesystem;
 
 namespace idl {
 
-
 enum class TokenKind { kIdent, kNumber, kString, kChar, kPunct, kDirective, kEnd };
 
 struct Token {
@@ -55,7 +54,7 @@ inline std::vector<std::string> split(const std::string& s, const std::string& s
 }
 
 inline std::string join(const std::vector<std::string>& parts, const std::string& sep, size_t begin = 0,
-                 size_t end = std::string::npos) {
+                        size_t end = std::string::npos) {
   std::string out;
   end = std::min(end, parts.size());
   for (size_t i = begin; i < end; ++i) {
@@ -74,18 +73,26 @@ inline std::string trim(const std::string& s) {
 
 inline char unescape_char(char c) {
   switch (c) {
-    case 'n': return '\n';
-    case 't': return '\t';
-    case 'r': return '\r';
-    case '0': return '\0';
-    case 'a': return '\a';
-    case 'b': return '\b';
-    case 'f': return '\f';
-    case 'v': return '\v';
-    default: return c;
+    case 'n':
+      return '\n';
+    case 't':
+      return '\t';
+    case 'r':
+      return '\r';
+    case '0':
+      return '\0';
+    case 'a':
+      return '\a';
+    case 'b':
+      return '\b';
+    case 'f':
+      return '\f';
+    case 'v':
+      return '\v';
+    default:
+      return c;
   }
 }
-
 
 // Integer literal as IDL writes it (decimal, 0x hex, leading-0 octal); nullopt when not one.
 inline std::optional<unsigned long long> parse_integer_literal(const std::string& text) {
@@ -139,8 +146,8 @@ struct RegistryState {
 namespace idl {
 /// Parses the tokens of one IDL file into `registry` (structs, typedefs, constants; included
 /// files through registry.parse_file). Returns the structs the file declares. Throws IdlError.
-std::vector<const StructType*> parse(detail::RegistryState& registry, const std::string& file,
-                                     const std::string& root, std::vector<Token> tokens);
+std::vector<const StructType*> parse(detail::RegistryState& registry, const std::string& file, const std::string& root,
+                                     std::vector<Token> tokens);
 }  // namespace idl
 
 }  // namespace unav_introspection

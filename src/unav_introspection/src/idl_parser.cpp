@@ -103,12 +103,8 @@ namespace {
 
 class Parser {
  public:
-  Parser(detail::RegistryState& registry, std::string file, std::string root,
-         std::vector<Token> tokens)
-      : registry_(registry),
-        file_(std::move(file)),
-        root_(std::move(root)),
-        tokens_(std::move(tokens)) {}
+  Parser(detail::RegistryState& registry, std::string file, std::string root, std::vector<Token> tokens)
+      : registry_(registry), file_(std::move(file)), root_(std::move(root)), tokens_(std::move(tokens)) {}
 
   std::vector<const StructType*> run() {
     parse_definitions(false);
@@ -124,13 +120,9 @@ class Parser {
     std::string text;
   };
 
-  [[noreturn]] void fail(int line, const std::string& message) const {
-    throw IdlError(file_, line, message);
-  }
+  [[noreturn]] void fail(int line, const std::string& message) const { throw IdlError(file_, line, message); }
 
-  const Token& peek(size_t k = 0) const {
-    return tokens_[std::min(pos_ + k, tokens_.size() - 1)];
-  }
+  const Token& peek(size_t k = 0) const { return tokens_[std::min(pos_ + k, tokens_.size() - 1)]; }
 
   const Token& next() {
     const Token& t = tokens_[pos_];
@@ -140,10 +132,14 @@ class Parser {
 
   static std::string describe(const Token& t) {
     switch (t.kind) {
-      case TokenKind::kEnd: return "end of file";
-      case TokenKind::kString: return "\"" + t.text + "\"";
-      case TokenKind::kDirective: return "'#" + t.text + "'";
-      default: return "'" + t.text + "'";
+      case TokenKind::kEnd:
+        return "end of file";
+      case TokenKind::kString:
+        return "\"" + t.text + "\"";
+      case TokenKind::kDirective:
+        return "'#" + t.text + "'";
+      default:
+        return "'" + t.text + "'";
     }
   }
 
@@ -170,13 +166,10 @@ class Parser {
     return next().text;
   }
 
-  std::string scoped(const std::string& name) const {
-    return scope_.empty() ? name : join(scope_, "::") + "::" + name;
-  }
+  std::string scoped(const std::string& name) const { return scope_.empty() ? name : join(scope_, "::") + "::" + name; }
 
   // Scoped names `parts` may refer to from the current scope, innermost first.
-  std::vector<std::string> lookup_candidates(const std::vector<std::string>& parts,
-                                             bool absolute) const {
+  std::vector<std::string> lookup_candidates(const std::vector<std::string>& parts, bool absolute) const {
     std::vector<std::string> out;
     const std::string rel = join(parts, "::");
     if (!absolute) {
@@ -223,9 +216,8 @@ class Parser {
       } else if (is_keyword("const")) {
         parse_const();
       } else if (d.kind == TokenKind::kIdent &&
-                 (d.text == "enum" || d.text == "union" || d.text == "interface" ||
-                  d.text == "bitmask" || d.text == "bitset" || d.text == "exception" ||
-                  d.text == "valuetype")) {
+                 (d.text == "enum" || d.text == "union" || d.text == "interface" || d.text == "bitmask" ||
+                  d.text == "bitset" || d.text == "exception" || d.text == "valuetype")) {
         fail(d.line, "'" + d.text + "' is not supported");
       } else {
         fail(d.line, "expected module, struct, typedef or const, got " + describe(d));
@@ -237,14 +229,13 @@ class Parser {
     std::istringstream in(t.text);
     std::string word;
     in >> word;
-    if (word == "ifndef" || word == "ifdef" || word == "define" || word == "endif" ||
-        word == "pragma") {
+    if (word == "ifndef" || word == "ifdef" || word == "define" || word == "endif" || word == "pragma") {
       return;  // include guards and pragmas; files are parsed once anyway
     }
     if (word != "include") fail(t.line, "unsupported preprocessor directive '#" + word + "'");
     const std::string rest = trim(t.text.substr(7));
-    if (rest.size() < 3 || !((rest.front() == '"' && rest.back() == '"') ||
-                             (rest.front() == '<' && rest.back() == '>'))) {
+    if (rest.size() < 3 ||
+        !((rest.front() == '"' && rest.back() == '"') || (rest.front() == '<' && rest.back() == '>'))) {
       fail(t.line, "malformed #include, expected #include \"pkg/msg/Type.idl\"");
     }
     const std::string rel = rest.substr(1, rest.size() - 2);
@@ -385,10 +376,10 @@ class Parser {
     }
     if (field.container == Field::Container::kSingle) return YAML::Node(text);
     const std::string inner = trim(text);
-    if (inner.size() < 2 || !((inner.front() == '(' && inner.back() == ')') ||
-                              (inner.front() == '[' && inner.back() == ']'))) {
-      fail(a.line, "@default of array or sequence '" + field.name +
-                       "' must look like \"(1, 2)\" or \"[1, 2]\", got '" + text + "'");
+    if (inner.size() < 2 ||
+        !((inner.front() == '(' && inner.back() == ')') || (inner.front() == '[' && inner.back() == ']'))) {
+      fail(a.line, "@default of array or sequence '" + field.name + "' must look like \"(1, 2)\" or \"[1, 2]\", got '" +
+                       text + "'");
     }
     try {
       YAML::Node node = YAML::Load("[" + inner.substr(1, inner.size() - 2) + "]");
@@ -414,8 +405,7 @@ class Parser {
         if (c == registry_.constants.end()) continue;
         const auto v = parse_integer_literal(c->second.value);
         if (!v || *v == 0) {
-          fail(line, "constant '" + name + "' = '" + c->second.value +
-                         "' is not a positive integer size");
+          fail(line, "constant '" + name + "' = '" + c->second.value + "' is not a positive integer size");
         }
         return static_cast<size_t>(*v);
       }
@@ -426,13 +416,11 @@ class Parser {
 
   std::optional<PrimitiveKind> parse_primitive() {
     static const std::map<std::string, PrimitiveKind> kSimple = {
-        {"boolean", PrimitiveKind::kBool},   {"octet", PrimitiveKind::kOctet},
-        {"char", PrimitiveKind::kChar},      {"int8", PrimitiveKind::kInt8},
-        {"uint8", PrimitiveKind::kUint8},    {"int16", PrimitiveKind::kInt16},
-        {"uint16", PrimitiveKind::kUint16},  {"int32", PrimitiveKind::kInt32},
-        {"uint32", PrimitiveKind::kUint32},  {"int64", PrimitiveKind::kInt64},
-        {"uint64", PrimitiveKind::kUint64},  {"float", PrimitiveKind::kFloat},
-        {"double", PrimitiveKind::kDouble},  {"short", PrimitiveKind::kInt16},
+        {"boolean", PrimitiveKind::kBool},  {"octet", PrimitiveKind::kOctet},   {"char", PrimitiveKind::kChar},
+        {"int8", PrimitiveKind::kInt8},     {"uint8", PrimitiveKind::kUint8},   {"int16", PrimitiveKind::kInt16},
+        {"uint16", PrimitiveKind::kUint16}, {"int32", PrimitiveKind::kInt32},   {"uint32", PrimitiveKind::kUint32},
+        {"int64", PrimitiveKind::kInt64},   {"uint64", PrimitiveKind::kUint64}, {"float", PrimitiveKind::kFloat},
+        {"double", PrimitiveKind::kDouble}, {"short", PrimitiveKind::kInt16},
     };
     const Token& t = peek();
     if (t.kind != TokenKind::kIdent) return std::nullopt;
@@ -502,8 +490,7 @@ class Parser {
       spec.container = Field::Container::kSequence;
       if (accept(",")) spec.sequence_bound = parse_size();
       expect(">", "to close 'sequence<'");
-      spec.text = spec.sequence_bound ? "sequence<" + inner.text + ", " +
-                                            std::to_string(spec.sequence_bound) + ">"
+      spec.text = spec.sequence_bound ? "sequence<" + inner.text + ", " + std::to_string(spec.sequence_bound) + ">"
                                       : "sequence<" + inner.text + ">";
       return spec;
     }
@@ -537,8 +524,10 @@ class Parser {
         return spec;
       }
     }
-    fail(line, "unknown type '" + spec.text + "' (not declared before use, not in an included file, "
-                   "and no IDL root holds a file declaring it; roots: " + registry_.roots_text() + ")");
+    fail(line, "unknown type '" + spec.text +
+                   "' (not declared before use, not in an included file, "
+                   "and no IDL root holds a file declaring it; roots: " +
+                   registry_.roots_text() + ")");
   }
 
   void parse_typedef() {
@@ -587,11 +576,10 @@ class Parser {
   std::vector<const StructType*> declared_;
 };
 
-
 }  // namespace
 
-std::vector<const StructType*> parse(detail::RegistryState& registry, const std::string& file,
-                                     const std::string& root, std::vector<Token> tokens) {
+std::vector<const StructType*> parse(detail::RegistryState& registry, const std::string& file, const std::string& root,
+                                     std::vector<Token> tokens) {
   return Parser(registry, file, root, std::move(tokens)).run();
 }
 

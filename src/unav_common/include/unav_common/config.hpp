@@ -37,8 +37,8 @@
 #include <utility>
 #include <vector>
 
-#include <Eigen/Core>
 #include <yaml-cpp/yaml.h>
+#include <Eigen/Core>
 
 #include "unav_common/errors.hpp"
 

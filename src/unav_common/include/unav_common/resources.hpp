@@ -27,8 +27,7 @@ std::optional<std::string> find_package_share(const std::string& package);
 /// Path of the executable file P/lib/package/executable, for the first prefix P (in search
 /// order) holding share/package and that file. When `searched_dirs` is given, it receives
 /// every P/lib/package folder looked at (empty when the package is not installed at all).
-std::optional<std::string> find_executable(const std::string& package,
-                                           const std::string& executable,
+std::optional<std::string> find_executable(const std::string& package, const std::string& executable,
                                            std::vector<std::string>* searched_dirs = nullptr);
 
 /// The package whose share folder holds the workspace's config/, worlds/ and launch_scripts/.

@@ -46,11 +46,11 @@ struct Sim3 {
 
 enum class UmeyamaStatus {
   kOk,
-  kSizeMismatch,   ///< from and to have different numbers of points (nothing computed)
-  kTooFewPoints,   ///< fewer than UmeyamaOptions::min_points (nothing computed)
-  kNoSpread,       ///< source variance not above min_source_variance (S computed anyway)
-  kCollinear,      ///< second singular value too small: rotation not unique (S computed anyway)
-  kBadScale        ///< scale not finite or not positive (S computed anyway)
+  kSizeMismatch,  ///< from and to have different numbers of points (nothing computed)
+  kTooFewPoints,  ///< fewer than UmeyamaOptions::min_points (nothing computed)
+  kNoSpread,      ///< source variance not above min_source_variance (S computed anyway)
+  kCollinear,     ///< second singular value too small: rotation not unique (S computed anyway)
+  kBadScale       ///< scale not finite or not positive (S computed anyway)
 };
 const char* to_string(UmeyamaStatus status);
 
@@ -70,7 +70,7 @@ struct UmeyamaResult {
   UmeyamaStatus status = UmeyamaStatus::kOk;
   /// to ~ S * from. Filled for every status but kSizeMismatch and kTooFewPoints.
   Sim3 S;
-  double source_variance = 0.0;                              ///< m^2
+  double source_variance = 0.0;                               ///< m^2
   Eigen::Vector3d singular_values = Eigen::Vector3d::Zero();  ///< of the cross-covariance, descending
   bool ok() const { return status == UmeyamaStatus::kOk; }
   std::string message() const;

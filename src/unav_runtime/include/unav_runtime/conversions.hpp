@@ -116,8 +116,7 @@ inline geometry_msgs::msg::Transform to_transform_msg(const Eigen::Isometry3d& X
 }
 /// TransformStamped of child frame C in parent frame P (X_PC), stamped t [s].
 inline geometry_msgs::msg::TransformStamped to_transform_stamped(const Eigen::Isometry3d& X_PC, double t_s,
-                                                                 const std::string& parent,
-                                                                 const std::string& child) {
+                                                                 const std::string& parent, const std::string& child) {
   geometry_msgs::msg::TransformStamped m;
   m.header() = make_header(t_s, parent);
   m.child_frame_id(child);

@@ -111,7 +111,8 @@ inline bool spin_until(std::initializer_list<Context*> contexts, const std::func
 
 /// Spins every context in turn for `duration` (lets callbacks run, e.g. to show nothing happens).
 inline void spin_for(std::initializer_list<Context*> contexts, std::chrono::milliseconds duration) {
-  spin_until(contexts, [] { return false; }, duration);
+  spin_until(
+      contexts, [] { return false; }, duration);
 }
 
 /// A writer and a reader on the same topic that a test needs connected.
@@ -157,7 +158,8 @@ inline bool all_matched(const std::vector<Link>& links) {
 /// Spins `contexts` until every link is matched on both sides (see the top of this file).
 inline bool wait_for_match(std::initializer_list<Context*> contexts, const std::vector<Link>& links,
                            std::chrono::milliseconds timeout = std::chrono::seconds(20)) {
-  return spin_until(contexts, [&] { return all_matched(links); }, timeout);
+  return spin_until(
+      contexts, [&] { return all_matched(links); }, timeout);
 }
 
 /// Everything `l.pub` wrote was acknowledged by the readers it matched, and `l.sub` holds no sample
@@ -171,11 +173,14 @@ inline bool delivered(const Link& l) {
 /// before checking what a node received (or before destroying it), which a loaded machine outlasts.
 inline bool wait_for_delivery(std::initializer_list<Context*> contexts, const std::vector<Link>& links,
                               std::chrono::milliseconds timeout = std::chrono::seconds(20)) {
-  return spin_until(contexts, [&] {
-    for (const Link& l : links)
-      if (!delivered(l)) return false;
-    return true;
-  }, timeout);
+  return spin_until(
+      contexts,
+      [&] {
+        for (const Link& l : links)
+          if (!delivered(l)) return false;
+        return true;
+      },
+      timeout);
 }
 
 /// One line per link with both counts, for the failure message of wait_for_match.
