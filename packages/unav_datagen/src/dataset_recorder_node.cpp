@@ -40,17 +40,7 @@ class DatasetRecorder : public unav::Node {
     const std::string cams_path = declare_parameter<std::string>(
         "cameras_config", unav::common::try_find_resource("config/sensors/bluerov2_cameras.yaml").value_or(""),
         {"camera YAML (for the camera's mount on the body)", {}, {}, false});
-    bool found = false;
-    try {
-      for (const auto& c : unav::scene::load_cameras(cams_path))
-        if (c.name == camera_) {
-          X_BC_ = c.X_BC;
-          found = true;
-        }
-    } catch (const std::exception& e) {
-      throw unav::ConfigError(e.what());
-    }
-    if (!found) throw unav::ParameterError("node '" + name() + "': camera '" + camera_ + "' is not in " + cams_path);
+    X_BC_ = unav::scene::load_camera(cams_path, camera_).X_BC;  // ConfigError names file and camera
     try {
       writer_ = std::make_unique<DatasetWriter>(out);
     } catch (const DatasetError& e) {

@@ -92,17 +92,7 @@ TrajectoryEvaluator::TrajectoryEvaluator(const unav::NodeOptions& options) : Nod
             }
         });
   } else if (!camera.empty()) {
-    bool found = false;
-    try {
-      for (const auto& c : unav::scene::load_cameras(cams_path))
-        if (c.name == camera) {
-          X_BE_ = c.X_BC;
-          found = true;
-        }
-    } catch (const std::exception& e) {
-      throw unav::ConfigError(std::string("parameter 'cameras_config': ") + e.what());
-    }
-    if (!found) throw unav::ParameterError("node '" + name() + "': camera '" + camera + "' is not in '" + cams_path + "'");
+    X_BE_ = unav::scene::load_camera(cams_path, camera).X_BC;  // ConfigError names file and camera
   }
   std::error_code ec;
   std::filesystem::create_directories(output_dir_, ec);

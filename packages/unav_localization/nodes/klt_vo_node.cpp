@@ -41,17 +41,7 @@ class KltVoNode : public unav::Node {
     camera_ = cam;
     const std::string cams_path = declare_parameter<std::string>(
         "cameras_config", unav::common::try_find_resource("config/sensors/bluerov2_cameras.yaml").value_or(""), {"camera YAML", {}, {}, false});
-    bool found = false;
-    try {
-      for (const auto& c : unav::scene::load_cameras(cams_path))
-        if (c.name == cam) {
-          X_BC_ = c.X_BC;
-          found = true;
-        }
-    } catch (const std::exception& e) {
-      throw unav::ConfigError(e.what());
-    }
-    if (!found) throw unav::ParameterError("node '" + name() + "': camera '" + cam + "' is not in " + cams_path);
+    X_BC_ = unav::scene::load_camera(cams_path, cam).X_BC;  // ConfigError names file and camera
     const std::string mode = declare_parameter<std::string>("mode", "rgbd", {"rgbd | monocular", {}, {}, false});
     if (mode == "monocular") {
       options_.mode = KltVoOptions::Mode::kMonocular;

@@ -50,16 +50,7 @@ class OrbSlamNode : public unav::Node {
     frame_id_ = declare_parameter<std::string>("frame_id", "orb_slam_map", {"odometry frame", {}, {}, false});
     std::string msg;
     if (!options_.IsValid(&msg)) throw unav::ParameterError("node '" + name() + "': " + msg);
-    bool found = false;
-    try {
-      for (const auto& c : unav::scene::load_cameras(cams_path))
-        if (c.name == cam) {
-          found = true;
-        }
-    } catch (const std::exception& e) {
-      throw unav::ConfigError(e.what());
-    }
-    if (!found) throw unav::ParameterError("node '" + name() + "': camera '" + cam + "' is not in " + cams_path);
+    (void)unav::scene::load_camera(cams_path, cam);  // the camera must exist (ConfigError names file and camera)
     if (!voc_path.empty()) {
       try {
         vocabulary_ = std::make_shared<BowVocabulary>(BowVocabulary::Load(voc_path));

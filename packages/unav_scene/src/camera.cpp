@@ -125,4 +125,13 @@ std::vector<CameraModel> default_cameras() {
   return {front, down};
 }
 
+CameraModel load_camera(const std::string& path, const std::string& name) {
+  std::string names;
+  for (const auto& c : load_cameras(path)) {
+    if (c.name == name) return c;
+    names += (names.empty() ? "" : ", ") + c.name;
+  }
+  throw ConfigError(path, "cameras", name, "no camera of that name (cameras: " + names + ")");
+}
+
 }  // namespace unav::scene

@@ -67,6 +67,19 @@ TEST(Camera, DefaultVehicleCamerasFromConfig) {
   EXPECT_TRUE(front.has_distortion());
 }
 
+TEST(Camera, OneCameraByNameOrAnErrorListingTheCameras) {
+  const std::string file = kRoot + "/config/sensors/bluerov2_cameras.yaml";
+  EXPECT_EQ(load_camera(file, "down").width, 320);
+  try {
+    load_camera(file, "rear");
+    ADD_FAILURE() << "no error for a missing camera";
+  } catch (const ConfigError& e) {
+    EXPECT_EQ(e.file(), file);
+    EXPECT_EQ(e.value(), "rear");
+    EXPECT_EQ(e.rule(), "no camera of that name (cameras: front, down)");
+  }
+}
+
 TEST(Camera, BadFieldOfViewNamesFileAndKey) {
   const fs::path d = fs::temp_directory_path() / ("unav_cam_" + std::to_string(::getpid()));
   fs::create_directories(d);

@@ -36,6 +36,10 @@ struct CameraModel {
 /// Errors name the file, the camera and the key.
 std::vector<CameraModel> load_cameras(const std::string& path);
 
+/// The camera called `name` in a sensor YAML file. Throws ConfigError naming the file, the camera
+/// and the cameras the file has when there is none of that name.
+CameraModel load_camera(const std::string& path, const std::string& name);
+
 /// The paper's default vehicle: "front" (640x480, 80 deg) and "down" (320x180, 90 deg).
 std::vector<CameraModel> default_cameras();
 
