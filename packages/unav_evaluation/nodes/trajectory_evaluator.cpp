@@ -2,12 +2,12 @@
 
 #include <sys/file.h>
 
+#include <fcntl.h>
+#include <unistd.h>
 #include <algorithm>
 #include <cerrno>
 #include <cstring>
-#include <fcntl.h>
 #include <filesystem>
-#include <unistd.h>
 
 #include "unav_runtime/conversions.hpp"
 #include "unav_scene/camera.hpp"
@@ -58,20 +58,26 @@ class FolderLock {
 
 }  // namespace
 
-TrajectoryEvaluator::TrajectoryEvaluator(const unav::NodeOptions& options) : Node("trajectory_evaluator", options, "rov") {
+TrajectoryEvaluator::TrajectoryEvaluator(const unav::NodeOptions& options)
+    : Node("trajectory_evaluator", options, "rov") {
   const auto names = declare_parameter<std::vector<std::string>>("estimates", {}, {"estimator names", {}, {}, false});
   output_dir_ = declare_parameter<std::string>("output_dir", "out/evaluation", {"results folder", {}, {}, false});
-  trajectory_name_ = declare_parameter<std::string>("trajectory_name", "run", {"row label, e.g. linear", {}, {}, false});
+  trajectory_name_ =
+      declare_parameter<std::string>("trajectory_name", "run", {"row label, e.g. linear", {}, {}, false});
   try {
-    alignment_ = alignment_from_string(declare_parameter<std::string>("alignment", "sim3", {"none|se3|sim3|scale", {}, {}, false}));
+    alignment_ = alignment_from_string(
+        declare_parameter<std::string>("alignment", "sim3", {"none|se3|sim3|scale", {}, {}, false}));
   } catch (const TrajectoryError& e) {
     throw unav::ParameterError("node '" + name() + "': parameter 'alignment': " + e.what());
   }
   rpe_.delta = static_cast<double>(declare_parameter<int64_t>("rpe_delta", 1, {"RPE delta [frames]", 1.0, {}, false}));
-  max_diff_ = declare_parameter<double>("max_time_diff", 0.02, {"association max time difference [s]", 1e-6, 10.0, false});
-  combine_ = declare_parameter<bool>("combine", false, {"share output_dir with other runs (prefixed files, one combined table)", {}, {}, false});
+  max_diff_ =
+      declare_parameter<double>("max_time_diff", 0.02, {"association max time difference [s]", 1e-6, 10.0, false});
+  combine_ = declare_parameter<bool>(
+      "combine", false, {"share output_dir with other runs (prefixed files, one combined table)", {}, {}, false});
   if (combine_ && (trajectory_name_.empty() || trajectory_name_.find_first_of("/\t") != std::string::npos))
-    throw unav::ParameterError("node '" + name() + "': trajectory_name '" + trajectory_name_ + "' must be a non-empty file name with combine");
+    throw unav::ParameterError("node '" + name() + "': trajectory_name '" + trajectory_name_ +
+                               "' must be a non-empty file name with combine");
   const std::string camera = declare_parameter<std::string>(
       "camera", "", {"estimators report this camera's optical frame (empty: base_link_frd)", {}, {}, false});
   const std::string cams_path = declare_parameter<std::string>(
@@ -98,14 +104,16 @@ TrajectoryEvaluator::TrajectoryEvaluator(const unav::NodeOptions& options) : Nod
   std::filesystem::create_directories(output_dir_, ec);
   if (ec) throw unav::ConfigError("output_dir '" + output_dir_ + "': cannot create: " + ec.message());
   subs_.push_back(create_subscription<nav_msgs::msg::Odometry>(
-      "ground_truth/odom", unav::QoS::reliable(100), [this](const nav_msgs::msg::Odometry& m) { append(ground_truth_, m); }));
+      "ground_truth/odom", unav::QoS::reliable(100),
+      [this](const nav_msgs::msg::Odometry& m) { append(ground_truth_, m); }));
   for (const auto& n : names) {
     estimates_[n];
     subs_.push_back(create_subscription<nav_msgs::msg::Odometry>(
         "localization/" + n + "/odom", unav::QoS::reliable(100),
         [this, n](const nav_msgs::msg::Odometry& m) { append(estimates_[n], m); }));
     path_subs_.push_back(create_subscription<nav_msgs::msg::Path>(
-        "localization/" + n + "/path", unav::QoS::reliable(2), [this, n](const nav_msgs::msg::Path& m) { paths_[n] = from_path(m); }));
+        "localization/" + n + "/path", unav::QoS::reliable(2),
+        [this, n](const nav_msgs::msg::Path& m) { paths_[n] = from_path(m); }));
   }
   logger()->info("evaluating {} estimator(s) against ground truth; results in {}", names.size(), output_dir_);
 }
@@ -127,8 +135,10 @@ std::vector<AlgorithmResult> TrajectoryEvaluator::write_outputs() {
     return results;
   }
   if (!have_mount_) {
-    logger()->error("no {} -> {} transform on /tf_static (is the renderer running?): estimates are compared "
-                    "with the body frame", body_frame_, camera_frame_);
+    logger()->error(
+        "no {} -> {} transform on /tf_static (is the renderer running?): estimates are compared "
+        "with the body frame",
+        body_frame_, camera_frame_);
   }
   const std::string prefix = output_dir_ + "/" + (combine_ ? trajectory_name_ + "_" : "");
   // Ground truth of the frame the estimators report (the body, or a camera on it).

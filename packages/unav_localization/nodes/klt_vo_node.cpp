@@ -29,8 +29,8 @@
 #include "unav_common/resources.hpp"
 #include "unav_localization/klt_vo.hpp"
 #include "unav_runtime/lockstep_ack.hpp"
-#include "unav_scene/camera.hpp"
 #include "unav_runtime/runtime.hpp"
+#include "unav_scene/camera.hpp"
 
 namespace unav_localization {
 
@@ -40,17 +40,21 @@ class KltVoNode : public unav::Node {
     const std::string cam = declare_parameter<std::string>("camera", "down", {"camera name", {}, {}, false});
     camera_ = cam;
     const std::string cams_path = declare_parameter<std::string>(
-        "cameras_config", unav::common::try_find_resource("config/sensors/bluerov2_cameras.yaml").value_or(""), {"camera YAML", {}, {}, false});
+        "cameras_config", unav::common::try_find_resource("config/sensors/bluerov2_cameras.yaml").value_or(""),
+        {"camera YAML", {}, {}, false});
     X_BC_ = unav::scene::load_camera(cams_path, cam).X_BC;  // ConfigError names file and camera
     const std::string mode = declare_parameter<std::string>("mode", "rgbd", {"rgbd | monocular", {}, {}, false});
     if (mode == "monocular") {
       options_.mode = KltVoOptions::Mode::kMonocular;
     } else if (mode != "rgbd") {
-      throw unav::ParameterError("node '" + name() + "': parameter 'mode' must be 'rgbd' or 'monocular', got '" + mode + "'");
+      throw unav::ParameterError("node '" + name() + "': parameter 'mode' must be 'rgbd' or 'monocular', got '" + mode +
+                                 "'");
     }
-    lockstep_ = declare_parameter<bool>("lockstep", false, {"ack every processed image on /lockstep/ack", {}, {}, false});
+    lockstep_ =
+        declare_parameter<bool>("lockstep", false, {"ack every processed image on /lockstep/ack", {}, {}, false});
     ack_name_ = declare_parameter<std::string>("lockstep_name", "klt_vo", {"participant name in acks", {}, {}, false});
-    image_period_ = declare_parameter<double>("image_period", 0.1, {"camera frame period [s] (lockstep acks)", 1e-3, 10.0, false});
+    image_period_ =
+        declare_parameter<double>("image_period", 0.1, {"camera frame period [s] (lockstep acks)", 1e-3, 10.0, false});
     // A frame consumer owes nothing until its next frame: it acks up to 1 ms before it.
     if (lockstep_) acker_ = std::make_unique<unav::lockstep::Acker>(*this, ack_name_, image_period_ - 1e-3);
     const std::string base = "camera/" + cam;
@@ -60,20 +64,21 @@ class KltVoNode : public unav::Node {
                                                                   [this](const sensor_msgs::msg::CameraInfo& m) {
                                                                     if (vo_) return;
                                                                     Eigen::Matrix3d K;
-                                                                    for (int i = 0; i < 9; ++i) K(i / 3, i % 3) = m.k()[static_cast<size_t>(i)];
+                                                                    for (int i = 0; i < 9; ++i)
+                                                                      K(i / 3, i % 3) = m.k()[static_cast<size_t>(i)];
                                                                     vo_ = std::make_unique<KltVo>(K, options_);
                                                                     try_process();
                                                                   });
-    rgb_sub_ = create_subscription<sensor_msgs::msg::Image>(base + "/image_raw", unav::QoS::reliable(20),
-                                                            [this](const sensor_msgs::msg::Image& m) {
-                                                              if (m.encoding() != "rgb8") return;
-                                                              cv::Mat rgb(static_cast<int>(m.height()), static_cast<int>(m.width()), CV_8UC3,
-                                                                          const_cast<uint8_t*>(m.data().data()));
-                                                              cv::Mat gray;
-                                                              cv::cvtColor(rgb, gray, cv::COLOR_RGB2GRAY);
-                                                              grays_[key(m.header())] = {gray, m.header()};
-                                                              try_process();
-                                                            });
+    rgb_sub_ = create_subscription<sensor_msgs::msg::Image>(
+        base + "/image_raw", unav::QoS::reliable(20), [this](const sensor_msgs::msg::Image& m) {
+          if (m.encoding() != "rgb8") return;
+          cv::Mat rgb(static_cast<int>(m.height()), static_cast<int>(m.width()), CV_8UC3,
+                      const_cast<uint8_t*>(m.data().data()));
+          cv::Mat gray;
+          cv::cvtColor(rgb, gray, cv::COLOR_RGB2GRAY);
+          grays_[key(m.header())] = {gray, m.header()};
+          try_process();
+        });
     if (!monocular()) {
       depth_sub_ = create_subscription<sensor_msgs::msg::Image>(
           base + "/depth/image_raw", unav::QoS::reliable(20), [this](const sensor_msgs::msg::Image& m) {
@@ -107,8 +112,7 @@ class KltVoNode : public unav::Node {
           logger()->warn("frame rejected: {}", s.message);
       }
       last_status_ = s.status;
-      if (s.status == VoStatus::kInitialized || s.status == VoStatus::kTracking)
-        publish(frame.header, T_C0C);
+      if (s.status == VoStatus::kInitialized || s.status == VoStatus::kTracking) publish(frame.header, T_C0C);
       ack(frame.header);
     }
     grays_.clear();
@@ -126,12 +130,13 @@ class KltVoNode : public unav::Node {
       if (d == depths_.end()) {
         if (depths_.empty() || depths_.rbegin()->first < it->first) return;  // its depth may still come
         ack(it->second.header);
-        grays_.erase(it);                                                   // depth lost: skip the frame
+        grays_.erase(it);  // depth lost: skip the frame
         continue;
       }
       Eigen::Isometry3d T_C0C;
       const VoSummary s = vo_->ProcessFrame(it->second.gray, d->second, &T_C0C);
-      if (s.status == VoStatus::kLost) logger()->warn("tracking lost ({}), predicting; re-initialising on new corners", s.message);
+      if (s.status == VoStatus::kLost)
+        logger()->warn("tracking lost ({}), predicting; re-initialising on new corners", s.message);
       publish(it->second.header, X_BC_ * T_C0C * X_BC_.inverse());
       ack(it->second.header);
       depths_.erase(depths_.begin(), std::next(d));

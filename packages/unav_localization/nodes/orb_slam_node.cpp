@@ -27,8 +27,8 @@
 #include "unav_common/resources.hpp"
 #include "unav_localization/mono_slam.hpp"
 #include "unav_runtime/lockstep_ack.hpp"
-#include "unav_scene/camera.hpp"
 #include "unav_runtime/runtime.hpp"
+#include "unav_scene/camera.hpp"
 
 namespace unav_localization {
 
@@ -38,15 +38,20 @@ class OrbSlamNode : public unav::Node {
     const std::string cam = declare_parameter<std::string>("camera", "down", {"camera name", {}, {}, false});
     camera_ = cam;
     const std::string cams_path = declare_parameter<std::string>(
-        "cameras_config", unav::common::try_find_resource("config/sensors/bluerov2_cameras.yaml").value_or(""), {"camera YAML (the camera must be in it)", {}, {}, false});
+        "cameras_config", unav::common::try_find_resource("config/sensors/bluerov2_cameras.yaml").value_or(""),
+        {"camera YAML (the camera must be in it)", {}, {}, false});
     const std::string voc_path = declare_parameter<std::string>(
         "vocabulary", unav::common::try_find_resource("config/vocabulary/orb_vocabulary.bin").value_or(""),
         {"bag-of-words vocabulary (unav_train_vocabulary); empty: no loop closing or relocalisation", {}, {}, false});
-    options_.orb.features = static_cast<int>(declare_parameter<int64_t>("features", 1000, {"ORB features per image", 100.0, 10000.0, false}));
+    options_.orb.features = static_cast<int>(
+        declare_parameter<int64_t>("features", 1000, {"ORB features per image", 100.0, 10000.0, false}));
     options_.loop_closing = declare_parameter<bool>("loop_closing", true, {"detect and close loops", {}, {}, false});
-    lockstep_ = declare_parameter<bool>("lockstep", false, {"ack every processed image on /lockstep/ack", {}, {}, false});
-    ack_name_ = declare_parameter<std::string>("lockstep_name", "orb_slam", {"participant name in acks", {}, {}, false});
-    image_period_ = declare_parameter<double>("image_period", 0.1, {"camera frame period [s] (lockstep acks)", 1e-3, 10.0, false});
+    lockstep_ =
+        declare_parameter<bool>("lockstep", false, {"ack every processed image on /lockstep/ack", {}, {}, false});
+    ack_name_ =
+        declare_parameter<std::string>("lockstep_name", "orb_slam", {"participant name in acks", {}, {}, false});
+    image_period_ =
+        declare_parameter<double>("image_period", 0.1, {"camera frame period [s] (lockstep acks)", 1e-3, 10.0, false});
     frame_id_ = declare_parameter<std::string>("frame_id", "orb_slam_map", {"odometry frame", {}, {}, false});
     std::string msg;
     if (!options_.IsValid(&msg)) throw unav::ParameterError("node '" + name() + "': " + msg);
@@ -68,16 +73,18 @@ class OrbSlamNode : public unav::Node {
     if (lockstep_) acker_ = std::make_unique<unav::lockstep::Acker>(*this, ack_name_, image_period_ - 1e-3);
     info_sub_ = create_subscription<sensor_msgs::msg::CameraInfo>(
         base + "/camera_info", unav::QoS::reliable(5), [this](const sensor_msgs::msg::CameraInfo& m) { on_info(m); });
-    image_sub_ = create_subscription<sensor_msgs::msg::Image>(base + "/image_raw", unav::QoS::reliable(50),
-                                                              [this](const sensor_msgs::msg::Image& m) { on_image(m); });
+    image_sub_ = create_subscription<sensor_msgs::msg::Image>(
+        base + "/image_raw", unav::QoS::reliable(50), [this](const sensor_msgs::msg::Image& m) { on_image(m); });
   }
 
   ~OrbSlamNode() override {
     if (slam_) {
       const auto st = slam_->stats();
-      logger()->info("{} frames ({} tracked, {} lost), {} keyframes, {} points, {} loops, {} relocalisations, {} re-initialisations",
-                     st.frames, st.tracked_frames, st.lost_frames, st.keyframes, st.points, st.loops, st.relocalizations,
-                     st.reinitializations);
+      logger()->info(
+          "{} frames ({} tracked, {} lost), {} keyframes, {} points, {} loops, {} relocalisations, {} "
+          "re-initialisations",
+          st.frames, st.tracked_frames, st.lost_frames, st.keyframes, st.points, st.loops, st.relocalizations,
+          st.reinitializations);
     }
   }
 
@@ -116,14 +123,15 @@ class OrbSlamNode : public unav::Node {
     const int h = static_cast<int>(m.height()), w = static_cast<int>(m.width());
     cv::Mat gray;
     auto* data = const_cast<uint8_t*>(m.data().data());
-    if (m.encoding() == "rgb8" && m.data().size() >= static_cast<size_t>(w * h * 3)) {
+    if (m.encoding() == "rgb8" && m.data().size() >= static_cast<size_t>(w) * static_cast<size_t>(h) * 3) {
       cv::cvtColor(cv::Mat(h, w, CV_8UC3, data, m.step()), gray, cv::COLOR_RGB2GRAY);
-    } else if (m.encoding() == "bgr8" && m.data().size() >= static_cast<size_t>(w * h * 3)) {
+    } else if (m.encoding() == "bgr8" && m.data().size() >= static_cast<size_t>(w) * static_cast<size_t>(h) * 3) {
       cv::cvtColor(cv::Mat(h, w, CV_8UC3, data, m.step()), gray, cv::COLOR_BGR2GRAY);
-    } else if (m.encoding() == "mono8" && m.data().size() >= static_cast<size_t>(w * h)) {
+    } else if (m.encoding() == "mono8" && m.data().size() >= static_cast<size_t>(w) * static_cast<size_t>(h)) {
       gray = cv::Mat(h, w, CV_8UC1, data, m.step()).clone();
     } else {
-      logger()->warn("image encoding '{}' ({}x{}, {} bytes) is not rgb8/bgr8/mono8: skipped", m.encoding(), w, h, m.data().size());
+      logger()->warn("image encoding '{}' ({}x{}, {} bytes) is not rgb8/bgr8/mono8: skipped", m.encoding(), w, h,
+                     m.data().size());
       ack(m.header());
       return;
     }
@@ -138,8 +146,10 @@ class OrbSlamNode : public unav::Node {
       publish_odometry(m.header(), s.T_wc);
     }
     if (s.reinitialized) logger()->warn("re-initialising: a new map will continue from the last good pose");
-    if (s.loop_closed) logger()->info("loop closed at t = {:.3f} ({} loops): {}", t, slam_->stats().loops, s.message);
-    else if (s.keyframe && !s.message.empty()) logger()->info("t = {:.3f}: {}", t, s.message);
+    if (s.loop_closed)
+      logger()->info("loop closed at t = {:.3f} ({} loops): {}", t, slam_->stats().loops, s.message);
+    else if (s.keyframe && !s.message.empty())
+      logger()->info("t = {:.3f}: {}", t, s.message);
     if (s.keyframe || s.loop_closed) publish_path(m.header());
     ack(m.header());
   }

@@ -13,8 +13,7 @@ Eigen::Matrix3d CameraModel::K() const {
   return K;
 }
 
-CameraModel CameraModel::from_hfov(const std::string& name, int width, int height,
-                                   double hfov_rad) {
+CameraModel CameraModel::from_hfov(const std::string& name, int width, int height, double hfov_rad) {
   if (!(hfov_rad > 0.0 && hfov_rad < M_PI))
     throw ConfigError("camera '" + name + "': hfov must be in (0, 180) deg (got " +
                       std::to_string(hfov_rad * 180.0 / M_PI) + " deg)");
@@ -31,11 +30,11 @@ CameraModel CameraModel::from_hfov(const std::string& name, int width, int heigh
 void CameraModel::validate(const std::string& where) const {
   const std::string pre = where + ": camera '" + name + "': ";
   if (width <= 0 || height <= 0 || width > 8192 || height > 8192)
-    throw ConfigError(pre + "width/height must be in 1..8192 (got " + std::to_string(width) +
-                      "x" + std::to_string(height) + ")");
+    throw ConfigError(pre + "width/height must be in 1..8192 (got " + std::to_string(width) + "x" +
+                      std::to_string(height) + ")");
   if (!(fx > 0.0) || !(fy > 0.0))
-    throw ConfigError(pre + "focal length / field of view must be positive (fx=" +
-                      std::to_string(fx) + ", fy=" + std::to_string(fy) + ")");
+    throw ConfigError(pre + "focal length / field of view must be positive (fx=" + std::to_string(fx) +
+                      ", fy=" + std::to_string(fy) + ")");
   if (!std::isfinite(cx) || !std::isfinite(cy)) throw ConfigError(pre + "cx/cy not finite");
   if (!(near_m > 0.0 && far_m > near_m)) throw ConfigError(pre + "need 0 < near_m < far_m");
   if (!(noise_stddev >= 0.0)) throw ConfigError(pre + "noise_stddev must be >= 0");
@@ -54,8 +53,8 @@ std::vector<CameraModel> load_cameras(const std::string& path) {
     const YAML::Node n = list[i];
     const std::string p = "cameras[" + std::to_string(i) + "]";
     check_keys(c, n, p,
-               {"name", "mount", "width", "height", "hfov_deg", "intrinsics", "distortion",
-                "noise_stddev", "exposure", "near_m", "far_m"});
+               {"name", "mount", "width", "height", "hfov_deg", "intrinsics", "distortion", "noise_stddev", "exposure",
+                "near_m", "far_m"});
     const std::string name = get_string(c, n, p, "name", "");
     if (name.empty()) c.fail(join_key(p, "name"), "missing camera name");
     const int w = static_cast<int>(get_double(c, n, p, "width", 0));
@@ -78,8 +77,7 @@ std::vector<CameraModel> load_cameras(const std::string& path) {
       const double hfov_deg = get_double(c, n, p, "hfov_deg", -1.0);
       if (!n["hfov_deg"]) c.fail(join_key(p, "hfov_deg"), "need hfov_deg or intrinsics");
       if (!(hfov_deg > 0.0 && hfov_deg < 180.0))
-        c.fail(join_key(p, "hfov_deg"),
-               "field of view must be in (0, 180) deg (got " + std::to_string(hfov_deg) + ")");
+        c.fail(join_key(p, "hfov_deg"), "field of view must be in (0, 180) deg (got " + std::to_string(hfov_deg) + ")");
       cam = CameraModel::from_hfov(name, w, h, hfov_deg * M_PI / 180.0);
     }
     if (const YAML::Node m = n["mount"]) {
@@ -100,8 +98,8 @@ std::vector<CameraModel> load_cameras(const std::string& path) {
       check_keys(c, d, dp, {"model", "k1", "k2", "p1", "p2", "k3"});
       const std::string model = get_string(c, d, dp, "model", "plumb_bob");
       if (model != "plumb_bob") c.fail(join_key(dp, "model"), "only plumb_bob is supported");
-      cam.distortion << get_double(c, d, dp, "k1", 0), get_double(c, d, dp, "k2", 0),
-          get_double(c, d, dp, "p1", 0), get_double(c, d, dp, "p2", 0), get_double(c, d, dp, "k3", 0);
+      cam.distortion << get_double(c, d, dp, "k1", 0), get_double(c, d, dp, "k2", 0), get_double(c, d, dp, "p1", 0),
+          get_double(c, d, dp, "p2", 0), get_double(c, d, dp, "k3", 0);
     }
     cam.noise_stddev = get_double(c, n, p, "noise_stddev", 0.0);
     cam.exposure = get_double(c, n, p, "exposure", 1.0);

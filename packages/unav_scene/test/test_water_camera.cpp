@@ -53,7 +53,7 @@ TEST(Camera, DefaultVehicleCamerasFromConfig) {
   const CameraModel& down = cams[1];
   EXPECT_EQ(front.name, "front");
   EXPECT_EQ(down.name, "down");
-  EXPECT_EQ(down.width, 320);   // the paper's policy input: 180 x 320 (h x w)
+  EXPECT_EQ(down.width, 320);  // the paper's policy input: 180 x 320 (h x w)
   EXPECT_EQ(down.height, 180);
   // Optical z (column 2 of R_BC) is body x for the front camera, body z for the down camera.
   EXPECT_TRUE(front.X_BC.linear().col(2).isApprox(Eigen::Vector3d::UnitX(), 1e-12));

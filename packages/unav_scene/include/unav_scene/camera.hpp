@@ -14,14 +14,14 @@ namespace unav::scene {
 /// u = fx x/z + cx, v = fy y/z + cy in the optical frame.
 struct CameraModel {
   std::string name = "camera";
-  Pose X_BC = Pose::Identity();   ///< optical frame C in body frame base_link_frd
+  Pose X_BC = Pose::Identity();  ///< optical frame C in body frame base_link_frd
   int width = 320;
   int height = 180;
-  double fx = 0, fy = 0, cx = 0, cy = 0;   ///< [px]
+  double fx = 0, fy = 0, cx = 0, cy = 0;  ///< [px]
   /// plumb_bob coefficients k1, k2, p1, p2, k3 (OpenCV order); all zero = none.
   Eigen::Matrix<double, 5, 1> distortion = Eigen::Matrix<double, 5, 1>::Zero();
-  double noise_stddev = 0.0;     ///< additive Gaussian noise, fraction of full scale (0..1)
-  double exposure = 1.0;         ///< linear gain before sRGB encoding
+  double noise_stddev = 0.0;  ///< additive Gaussian noise, fraction of full scale (0..1)
+  double exposure = 1.0;      ///< linear gain before sRGB encoding
   double near_m = 0.05, far_m = 200.0;
 
   Eigen::Matrix3d K() const;
