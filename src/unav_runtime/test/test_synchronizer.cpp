@@ -35,17 +35,17 @@ TEST(ApproximateTime, PairsNearestStampsWithinTheIntervalOnceDecided) {
   // nearest pose, decided when a pose at or after the image has arrived.
   unav::sync::ApproximateTime<int, std::string> sync(
       100, 5 * kMs, [&](const int& a, const std::string& b) { out.emplace_back(a, b); });
-  for (int k = 0; k <= 10; ++k) sync.add_second(k * 10 * kMs, "p" + std::to_string(k * 10));
+  for (int64_t k = 0; k <= 10; ++k) sync.add_second(k * 10 * kMs, "p" + std::to_string(k * 10));
   sync.add_first(98 * kMs, 1);  // poses up to 100 ms known: nearest is p100 (2 ms)
   ASSERT_EQ(out, (Pairs{{1, "p100"}}));
   sync.add_first(203 * kMs, 2);  // no pose at or after 203 yet: wait
   EXPECT_EQ(out.size(), 1u);
-  for (int k = 11; k <= 21; ++k) sync.add_second(k * 10 * kMs, "p" + std::to_string(k * 10));
+  for (int64_t k = 11; k <= 21; ++k) sync.add_second(k * 10 * kMs, "p" + std::to_string(k * 10));
   ASSERT_EQ(out.size(), 2u);
   EXPECT_EQ(out.back(), (std::pair<int, std::string>{2, "p200"}));  // 3 ms away, p210 is 7 ms
   // An image with no pose within 5 ms is dropped, not paired with a far one.
   sync.add_first(256 * kMs, 3);
-  for (int k = 22; k <= 27; ++k) sync.add_second(k * 10 * kMs + 9 * kMs, "late");  // 229, 239, ...: 259 is 3 ms off
+  for (int64_t k = 22; k <= 27; ++k) sync.add_second(k * 10 * kMs + 9 * kMs, "late");  // 229, 239, ...: 259 is 3 ms off
   EXPECT_EQ(out.back().first, 3);
   Pairs far;
   unav::sync::ApproximateTime<int, std::string> strict(
