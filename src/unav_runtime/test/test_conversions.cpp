@@ -4,7 +4,7 @@
 #include "unav_runtime/conversions.hpp"
 
 TEST(Conversions, StampsRoundTripThroughNanoseconds) {
-  const unav::Time t = unav::time_from_seconds(12.345678901);
+  const unav::Time t = unav::Time::from_seconds(12.345678901);
   EXPECT_EQ(t.ns, 12345678901);
   const auto m = unav::to_msg(t);
   EXPECT_EQ(m.sec(), 12);

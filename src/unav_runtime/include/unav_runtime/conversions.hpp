@@ -42,12 +42,10 @@ inline builtin_interfaces::msg::Time to_msg(const Time& t) {
 inline double seconds(const std_msgs::msg::Header& h) { return from_msg(h.stamp()).seconds(); }
 /// Stamp of a header, ns.
 inline int64_t nanoseconds(const std_msgs::msg::Header& h) { return from_msg(h.stamp()).ns; }
-/// Time from seconds, rounded to the nearest nanosecond.
-inline Time time_from_seconds(double t_s) { return Time{std::llround(t_s * 1e9)}; }
 /// A header with the stamp t [s] and the frame.
 inline std_msgs::msg::Header make_header(double t_s, const std::string& frame_id) {
   std_msgs::msg::Header h;
-  h.stamp() = to_msg(time_from_seconds(t_s));
+  h.stamp() = to_msg(Time::from_seconds(t_s));
   h.frame_id(frame_id);
   return h;
 }
