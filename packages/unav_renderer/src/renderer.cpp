@@ -154,7 +154,7 @@ double luminance(const Eigen::Vector3d& c) { return 0.2126 * c.x() + 0.7152 * c.
 }  // namespace
 
 struct Renderer::Impl {
-  std::unique_ptr<EglContext> ctx;
+  std::shared_ptr<EglContext> ctx;   // shared by every Renderer made with the same context
   World world;
   std::vector<CameraModel> cameras;
   RenderOptions options;
@@ -185,6 +185,7 @@ struct Renderer::Impl {
   void self_test();
   void upload_scene(const SceneGeometry& geo);
   void upload_snow();
+  void release_scene();   // meshes and marine-snow buffers (set_world, destructor)
   GLuint texture(const std::string& name);
   Targets& targets_for(const CameraModel& c);
   struct FrameSetup;
@@ -690,6 +691,10 @@ void Renderer::Impl::collect_oldest() {
 }
 
 Renderer::Renderer(World world, std::vector<CameraModel> cameras, RenderOptions options)
+    : Renderer(std::move(world), std::move(cameras), options, nullptr) {}
+
+Renderer::Renderer(World world, std::vector<CameraModel> cameras, RenderOptions options,
+                   std::shared_ptr<EglContext> context)
     : impl_(std::make_unique<Impl>()) {
   impl_->world = std::move(world);
   impl_->cameras = std::move(cameras);
@@ -702,7 +707,7 @@ Renderer::Renderer(World world, std::vector<CameraModel> cameras, RenderOptions 
         throw ConfigError("Renderer: duplicate camera name '" + impl_->cameras[i].name + "'");
   // Geometry first: a bad mesh file is reported before any GL work.
   const SceneGeometry geo = build_scene_geometry(impl_->world);
-  impl_->ctx = EglContext::create(options.egl);
+  impl_->ctx = context ? std::move(context) : std::shared_ptr<EglContext>(EglContext::create(options.egl));
   impl_->ctx->make_current();
   glGenVertexArrays(1, &impl_->empty_vao);
   impl_->self_test();
@@ -714,6 +719,34 @@ Renderer::Renderer(World world, std::vector<CameraModel> cameras, RenderOptions 
   impl_->upload_snow();
   impl_->slots.resize(static_cast<std::size_t>(std::max(1, options.readback_slots)));
   check_gl("Renderer setup");
+}
+
+void Renderer::Impl::release_scene() {
+  for (auto& m : meshes) {
+    glDeleteBuffers(3, m.vbo);
+    glDeleteBuffers(1, &m.ebo);
+    glDeleteVertexArrays(1, &m.vao);
+  }
+  meshes.clear();
+  if (snow_vao) glDeleteVertexArrays(1, &snow_vao);
+  if (snow_vbo) glDeleteBuffers(1, &snow_vbo);
+  snow_vao = snow_vbo = 0;
+  snow_count = 0;
+}
+
+void Renderer::set_world(World world) {
+  Impl& I = *impl_;
+  // Geometry first: a bad world leaves the current scene in place.
+  const SceneGeometry geo = build_scene_geometry(world);
+  world.water.validate("Renderer::set_world");
+  I.ctx->make_current();
+  while (!I.in_flight.empty()) I.collect_oldest();   // frames of the old scene stay collectable
+  I.release_scene();
+  I.world = std::move(world);
+  I.water = I.world.water;
+  I.upload_scene(geo);
+  I.upload_snow();
+  check_gl("Renderer::set_world");
 }
 
 Renderer::~Renderer() {
@@ -734,14 +767,8 @@ Renderer::~Renderer() {
     GLuint texs[7] = {t.scene_color, t.scene_zc, t.scene_depth, t.post_rgba, t.post_zc, t.distmap, t.is_tex};
     glDeleteTextures(7, texs);
   }
-  for (auto& m : impl_->meshes) {
-    glDeleteBuffers(3, m.vbo);
-    glDeleteBuffers(1, &m.ebo);
-    glDeleteVertexArrays(1, &m.vao);
-  }
+  impl_->release_scene();
   for (auto& [name, t] : impl_->textures) glDeleteTextures(1, &t);
-  if (impl_->snow_vao) glDeleteVertexArrays(1, &impl_->snow_vao);
-  if (impl_->snow_vbo) glDeleteBuffers(1, &impl_->snow_vbo);
   glDeleteVertexArrays(1, &impl_->empty_vao);
   glDeleteProgram(impl_->scene.id());
   glDeleteProgram(impl_->snow.id());
@@ -804,6 +831,7 @@ void Renderer::set_water(const WaterModel& water) {
   impl_->water = water;
 }
 const WaterModel& Renderer::water() const { return impl_->water; }
+void Renderer::set_next_sequence(std::uint64_t sequence) { impl_->sequence = sequence; }
 void Renderer::set_options(const RenderOptions& options) {
   const EglOptions egl = impl_->options.egl;
   const int tex = impl_->options.texture_size, slots = impl_->options.readback_slots;
@@ -821,6 +849,7 @@ std::vector<std::string> Renderer::camera_names() const {
   return n;
 }
 const EglContext& Renderer::context() const { return *impl_->ctx; }
+std::shared_ptr<EglContext> Renderer::shared_context() const { return impl_->ctx; }
 RenderTimings Renderer::last_timings() const { return impl_->timings; }
 std::size_t Renderer::triangle_count() const { return impl_->triangles; }
 Pose Renderer::camera_pose(const Pose& X_WB, const std::string& camera) const {

@@ -255,10 +255,7 @@ void parse_pipelines(const YamlCtx& c, const YAML::Node& root, World& w) {
       if (n["points_ne"] && n["points_ned"]) c.fail(p, "give points_ne or points_ned, not both");
       pipe.points_W = parse_points(c, n, p, w.seabed, pipe.radius_m, burial);
       pipe.material = parse_material(c, n["material"], join_key(p, "material"), pipe.material);
-      pipe.centerline_W = bent_centerline(pipe.points_W, pipe.bend_radius_m, 0.1);
-      pipe.arc_length_m.resize(pipe.centerline_W.size(), 0.0);
-      for (std::size_t k = 1; k < pipe.centerline_W.size(); ++k)
-        pipe.arc_length_m[k] = pipe.arc_length_m[k - 1] + (pipe.centerline_W[k] - pipe.centerline_W[k - 1]).norm();
+      build_centerline(&pipe);
       w.pipelines.push_back(std::move(pipe));
     }
   }
@@ -310,26 +307,15 @@ void parse_rocks(const YamlCtx& c, const YAML::Node& root, World& w) {
     const Eigen::Vector2d rr = get_vec<2>(c, rf, p, "radius_m", Eigen::Vector2d(0.1, 0.4));
     if (!(rr.x() > 0.0 && rr.y() >= rr.x())) c.fail("rock_field.radius_m", "need 0 < min <= max");
     const double clearance = get_double(c, rf, p, "clearance_from_pipe_m", 0.5);
-    const Material mat = parse_material(c, rf["material"], "rock_field.material", Rock{}.material);
-    int placed = 0;
-    for (int k = 0; placed < count && k < count * 20; ++k) {
-      auto U = [&](int j) { return noise::lattice(k, j, 17, seed); };
-      const double n_m = lo.x() + (hi.x() - lo.x()) * U(0), e_m = lo.y() + (hi.y() - lo.y()) * U(1);
-      // Mostly small rocks, a few large ones.
-      const double rad = rr.x() + (rr.y() - rr.x()) * std::pow(U(2), 2.0);
-      Rock r;
-      r.radii_m = rad * Eigen::Vector3d(0.8 + 0.4 * U(3), 0.8 + 0.4 * U(4), 0.45 + 0.3 * U(5));
-      r.p_W = rock_on_seabed(n_m, e_m, r.radii_m);
-      if (!w.pipelines.empty()) {
-        const PipeQuery q = nearest_pipe_point(w, r.p_W, true);
-        if (q.horizontal_distance_m < clearance + rad + w.pipelines[q.pipeline].radius_m) continue;
-      }
-      r.yaw_rad = 2.0 * M_PI * U(6);
-      r.seed = seed * 1000U + static_cast<std::uint32_t>(k);
-      r.material = mat;
-      w.rocks.push_back(r);
-      ++placed;
-    }
+    RockField field;
+    field.count = count;
+    field.seed = seed;
+    field.region_lo_ne = lo;
+    field.region_hi_ne = hi;
+    field.radius_m = rr;
+    field.clearance_from_pipe_m = clearance;
+    field.material = parse_material(c, rf["material"], "rock_field.material", Rock{}.material);
+    add_rock_field(&w, field);
   }
 }
 
@@ -402,6 +388,38 @@ void parse_lights(const YamlCtx& c, const YAML::Node& root, World& w) {
 }
 
 }  // namespace
+
+void build_centerline(Pipeline* pipe, double step_m) {
+  pipe->centerline_W = bent_centerline(pipe->points_W, pipe->bend_radius_m, step_m);
+  pipe->arc_length_m.assign(pipe->centerline_W.size(), 0.0);
+  for (std::size_t k = 1; k < pipe->centerline_W.size(); ++k)
+    pipe->arc_length_m[k] =
+        pipe->arc_length_m[k - 1] + (pipe->centerline_W[k] - pipe->centerline_W[k - 1]).norm();
+}
+
+void add_rock_field(World* world, const RockField& f) {
+  World& w = *world;
+  const Eigen::Vector2d &lo = f.region_lo_ne, &hi = f.region_hi_ne, &rr = f.radius_m;
+  int placed = 0;
+  for (int k = 0; placed < f.count && k < f.count * 20; ++k) {
+    auto U = [&](int j) { return noise::lattice(k, j, 17, f.seed); };
+    const double n_m = lo.x() + (hi.x() - lo.x()) * U(0), e_m = lo.y() + (hi.y() - lo.y()) * U(1);
+    // Mostly small rocks, a few large ones.
+    const double rad = rr.x() + (rr.y() - rr.x()) * std::pow(U(2), 2.0);
+    Rock r;
+    r.radii_m = rad * Eigen::Vector3d(0.8 + 0.4 * U(3), 0.8 + 0.4 * U(4), 0.45 + 0.3 * U(5));
+    r.p_W = Eigen::Vector3d(n_m, e_m, w.seabed.depth_at(n_m, e_m) - 0.45 * r.radii_m.z());
+    if (!w.pipelines.empty()) {
+      const PipeQuery q = nearest_pipe_point(w, r.p_W, true);
+      if (q.horizontal_distance_m < f.clearance_from_pipe_m + rad + w.pipelines[q.pipeline].radius_m) continue;
+    }
+    r.yaw_rad = 2.0 * M_PI * U(6);
+    r.seed = f.seed * 1000U + static_cast<std::uint32_t>(k);
+    r.material = f.material;
+    w.rocks.push_back(r);
+    ++placed;
+  }
+}
 
 World load_world(const std::string& path) {
   YamlCtx c{path};

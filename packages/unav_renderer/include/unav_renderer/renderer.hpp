@@ -74,6 +74,11 @@ class Renderer {
   /// Creates the EGL context, compiles shaders, builds and uploads the scene geometry and
   /// procedural textures. Throws EglError / GlError / ConfigError with the cause.
   Renderer(World world, std::vector<CameraModel> cameras, RenderOptions options = {});
+  /// Same, drawing in an existing context (several renderers, one context: vectorised
+  /// environments). `context` null = create one from options.egl. All renderers sharing a
+  /// context must be used from the same thread.
+  Renderer(World world, std::vector<CameraModel> cameras, RenderOptions options,
+           std::shared_ptr<EglContext> context);
   ~Renderer();
   Renderer(const Renderer&) = delete;
   Renderer& operator=(const Renderer&) = delete;
@@ -89,6 +94,14 @@ class Renderer {
   std::optional<Frame> collect();
   std::size_t in_flight() const;
 
+  /// Replace the scene (new episode, domain randomisation) keeping the context, the shaders, the
+  /// textures and the render targets: only the geometry and the particles are re-uploaded. The
+  /// water becomes the world's. Frames still in flight are completed first (collect() returns
+  /// them). Throws ConfigError for a bad world, leaving the current scene unchanged.
+  void set_world(World world);
+  /// The sequence number of the next frame (frame noise = f(options.seed, sequence)): set it
+  /// back to 0 with a new seed and an episode's images repeat.
+  void set_next_sequence(std::uint64_t sequence);
   /// Change the water (domain randomisation, test sweeps) without rebuilding the scene.
   void set_water(const WaterModel& water);
   const WaterModel& water() const;
@@ -99,6 +112,7 @@ class Renderer {
   const CameraModel& camera(const std::string& name) const;
   std::vector<std::string> camera_names() const;
   const EglContext& context() const;
+  std::shared_ptr<EglContext> shared_context() const;   ///< for more renderers in this context
   RenderTimings last_timings() const;
   std::size_t triangle_count() const;
 

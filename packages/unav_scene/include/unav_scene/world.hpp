@@ -121,6 +121,23 @@ struct World {
 /// (unknown key, wrong type, non-positive radius, missing mesh file, bad water preset ...).
 World load_world(const std::string& path);
 
+/// Fills pipe->centerline_W (bends of bend_radius_m at the vertices, sampled every <= step_m)
+/// and pipe->arc_length_m from pipe->points_W: what load_world does for each pipeline.
+void build_centerline(Pipeline* pipe, double step_m = 0.1);
+
+/// A seeded scatter of rocks on the seabed (world.yaml `rock_field`): mostly small, a few large,
+/// none closer than clearance_from_pipe_m to a pipeline. Same seed, same rocks.
+struct RockField {
+  int count = 0;
+  std::uint32_t seed = 1;
+  Eigen::Vector2d region_lo_ne{0, 0}, region_hi_ne{0, 0};   ///< [m]
+  Eigen::Vector2d radius_m{0.1, 0.4};                       ///< min, max
+  double clearance_from_pipe_m = 0.5;
+  Material material{"rock", {0.45, 0.42, 0.38}, 0.6};
+};
+/// Appends the field's rocks to world->rocks (on world->seabed; after the pipelines are set).
+void add_rock_field(World* world, const RockField& field);
+
 /// Nearest point of any pipeline centre line (including bends) to a point.
 struct PipeQuery {
   bool valid = false;             ///< false when the world has no pipeline

@@ -1,0 +1,89 @@
+// Throughput of the pipe-following environment on this machine, printed (not a test):
+// steps/s of one env and of the vectorised env (one EGL context), for both dynamics, with the
+// time per step split into physics, MPC + allocator, render submit and readback.
+//   bench_pipe_env [config.yaml] [steps=60] [num_envs=4] [width height]
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <string>
+
+#include "unav_common/resources.hpp"
+#include "unav_sim/pipe_following_env.hpp"
+
+using namespace unav::sim;
+using Clock = std::chrono::steady_clock;
+
+namespace {
+
+EpisodeTimings sum(const EpisodeTimings& a, const EpisodeTimings& b) {
+  EpisodeTimings s = a;
+  s.physics_s += b.physics_s;
+  s.control_s += b.control_s;
+  s.render_s += b.render_s;
+  s.readback_s += b.readback_s;
+  s.physics_steps += b.physics_steps;
+  s.control_steps += b.control_steps;
+  s.frames += b.frames;
+  return s;
+}
+EpisodeTimings diff(const EpisodeTimings& a, const EpisodeTimings& b) {
+  EpisodeTimings d = a;
+  d.physics_s -= b.physics_s;
+  d.control_s -= b.control_s;
+  d.render_s -= b.render_s;
+  d.readback_s -= b.readback_s;
+  d.frames -= b.frames;
+  return d;
+}
+
+void run(const PipeFollowingConfig& cfg, int num_envs, int steps) {
+  VectorPipeFollowingEnv vec(cfg, num_envs);
+  std::vector<std::uint8_t> obs;
+  std::vector<std::array<double, 2>> actions(static_cast<std::size_t>(num_envs));
+  std::uint64_t seed = 0;
+  for (int i = 0; i < num_envs; ++i) vec.env(i).reset(seed++);
+  vec.observe_all(&obs);
+  EpisodeTimings before;
+  for (int i = 0; i < num_envs; ++i) before = sum(before, vec.env(i).episode().timings());
+  const auto t0 = Clock::now();
+  int resets = 0;
+  for (int k = 0; k < steps; ++k) {
+    for (int i = 0; i < num_envs; ++i) actions[static_cast<std::size_t>(i)] = vec.env(i).expert_action();
+    const auto r = vec.step(actions, &obs);
+    for (int i = 0; i < num_envs; ++i)
+      if (r[static_cast<std::size_t>(i)].terminated || r[static_cast<std::size_t>(i)].truncated) {
+        vec.env(i).reset(seed++);
+        ++resets;
+      }
+  }
+  const double wall = std::chrono::duration<double>(Clock::now() - t0).count();
+  EpisodeTimings after;
+  for (int i = 0; i < num_envs; ++i) after = sum(after, vec.env(i).episode().timings());
+  const EpisodeTimings d = diff(after, before);
+  const double n = static_cast<double>(steps) * num_envs;
+  std::printf("%-9s %3dx%-3d envs=%d: %7.1f steps/s  (%.2f ms/step: physics %.2f, mpc+alloc %.2f, render %.2f, "
+              "readback %.2f, other %.2f; %d resets incl.)\n",
+              cfg.env.dynamics.c_str(), vec.env(0).obs_height(), vec.env(0).obs_width(), num_envs, n / wall,
+              1e3 * wall / n, 1e3 * d.physics_s / n, 1e3 * d.control_s / n, 1e3 * d.render_s / n,
+              1e3 * d.readback_s / n, 1e3 * (wall - d.physics_s - d.control_s - d.render_s - d.readback_s) / n, resets);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  const std::string path = argc > 1 ? argv[1] : unav::common::find_resource("config/learning/pipe_following.yaml");
+  const int steps = argc > 2 ? std::atoi(argv[2]) : 60;
+  const int num_envs = argc > 3 ? std::atoi(argv[3]) : 4;
+  PipeFollowingConfig cfg = load_pipe_following_config(path);
+  if (argc > 5) {
+    cfg.episode.image_width = std::atoi(argv[4]);
+    cfg.episode.image_height = std::atoi(argv[5]);
+  }
+  std::printf("pipe-following env throughput (%s), expert actions, random scenes\n", path.c_str());
+  for (const char* dyn : {"kinematic", "mpc"}) {
+    cfg.env.dynamics = dyn;
+    run(cfg, 1, steps);
+    run(cfg, num_envs, steps);
+  }
+  return 0;
+}

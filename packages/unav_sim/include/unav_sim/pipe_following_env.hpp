@@ -1,0 +1,177 @@
+// The paper's DRL pipe-following task (section V-B) as an environment core, DDS-free:
+//   observation  the down camera's RGB image, uint8 H x W x 3 (180 x 320 by default)
+//   action       a = (a1, a2) in [-1, 1]^2: a1 the direction of a step of step_length_m (1 m)
+//                relative to the heading (+-max_step_angle_deg), a2 the heading change
+//                (+-max_turn_deg); the resulting waypoint (depth held) is executed by the MPC
+//                (dynamics "mpc") or reached exactly (dynamics "kinematic", the fast variant)
+//   reward       r = alive_reward - position_weight e_p^2 - heading_weight e_psi (10, 2, 2):
+//                e_p the horizontal distance to the pipe centre line [m], e_psi the heading
+//                error to the pipe direction [rad, 0..pi]
+//   terminated   e_p > termination_distance_m (2.5 m: the pipe leaves the view)
+//   truncated    the end of the pipe reached (within end_margin_m) or max_steps actions
+// Scenes: "random" draws a pipe world per reset from PipeSceneRanges; training seeds and
+// evaluation seeds map to disjoint scene seeds (split train: [0, 2^62), eval: [2^62, 2^63));
+// "fixed" uses one world file (the paper's ~20 m left + right pipe: the evaluation scene).
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "unav_common/config.hpp"
+#include "unav_sim/episode.hpp"
+#include "unav_sim/pipe_scene.hpp"
+
+namespace unav::sim {
+
+struct PipeFollowingParams {
+  std::string dynamics = "mpc";
+  std::string scenes = "random";
+  std::string world = "worlds/pipe_inspection/world.yaml";
+  std::string split = "train";
+  std::string camera = "down";
+  double step_length_m = 1.0;
+  double max_step_angle_deg = 60.0;
+  double max_turn_deg = 30.0;
+  double step_duration_s = 1.5;
+  double height_above_pipe_m = 1.5;
+  double termination_distance_m = 2.5;
+  double end_margin_m = 1.0;
+  int max_steps = 200;
+  double start_offset_m = 0.5;
+  double start_heading_deg = 20.0;
+  double start_arc_fraction = 0.3;
+  double alive_reward = 10.0;
+  double position_weight = 2.0;
+  double heading_weight = 2.0;
+
+  template <class Archive>
+  void Serialize(Archive* a) {
+    using unav::common::Field;
+    a->Visit(Field("dynamics", &dynamics).OneOf({"mpc", "kinematic"})
+                 .Doc("mpc: the MPC flies each waypoint; kinematic: the vehicle is placed on it (fast)"));
+    a->Visit(Field("scenes", &scenes).OneOf({"random", "fixed"}).Doc("random pipe worlds or the world file"));
+    a->Visit(Field("world", &world).Doc("world.yaml of scenes=fixed (relative to the resource roots)"));
+    a->Visit(Field("split", &split).OneOf({"train", "eval"}).Doc("seed space of random scenes (disjoint)"));
+    a->Visit(Field("camera", &camera).Doc("observation camera (of the episode's cameras)"));
+    a->Visit(Field("step_length_m", &step_length_m).Above(0.0).Max(5.0).Unit("m").Doc("waypoint distance per action"));
+    a->Visit(Field("max_step_angle_deg", &max_step_angle_deg).Range(0.0, 180.0).Unit("deg")
+                 .Doc("a1 = +-1: step direction this far right/left of the heading"));
+    a->Visit(Field("max_turn_deg", &max_turn_deg).Range(0.0, 180.0).Unit("deg").Doc("a2 = +-1: heading change"));
+    a->Visit(Field("step_duration_s", &step_duration_s).Above(0.0).Max(30.0).Unit("s").Doc("simulated time per action"));
+    a->Visit(Field("height_above_pipe_m", &height_above_pipe_m).Above(0.0).Unit("m").Doc("flight height (held)"));
+    a->Visit(Field("termination_distance_m", &termination_distance_m).Above(0.0).Unit("m").Doc("e_p beyond: terminated"));
+    a->Visit(Field("end_margin_m", &end_margin_m).Min(0.0).Unit("m").Doc("truncated this close to the pipe end"));
+    a->Visit(Field("max_steps", &max_steps).Range(1, 1000000).Doc("truncated after this many actions"));
+    a->Visit(Field("start_offset_m", &start_offset_m).Min(0.0).Unit("m").Doc("max lateral offset at reset"));
+    a->Visit(Field("start_heading_deg", &start_heading_deg).Range(0.0, 180.0).Unit("deg").Doc("max heading error at reset"));
+    a->Visit(Field("start_arc_fraction", &start_arc_fraction).Range(0.0, 0.9)
+                 .Doc("random scenes start anywhere in this first fraction of the pipe"));
+    a->Visit(Field("alive_reward", &alive_reward).Doc("r = alive - wp e_p^2 - wh e_psi"));
+    a->Visit(Field("position_weight", &position_weight).Min(0.0));
+    a->Visit(Field("heading_weight", &heading_weight).Min(0.0));
+  }
+};
+
+/// A learning config file (config/learning/pipe_following.yaml): the sections `env`, `episode`
+/// and `pipe_scenes`; each absent section keeps its defaults.
+struct PipeFollowingConfig {
+  PipeFollowingParams env;
+  EpisodeParams episode;
+  PipeSceneRanges scenes;
+};
+PipeFollowingConfig load_pipe_following_config(const std::string& path);
+/// Sets "env.max_steps", "episode.image_width", "pipe_scenes.turns" ... or a bare env key
+/// ("max_steps") from YAML text. Unknown keys throw ConfigError listing the valid ones.
+void apply_override(PipeFollowingConfig* config, const std::string& key, const std::string& yaml_value,
+                    const std::string& source);
+
+struct PipeFollowingInfo {
+  double e_p = 0;             ///< horizontal distance to the centre line [m]
+  double e_psi = 0;           ///< heading error [rad], 0..pi
+  double lateral_m = 0;       ///< signed, > 0 right of the pipe
+  double arc_length_m = 0;    ///< nearest point's arc length from the pipe start
+  double progress = 0;        ///< arc_length / pipe length
+  double pipe_length_m = 0;
+  double time_s = 0;          ///< simulated time since reset
+  int steps = 0;
+  bool pipe_end = false;      ///< truncated at the pipe end
+  std::uint64_t scene_seed = 0;
+  std::uint64_t clipped_actions = 0;    ///< since construction: components outside [-1, 1]
+  std::uint64_t rejected_actions = 0;   ///< since construction: NaN/Inf (replaced by 0, never integrated)
+  std::array<double, 3> position_W{0, 0, 0};
+  double yaw = 0;
+};
+
+struct PipeFollowingStep {
+  double reward = 0;
+  bool terminated = false;
+  bool truncated = false;
+  PipeFollowingInfo info;
+};
+
+class PipeFollowingEnv {
+ public:
+  /// Throws ConfigError (bad config), EglError (no context). `context`: share an EGL context.
+  explicit PipeFollowingEnv(PipeFollowingConfig config,
+                            std::shared_ptr<unav_renderer::EglContext> context = nullptr);
+  ~PipeFollowingEnv();
+
+  int obs_width() const;
+  int obs_height() const;
+
+  /// New episode: scene (random: drawn from the seed and split), start pose from the seed.
+  /// Returns the info; the observation is observe().
+  PipeFollowingInfo reset(std::uint64_t seed);
+  /// Applies the action (clipped; NaN/Inf components replaced by 0 and counted) and the dynamics;
+  /// the observation of the new state is observe().
+  PipeFollowingStep act(const std::array<double, 2>& action);
+  /// The observation (H x W x 3 rgb8) of the current state.
+  std::vector<std::uint8_t> observe();
+  /// Split observe(): start the frame, then wait for it (vector envs overlap the N frames).
+  void submit_observation();
+  std::vector<std::uint8_t> collect_observation();
+
+  /// Privileged expert (knows the pipe): the action steering to the centre line 2 m ahead and
+  /// turning to the pipe direction there. Behaviour cloning and the upper-bound baseline.
+  std::array<double, 2> expert_action() const;
+  /// The waypoint an action leads to from the current state: NED position and yaw.
+  std::pair<Eigen::Vector3d, double> waypoint_for(const std::array<double, 2>& action) const;
+  PipeFollowingInfo info() const;
+
+  const PipeFollowingConfig& config() const { return config_; }
+  Episode& episode() { return *episode_; }
+
+ private:
+  PipeFollowingInfo measure() const;
+  PipeFollowingConfig config_;
+  scene::World base_world_, fixed_world_;
+  std::unique_ptr<Episode> episode_;
+  double hold_depth_ = 0;
+  int steps_ = 0;
+  std::uint64_t scene_seed_ = 0;
+  std::uint64_t clipped_ = 0, rejected_ = 0;
+  bool pipe_end_ = false;
+};
+
+/// N environments stepped together in one process, sharing one EGL context: dynamics of each,
+/// then the N frames submitted before any is read back.
+class VectorPipeFollowingEnv {
+ public:
+  VectorPipeFollowingEnv(const PipeFollowingConfig& config, int num_envs);
+  int size() const { return static_cast<int>(envs_.size()); }
+  PipeFollowingEnv& env(int i) { return *envs_.at(static_cast<std::size_t>(i)); }
+  /// act() on every env, then the N observations (concatenated, N x H x W x 3).
+  std::vector<PipeFollowingStep> step(const std::vector<std::array<double, 2>>& actions,
+                                      std::vector<std::uint8_t>* observations);
+  /// observe() of every env into one N x H x W x 3 buffer.
+  void observe_all(std::vector<std::uint8_t>* observations);
+
+ private:
+  std::vector<std::unique_ptr<PipeFollowingEnv>> envs_;
+};
+
+}  // namespace unav::sim

@@ -1,0 +1,261 @@
+#include "unav_sim/pipe_following_env.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+
+#include "unav_common/errors.hpp"
+#include "unav_common/resources.hpp"
+
+namespace unav::sim {
+namespace {
+
+constexpr double kDeg = M_PI / 180.0;
+constexpr std::uint64_t kSceneSeedMask = (std::uint64_t{1} << 62U) - 1U;
+
+double wrap(double a) { return std::remainder(a, 2.0 * M_PI); }   // (-pi, pi]
+
+std::string resource(const std::string& p) {
+  if (!p.empty() && p.front() == '/') return p;
+  return unav::common::find_resource(p);
+}
+
+double yaw_of(const Eigen::Quaterniond& q) {
+  const Eigen::Vector3d f = q * Eigen::Vector3d::UnitX();
+  return std::atan2(f.y(), f.x());
+}
+
+RigidBodyState level_state(const Eigen::Vector3d& p, double yaw) {
+  RigidBodyState x;
+  x.p_WB_W = p;
+  x.q_WB = Eigen::Quaterniond(Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()));
+  return x;
+}
+
+// Centre-line point and heading at arc length s (clamped to the pipe).
+std::pair<Eigen::Vector3d, double> point_at(const scene::Pipeline& pipe, double s) {
+  const auto& a = pipe.arc_length_m;
+  const auto& c = pipe.centerline_W;
+  if (c.size() < 2) return {c.empty() ? Eigen::Vector3d::Zero() : c.front(), 0.0};
+  s = std::clamp(s, 0.0, a.back());
+  std::size_t k = static_cast<std::size_t>(std::upper_bound(a.begin(), a.end(), s) - a.begin());
+  k = std::clamp<std::size_t>(k, 1, c.size() - 1);
+  const double seg = a[k] - a[k - 1];
+  const double t = seg > 0 ? (s - a[k - 1]) / seg : 0.0;
+  const Eigen::Vector3d d = c[k] - c[k - 1];
+  return {c[k - 1] + t * d, std::atan2(d.y(), d.x())};
+}
+
+}  // namespace
+
+PipeFollowingConfig load_pipe_following_config(const std::string& path) {
+  const YAML::Node root = unav::common::detail::ReadYamlFile(path);
+  PipeFollowingConfig c;
+  if (!root || root.IsNull()) return c;
+  if (!root.IsMap()) throw ConfigError(path, "", "", "expected a mapping with env, episode, pipe_scenes");
+  for (const auto& kv : root) {
+    const auto key = kv.first.as<std::string>();
+    if (key != "env" && key != "episode" && key != "pipe_scenes")
+      throw ConfigError(path, key, "", "unknown section (allowed: env, episode, pipe_scenes)");
+  }
+  if (root["env"]) unav::common::LoadYaml(root, path, &c.env, "env");
+  if (root["episode"]) unav::common::LoadYaml(root, path, &c.episode, "episode");
+  if (root["pipe_scenes"]) unav::common::LoadYaml(root, path, &c.scenes, "pipe_scenes");
+  c.scenes.validate(path);
+  return c;
+}
+
+void apply_override(PipeFollowingConfig* config, const std::string& key, const std::string& yaml_value,
+                    const std::string& source) {
+  PipeFollowingConfig c = *config;
+  const auto dot = key.find('.');
+  const std::string section = dot == std::string::npos ? "" : key.substr(0, dot);
+  const std::string rest = dot == std::string::npos ? key : key.substr(dot + 1);
+  if (section == "episode") {
+    unav::common::ApplyOverride(&c.episode, rest, yaml_value, source);
+  } else if (section == "pipe_scenes") {
+    unav::common::ApplyOverride(&c.scenes, rest, yaml_value, source);
+    c.scenes.validate(source);
+  } else if (section == "env") {
+    unav::common::ApplyOverride(&c.env, rest, yaml_value, source);
+  } else {
+    unav::common::ApplyOverride(&c.env, key, yaml_value, source);
+  }
+  *config = std::move(c);
+}
+
+PipeFollowingEnv::PipeFollowingEnv(PipeFollowingConfig config, std::shared_ptr<unav_renderer::EglContext> context)
+    : config_(std::move(config)) {
+  unav::common::Validate(config_.env, "env");
+  config_.scenes.validate("pipe_scenes");
+  if (std::find(config_.episode.cameras.begin(), config_.episode.cameras.end(), config_.env.camera) ==
+      config_.episode.cameras.end())
+    throw ConfigError("env", "camera", config_.env.camera, "must be one of episode.cameras");
+  EpisodeSetup setup = load_episode_setup(config_.episode);
+  base_world_ = scene::load_world(resource(config_.scenes.base_world));
+  scene::World first;
+  if (config_.env.scenes == "fixed") {
+    fixed_world_ = scene::load_world(resource(config_.env.world));
+    if (fixed_world_.pipelines.empty())
+      throw ConfigError(config_.env.world, "pipelines", "[]", "the pipe-following world needs a pipeline");
+    first = fixed_world_;
+  } else {
+    first = generate_pipe_world(config_.scenes, base_world_, 0);
+  }
+  episode_ = std::make_unique<Episode>(std::move(setup), std::move(first), std::move(context));
+  reset(0);
+}
+
+PipeFollowingEnv::~PipeFollowingEnv() = default;
+
+int PipeFollowingEnv::obs_width() const { return episode_->renderer().camera(config_.env.camera).width; }
+int PipeFollowingEnv::obs_height() const { return episode_->renderer().camera(config_.env.camera).height; }
+
+PipeFollowingInfo PipeFollowingEnv::reset(std::uint64_t seed) {
+  const PipeFollowingParams& p = config_.env;
+  std::mt19937_64 rng(seed * 0x9E3779B97F4A7C15ULL + 0x632BE59BD9B4E019ULL);
+  auto U = [&rng](double lo, double hi) { return std::uniform_real_distribution<double>(lo, hi)(rng); };
+  scene::World world;
+  const scene::World* new_world = nullptr;
+  if (p.scenes == "random") {
+    scene_seed_ = (seed & kSceneSeedMask) | (p.split == "eval" ? (std::uint64_t{1} << 62U) : 0U);
+    world = generate_pipe_world(config_.scenes, base_world_, scene_seed_);
+    new_world = &world;
+  } else {
+    scene_seed_ = 0;
+  }
+  const scene::World& w = new_world ? *new_world : episode_->world();
+  const scene::Pipeline& pipe = w.pipelines.front();
+  const double s0 = U(0.0, 1.0) * p.start_arc_fraction * pipe.length_m();
+  const auto [c, h] = point_at(pipe, s0);
+  const double offset = U(-1.0, 1.0) * p.start_offset_m;
+  const double yaw = wrap(h + U(-1.0, 1.0) * p.start_heading_deg * kDeg);
+  const Eigen::Vector3d right(-std::sin(h), std::cos(h), 0.0);
+  Eigen::Vector3d p0 = c + offset * right;
+  p0.z() = c.z() - p.height_above_pipe_m;
+  hold_depth_ = p0.z();
+  episode_->reset(seed, level_state(p0, yaw), new_world);
+  steps_ = 0;
+  pipe_end_ = false;
+  return measure();
+}
+
+std::pair<Eigen::Vector3d, double> PipeFollowingEnv::waypoint_for(const std::array<double, 2>& a) const {
+  const PipeFollowingParams& p = config_.env;
+  const auto& x = episode_->state();
+  const double yaw = yaw_of(x.q_WB);
+  const double dir = yaw + a[0] * p.max_step_angle_deg * kDeg;
+  Eigen::Vector3d wp = x.p_WB_W + p.step_length_m * Eigen::Vector3d(std::cos(dir), std::sin(dir), 0.0);
+  wp.z() = hold_depth_;
+  return {wp, wrap(yaw + a[1] * p.max_turn_deg * kDeg)};
+}
+
+PipeFollowingStep PipeFollowingEnv::act(const std::array<double, 2>& action) {
+  std::array<double, 2> a = action;
+  for (double& v : a) {
+    if (!std::isfinite(v)) {
+      v = 0.0;
+      ++rejected_;
+    } else if (v < -1.0 || v > 1.0) {
+      v = std::clamp(v, -1.0, 1.0);
+      ++clipped_;
+    }
+  }
+  const auto [wp, yaw] = waypoint_for(a);
+  if (config_.env.dynamics == "kinematic") {
+    episode_->teleport(level_state(wp, yaw), config_.env.step_duration_s);
+  } else {
+    episode_->set_setpoint(control::PoseSetpoint::FromPositionYaw(wp, yaw));
+    episode_->advance(config_.env.step_duration_s);
+  }
+  ++steps_;
+  PipeFollowingStep r;
+  r.info = measure();
+  const PipeFollowingParams& p = config_.env;
+  r.reward = p.alive_reward - p.position_weight * r.info.e_p * r.info.e_p - p.heading_weight * r.info.e_psi;
+  r.terminated = !(r.info.e_p <= p.termination_distance_m);   // NaN state terminates too
+  pipe_end_ = r.info.arc_length_m >= r.info.pipe_length_m - p.end_margin_m;
+  r.info.pipe_end = pipe_end_;
+  r.truncated = !r.terminated && (pipe_end_ || steps_ >= p.max_steps);
+  return r;
+}
+
+std::vector<std::uint8_t> PipeFollowingEnv::observe() {
+  submit_observation();
+  return collect_observation();
+}
+
+void PipeFollowingEnv::submit_observation() { episode_->submit(config_.env.camera); }
+
+std::vector<std::uint8_t> PipeFollowingEnv::collect_observation() { return std::move(episode_->collect().rgb); }
+
+std::array<double, 2> PipeFollowingEnv::expert_action() const {
+  const PipeFollowingParams& p = config_.env;
+  const auto& x = episode_->state();
+  const double yaw = yaw_of(x.q_WB);
+  const scene::PipeQuery q = scene::nearest_pipe_point(episode_->world(), x.p_WB_W, true);
+  if (!q.valid) return {0.0, 0.0};
+  const scene::Pipeline& pipe = episode_->world().pipelines[q.pipeline];
+  const auto [target, heading] = point_at(pipe, q.arc_length_m + 2.0);
+  const double dir = std::atan2(target.y() - x.p_WB_W.y(), target.x() - x.p_WB_W.x());
+  auto ratio = [](double angle, double max_deg) {
+    return max_deg > 0 ? std::clamp(angle / (max_deg * kDeg), -1.0, 1.0) : 0.0;
+  };
+  return {ratio(wrap(dir - yaw), p.max_step_angle_deg), ratio(wrap(heading - yaw), p.max_turn_deg)};
+}
+
+PipeFollowingInfo PipeFollowingEnv::measure() const {
+  PipeFollowingInfo i;
+  const auto& x = episode_->state();
+  const double yaw = yaw_of(x.q_WB);
+  const scene::PipeQuery q = scene::nearest_pipe_point(episode_->world(), x.p_WB_W, true);
+  i.e_p = q.horizontal_distance_m;
+  i.e_psi = std::abs(wrap(yaw - q.heading_rad));
+  i.lateral_m = q.lateral_m;
+  i.arc_length_m = q.arc_length_m;
+  i.pipe_length_m = episode_->world().pipelines[q.pipeline].length_m();
+  i.progress = i.pipe_length_m > 0 ? i.arc_length_m / i.pipe_length_m : 0.0;
+  i.time_s = episode_->time();
+  i.steps = steps_;
+  i.pipe_end = pipe_end_;
+  i.scene_seed = scene_seed_;
+  i.clipped_actions = clipped_;
+  i.rejected_actions = rejected_;
+  i.position_W = {x.p_WB_W.x(), x.p_WB_W.y(), x.p_WB_W.z()};
+  i.yaw = yaw;
+  return i;
+}
+
+PipeFollowingInfo PipeFollowingEnv::info() const { return measure(); }
+
+VectorPipeFollowingEnv::VectorPipeFollowingEnv(const PipeFollowingConfig& config, int num_envs) {
+  if (num_envs < 1) throw ConfigError("vector env", "num_envs", std::to_string(num_envs), "must be >= 1");
+  std::shared_ptr<unav_renderer::EglContext> ctx;
+  for (int i = 0; i < num_envs; ++i) {
+    envs_.push_back(std::make_unique<PipeFollowingEnv>(config, ctx));
+    ctx = envs_.back()->episode().renderer().shared_context();
+  }
+}
+
+std::vector<PipeFollowingStep> VectorPipeFollowingEnv::step(const std::vector<std::array<double, 2>>& actions,
+                                                            std::vector<std::uint8_t>* observations) {
+  if (actions.size() != envs_.size())
+    throw std::invalid_argument("VectorPipeFollowingEnv::step: " + std::to_string(actions.size()) +
+                                " actions for " + std::to_string(envs_.size()) + " environments");
+  std::vector<PipeFollowingStep> out;
+  out.reserve(envs_.size());
+  for (std::size_t i = 0; i < envs_.size(); ++i) out.push_back(envs_[i]->act(actions[i]));
+  observe_all(observations);
+  return out;
+}
+
+void VectorPipeFollowingEnv::observe_all(std::vector<std::uint8_t>* observations) {
+  for (auto& e : envs_) e->submit_observation();
+  observations->clear();
+  for (auto& e : envs_) {
+    const std::vector<std::uint8_t> o = e->collect_observation();
+    observations->insert(observations->end(), o.begin(), o.end());
+  }
+}
+
+}  // namespace unav::sim

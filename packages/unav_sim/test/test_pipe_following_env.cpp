@@ -1,0 +1,161 @@
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "unav_common/errors.hpp"
+#include "unav_sim/pipe_following_env.hpp"
+
+using namespace unav::sim;
+
+namespace {
+
+// The paper's evaluation pipe, a fixed start on its first (northbound) run, small images.
+PipeFollowingConfig fixed_config(const std::string& dynamics) {
+  PipeFollowingConfig c = load_pipe_following_config(std::string(UNAV_REPO_ROOT) + "/config/learning/pipe_following.yaml");
+  c.env.scenes = "fixed";
+  c.env.dynamics = dynamics;
+  c.env.start_offset_m = 0.0;
+  c.env.start_heading_deg = 0.0;
+  c.env.start_arc_fraction = 0.0;
+  c.episode.image_width = 80;
+  c.episode.image_height = 45;
+  return c;
+}
+
+}  // namespace
+
+// Kinematic steps on the straight northbound run (pipe along the north axis at east = 0):
+// every quantity follows from geometry. a = (0, 0): 1 m north, on the pipe: r = 10.
+// a2 = 1: heading +30 deg: e_psi = pi/6, r = 10 - 2 pi/6. a1 = 1 from heading 0: the step goes
+// 60 deg right: e_p = sin 60 deg per step; the third such step passes 2.5 m and terminates.
+TEST(PipeFollowingEnv, RewardAndTerminationFollowThePapersFormula) {
+  PipeFollowingEnv env(fixed_config("kinematic"));
+  PipeFollowingInfo i0 = env.reset(0);
+  EXPECT_NEAR(i0.e_p, 0.0, 1e-9);
+  EXPECT_NEAR(i0.e_psi, 0.0, 1e-9);
+  PipeFollowingStep s = env.act({0.0, 0.0});
+  EXPECT_NEAR(s.info.position_W[0], 1.0, 1e-9);
+  EXPECT_NEAR(s.info.e_p, 0.0, 1e-9);
+  EXPECT_NEAR(s.reward, 10.0, 1e-9);
+  EXPECT_FALSE(s.terminated || s.truncated);
+  s = env.act({0.0, 1.0});
+  EXPECT_NEAR(s.info.e_psi, M_PI / 6, 1e-9);
+  EXPECT_NEAR(s.reward, 10.0 - 2.0 * M_PI / 6, 1e-9);
+  env.reset(0);
+  for (int k = 1; k <= 3; ++k) {
+    s = env.act({1.0, 0.0});
+    const double e_p = k * std::sin(M_PI / 3);
+    EXPECT_NEAR(s.info.e_p, e_p, 1e-6) << "step " << k;
+    EXPECT_NEAR(s.info.lateral_m, e_p, 1e-6);   // east of a northbound pipe = right of it
+    EXPECT_NEAR(s.reward, 10.0 - 2.0 * e_p * e_p, 1e-6);
+    EXPECT_EQ(s.terminated, k == 3) << "step " << k;
+  }
+  EXPECT_FALSE(s.truncated);
+}
+
+TEST(PipeFollowingEnv, BadActionsAreClippedOrRejectedAndCounted) {
+  PipeFollowingEnv env(fixed_config("kinematic"));
+  env.reset(0);
+  PipeFollowingStep s = env.act({std::nan(""), 5.0});   // NaN -> 0, 5 -> 1
+  EXPECT_EQ(s.info.rejected_actions, 1u);
+  EXPECT_EQ(s.info.clipped_actions, 1u);
+  EXPECT_NEAR(s.info.position_W[0], 1.0, 1e-9);
+  EXPECT_NEAR(s.info.e_psi, M_PI / 6, 1e-9);
+  EXPECT_TRUE(std::isfinite(s.reward));
+}
+
+TEST(PipeFollowingEnv, TruncatesAtTheStepLimit) {
+  PipeFollowingConfig c = fixed_config("kinematic");
+  c.env.max_steps = 4;
+  PipeFollowingEnv env(c);
+  env.reset(0);
+  for (int k = 1; k <= 4; ++k) {
+    const auto s = env.act(env.expert_action());
+    EXPECT_EQ(s.truncated, k == 4);
+    EXPECT_FALSE(s.terminated);
+  }
+}
+
+// The privileged expert follows the whole evaluation pipe (both turns) to its end, kinematic and
+// with the MPC flying each waypoint: the upper bound of the learned policy. The MPC's e_p bound
+// (0.5 m, the target for the learned policy) leaves room for its lag in the bends.
+TEST(PipeFollowingEnv, ExpertFollowsTheEvaluationPipeToItsEnd) {
+  for (const std::string dyn : {"kinematic", "mpc"}) {
+    PipeFollowingEnv env(fixed_config(dyn));
+    PipeFollowingInfo info = env.reset(0);
+    const double length = info.pipe_length_m;
+    EXPECT_GT(length, 18.0);
+    EXPECT_LT(length, 23.0);
+    double max_ep = 0, sum_ep = 0;
+    int n = 0;
+    PipeFollowingStep s;
+    do {
+      s = env.act(env.expert_action());
+      max_ep = std::max(max_ep, s.info.e_p);
+      sum_ep += s.info.e_p;
+      ++n;
+    } while (!s.terminated && !s.truncated);
+    EXPECT_FALSE(s.terminated) << dyn;
+    EXPECT_TRUE(s.info.pipe_end) << dyn;
+    EXPECT_GT(s.info.progress, (length - 1.5) / length) << dyn;
+    EXPECT_LT(max_ep, dyn == "kinematic" ? 0.35 : 0.5) << dyn;
+    std::printf("[%s] expert: %d steps, mean e_p %.3f m, max e_p %.3f m, %.1f s simulated\n", dyn.c_str(), n,
+                sum_ep / n, max_ep, s.info.time_s);
+  }
+}
+
+// Random scenes: the observation repeats for a seed (gymnasium's determinism check), the start
+// is near the pipe, train and eval seeds give different scenes.
+TEST(PipeFollowingEnv, RandomScenesRepeatPerSeedAndSplitsAreDisjoint) {
+  PipeFollowingConfig c = fixed_config("kinematic");
+  c.env.scenes = "random";
+  c.env.start_offset_m = 0.5;
+  c.env.start_heading_deg = 20.0;
+  PipeFollowingEnv env(c);
+  const PipeFollowingInfo a = env.reset(11);
+  const auto obs_a = env.observe();
+  EXPECT_EQ(obs_a.size(), 80u * 45u * 3u);
+  EXPECT_LE(a.e_p, 0.5 + 1e-9);
+  EXPECT_LE(a.e_psi, 20.0 * M_PI / 180 + 1e-9);
+  env.reset(12);
+  const PipeFollowingInfo b = env.reset(11);
+  EXPECT_EQ(env.observe(), obs_a);
+  EXPECT_EQ(a.scene_seed, b.scene_seed);
+  c.env.split = "eval";
+  PipeFollowingEnv eval(c);
+  const PipeFollowingInfo e = eval.reset(11);
+  EXPECT_NE(e.scene_seed, a.scene_seed);
+  EXPECT_NE(eval.observe(), obs_a);
+}
+
+TEST(PipeFollowingEnv, VectorEnvSharesOneContextAndMatchesSingleEnvs) {
+  PipeFollowingConfig c = fixed_config("kinematic");
+  c.env.scenes = "random";
+  VectorPipeFollowingEnv vec(c, 3);
+  EXPECT_EQ(&vec.env(0).episode().renderer().context(), &vec.env(2).episode().renderer().context());
+  for (int i = 0; i < 3; ++i) vec.env(i).reset(100 + i);
+  std::vector<std::uint8_t> obs;
+  const auto steps = vec.step({{0.1, 0.0}, {0.0, -0.2}, {-0.3, 0.4}}, &obs);
+  ASSERT_EQ(steps.size(), 3u);
+  const std::size_t frame = 80u * 45u * 3u;
+  ASSERT_EQ(obs.size(), 3 * frame);
+  PipeFollowingEnv single(c);
+  single.reset(102);
+  const auto s = single.act({-0.3, 0.4});
+  EXPECT_EQ(s.reward, steps[2].reward);
+  const auto o = single.observe();
+  EXPECT_TRUE(std::equal(o.begin(), o.end(), obs.begin() + 2 * frame));
+}
+
+TEST(PipeFollowingConfig, OverridesAreCheckedByName) {
+  PipeFollowingConfig c;
+  apply_override(&c, "max_steps", "50", "test");
+  EXPECT_EQ(c.env.max_steps, 50);
+  apply_override(&c, "episode.image_width", "64", "test");
+  EXPECT_EQ(c.episode.image_width, 64);
+  apply_override(&c, "pipe_scenes.turns", "[1, 2]", "test");
+  EXPECT_EQ(c.scenes.turns[1], 2);
+  EXPECT_THROW(apply_override(&c, "max_stepz", "5", "test"), unav::ConfigError);
+  EXPECT_THROW(apply_override(&c, "dynamics", "teleport", "test"), unav::ConfigError);
+  EXPECT_THROW(apply_override(&c, "pipe_scenes.segment_m", "[5, 1]", "test"), unav::ConfigError);
+}
