@@ -1,11 +1,14 @@
 // Throughput of the pipe-following environment on this machine, printed (not a test):
 // steps/s of one env and of the vectorised env (one EGL context), for both dynamics, with the
 // time per step split into physics, MPC + allocator, render submit and readback.
-//   bench_pipe_env [config.yaml] [steps=60] [num_envs=4] [width height]
+//   bench_pipe_env [--config F] [--steps 60] [--envs 4] [--dynamics mpc|kinematic] [key=value ...]
+// key=value: any config key (episode.image_width=80, episode.marine_snow=false, ...).
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "unav_common/resources.hpp"
 #include "unav_sim/pipe_following_env.hpp"
@@ -62,7 +65,7 @@ void run(const PipeFollowingConfig& cfg, int num_envs, int steps) {
   const EpisodeTimings d = diff(after, before);
   const double n = static_cast<double>(steps) * num_envs;
   std::printf("%-9s %3dx%-3d envs=%d: %7.1f steps/s  (%.2f ms/step: physics %.2f, mpc+alloc %.2f, render %.2f, "
-              "readback %.2f, other %.2f; %d resets incl.)\n",
+              "readback %.2f, other %.2f; parts summed over threads; %d resets incl.)\n",
               cfg.env.dynamics.c_str(), vec.env(0).obs_height(), vec.env(0).obs_width(), num_envs, n / wall,
               1e3 * wall / n, 1e3 * d.physics_s / n, 1e3 * d.control_s / n, 1e3 * d.render_s / n,
               1e3 * d.readback_s / n, 1e3 * (wall - d.physics_s - d.control_s - d.render_s - d.readback_s) / n, resets);
@@ -71,19 +74,36 @@ void run(const PipeFollowingConfig& cfg, int num_envs, int steps) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  const std::string path = argc > 1 ? argv[1] : unav::common::find_resource("config/learning/pipe_following.yaml");
-  const int steps = argc > 2 ? std::atoi(argv[2]) : 60;
-  const int num_envs = argc > 3 ? std::atoi(argv[3]) : 4;
-  PipeFollowingConfig cfg = load_pipe_following_config(path);
-  if (argc > 5) {
-    cfg.episode.image_width = std::atoi(argv[4]);
-    cfg.episode.image_height = std::atoi(argv[5]);
+  std::string path;
+  int steps = 60, num_envs = 4;
+  std::vector<std::string> dynamics{"kinematic", "mpc"};
+  std::vector<std::pair<std::string, std::string>> overrides;
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    const bool has_value = i + 1 < argc;
+    if (a == "--config" && has_value) {
+      path = argv[++i];
+    } else if (a == "--steps" && has_value) {
+      steps = std::atoi(argv[++i]);
+    } else if (a == "--envs" && has_value) {
+      num_envs = std::atoi(argv[++i]);
+    } else if (a == "--dynamics" && has_value) {
+      dynamics = {argv[++i]};
+    } else if (a.find('=') != std::string::npos) {
+      overrides.emplace_back(a.substr(0, a.find('=')), a.substr(a.find('=') + 1));
+    } else {
+      std::fprintf(stderr, "usage: bench_pipe_env [--config F] [--steps N] [--envs N] [--dynamics D] [key=value ...]\n");
+      return 2;
+    }
   }
+  if (path.empty()) path = unav::common::find_resource("config/learning/pipe_following.yaml");
+  PipeFollowingConfig cfg = load_pipe_following_config(path);
+  for (const auto& [k, v] : overrides) apply_override(&cfg, k, v, "command line");
   std::printf("pipe-following env throughput (%s), expert actions, random scenes\n", path.c_str());
-  for (const char* dyn : {"kinematic", "mpc"}) {
+  for (const auto& dyn : dynamics) {
     cfg.env.dynamics = dyn;
     run(cfg, 1, steps);
-    run(cfg, num_envs, steps);
+    if (num_envs > 1) run(cfg, num_envs, steps);
   }
   return 0;
 }

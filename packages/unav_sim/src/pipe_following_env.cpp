@@ -2,7 +2,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <exception>
+#include <mutex>
 #include <random>
+#include <thread>
 
 #include "unav_common/errors.hpp"
 #include "unav_common/resources.hpp"
@@ -228,8 +231,11 @@ PipeFollowingInfo PipeFollowingEnv::measure() const {
 
 PipeFollowingInfo PipeFollowingEnv::info() const { return measure(); }
 
-VectorPipeFollowingEnv::VectorPipeFollowingEnv(const PipeFollowingConfig& config, int num_envs) {
+VectorPipeFollowingEnv::VectorPipeFollowingEnv(const PipeFollowingConfig& config, int num_envs, int num_threads) {
   if (num_envs < 1) throw ConfigError("vector env", "num_envs", std::to_string(num_envs), "must be >= 1");
+  if (num_threads < 0) throw ConfigError("vector env", "num_threads", std::to_string(num_threads), "must be >= 0");
+  threads_ = num_threads > 0 ? num_threads : std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
+  threads_ = std::min(threads_, num_envs);
   std::shared_ptr<unav_renderer::EglContext> ctx;
   for (int i = 0; i < num_envs; ++i) {
     envs_.push_back(std::make_unique<PipeFollowingEnv>(config, ctx));
@@ -244,7 +250,33 @@ std::vector<PipeFollowingStep> VectorPipeFollowingEnv::step(const std::vector<st
                                 " actions for " + std::to_string(envs_.size()) + " environments");
   std::vector<PipeFollowingStep> out;
   out.reserve(envs_.size());
-  for (std::size_t i = 0; i < envs_.size(); ++i) out.push_back(envs_[i]->act(actions[i]));
+  out.resize(envs_.size());
+  // Env i's dynamics touch only env i (simulator, MPC, allocator): threads take every
+  // threads_-th env; the results do not depend on the thread count.
+  auto work = [&](std::size_t first) {
+    for (std::size_t i = first; i < envs_.size(); i += static_cast<std::size_t>(threads_))
+      out[i] = envs_[i]->act(actions[i]);
+  };
+  std::vector<std::thread> pool;
+  std::exception_ptr error;
+  std::mutex error_mutex;
+  for (int t = 1; t < threads_; ++t)
+    pool.emplace_back([&, t] {
+      try {
+        work(static_cast<std::size_t>(t));
+      } catch (...) {
+        const std::lock_guard<std::mutex> lock(error_mutex);
+        error = std::current_exception();
+      }
+    });
+  try {
+    work(0);
+  } catch (...) {
+    const std::lock_guard<std::mutex> lock(error_mutex);
+    error = std::current_exception();
+  }
+  for (auto& th : pool) th.join();
+  if (error) std::rethrow_exception(error);
   observe_all(observations);
   return out;
 }

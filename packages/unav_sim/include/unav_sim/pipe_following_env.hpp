@@ -157,11 +157,13 @@ class PipeFollowingEnv {
   bool pipe_end_ = false;
 };
 
-/// N environments stepped together in one process, sharing one EGL context: dynamics of each,
-/// then the N frames submitted before any is read back.
+/// N environments stepped together in one process, sharing one EGL context: the dynamics (MPC +
+/// physics) of the N envs on `num_threads` threads, then the N frames submitted before any is
+/// read back (rendering stays on the calling thread, which owns the context).
 class VectorPipeFollowingEnv {
  public:
-  VectorPipeFollowingEnv(const PipeFollowingConfig& config, int num_envs);
+  /// num_threads: 0 = std::thread::hardware_concurrency(); 1 = all on the calling thread.
+  VectorPipeFollowingEnv(const PipeFollowingConfig& config, int num_envs, int num_threads = 0);
   int size() const { return static_cast<int>(envs_.size()); }
   PipeFollowingEnv& env(int i) { return *envs_.at(static_cast<std::size_t>(i)); }
   /// act() on every env, then the N observations (concatenated, N x H x W x 3).
@@ -172,6 +174,7 @@ class VectorPipeFollowingEnv {
 
  private:
   std::vector<std::unique_ptr<PipeFollowingEnv>> envs_;
+  int threads_ = 1;
 };
 
 }  // namespace unav::sim
