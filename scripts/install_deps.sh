@@ -13,6 +13,8 @@ PKGS=(
   libyaml-cpp-dev libcli11-dev libspdlog-dev nlohmann-json3-dev
   libgtest-dev libgmock-dev libbenchmark-dev libsqlite3-dev
   clang-format clang-tidy
+  pybind11-dev python3-dev python3-venv python3-pytest python3-numpy python3-torch
+  python3-pandas python3-matplotlib python3-tqdm python3-rich python3-typing-extensions
 )
 missing=()
 for p in "${PKGS[@]}"; do
@@ -20,10 +22,40 @@ for p in "${PKGS[@]}"; do
 done
 if [ ${#missing[@]} -eq 0 ]; then
   echo "install_deps: all ${#PKGS[@]} Debian packages present"
-  exit 0
+else
+  SUDO=""
+  [ "$(id -u)" -eq 0 ] || SUDO="sudo"
+  echo "install_deps: installing ${#missing[@]} missing packages: ${missing[*]}"
+  $SUDO apt-get update -q
+  DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -q -o DPkg::Lock::Timeout=900 "${missing[@]}"
 fi
-SUDO=""
-[ "$(id -u)" -eq 0 ] || SUDO="sudo"
-echo "install_deps: installing ${#missing[@]} missing packages: ${missing[*]}"
-$SUDO apt-get update -q
-DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -q -o DPkg::Lock::Timeout=900 "${missing[@]}"
+
+# The learning stack: a venv made from Debian's Python with its site packages, so Debian's torch
+# (1.13, CPU) is used. Debian's torch reports version 1.13.0a0, which pip does not count as
+# >= 1.13: installing stable-baselines3 with its dependencies would pull a CUDA torch of several
+# GB from PyPI. So the PyPI packages are installed pinned and without dependencies; everything
+# else they import comes from the Debian packages above.
+VENV="${UNAV_VENV:-$(cd "$(dirname "$0")/.." && pwd)/.venv}"
+PY_PINS=(gymnasium==1.0.0 stable-baselines3==2.4.1 farama-notifications==0.0.4 cloudpickle==3.1.1)
+if [ ! -x "$VENV/bin/python" ]; then
+  echo "install_deps: creating the Python venv $VENV (from /usr/bin/python3, with system site packages)"
+  /usr/bin/python3 -m venv --system-site-packages "$VENV"
+fi
+if ! "$VENV/bin/python" - "${PY_PINS[@]}" <<'PYEOF'
+import sys
+from importlib.metadata import version, PackageNotFoundError
+for pin in sys.argv[1:]:
+    name, want = pin.split("==")
+    try:
+        if version(name) != want:
+            sys.exit(1)
+    except PackageNotFoundError:
+        sys.exit(1)
+PYEOF
+then
+  echo "install_deps: pip install --no-deps ${PY_PINS[*]}"
+  "$VENV/bin/pip" install -q --no-deps "${PY_PINS[@]}"
+fi
+"$VENV/bin/python" -c "import gymnasium, stable_baselines3, torch, pandas, tqdm, rich" \
+  || { echo "install_deps: the venv $VENV cannot import the learning stack"; exit 1; }
+echo "install_deps: Python venv $VENV ready (gymnasium, stable-baselines3 over Debian's torch)"

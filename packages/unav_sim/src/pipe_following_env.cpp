@@ -9,6 +9,7 @@
 
 #include "unav_common/errors.hpp"
 #include "unav_common/resources.hpp"
+#include "unav_control/pipe_action.hpp"
 
 namespace unav::sim {
 namespace {
@@ -146,11 +147,9 @@ PipeFollowingInfo PipeFollowingEnv::reset(std::uint64_t seed) {
 std::pair<Eigen::Vector3d, double> PipeFollowingEnv::waypoint_for(const std::array<double, 2>& a) const {
   const PipeFollowingParams& p = config_.env;
   const auto& x = episode_->state();
-  const double yaw = yaw_of(x.q_WB);
-  const double dir = yaw + a[0] * p.max_step_angle_deg * kDeg;
-  Eigen::Vector3d wp = x.p_WB_W + p.step_length_m * Eigen::Vector3d(std::cos(dir), std::sin(dir), 0.0);
-  wp.z() = hold_depth_;
-  return {wp, wrap(yaw + a[1] * p.max_turn_deg * kDeg)};
+  const control::PoseSetpoint sp = control::waypoint_from_action(
+      x.p_WB_W, yaw_of(x.q_WB), a, {p.step_length_m, p.max_step_angle_deg, p.max_turn_deg}, hold_depth_);
+  return {sp.p_W, yaw_of(sp.q_WB)};
 }
 
 PipeFollowingStep PipeFollowingEnv::act(const std::array<double, 2>& action) {
@@ -231,6 +230,14 @@ PipeFollowingInfo PipeFollowingEnv::measure() const {
 
 PipeFollowingInfo PipeFollowingEnv::info() const { return measure(); }
 
+void PipeFollowingEnv::set_option(const std::string& key, const std::string& yaml_value) {
+  if (key == "scenes" || key == "world" || key == "camera")
+    throw ConfigError("reset options", key, yaml_value, "fixed when the environment is made (pass it to make())");
+  PipeFollowingParams p = config_.env;
+  unav::common::ApplyOverride(&p, key, yaml_value, "reset options");
+  config_.env = p;
+}
+
 VectorPipeFollowingEnv::VectorPipeFollowingEnv(const PipeFollowingConfig& config, int num_envs, int num_threads) {
   if (num_envs < 1) throw ConfigError("vector env", "num_envs", std::to_string(num_envs), "must be >= 1");
   if (num_threads < 0) throw ConfigError("vector env", "num_threads", std::to_string(num_threads), "must be >= 0");
@@ -243,8 +250,12 @@ VectorPipeFollowingEnv::VectorPipeFollowingEnv(const PipeFollowingConfig& config
   }
 }
 
-std::vector<PipeFollowingStep> VectorPipeFollowingEnv::step(const std::vector<std::array<double, 2>>& actions,
-                                                            std::vector<std::uint8_t>* observations) {
+std::vector<PipeFollowingStep> VectorPipeFollowingEnv::step(
+    const std::vector<std::array<double, 2>>& actions, std::vector<std::uint8_t>* observations,
+    const std::vector<std::optional<std::uint64_t>>& resets) {
+  if (!resets.empty() && resets.size() != envs_.size())
+    throw std::invalid_argument("VectorPipeFollowingEnv::step: " + std::to_string(resets.size()) +
+                                " reset entries for " + std::to_string(envs_.size()) + " environments");
   if (actions.size() != envs_.size())
     throw std::invalid_argument("VectorPipeFollowingEnv::step: " + std::to_string(actions.size()) +
                                 " actions for " + std::to_string(envs_.size()) + " environments");
@@ -255,7 +266,7 @@ std::vector<PipeFollowingStep> VectorPipeFollowingEnv::step(const std::vector<st
   // threads_-th env; the results do not depend on the thread count.
   auto work = [&](std::size_t first) {
     for (std::size_t i = first; i < envs_.size(); i += static_cast<std::size_t>(threads_))
-      out[i] = envs_[i]->act(actions[i]);
+      if (resets.empty() || !resets[i]) out[i] = envs_[i]->act(actions[i]);
   };
   std::vector<std::thread> pool;
   std::exception_ptr error;
@@ -277,6 +288,9 @@ std::vector<PipeFollowingStep> VectorPipeFollowingEnv::step(const std::vector<st
   }
   for (auto& th : pool) th.join();
   if (error) std::rethrow_exception(error);
+  // Resets upload a new scene: GL work, on this (the context's) thread.
+  for (std::size_t i = 0; i < resets.size(); ++i)
+    if (resets[i]) out[i].info = envs_[i]->reset(*resets[i]);
   observe_all(observations);
   return out;
 }

@@ -18,6 +18,7 @@
 #include <cstdint>
 #include <map>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -142,6 +143,11 @@ class PipeFollowingEnv {
   std::pair<Eigen::Vector3d, double> waypoint_for(const std::array<double, 2>& action) const;
   PipeFollowingInfo info() const;
 
+  /// Sets an env parameter for the next reset() ("max_steps", "start_offset_m", "split", ...;
+  /// gymnasium reset options). Unknown keys, bad values and the keys fixed at construction
+  /// (scenes, world, camera) throw ConfigError naming the key.
+  void set_option(const std::string& key, const std::string& yaml_value);
+
   const PipeFollowingConfig& config() const { return config_; }
   Episode& episode() { return *episode_; }
 
@@ -166,9 +172,12 @@ class VectorPipeFollowingEnv {
   VectorPipeFollowingEnv(const PipeFollowingConfig& config, int num_envs, int num_threads = 0);
   int size() const { return static_cast<int>(envs_.size()); }
   PipeFollowingEnv& env(int i) { return *envs_.at(static_cast<std::size_t>(i)); }
-  /// act() on every env, then the N observations (concatenated, N x H x W x 3).
+  /// act() on every env, then the N observations (concatenated, N x H x W x 3). `resets`
+  /// (empty, or one entry per env): a seed resets that env instead of acting (its step has
+  /// reward 0, no flags, the reset's info): gymnasium's next-step autoreset.
   std::vector<PipeFollowingStep> step(const std::vector<std::array<double, 2>>& actions,
-                                      std::vector<std::uint8_t>* observations);
+                                      std::vector<std::uint8_t>* observations,
+                                      const std::vector<std::optional<std::uint64_t>>& resets = {});
   /// observe() of every env into one N x H x W x 3 buffer.
   void observe_all(std::vector<std::uint8_t>* observations);
 
