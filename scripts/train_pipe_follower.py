@@ -124,7 +124,10 @@ def main() -> int:
     else:
         model = PPO("CnnPolicy", venv, n_steps=args.n_steps, batch_size=256, n_epochs=4, learning_rate=args.lr,
                     gamma=0.95, gae_lambda=0.9, clip_range=0.1, ent_coef=0.0,
-                    policy_kwargs=dict(log_std_init=-1.5), seed=args.seed, device="cpu", verbose=0)
+                    # Separate CNNs for actor and critic: value targets (~100) would otherwise push
+                    # the shared features away from what behaviour cloning taught the actor.
+                    policy_kwargs=dict(log_std_init=-1.5, share_features_extractor=False),
+                    seed=args.seed, device="cpu", verbose=0)
         run_eval(model, 0)
         if args.bc_steps > 0:
             t = time.time()
@@ -148,8 +151,9 @@ def main() -> int:
             return True
 
     def set_actor_trainable(trainable: bool) -> None:
+        critic = ("value_net", "mlp_extractor.value_net", "vf_features_extractor")
         for name, param in model.policy.named_parameters():
-            if not name.startswith("value_net") and not name.startswith("mlp_extractor.value_net"):
+            if not name.startswith(critic):
                 param.requires_grad_(trainable)
 
     warmup = 0 if args.resume else min(args.critic_warmup, args.steps)

@@ -27,9 +27,14 @@ FLOORS = {
     # floor 3: capabilities (DDS-free cores + their thin nodes)
     "unav_renderer": 3, "unav_control": 3, "unav_localization": 3, "unav_evaluation": 3,
     "unav_datagen": 3,
-    # floor 4: tools, launch, resources, examples, system tests
-    "unav_cli": 4, "unav_examples": 4, "unav_resources": 4,
-    "unav_system_tests": 4,
+    # floor 4: in-process composition of capabilities (episode, environment core)
+    "unav_sim": 4,
+    # floor 5: what embeds the composition: the Gymnasium binding, the planners (whose tests fly
+    # them in the environment core)
+    "unav_gym": 5, "unav_planning": 5,
+    # floor 6: tools, launch, resources, examples, system tests
+    "unav_cli": 6, "unav_examples": 6, "unav_resources": 6,
+    "unav_system_tests": 6,
 }
 # Allowed arrows within one floor (a capability reusing another's DDS-free core).
 SAME_FLOOR_OK = set()  # (src, dst) pairs; none today
@@ -41,7 +46,7 @@ PENDING = {}
 FRAMEWORK = {"unav_runtime", "unav_introspection", "unav_launch", "unav_cli", "unav_examples", "unav_common",
              "unav_cmake", "unav_resources"}
 CAPABILITIES = {"unav_physics", "unav_scene", "unav_renderer", "unav_control", "unav_localization",
-                "unav_evaluation", "unav_datagen"}
+                "unav_evaluation", "unav_datagen", "unav_sim", "unav_gym", "unav_planning"}
 # Headers a DDS-free core must never include.
 FORBIDDEN_IN_CORE = re.compile(
     r'#\s*include\s*[<"](unav_runtime/|unav_launch/|unav_introspection/|fastdds/|fastrtps/|fastcdr/|'

@@ -1,4 +1,8 @@
 #include "trajectory_evaluator.hpp"
+#include "unav_scene/pipe_tracking.hpp"
+
+#include <fstream>
+#include <nlohmann/json.hpp>
 
 #include <sys/file.h>
 
@@ -83,6 +87,14 @@ TrajectoryEvaluator::TrajectoryEvaluator(const unav::NodeOptions& options)
   const std::string cams_path = declare_parameter<std::string>(
       "cameras_config", "", {"camera YAML with `camera` (empty: the mount comes from /tf_static)", {}, {}, false});
   body_frame_ = declare_parameter<std::string>("body_frame", "base_link_frd", {"vehicle body frame", {}, {}, false});
+  const std::string pipe_world = declare_parameter<std::string>(
+      "pipeline_world", "", {"world.yaml: also report cross-track error along its first pipeline", {}, {}, false});
+  pipe_loss_m_ =
+      declare_parameter<double>("pipe_loss_distance", 2.5, {"pipe lost beyond this e_p [m]", 0.01, 100.0, false});
+  if (!pipe_world.empty()) {
+    pipe_world_ = std::make_unique<unav::scene::World>(unav::scene::load_world(pipe_world));
+    if (pipe_world_->pipelines.empty()) throw unav::ConfigError("pipeline_world '" + pipe_world + "' has no pipeline");
+  }
   if (!camera.empty() && cams_path.empty()) {
     // The mount's owner (the renderer) publishes it once, latched: look it up like tf2 does.
     camera_frame_ = camera + "_optical";
@@ -141,6 +153,7 @@ std::vector<AlgorithmResult> TrajectoryEvaluator::write_outputs() {
         body_frame_, camera_frame_);
   }
   const std::string prefix = output_dir_ + "/" + (combine_ ? trajectory_name_ + "_" : "");
+  if (pipe_world_) write_pipe_tracking(prefix + "pipe_tracking.json");
   // Ground truth of the frame the estimators report (the body, or a camera on it).
   Trajectory truth = ground_truth_;
   for (auto& X : truth.poses) X = X * X_BE_;
@@ -192,6 +205,28 @@ std::vector<AlgorithmResult> TrajectoryEvaluator::write_outputs() {
   }
   logger()->info("evaluation written to {}", output_dir_);
   return results;
+}
+
+void TrajectoryEvaluator::write_pipe_tracking(const std::string& path) {
+  std::vector<Eigen::Vector3d> p;
+  for (const auto& X : ground_truth_.poses) p.push_back(X.translation());
+  const unav::scene::PipeTracking t = unav::scene::track_pipe(*pipe_world_, p, pipe_loss_m_);
+  nlohmann::json j{{"trajectory", trajectory_name_},
+                   {"poses", ground_truth_.size()},
+                   {"duration_s", ground_truth_.stamps.back() - ground_truth_.stamps.front()},
+                   {"mean_e_p_m", t.mean_e_p_m},
+                   {"rms_e_p_m", t.rms_e_p_m},
+                   {"max_e_p_m", t.max_e_p_m},
+                   {"followed_m", t.followed_m},
+                   {"pipe_length_m", t.pipe_length_m},
+                   {"followed_fraction", t.followed_fraction},
+                   {"lost", t.lost},
+                   {"loss_distance_m", pipe_loss_m_}};
+  if (t.lost) j["lost_at_s"] = ground_truth_.stamps[static_cast<std::size_t>(t.lost_at_index)];
+  std::ofstream(path) << j.dump(2) << "\n";
+  logger()->info("pipe tracking: mean e_p {:.3f} m, max {:.3f} m, followed {:.1f} of {:.1f} m ({:.0f} %){}",
+                 t.mean_e_p_m, t.max_e_p_m, t.followed_m, t.pipe_length_m, 100.0 * t.followed_fraction,
+                 t.lost ? ", pipe lost" : "");
 }
 
 }  // namespace unav_evaluation

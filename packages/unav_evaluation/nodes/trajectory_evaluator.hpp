@@ -16,7 +16,10 @@
 //         <camera>_optical is looked up on /tf_static, where the renderer publishes it, or read
 //         from cameras_config when that YAML is given), body_frame (default base_link_frd),
 //         combine (several runs share output_dir: files are prefixed with trajectory_name and
-//         results.md/csv/json hold the rows of every run, kept in rows/<trajectory_name>.tsv).
+//         results.md/csv/json hold the rows of every run, kept in rows/<trajectory_name>.tsv),
+//         pipeline_world (world.yaml: also writes pipe_tracking.json, the cross-track error e_p
+//         of the ground truth along its first pipeline and the length followed before e_p first
+//         exceeded pipe_loss_distance, default 2.5 m: the pipe-following figures).
 #pragma once
 
 #include <map>
@@ -29,6 +32,7 @@
 #include "tf2_msgs/msg/tf_message.hpp"
 #include "unav_evaluation/report.hpp"
 #include "unav_runtime/runtime.hpp"
+#include "unav_scene/world.hpp"
 
 namespace unav_evaluation {
 
@@ -40,6 +44,12 @@ class TrajectoryEvaluator : public unav::Node {
   std::vector<AlgorithmResult> write_outputs();
 
  private:
+  void write_pipe_tracking(const std::string& path);
+  std::unique_ptr<unav::scene::World> pipe_world_;
+  double pipe_loss_m_ = 2.5;
+
+ public:
+ private:
   std::string output_dir_, trajectory_name_;
   Alignment alignment_ = Alignment::kSim3;
   RpeOptions rpe_;
@@ -47,8 +57,8 @@ class TrajectoryEvaluator : public unav::Node {
   bool written_ = false, combine_ = false;
   Trajectory ground_truth_;
   Eigen::Isometry3d X_BE_ = Eigen::Isometry3d::Identity();  ///< estimated frame on the body
-  std::string camera_frame_, body_frame_;  ///< tf lookup of X_BE_ (camera_frame_ empty: not needed)
-  bool have_mount_ = true;                 ///< false until the camera mount is known
+  std::string camera_frame_, body_frame_;                   ///< tf lookup of X_BE_ (camera_frame_ empty: not needed)
+  bool have_mount_ = true;                                  ///< false until the camera mount is known
   std::shared_ptr<unav::Subscription<tf2_msgs::msg::TFMessage>> tf_static_sub_;
   std::map<std::string, Trajectory> estimates_, paths_;
   std::vector<std::shared_ptr<unav::Subscription<nav_msgs::msg::Odometry>>> subs_;

@@ -76,17 +76,17 @@ PYBIND11_MODULE(_core, m) {
       PyErr_SetString(PyExc_ValueError, e.what());
     }
   });
-  m.def("default_config", [] { return unav::common::find_resource("config/learning/pipe_following.yaml"); },
-        "Path of the installed config/learning/pipe_following.yaml.");
+  m.def(
+      "default_config", [] { return unav::common::find_resource("config/learning/pipe_following.yaml"); },
+      "Path of the installed config/learning/pipe_following.yaml.");
 
   py::class_<PipeFollowingEnv>(m, "PipeFollowingCore")
       .def(py::init([](const std::string& config, const std::map<std::string, std::string>& overrides) {
              return std::make_unique<PipeFollowingEnv>(make_config(config, overrides));
            }),
            py::arg("config") = "", py::arg("overrides") = std::map<std::string, std::string>{})
-      .def_property_readonly("obs_shape", [](const PipeFollowingEnv& e) {
-        return py::make_tuple(e.obs_height(), e.obs_width(), 3);
-      })
+      .def_property_readonly("obs_shape",
+                             [](const PipeFollowingEnv& e) { return py::make_tuple(e.obs_height(), e.obs_width(), 3); })
       .def("set_option", &PipeFollowingEnv::set_option)
       .def("reset",
            [](PipeFollowingEnv& e, std::uint64_t seed) {
@@ -125,12 +125,13 @@ PYBIND11_MODULE(_core, m) {
            py::arg("num_envs"), py::arg("config") = "", py::arg("overrides") = std::map<std::string, std::string>{},
            py::arg("num_threads") = 0)
       .def_property_readonly("num_envs", &VectorPipeFollowingEnv::size)
-      .def_property_readonly("obs_shape", [](VectorPipeFollowingEnv& v) {
-        return py::make_tuple(v.env(0).obs_height(), v.env(0).obs_width(), 3);
-      })
-      .def("set_option", [](VectorPipeFollowingEnv& v, const std::string& k, const std::string& value) {
-        for (int i = 0; i < v.size(); ++i) v.env(i).set_option(k, value);
-      })
+      .def_property_readonly(
+          "obs_shape",
+          [](VectorPipeFollowingEnv& v) { return py::make_tuple(v.env(0).obs_height(), v.env(0).obs_width(), 3); })
+      .def("set_option",
+           [](VectorPipeFollowingEnv& v, const std::string& k, const std::string& value) {
+             for (int i = 0; i < v.size(); ++i) v.env(i).set_option(k, value);
+           })
       .def("reset",
            [](VectorPipeFollowingEnv& v, const std::vector<std::uint64_t>& seeds) {
              if (static_cast<int>(seeds.size()) != v.size())
@@ -176,33 +177,34 @@ PYBIND11_MODULE(_core, m) {
                                   truncated, infos);
           },
           py::arg("actions"), py::arg("resets") = std::vector<std::optional<std::uint64_t>>{})
-      .def("reset_some",
-           [](VectorPipeFollowingEnv& v, const std::vector<std::optional<std::uint64_t>>& seeds) {
-             if (static_cast<int>(seeds.size()) != v.size())
-               throw py::value_error("reset_some: " + std::to_string(seeds.size()) + " entries for " +
-                                     std::to_string(v.size()) + " environments");
-             const int h = v.env(0).obs_height(), w = v.env(0).obs_width();
-             const std::size_t frame = static_cast<std::size_t>(h) * w * 3;
-             std::vector<std::uint8_t> obs(frame * seeds.size(), 0);
-             std::vector<std::optional<PipeFollowingInfo>> infos(seeds.size());
-             {
-               py::gil_scoped_release nogil;
-               for (std::size_t i = 0; i < seeds.size(); ++i)
-                 if (seeds[i]) {
-                   infos[i] = v.env(static_cast<int>(i)).reset(*seeds[i]);
-                   v.env(static_cast<int>(i)).submit_observation();
-                 }
-               for (std::size_t i = 0; i < seeds.size(); ++i)
-                 if (seeds[i]) {
-                   const auto o = v.env(static_cast<int>(i)).collect_observation();
-                   std::copy(o.begin(), o.end(), obs.begin() + static_cast<std::ptrdiff_t>(i * frame));
-                 }
-             }
-             py::list li;
-             for (const auto& i : infos) li.append(i ? py::object(to_dict(*i)) : py::object(py::none()));
-             return py::make_tuple(image(obs, v.size(), h, w), li);
-           },
-           "Resets the envs with a seed (None: untouched); their first observations (others zero).")
+      .def(
+          "reset_some",
+          [](VectorPipeFollowingEnv& v, const std::vector<std::optional<std::uint64_t>>& seeds) {
+            if (static_cast<int>(seeds.size()) != v.size())
+              throw py::value_error("reset_some: " + std::to_string(seeds.size()) + " entries for " +
+                                    std::to_string(v.size()) + " environments");
+            const int h = v.env(0).obs_height(), w = v.env(0).obs_width();
+            const std::size_t frame = static_cast<std::size_t>(h) * w * 3;
+            std::vector<std::uint8_t> obs(frame * seeds.size(), 0);
+            std::vector<std::optional<PipeFollowingInfo>> infos(seeds.size());
+            {
+              py::gil_scoped_release nogil;
+              for (std::size_t i = 0; i < seeds.size(); ++i)
+                if (seeds[i]) {
+                  infos[i] = v.env(static_cast<int>(i)).reset(*seeds[i]);
+                  v.env(static_cast<int>(i)).submit_observation();
+                }
+              for (std::size_t i = 0; i < seeds.size(); ++i)
+                if (seeds[i]) {
+                  const auto o = v.env(static_cast<int>(i)).collect_observation();
+                  std::copy(o.begin(), o.end(), obs.begin() + static_cast<std::ptrdiff_t>(i * frame));
+                }
+            }
+            py::list li;
+            for (const auto& i : infos) li.append(i ? py::object(to_dict(*i)) : py::object(py::none()));
+            return py::make_tuple(image(obs, v.size(), h, w), li);
+          },
+          "Resets the envs with a seed (None: untouched); their first observations (others zero).")
       .def("expert_actions", [](VectorPipeFollowingEnv& v) {
         py::array_t<double> a({static_cast<py::ssize_t>(v.size()), py::ssize_t{2}});
         for (int i = 0; i < v.size(); ++i) {

@@ -14,19 +14,17 @@
 #include <stdexcept>
 #include <unordered_map>
 
-#include "unav_scene/noise.hpp"
 #include "shaders.hpp"
 #include "textures.hpp"
 #include "unav_renderer/errors.hpp"
+#include "unav_scene/noise.hpp"
 #include "unav_scene/scene_geometry.hpp"
 
 namespace unav_renderer {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-double ms_since(Clock::time_point t0) {
-  return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
-}
+double ms_since(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
 
 void check_gl(const char* where) {
   const GLenum e = glGetError();
@@ -115,7 +113,7 @@ struct Targets {
   // by a margin when distortion pulls in pixels from outside the undistorted field.
   CameraModel internal;
   int margin_x = 0, margin_y = 0;
-  int width = 0, height = 0;     // internal size
+  int width = 0, height = 0;  // internal size
   int out_width = 0, out_height = 0;
   int is_width = 0, is_height = 0, is_scale = 1;
   GLuint is_fbo = 0, is_tex = 0;
@@ -128,7 +126,7 @@ struct Slot {
   GLuint pbo_rgba = 0, pbo_depth = 0;
   std::size_t capacity_px = 0;
   GLsync fence = nullptr;
-  Frame meta;   // everything but the pixels
+  Frame meta;  // everything but the pixels
 };
 
 GLuint make_tex(GLenum internal, int w, int h, GLenum format, GLenum type, GLenum filter) {
@@ -154,7 +152,7 @@ double luminance(const Eigen::Vector3d& c) { return 0.2126 * c.x() + 0.7152 * c.
 }  // namespace
 
 struct Renderer::Impl {
-  std::shared_ptr<EglContext> ctx;   // shared by every Renderer made with the same context
+  std::shared_ptr<EglContext> ctx;  // shared by every Renderer made with the same context
   World world;
   std::vector<CameraModel> cameras;
   RenderOptions options;
@@ -167,7 +165,7 @@ struct Renderer::Impl {
   GLuint empty_vao = 0;
   std::map<std::string, Targets> targets;
   std::vector<Slot> slots;
-  std::deque<std::size_t> in_flight;   // slot indices, oldest first
+  std::deque<std::size_t> in_flight;  // slot indices, oldest first
   std::size_t next_slot = 0;
   std::deque<Frame> done;
   std::uint64_t sequence = 0;
@@ -185,7 +183,7 @@ struct Renderer::Impl {
   void self_test();
   void upload_scene(const SceneGeometry& geo);
   void upload_snow();
-  void release_scene();   // meshes and marine-snow buffers (set_world, destructor)
+  void release_scene();  // meshes and marine-snow buffers (set_world, destructor)
   GLuint texture(const std::string& name);
   Targets& targets_for(const CameraModel& c);
   struct FrameSetup;
@@ -227,8 +225,8 @@ void Renderer::Impl::self_test() {
   const int r = px[4 * 27], g = px[4 * 27 + 1], b = px[4 * 27 + 2];
   if (std::abs(r - 64) > 2 || std::abs(g - 128) > 2 || std::abs(b - 191) > 2)
     throw GlError("OpenGL context on '" + ctx->gl_renderer() + "' (" + ctx->platform() +
-                  ") renders nothing usable: read back (" + std::to_string(r) + ", " +
-                  std::to_string(g) + ", " + std::to_string(b) + ") instead of (64, 128, 191)");
+                  ") renders nothing usable: read back (" + std::to_string(r) + ", " + std::to_string(g) + ", " +
+                  std::to_string(b) + ") instead of (64, 128, 191)");
 }
 
 GLuint Renderer::Impl::texture(const std::string& name) {
@@ -267,15 +265,14 @@ void Renderer::Impl::upload_scene(const SceneGeometry& geo) {
     const int comps[3] = {3, 3, 2};
     for (int a = 0; a < 3; ++a) {
       glBindBuffer(GL_ARRAY_BUFFER, g.vbo[a]);
-      glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(attr[a]->size() * sizeof(float)),
-                   attr[a]->data(), GL_STATIC_DRAW);
+      glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(attr[a]->size() * sizeof(float)), attr[a]->data(),
+                   GL_STATIC_DRAW);
       glEnableVertexAttribArray(static_cast<GLuint>(a));
       glVertexAttribPointer(static_cast<GLuint>(a), comps[a], GL_FLOAT, GL_FALSE, 0, nullptr);
     }
     glGenBuffers(1, &g.ebo);
     glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, g.ebo);
-    glBufferData(GL_ELEMENT_ARRAY_BUFFER,
-                 static_cast<GLsizeiptr>(sm.mesh.indices.size() * sizeof(std::uint32_t)),
+    glBufferData(GL_ELEMENT_ARRAY_BUFFER, static_cast<GLsizeiptr>(sm.mesh.indices.size() * sizeof(std::uint32_t)),
                  sm.mesh.indices.data(), GL_STATIC_DRAW);
     g.index_count = static_cast<GLsizei>(sm.mesh.indices.size());
     glBindVertexArray(0);
@@ -345,8 +342,8 @@ Targets& Renderer::Impl::targets_for(const CameraModel& c) {
   glBindFramebuffer(GL_FRAMEBUFFER, t.scene_fbo);
   t.scene_color = make_tex(GL_RGBA16F, t.width, t.height, GL_RGBA, GL_FLOAT, GL_LINEAR);
   glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR_MIPMAP_LINEAR);
-  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAX_LEVEL, 5);   // blur radius <= 16 px
-  glGenerateMipmap(GL_TEXTURE_2D);   // allocate the chain (forward-scatter blur)
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAX_LEVEL, 5);  // blur radius <= 16 px
+  glGenerateMipmap(GL_TEXTURE_2D);                          // allocate the chain (forward-scatter blur)
   t.scene_zc = make_tex(GL_R32F, t.width, t.height, GL_RED, GL_FLOAT, GL_NEAREST);
   t.scene_depth = make_tex(GL_DEPTH_COMPONENT32F, t.width, t.height, GL_DEPTH_COMPONENT, GL_FLOAT, GL_NEAREST);
   glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, t.scene_color, 0);
@@ -467,7 +464,6 @@ void Renderer::Impl::scene_pass(const Targets& t, const FrameSetup& f) {
     glBindVertexArray(m.vao);
     glDrawElements(GL_TRIANGLES, m.index_count, GL_UNSIGNED_INT, nullptr);
   }
-
 }
 
 // Marine snow: additive into the colour only (depth and segmentation untouched).
@@ -504,7 +500,6 @@ void Renderer::Impl::snow_pass(const FrameSetup& f, const CameraModel& c, double
     glColorMaski(1, GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
     glDepthMask(GL_TRUE);
   }
-
 }
 
 // Lamp in-scattering at low resolution (and the forward-scatter mip chain). Returns whether
@@ -526,8 +521,8 @@ bool Renderer::Impl::inscatter_pass(const Targets& t, const FrameSetup& f, const
     glActiveTexture(GL_TEXTURE0);
     glUniform1i(inscatter["u_color"], 0);
     glUniform1i(inscatter["u_depth"], 1);
-    glUniform4f(inscatter["u_K"], static_cast<float>(c.fx), static_cast<float>(c.fy),
-                static_cast<float>(c.cx), static_cast<float>(c.cy));
+    glUniform4f(inscatter["u_K"], static_cast<float>(c.fx), static_cast<float>(c.fy), static_cast<float>(c.cx),
+                static_cast<float>(c.cy));
     glUniform2i(inscatter["u_size"], t.width, t.height);
     glUniform1f(inscatter["u_scale"], static_cast<float>(t.is_scale));
     set3(inscatter["u_betaD"], water.beta_D);
@@ -589,13 +584,14 @@ void Renderer::Impl::post_pass(const Targets& t, const FrameSetup& f, const Came
   glUniform1f(post["u_blur_px_per_m"], static_cast<float>(water.forward_blur_rad_per_m * c.fx));
   double gain = c.exposure;
   if (options.auto_exposure) {
-    const Eigen::Vector3d Ed = (world.sun.surface_irradiance.array() * (-water.K_d.array() * std::max(0.0, f.cam_W.z())).exp()).matrix();
+    const Eigen::Vector3d Ed =
+        (world.sun.surface_irradiance.array() * (-water.K_d.array() * std::max(0.0, f.cam_W.z())).exp()).matrix();
     gain *= std::clamp(0.45 / std::max(luminance(Ed), 1e-6), 0.25, 5.0);
   }
   glUniform1f(post["u_gain"], static_cast<float>(gain));
   glUniform1f(post["u_noise_std"], options.noise ? static_cast<float>(c.noise_stddev) : 0.0f);
   glUniform1ui(post["u_seed"], static_cast<GLuint>(noise::hash32(static_cast<std::uint32_t>(options.seed) ^
-                                                                  static_cast<std::uint32_t>(seq * 2654435761ULL))));
+                                                                 static_cast<std::uint32_t>(seq * 2654435761ULL))));
   glUniform1i(post["u_srgb"], options.srgb_output ? 1 : 0);
   glBindVertexArray(empty_vao);
   glDrawArrays(GL_TRIANGLES, 0, 3);
@@ -740,7 +736,7 @@ void Renderer::set_world(World world) {
   const SceneGeometry geo = build_scene_geometry(world);
   world.water.validate("Renderer::set_world");
   I.ctx->make_current();
-  while (!I.in_flight.empty()) I.collect_oldest();   // frames of the old scene stay collectable
+  while (!I.in_flight.empty()) I.collect_oldest();  // frames of the old scene stay collectable
   I.release_scene();
   I.world = std::move(world);
   I.water = I.world.water;
@@ -818,7 +814,7 @@ std::size_t Renderer::in_flight() const { return impl_->in_flight.size() + impl_
 Frame Renderer::render(const Pose& X_WB, const std::string& camera, double stamp_s) {
   Impl& I = *impl_;
   I.ctx->make_current();
-  while (!I.in_flight.empty()) I.collect_oldest();   // keep earlier async frames for collect()
+  while (!I.in_flight.empty()) I.collect_oldest();  // keep earlier async frames for collect()
   submit(X_WB, camera, stamp_s);
   I.collect_oldest();
   Frame f = std::move(I.done.back());
@@ -852,16 +848,13 @@ const EglContext& Renderer::context() const { return *impl_->ctx; }
 std::shared_ptr<EglContext> Renderer::shared_context() const { return impl_->ctx; }
 RenderTimings Renderer::last_timings() const { return impl_->timings; }
 std::size_t Renderer::triangle_count() const { return impl_->triangles; }
-Pose Renderer::camera_pose(const Pose& X_WB, const std::string& camera) const {
-  return X_WB * impl_->cam(camera).X_BC;
-}
+Pose Renderer::camera_pose(const Pose& X_WB, const std::string& camera) const { return X_WB * impl_->cam(camera).X_BC; }
 
 void write_png_rgb(const Frame& frame, const std::string& path) {
   cv::Mat rgb(frame.height, frame.width, CV_8UC3, const_cast<std::uint8_t*>(frame.rgb.data()));
   cv::Mat bgr;
   cv::cvtColor(rgb, bgr, cv::COLOR_RGB2BGR);
-  if (!cv::imwrite(path, bgr, {cv::IMWRITE_PNG_COMPRESSION, 9}))
-    throw ConfigError(path + ": cannot write PNG");
+  if (!cv::imwrite(path, bgr, {cv::IMWRITE_PNG_COMPRESSION, 9})) throw ConfigError(path + ": cannot write PNG");
 }
 
 std::vector<std::uint8_t> read_png_rgb(const std::string& path, int* width, int* height) {

@@ -27,12 +27,14 @@ void fill_image(sensor_msgs::msg::Image& m, int w, int h, const char* encoding, 
 
 UnderwaterRendererNode::UnderwaterRendererNode(const unav::NodeOptions& options)
     : Node("underwater_renderer", options, "rov") {
-  const std::string world_path = declare_parameter<std::string>(
-      "world", resource("worlds/pipe_inspection/world.yaml"), {"world.yaml path", {}, {}, false});
+  const std::string world_path = declare_parameter<std::string>("world", resource("worlds/pipe_inspection/world.yaml"),
+                                                                {"world.yaml path", {}, {}, false});
   const std::string cameras_path = declare_parameter<std::string>(
       "cameras_config", resource("config/sensors/bluerov2_cameras.yaml"), {"camera YAML path", {}, {}, false});
   const std::string water = declare_parameter<std::string>(
       "water", "", {"Jerlov preset (I, II, 3C, ...) or water YAML path; empty = the world's", {}, {}, false});
+  const auto only = declare_parameter<std::vector<std::string>>(
+      "cameras", {}, {"cameras of cameras_config to render; [] = all", {}, {}, false});
   const double rate = declare_parameter<double>("rate", 10.0, {"frame rate per camera [Hz]", 0.01, 1000.0, false});
   lockstep_ = declare_parameter<bool>("lockstep", false, {"ack every odometry on /lockstep/ack", {}, {}, false});
   ack_name_ = declare_parameter<std::string>("lockstep_name", "renderer", {"participant name in acks", {}, {}, false});
@@ -45,7 +47,8 @@ UnderwaterRendererNode::UnderwaterRendererNode(const unav::NodeOptions& options)
   ro.seed = static_cast<std::uint64_t>(declare_parameter<int64_t>("seed", 1, {"noise seed", 0.0, {}, false}));
   period_ = 1.0 / rate;
   if (world_path.empty() || cameras_path.empty())
-    throw unav::ParameterError("node '" + name() + "': 'world' and 'cameras_config' are required (unav_resources "
+    throw unav::ParameterError("node '" + name() +
+                               "': 'world' and 'cameras_config' are required (unav_resources "
                                "is not installed, so there is no default)");
 
   World world;
@@ -53,6 +56,11 @@ UnderwaterRendererNode::UnderwaterRendererNode(const unav::NodeOptions& options)
   try {
     world = load_world(world_path);
     cams = load_cameras(cameras_path);
+    if (!only.empty()) {
+      std::vector<CameraModel> picked;
+      for (const auto& n : only) picked.push_back(load_camera(cameras_path, n));  // error lists the file's cameras
+      cams = std::move(picked);
+    }
     if (!water.empty())
       world.water = water.find('/') != std::string::npos || water.find(".yaml") != std::string::npos
                         ? load_water_file(water)
@@ -62,8 +70,8 @@ UnderwaterRendererNode::UnderwaterRendererNode(const unav::NodeOptions& options)
   }
   renderer_ = std::make_unique<Renderer>(std::move(world), cams, ro);
 
-  odom_sub_ = create_subscription<nav_msgs::msg::Odometry>(
-      "ground_truth/odom", unav::QoS::reliable(), [this](const nav_msgs::msg::Odometry& m) { on_odom(m); });
+  odom_sub_ = create_subscription<nav_msgs::msg::Odometry>("ground_truth/odom", unav::QoS::reliable(),
+                                                           [this](const nav_msgs::msg::Odometry& m) { on_odom(m); });
   if (lockstep_) acker_ = std::make_unique<unav::lockstep::Acker>(*this, ack_name_);  // answers every state
   const unav::QoS qos = unav::QoS::reliable(5);
   for (const auto& c : cams) {
@@ -93,8 +101,8 @@ UnderwaterRendererNode::UnderwaterRendererNode(const unav::NodeOptions& options)
   }
   // Camera mounts, published once and latched by their owner: ROS 2 tools (RViz, Foxglove, tf2)
   // and our estimators and evaluator look them up instead of reading the camera YAML.
-  const std::string body_frame =
-      declare_parameter<std::string>("body_frame", "base_link_frd", {"vehicle body frame (tf parent of the cameras)", {}, {}, false});
+  const std::string body_frame = declare_parameter<std::string>(
+      "body_frame", "base_link_frd", {"vehicle body frame (tf parent of the cameras)", {}, {}, false});
   tf_static_pub_ = create_publisher<tf2_msgs::msg::TFMessage>("/tf_static", unav::QoS::static_latched());
   tf2_msgs::msg::TFMessage mounts;
   for (const auto& c : cams)

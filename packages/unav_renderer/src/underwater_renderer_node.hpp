@@ -1,6 +1,7 @@
 // underwater_renderer: renders the vehicle's cameras at the poses the physics server publishes.
 //
-// Ports (relative to the node namespace, default /rov; <cam> = camera name from cameras_config):
+// Ports (relative to the node namespace, default /rov; <cam> = camera name from cameras_config,
+// all of them or those named in the `cameras` parameter):
 //   sub  ground_truth/odom                      nav_msgs/Odometry       reliable
 //   pub  camera/<cam>/image_raw                 sensor_msgs/Image       reliable, depth 5 (rgb8)
 //   pub  camera/<cam>/camera_info               sensor_msgs/CameraInfo  reliable, depth 5
@@ -23,8 +24,8 @@
 #include "sensor_msgs/msg/camera_info.hpp"
 #include "sensor_msgs/msg/image.hpp"
 #include "tf2_msgs/msg/tf_message.hpp"
-#include "unav_runtime/lockstep_ack.hpp"
 #include "unav_renderer/renderer.hpp"
+#include "unav_runtime/lockstep_ack.hpp"
 #include "unav_runtime/runtime.hpp"
 
 namespace unav_renderer {

@@ -7,14 +7,13 @@
 #include <fstream>
 #include <limits>
 
-#include "unav_scene/noise.hpp"
 #include "unav_scene/errors.hpp"
+#include "unav_scene/noise.hpp"
 #include "yaml_util.hpp"
 
 namespace unav::scene {
 namespace detail {
-WaterModel parse_water(const YamlCtx& c, const YAML::Node& node, const std::string& path,
-                       bool in_world);
+WaterModel parse_water(const YamlCtx& c, const YAML::Node& node, const std::string& path, bool in_world);
 }  // namespace detail
 
 namespace fs = std::filesystem;
@@ -40,15 +39,15 @@ double Seabed::depth_at(double n_m, double e_m) const {
     const int i = std::min(static_cast<int>(uc), hm_width - 2), j = std::min(static_cast<int>(vc), hm_height - 2);
     const double fu = uc - i, fv = vc - j;
     auto H = [&](int a, int b) { return static_cast<double>(hm_values[b * hm_width + a]); };
-    const double h = (H(i, j) * (1 - fu) + H(i + 1, j) * fu) * (1 - fv) +
-                     (H(i, j + 1) * (1 - fu) + H(i + 1, j + 1) * fu) * fv;
-    d -= heightmap_range_m * h;   // white = shallower
+    const double h =
+        (H(i, j) * (1 - fu) + H(i + 1, j) * fu) * (1 - fv) + (H(i, j + 1) * (1 - fu) + H(i + 1, j + 1) * fu) * fv;
+    d -= heightmap_range_m * h;  // white = shallower
   }
   return d;
 }
 
-std::vector<Eigen::Vector3d> bent_centerline(const std::vector<Eigen::Vector3d>& P,
-                                             double bend_radius_m, double step_m) {
+std::vector<Eigen::Vector3d> bent_centerline(const std::vector<Eigen::Vector3d>& P, double bend_radius_m,
+                                             double step_m) {
   std::vector<Eigen::Vector3d> out;
   if (P.size() < 2) return P;
   auto add_line = [&](const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
@@ -87,15 +86,16 @@ std::vector<Eigen::Vector3d> bent_centerline(const std::vector<Eigen::Vector3d>&
 
 namespace {
 
-Material parse_material(const YamlCtx& c, const YAML::Node& n, const std::string& path,
-                        Material def) {
+Material parse_material(const YamlCtx& c, const YAML::Node& n, const std::string& path, Material def) {
   if (!n) return def;
   check_keys(c, n, path, {"texture", "albedo", "uv_scale_m"});
   def.texture = get_string(c, n, path, "texture", def.texture);
   static const char* kTextures[] = {"none", "sand", "rock", "pipe_coating", "checker"};
   bool ok = false;
   for (const char* t : kTextures) ok = ok || def.texture == t;
-  if (!ok) c.fail(join_key(path, "texture"), "unknown texture '" + def.texture + "' (valid: none, sand, rock, pipe_coating, checker)");
+  if (!ok)
+    c.fail(join_key(path, "texture"),
+           "unknown texture '" + def.texture + "' (valid: none, sand, rock, pipe_coating, checker)");
   def.albedo = get_vec<3>(c, n, path, "albedo", def.albedo, true);
   for (int i = 0; i < 3; ++i)
     if (!(def.albedo[i] >= 0.0 && def.albedo[i] <= 1.0)) c.fail(join_key(path, "albedo"), "values must be in [0, 1]");
@@ -124,14 +124,14 @@ void require_readable(const YamlCtx& c, const std::string& key, const std::strin
 }
 
 // Points of a pipeline: points_ne (placed on the seabed) or points_ned (explicit depth).
-std::vector<Eigen::Vector3d> parse_points(const YamlCtx& c, const YAML::Node& n,
-                                          const std::string& path, const Seabed& seabed,
-                                          double radius, double burial) {
+std::vector<Eigen::Vector3d> parse_points(const YamlCtx& c, const YAML::Node& n, const std::string& path,
+                                          const Seabed& seabed, double radius, double burial) {
   std::vector<Eigen::Vector3d> pts;
   const bool ne = static_cast<bool>(n["points_ne"]);
   const YAML::Node list = ne ? n["points_ne"] : n["points_ned"];
   const std::string key = join_key(path, ne ? "points_ne" : "points_ned");
-  if (!list || !list.IsSequence() || list.size() < 2) c.fail(key, "need a list of at least 2 points (points_ne or points_ned)");
+  if (!list || !list.IsSequence() || list.size() < 2)
+    c.fail(key, "need a list of at least 2 points (points_ne or points_ned)");
   for (std::size_t i = 0; i < list.size(); ++i) {
     const auto& v = list[i];
     const std::size_t dim = ne ? 2 : 3;
@@ -193,8 +193,9 @@ void parse_water_section(const YamlCtx& c, const YAML::Node& root, World& w) {
 void parse_seabed(const YamlCtx& c, const YAML::Node& root, World& w) {
   if (const YAML::Node s = root["seabed"]) {
     const std::string p = "seabed";
-    check_keys(c, s, p, {"enabled", "depth_m", "center_ne", "size_m", "resolution_m", "far_extent_m", "relief",
-                         "heightmap", "material"});
+    check_keys(c, s, p,
+               {"enabled", "depth_m", "center_ne", "size_m", "resolution_m", "far_extent_m", "relief", "heightmap",
+                "material"});
     auto& sb = w.seabed;
     sb.enabled = get_bool(c, s, p, "enabled", true);
     sb.depth_m = get_double(c, s, p, "depth_m", sb.depth_m);
@@ -241,8 +242,8 @@ void parse_pipelines(const YamlCtx& c, const YAML::Node& root, World& w) {
     for (std::size_t i = 0; i < pl.size(); ++i) {
       const std::string p = "pipelines[" + std::to_string(i) + "]";
       const YAML::Node n = pl[i];
-      check_keys(c, n, p, {"name", "radius_m", "bend_radius_m", "burial_fraction", "points_ne",
-                           "points_ned", "material"});
+      check_keys(c, n, p,
+                 {"name", "radius_m", "bend_radius_m", "burial_fraction", "points_ne", "points_ned", "material"});
       Pipeline pipe;
       pipe.name = get_string(c, n, p, "name", "pipeline" + std::to_string(i));
       pipe.radius_m = get_double(c, n, p, "radius_m", pipe.radius_m);
@@ -296,7 +297,8 @@ void parse_rocks(const YamlCtx& c, const YAML::Node& root, World& w) {
     if (count < 0 || count > 5000) c.fail("rock_field.count", "must be in [0, 5000]");
     const auto seed = static_cast<std::uint32_t>(get_double(c, rf, p, "seed", 1));
     const YAML::Node reg = rf["region_ne"];
-    if (!reg || !reg.IsSequence() || reg.size() != 2) c.fail("rock_field.region_ne", "expected [[n_min, e_min], [n_max, e_max]]");
+    if (!reg || !reg.IsSequence() || reg.size() != 2)
+      c.fail("rock_field.region_ne", "expected [[n_min, e_min], [n_max, e_max]]");
     Eigen::Vector2d lo, hi;
     try {
       lo = {reg[0][0].as<double>(), reg[0][1].as<double>()};
@@ -393,8 +395,7 @@ void build_centerline(Pipeline* pipe, double step_m) {
   pipe->centerline_W = bent_centerline(pipe->points_W, pipe->bend_radius_m, step_m);
   pipe->arc_length_m.assign(pipe->centerline_W.size(), 0.0);
   for (std::size_t k = 1; k < pipe->centerline_W.size(); ++k)
-    pipe->arc_length_m[k] =
-        pipe->arc_length_m[k - 1] + (pipe->centerline_W[k] - pipe->centerline_W[k - 1]).norm();
+    pipe->arc_length_m[k] = pipe->arc_length_m[k - 1] + (pipe->centerline_W[k] - pipe->centerline_W[k - 1]).norm();
 }
 
 void add_rock_field(World* world, const RockField& f) {
@@ -424,8 +425,8 @@ void add_rock_field(World* world, const RockField& f) {
 World load_world(const std::string& path) {
   YamlCtx c{path};
   const YAML::Node root = detail::load_yaml_file(path);
-  check_keys(c, root, "", {"name", "description", "water", "seabed", "pipelines", "rocks",
-                           "rock_field", "objects", "lights"});
+  check_keys(c, root, "",
+             {"name", "description", "water", "seabed", "pipelines", "rocks", "rock_field", "objects", "lights"});
   World w;
   w.file = path;
   w.dir = fs::path(path).parent_path().string();

@@ -1,16 +1,17 @@
 // World loading, pipeline centre-line API, scene geometry and mesh files (no OpenGL).
 #include <gtest/gtest.h>
 
-#include <assimp/Exporter.hpp>
-#include <assimp/Importer.hpp>
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
+#include <assimp/Exporter.hpp>
+#include <assimp/Importer.hpp>
 
 #include <cmath>
 #include <filesystem>
 #include <fstream>
 
 #include "unav_scene/errors.hpp"
+#include "unav_scene/pipe_tracking.hpp"
 #include "unav_scene/scene_geometry.hpp"
 #include "unav_scene/world.hpp"
 
@@ -40,7 +41,8 @@ void expect_config_error(F&& f, std::initializer_list<std::string> fragments) {
     ADD_FAILURE() << "no ConfigError thrown";
   } catch (const ConfigError& e) {
     for (const auto& frag : fragments)
-      EXPECT_NE(std::string(e.what()).find(frag), std::string::npos) << "message: " << e.what() << "\nmissing: " << frag;
+      EXPECT_NE(std::string(e.what()).find(frag), std::string::npos)
+          << "message: " << e.what() << "\nmissing: " << frag;
   }
 }
 
@@ -55,7 +57,7 @@ TEST(World, PipeInspectionHasTwentyMetrePipeWithLeftThenRightTurn) {
   EXPECT_GT(p.length_m(), 18.0);
   EXPECT_LT(p.length_m(), 24.0);
   EXPECT_NEAR(w.seabed.depth_m, 10.0, 1e-9);
-  for (const auto& v : p.points_W) EXPECT_NEAR(v.z(), 10.0 - 0.25 * 0.6, 0.2);   // on the seabed
+  for (const auto& v : p.points_W) EXPECT_NEAR(v.z(), 10.0 - 0.25 * 0.6, 0.2);  // on the seabed
   // Heading changes at the vertices: NED heading atan2(east, north); a left turn decreases it.
   std::vector<double> turns;
   for (std::size_t i = 1; i + 1 < p.points_W.size(); ++i) {
@@ -63,8 +65,8 @@ TEST(World, PipeInspectionHasTwentyMetrePipeWithLeftThenRightTurn) {
     turns.push_back(wrap(std::atan2(b.y(), b.x()) - std::atan2(a.y(), a.x())));
   }
   ASSERT_EQ(turns.size(), 2u);
-  EXPECT_LT(turns[0], -0.5);   // left
-  EXPECT_GT(turns[1], 0.5);    // right
+  EXPECT_LT(turns[0], -0.5);  // left
+  EXPECT_GT(turns[1], 0.5);   // right
   EXPECT_GE(w.rocks.size(), 20u);
   EXPECT_EQ(w.lamps.size(), 2u);
   EXPECT_EQ(w.water.name, "jerlov_IB");
@@ -85,8 +87,8 @@ TEST(World, NearestPipePointDistanceHeadingAndSide) {
   ASSERT_TRUE(q.valid);
   EXPECT_NEAR(q.horizontal_distance_m, 1.0, 1e-9);
   EXPECT_NEAR(q.heading_rad, 0.0, 1e-9);
-  EXPECT_NEAR(q.lateral_m, 1.0, 1e-9);   // east of a north-going pipe = right
-  EXPECT_NEAR(q.arc_length_m, 3.0, 1e-3);   // the leg slopes a few mm with the seabed relief
+  EXPECT_NEAR(q.lateral_m, 1.0, 1e-9);     // east of a north-going pipe = right
+  EXPECT_NEAR(q.arc_length_m, 3.0, 1e-3);  // the leg slopes a few mm with the seabed relief
   EXPECT_NEAR(distance_to_pipe(w, {3.0, -0.4, 9.0}), 0.4, 1e-9);
   EXPECT_NEAR(nearest_pipe_point(w, {3.0, -0.4, 9.0}).lateral_m, -0.4, 1e-9);
   // Middle leg heads north-west (-45 deg).
@@ -104,7 +106,7 @@ TEST(World, BentCenterlineKeepsBendRadius) {
   const auto c = bent_centerline({{0, 0, 0}, {10, 0, 0}, {10, 10, 0}}, 2.0, 0.01);
   double dmin = 1e9;
   for (const auto& p : c) dmin = std::min(dmin, (p - Eigen::Vector3d(10, 0, 0)).norm());
-  EXPECT_NEAR(dmin, 2.0 * (std::sqrt(2.0) - 1.0), 1e-3);   // sampling 1 cm -> < 1 mm error
+  EXPECT_NEAR(dmin, 2.0 * (std::sqrt(2.0) - 1.0), 1e-3);  // sampling 1 cm -> < 1 mm error
   for (std::size_t i = 1; i < c.size(); ++i) EXPECT_LE((c[i] - c[i - 1]).norm(), 0.0101);
 }
 
@@ -132,15 +134,17 @@ TEST(WorldErrors, UnreadableMeshNamesFile) {
 
 TEST(WorldErrors, BadValuesNameTheKey) {
   const auto d = temp_dir("bad_values");
-  expect_config_error([&] { load_world(write_file(d / "a.yaml", "pipelines:\n  - {radius_m: -1, points_ne: [[0,0],[1,0]]}\n")); },
-                      {"pipelines[0].radius_m"});
+  expect_config_error(
+      [&] { load_world(write_file(d / "a.yaml", "pipelines:\n  - {radius_m: -1, points_ne: [[0,0],[1,0]]}\n")); },
+      {"pipelines[0].radius_m"});
   expect_config_error([&] { load_world(write_file(d / "b.yaml", "water: {preset: jerlov_XII}\n")); },
                       {"water.preset", "jerlov_XII", "jerlov_II"});
   expect_config_error([&] { load_world(write_file(d / "c.yaml", "lights: {sun: {direction_ned: [0, 0, -1]}}\n")); },
                       {"lights.sun.direction_ned"});
   expect_config_error([&] { load_world(write_file(d / "d.yaml", "pipelines:\n  - {points_ne: [[0,0]]}\n")); },
                       {"pipelines[0].points_ne"});
-  expect_config_error([&] { load_world((d / "does_not_exist.yaml").string()); }, {"does_not_exist.yaml", "cannot open"});
+  expect_config_error([&] { load_world((d / "does_not_exist.yaml").string()); },
+                      {"does_not_exist.yaml", "cannot open"});
   expect_config_error([&] { load_world(write_file(d / "e.yaml", "seabed: {material: {texture: marble}}\n")); },
                       {"seabed.material.texture", "marble"});
 }
@@ -192,7 +196,31 @@ TEST(Meshes, SceneGeometryOfPipeInspection) {
         const double t = std::clamp((p - c[k]).dot(ab) / ab.squaredNorm(), 0.0, 1.0);
         dmin = std::min(dmin, (p - c[k] - t * ab).norm());
       }
-      EXPECT_LE(dmin, 0.25 + 1e-4);   // caps lie inside
+      EXPECT_LE(dmin, 0.25 + 1e-4);  // caps lie inside
     }
   }
+}
+
+// Cross-track figures on the straight first run of the pipe_inspection pipe (north along
+// east = 0 from north = 0): a track 0.3 m east of it has e_p = 0.3 everywhere; a track that
+// leaves it sideways is lost at the first point beyond 2.5 m and counts up to it.
+TEST(PipeTracking, CrossTrackErrorAndFollowedLength) {
+  const unav::scene::World w =
+      unav::scene::load_world(std::string(UNAV_REPO_ROOT) + "/worlds/pipe_inspection/world.yaml");
+  std::vector<Eigen::Vector3d> along;
+  for (int i = 0; i <= 50; ++i) along.emplace_back(0.1 * i, 0.3, 8.0);
+  const auto t = unav::scene::track_pipe(w, along);
+  EXPECT_NEAR(t.mean_e_p_m, 0.3, 1e-6);
+  EXPECT_NEAR(t.max_e_p_m, 0.3, 1e-6);
+  EXPECT_NEAR(t.followed_m, 5.0, 0.02);  // centre line sampled every <= 0.1 m
+  EXPECT_FALSE(t.lost);
+  EXPECT_NEAR(t.followed_fraction, 5.0 / t.pipe_length_m, 1e-3);
+  std::vector<Eigen::Vector3d> away{
+      {1.0, 0.0, 8.0}, {2.0, 1.0, 8.0}, {3.0, 2.0, 8.0}, {4.0, 3.0, 8.0}, {5.0, 0.0, 8.0}};
+  const auto l = unav::scene::track_pipe(w, away);
+  EXPECT_TRUE(l.lost);
+  EXPECT_EQ(l.lost_at_index, 3);
+  EXPECT_EQ(l.samples, 4);
+  EXPECT_NEAR(l.followed_m, 3.0, 0.02);  // the point at north 5 after the loss does not count
+  EXPECT_NEAR(l.max_e_p_m, 3.0, 1e-6);
 }

@@ -64,11 +64,12 @@ void run(const PipeFollowingConfig& cfg, int num_envs, int steps) {
   for (int i = 0; i < num_envs; ++i) after = sum(after, vec.env(i).episode().timings());
   const EpisodeTimings d = diff(after, before);
   const double n = static_cast<double>(steps) * num_envs;
-  std::printf("%-9s %3dx%-3d envs=%d: %7.1f steps/s  (%.2f ms/step: physics %.2f, mpc+alloc %.2f, render %.2f, "
-              "readback %.2f, other %.2f; parts summed over threads; %d resets incl.)\n",
-              cfg.env.dynamics.c_str(), vec.env(0).obs_height(), vec.env(0).obs_width(), num_envs, n / wall,
-              1e3 * wall / n, 1e3 * d.physics_s / n, 1e3 * d.control_s / n, 1e3 * d.render_s / n,
-              1e3 * d.readback_s / n, 1e3 * (wall - d.physics_s - d.control_s - d.render_s - d.readback_s) / n, resets);
+  std::printf(
+      "%-9s %3dx%-3d envs=%d: %7.1f steps/s  (%.2f ms/step: physics %.2f, mpc+alloc %.2f, render %.2f, "
+      "readback %.2f, other %.2f; parts summed over threads; %d resets incl.)\n",
+      cfg.env.dynamics.c_str(), vec.env(0).obs_height(), vec.env(0).obs_width(), num_envs, n / wall, 1e3 * wall / n,
+      1e3 * d.physics_s / n, 1e3 * d.control_s / n, 1e3 * d.render_s / n, 1e3 * d.readback_s / n,
+      1e3 * (wall - d.physics_s - d.control_s - d.render_s - d.readback_s) / n, resets);
 }
 
 }  // namespace
@@ -92,7 +93,8 @@ int main(int argc, char** argv) {
     } else if (a.find('=') != std::string::npos) {
       overrides.emplace_back(a.substr(0, a.find('=')), a.substr(a.find('=') + 1));
     } else {
-      std::fprintf(stderr, "usage: bench_pipe_env [--config F] [--steps N] [--envs N] [--dynamics D] [key=value ...]\n");
+      std::fprintf(stderr,
+                   "usage: bench_pipe_env [--config F] [--steps N] [--envs N] [--dynamics D] [key=value ...]\n");
       return 2;
     }
   }

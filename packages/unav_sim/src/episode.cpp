@@ -59,7 +59,7 @@ EpisodeSetup load_episode_setup(const EpisodeParams& params) {
     throw ConfigError("episode", "control_period", std::to_string(params.control_period),
                       "must be a whole multiple of physics_dt (" + std::to_string(params.physics_dt) + " s)");
   s.mpc = control::load_mpc_config(config_path(params.mpc_config));
-  s.mpc.options.max_solve_time_ms = 0.0;   // iterations only: episodes repeat exactly
+  s.mpc.options.max_solve_time_ms = 0.0;  // iterations only: episodes repeat exactly
   s.allocator = control::load_allocator_config(config_path(params.allocator_config));
   const std::string cams = config_path(params.cameras_config);
   if (params.cameras.empty()) throw ConfigError(cams, "cameras", "[]", "at least one camera to render");
@@ -83,8 +83,8 @@ Episode::Episode(EpisodeSetup setup, World world, std::shared_ptr<unav_renderer:
   control::MpcOptions mo = setup_.mpc.options;
   mpc_ = std::make_unique<control::Mpc>(setup_.mpc.model, mo, setup_.simulator.environment);
   allocator_ = std::make_unique<control::Allocator>(control::make_allocator(setup_.allocator));
-  renderer_ = std::make_unique<unav_renderer::Renderer>(std::move(world), setup_.cameras, setup_.render,
-                                                        std::move(context));
+  renderer_ =
+      std::make_unique<unav_renderer::Renderer>(std::move(world), setup_.cameras, setup_.render, std::move(context));
   substeps_ = static_cast<int>(std::lround(setup_.params.control_period / setup_.params.physics_dt));
   reset(0, RigidBodyState{});
 }

@@ -17,7 +17,7 @@ namespace {
 constexpr double kDeg = M_PI / 180.0;
 constexpr std::uint64_t kSceneSeedMask = (std::uint64_t{1} << 62U) - 1U;
 
-double wrap(double a) { return std::remainder(a, 2.0 * M_PI); }   // (-pi, pi]
+double wrap(double a) { return std::remainder(a, 2.0 * M_PI); }  // (-pi, pi]
 
 std::string resource(const std::string& p) {
   if (!p.empty() && p.front() == '/') return p;
@@ -175,7 +175,7 @@ PipeFollowingStep PipeFollowingEnv::act(const std::array<double, 2>& action) {
   r.info = measure();
   const PipeFollowingParams& p = config_.env;
   r.reward = p.alive_reward - p.position_weight * r.info.e_p * r.info.e_p - p.heading_weight * r.info.e_psi;
-  r.terminated = !(r.info.e_p <= p.termination_distance_m);   // NaN state terminates too
+  r.terminated = !(r.info.e_p <= p.termination_distance_m);  // NaN state terminates too
   pipe_end_ = r.info.arc_length_m >= r.info.pipe_length_m - p.end_margin_m;
   r.info.pipe_end = pipe_end_;
   r.truncated = !r.terminated && (pipe_end_ || steps_ >= p.max_steps);
@@ -250,15 +250,15 @@ VectorPipeFollowingEnv::VectorPipeFollowingEnv(const PipeFollowingConfig& config
   }
 }
 
-std::vector<PipeFollowingStep> VectorPipeFollowingEnv::step(
-    const std::vector<std::array<double, 2>>& actions, std::vector<std::uint8_t>* observations,
-    const std::vector<std::optional<std::uint64_t>>& resets) {
+std::vector<PipeFollowingStep> VectorPipeFollowingEnv::step(const std::vector<std::array<double, 2>>& actions,
+                                                            std::vector<std::uint8_t>* observations,
+                                                            const std::vector<std::optional<std::uint64_t>>& resets) {
   if (!resets.empty() && resets.size() != envs_.size())
     throw std::invalid_argument("VectorPipeFollowingEnv::step: " + std::to_string(resets.size()) +
                                 " reset entries for " + std::to_string(envs_.size()) + " environments");
   if (actions.size() != envs_.size())
-    throw std::invalid_argument("VectorPipeFollowingEnv::step: " + std::to_string(actions.size()) +
-                                " actions for " + std::to_string(envs_.size()) + " environments");
+    throw std::invalid_argument("VectorPipeFollowingEnv::step: " + std::to_string(actions.size()) + " actions for " +
+                                std::to_string(envs_.size()) + " environments");
   std::vector<PipeFollowingStep> out;
   out.reserve(envs_.size());
   out.resize(envs_.size());

@@ -10,11 +10,13 @@ using unav::control::PoseSetpoint;
 
 namespace {
 
-World pipe_world() { return unav::scene::load_world(std::string(UNAV_REPO_ROOT) + "/worlds/pipe_inspection/world.yaml"); }
+World pipe_world() {
+  return unav::scene::load_world(std::string(UNAV_REPO_ROOT) + "/worlds/pipe_inspection/world.yaml");
+}
 
 EpisodeSetup small_setup() {
   EpisodeParams p;
-  p.image_width = 160;   // half size: the tests check geometry and repeatability, not looks
+  p.image_width = 160;  // half size: the tests check geometry and repeatability, not looks
   p.image_height = 90;
   return load_episode_setup(p);
 }
@@ -70,7 +72,7 @@ TEST(Episode, RepeatsExactlyForTheSameSeed) {
   EXPECT_EQ(x1.p_WB_W, x2.p_WB_W);
   EXPECT_EQ(x1.q_WB.coeffs(), x2.q_WB.coeffs());
   EXPECT_EQ(img1, img2);
-  const auto [x3, img3] = run(a, 8);   // another seed: other camera noise, same dynamics
+  const auto [x3, img3] = run(a, 8);  // another seed: other camera noise, same dynamics
   EXPECT_EQ(x1.p_WB_W, x3.p_WB_W);
   EXPECT_NE(img1, img3);
 }
@@ -88,7 +90,7 @@ TEST(Episode, ResetWithANewWorldKeepsTheContext) {
   };
   ep.reset(1, at(3.0, 0.0, 8.35));
   const int on_fixed = pipe_pixels(ep.render("down"));
-  EXPECT_GT(on_fixed, 500);   // a 0.5 m pipe 1.5 m below a 90 deg camera: ~1/6 of 160 x 90
+  EXPECT_GT(on_fixed, 500);  // a 0.5 m pipe 1.5 m below a 90 deg camera: ~1/6 of 160 x 90
   const World gen = generate_pipe_world(PipeSceneRanges{}, pipe_world(), 3);
   const auto& P = gen.pipelines[0].points_W;
   const Eigen::Vector3d mid = 0.5 * (P[0] + P[1]);
@@ -96,7 +98,7 @@ TEST(Episode, ResetWithANewWorldKeepsTheContext) {
   EXPECT_EQ(&ep.renderer().context(), ctx);
   EXPECT_EQ(ep.world().name, gen.name);
   EXPECT_GT(pipe_pixels(ep.render("down")), 300);
-  ep.reset(1, at(mid.x() + 30.0, mid.y() + 30.0, mid.z() - 1.5));   // far from the pipe
+  ep.reset(1, at(mid.x() + 30.0, mid.y() + 30.0, mid.z() - 1.5));  // far from the pipe
   EXPECT_EQ(pipe_pixels(ep.render("down")), 0);
 }
 

@@ -11,7 +11,8 @@ namespace {
 
 // The paper's evaluation pipe, a fixed start on its first (northbound) run, small images.
 PipeFollowingConfig fixed_config(const std::string& dynamics) {
-  PipeFollowingConfig c = load_pipe_following_config(std::string(UNAV_REPO_ROOT) + "/config/learning/pipe_following.yaml");
+  PipeFollowingConfig c =
+      load_pipe_following_config(std::string(UNAV_REPO_ROOT) + "/config/learning/pipe_following.yaml");
   c.env.scenes = "fixed";
   c.env.dynamics = dynamics;
   c.env.start_offset_m = 0.0;
@@ -46,7 +47,7 @@ TEST(PipeFollowingEnv, RewardAndTerminationFollowThePapersFormula) {
     s = env.act({1.0, 0.0});
     const double e_p = k * std::sin(M_PI / 3);
     EXPECT_NEAR(s.info.e_p, e_p, 1e-6) << "step " << k;
-    EXPECT_NEAR(s.info.lateral_m, e_p, 1e-6);   // east of a northbound pipe = right of it
+    EXPECT_NEAR(s.info.lateral_m, e_p, 1e-6);  // east of a northbound pipe = right of it
     EXPECT_NEAR(s.reward, 10.0 - 2.0 * e_p * e_p, 1e-6);
     EXPECT_EQ(s.terminated, k == 3) << "step " << k;
   }
@@ -56,7 +57,7 @@ TEST(PipeFollowingEnv, RewardAndTerminationFollowThePapersFormula) {
 TEST(PipeFollowingEnv, BadActionsAreClippedOrRejectedAndCounted) {
   PipeFollowingEnv env(fixed_config("kinematic"));
   env.reset(0);
-  PipeFollowingStep s = env.act({std::nan(""), 5.0});   // NaN -> 0, 5 -> 1
+  PipeFollowingStep s = env.act({std::nan(""), 5.0});  // NaN -> 0, 5 -> 1
   EXPECT_EQ(s.info.rejected_actions, 1u);
   EXPECT_EQ(s.info.clipped_actions, 1u);
   EXPECT_NEAR(s.info.position_W[0], 1.0, 1e-9);

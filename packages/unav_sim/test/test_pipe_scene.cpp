@@ -74,7 +74,7 @@ TEST(PipeScene, DrawsStayWithinTheirRanges) {
     EXPECT_TRUE(w.water.name == "jerlov_IB" || w.water.name == "jerlov_3C") << w.water.name;
     for (const auto& rock : w.rocks) {
       const auto q = unav::scene::nearest_pipe_point(w, rock.p_W, true);
-      EXPECT_GT(q.horizontal_distance_m, pipe.radius_m + 0.4);   // clearance + rock radius
+      EXPECT_GT(q.horizontal_distance_m, pipe.radius_m + 0.4);  // clearance + rock radius
     }
     // Arc length of the centre line: at most the polyline length (bends cut corners).
     double poly = 0;
@@ -101,6 +101,6 @@ TEST(PipeScene, BadRangesAreRejectedNamingTheKey) {
   r.turns = {3};
   EXPECT_THROW(r.validate("ranges.yaml"), unav::ConfigError);
   r = PipeSceneRanges{};
-  r.bend_radius_m = {0.1, 2.0};   // tighter than the thickest pipe
+  r.bend_radius_m = {0.1, 2.0};  // tighter than the thickest pipe
   EXPECT_THROW(r.validate("ranges.yaml"), unav::ConfigError);
 }

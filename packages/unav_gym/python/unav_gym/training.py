@@ -77,6 +77,14 @@ def collect_expert(venv_core, steps: int, noise: float, rng: np.random.Generator
     return np.concatenate(xs)[:steps], np.concatenate(ys)[:steps]
 
 
+def actor_mean(policy, obs_chw):
+    """The Gaussian policy's mean action for NCHW float observations in 0..255, through the
+    actor's own feature extractor (shared or not) only."""
+    from stable_baselines3.common.policies import BaseModel
+    features = BaseModel.extract_features(policy, obs_chw, policy.pi_features_extractor)
+    return policy.action_net(policy.mlp_extractor.forward_actor(features))
+
+
 def behaviour_clone(model, obs: np.ndarray, actions: np.ndarray, epochs: int, batch: int = 128,
                     lr: float = 1e-3, log=print) -> list[float]:
     """Fits the policy's mean action to the expert's (MSE), keeping PPO's value head untouched."""
@@ -93,9 +101,7 @@ def behaviour_clone(model, obs: np.ndarray, actions: np.ndarray, epochs: int, ba
             # HWC uint8 -> CHW float 0..255: the policy (behind VecTransposeImage) scales by 1/255 itself.
             o = torch.as_tensor(obs[idx]).permute(0, 3, 1, 2).float()
             a = torch.as_tensor(actions[idx])
-            features = policy.extract_features(o, policy.pi_features_extractor)
-            latent_pi = policy.mlp_extractor.forward_actor(features)
-            mean = policy.action_net(latent_pi)
+            mean = actor_mean(policy, o)
             loss = torch.nn.functional.mse_loss(mean, a)
             opt.zero_grad()
             loss.backward()
@@ -124,9 +130,7 @@ class _OnnxPolicy(torch.nn.Module):
 
     def forward(self, image):
         x = image.permute(0, 3, 1, 2).float()   # NHWC 0..255 -> NCHW; extract_features scales by 1/255
-        features = self.policy.extract_features(x, self.policy.pi_features_extractor)
-        mean = self.policy.action_net(self.policy.mlp_extractor.forward_actor(features))
-        return torch.clamp(mean, -1.0, 1.0)
+        return torch.clamp(actor_mean(self.policy, x), -1.0, 1.0)
 
 
 def export_onnx(model, path: str, obs_shape, metadata: dict) -> None:

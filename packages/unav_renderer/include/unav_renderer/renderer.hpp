@@ -34,15 +34,15 @@ struct RenderOptions {
   bool marine_snow = true;
   bool noise = true;
   bool lamps = true;
-  int lamp_scatter_samples = 8;   ///< ray-march steps for lamp in-scattering; 0 disables
-  int lamp_scatter_downsample = 4;   ///< in-scattering is computed at 1/N resolution (smooth)
-  bool srgb_output = true;        ///< encode rgb8 as sRGB (false: linear 0..1 -> 0..255)
+  int lamp_scatter_samples = 8;     ///< ray-march steps for lamp in-scattering; 0 disables
+  int lamp_scatter_downsample = 4;  ///< in-scattering is computed at 1/N resolution (smooth)
+  bool srgb_output = true;          ///< encode rgb8 as sRGB (false: linear 0..1 -> 0..255)
   /// Deterministic metering of the ambient light at the camera depth: gain =
   /// clamp(0.45 / luminance(E0 exp(-K_d d)), 0.25, 5), times CameraModel::exposure.
   bool auto_exposure = true;
-  int texture_size = 512;         ///< procedural texture edge [px]
-  int readback_slots = 2;         ///< PBO ring depth for submit()/collect()
-  std::uint64_t seed = 1;         ///< noise seed (frame noise = f(seed, sequence))
+  int texture_size = 512;  ///< procedural texture edge [px]
+  int readback_slots = 2;  ///< PBO ring depth for submit()/collect()
+  std::uint64_t seed = 1;  ///< noise seed (frame noise = f(seed, sequence))
   /// glFinish after each pass to time them (RenderTimings::*_pass_ms); serialises the GPU.
   bool profile_passes = false;
   EglOptions egl;
@@ -54,17 +54,17 @@ struct Frame {
   double stamp_s = 0.0;
   std::uint64_t sequence = 0;
   int width = 0, height = 0;
-  std::vector<std::uint8_t> rgb;   ///< rgb8, width*height*3
-  std::vector<float> depth;        ///< 32FC1, metres along the optical axis; +inf: water only
-  std::vector<std::uint8_t> seg;   ///< SegClass id per pixel (mono8)
+  std::vector<std::uint8_t> rgb;  ///< rgb8, width*height*3
+  std::vector<float> depth;       ///< 32FC1, metres along the optical axis; +inf: water only
+  std::vector<std::uint8_t> seg;  ///< SegClass id per pixel (mono8)
   Eigen::Matrix3d K = Eigen::Matrix3d::Identity();
-  Eigen::Matrix<double, 5, 1> D = Eigen::Matrix<double, 5, 1>::Zero();   ///< plumb_bob
-  Pose X_WC = Pose::Identity();    ///< optical frame in world_ned
+  Eigen::Matrix<double, 5, 1> D = Eigen::Matrix<double, 5, 1>::Zero();  ///< plumb_bob
+  Pose X_WC = Pose::Identity();                                         ///< optical frame in world_ned
 };
 
 struct RenderTimings {
-  double render_ms = 0;     ///< submit(): issuing the passes and the readback
-  double readback_ms = 0;   ///< collect(): waiting for the fence, PBO map, copy, split rgb/seg
+  double render_ms = 0;    ///< submit(): issuing the passes and the readback
+  double readback_ms = 0;  ///< collect(): waiting for the fence, PBO map, copy, split rgb/seg
   // Only with RenderOptions::profile_passes:
   double scene_pass_ms = 0, snow_pass_ms = 0, inscatter_pass_ms = 0, post_pass_ms = 0;
 };
@@ -77,8 +77,7 @@ class Renderer {
   /// Same, drawing in an existing context (several renderers, one context: vectorised
   /// environments). `context` null = create one from options.egl. All renderers sharing a
   /// context must be used from the same thread.
-  Renderer(World world, std::vector<CameraModel> cameras, RenderOptions options,
-           std::shared_ptr<EglContext> context);
+  Renderer(World world, std::vector<CameraModel> cameras, RenderOptions options, std::shared_ptr<EglContext> context);
   ~Renderer();
   Renderer(const Renderer&) = delete;
   Renderer& operator=(const Renderer&) = delete;
@@ -105,14 +104,14 @@ class Renderer {
   /// Change the water (domain randomisation, test sweeps) without rebuilding the scene.
   void set_water(const WaterModel& water);
   const WaterModel& water() const;
-  void set_options(const RenderOptions& options);   ///< egl/texture fields are ignored
+  void set_options(const RenderOptions& options);  ///< egl/texture fields are ignored
   const RenderOptions& options() const;
 
   const World& world() const;
   const CameraModel& camera(const std::string& name) const;
   std::vector<std::string> camera_names() const;
   const EglContext& context() const;
-  std::shared_ptr<EglContext> shared_context() const;   ///< for more renderers in this context
+  std::shared_ptr<EglContext> shared_context() const;  ///< for more renderers in this context
   RenderTimings last_timings() const;
   std::size_t triangle_count() const;
 

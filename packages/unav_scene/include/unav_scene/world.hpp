@@ -21,23 +21,23 @@ enum class SegClass : std::uint8_t { kWater = 0, kSeabed = 1, kPipeline = 2, kRo
 struct Material {
   std::string texture = "none";
   Eigen::Vector3d albedo{0.5, 0.5, 0.5};
-  double uv_scale_m = 1.0;   ///< metres per texture repeat
+  double uv_scale_m = 1.0;  ///< metres per texture repeat
 };
 
 struct Seabed {
   bool enabled = true;
-  double depth_m = 10.0;                  ///< mean depth of the seabed (NED z)
-  Eigen::Vector2d center_ne{0.0, 0.0};    ///< centre of the patch (north, east) [m]
-  Eigen::Vector2d size_m{60.0, 60.0};     ///< extent along north and east [m]
-  double resolution_m = 0.5;              ///< grid spacing [m]
+  double depth_m = 10.0;                ///< mean depth of the seabed (NED z)
+  Eigen::Vector2d center_ne{0.0, 0.0};  ///< centre of the patch (north, east) [m]
+  Eigen::Vector2d size_m{60.0, 60.0};   ///< extent along north and east [m]
+  double resolution_m = 0.5;            ///< grid spacing [m]
   /// A coarse flat seabed of this edge [m] is laid just below the detailed patch so the
   /// seabed fades into the water instead of ending at a visible edge (0 = none).
   double far_extent_m = 300.0;
-  double relief_amplitude_m = 0.0;        ///< procedural relief (value-noise fBm) amplitude
+  double relief_amplitude_m = 0.0;  ///< procedural relief (value-noise fBm) amplitude
   double relief_wavelength_m = 6.0;
   std::uint32_t relief_seed = 1;
-  std::string heightmap_file;             ///< optional 8/16-bit grey PNG (absolute path)
-  double heightmap_range_m = 1.0;         ///< white is this much shallower than black
+  std::string heightmap_file;      ///< optional 8/16-bit grey PNG (absolute path)
+  double heightmap_range_m = 1.0;  ///< white is this much shallower than black
   Material material{"sand", {0.76, 0.70, 0.55}, 2.0};
 
   /// Seabed depth (NED z, metres) at (north, east) from relief/heightmap (not the mesh).
@@ -52,7 +52,7 @@ struct Pipeline {
   std::string name;
   std::vector<Eigen::Vector3d> points_W;  ///< polyline vertices, world NED [m]
   double radius_m = 0.25;
-  double bend_radius_m = 1.0;             ///< centre-line radius of the bends at vertices
+  double bend_radius_m = 1.0;  ///< centre-line radius of the bends at vertices
   Material material{"pipe_coating", {0.55, 0.42, 0.25}, 1.0};
   /// Centre line with the bends, sampled every <= 0.1 m (filled by load_world).
   std::vector<Eigen::Vector3d> centerline_W;
@@ -73,9 +73,9 @@ struct Rock {
 /// A mesh file (assimp: OBJ, PLY, glTF/GLB, FBX, ...) or a primitive shape placed in the world.
 struct Object {
   std::string name;
-  std::string mesh_file;        ///< absolute path; empty for primitive shapes
-  std::string shape;            ///< "box", "sphere", "plane" when mesh_file is empty
-  Eigen::Vector3d size_m{1, 1, 1};   ///< box edges / plane x,y / sphere diameter
+  std::string mesh_file;            ///< absolute path; empty for primitive shapes
+  std::string shape;                ///< "box", "sphere", "plane" when mesh_file is empty
+  Eigen::Vector3d size_m{1, 1, 1};  ///< box edges / plane x,y / sphere diameter
   Pose X_WO = Pose::Identity();
   Eigen::Vector3d scale{1, 1, 1};
   SegClass seg_class = SegClass::kOther;
@@ -83,30 +83,30 @@ struct Object {
 };
 
 struct Sun {
-  Eigen::Vector3d direction_W{0.0, 0.0, 1.0};   ///< unit, direction the light travels (NED)
-  Eigen::Vector3d surface_irradiance{1.0, 1.0, 1.0};   ///< E0 per channel (display units)
-  double ambient_fraction = 0.35;   ///< share of diffuse (sky + scattered) light
+  Eigen::Vector3d direction_W{0.0, 0.0, 1.0};         ///< unit, direction the light travels (NED)
+  Eigen::Vector3d surface_irradiance{1.0, 1.0, 1.0};  ///< E0 per channel (display units)
+  double ambient_fraction = 0.35;                     ///< share of diffuse (sky + scattered) light
 };
 
 /// A lamp on the vehicle. Lamp frame L: x is the beam axis.
 struct Lamp {
   std::string name;
-  Pose X_BL = Pose::Identity();     ///< mount pose on base_link_frd
-  double cone_half_angle_rad = 0.6; ///< beam half angle (smooth falloff to zero at the edge)
-  Eigen::Vector3d intensity{1.0, 1.0, 1.0};   ///< radiant intensity on the axis (units*m^2)
+  Pose X_BL = Pose::Identity();              ///< mount pose on base_link_frd
+  double cone_half_angle_rad = 0.6;          ///< beam half angle (smooth falloff to zero at the edge)
+  Eigen::Vector3d intensity{1.0, 1.0, 1.0};  ///< radiant intensity on the axis (units*m^2)
 };
 
 struct MarineSnow {
-  double density_per_m3 = 0.0;   ///< particles per cubic metre around the camera
-  double size_m = 0.004;         ///< particle diameter
-  double box_m = 8.0;            ///< particles live in a box of this edge around the camera
+  double density_per_m3 = 0.0;  ///< particles per cubic metre around the camera
+  double size_m = 0.004;        ///< particle diameter
+  double box_m = 8.0;           ///< particles live in a box of this edge around the camera
   std::uint32_t seed = 7;
 };
 
 struct World {
   std::string name;
-  std::string file;   ///< path of world.yaml
-  std::string dir;    ///< its folder (relative paths resolve against it)
+  std::string file;  ///< path of world.yaml
+  std::string dir;   ///< its folder (relative paths resolve against it)
   WaterModel water;
   Seabed seabed;
   std::vector<Pipeline> pipelines;
@@ -130,8 +130,8 @@ void build_centerline(Pipeline* pipe, double step_m = 0.1);
 struct RockField {
   int count = 0;
   std::uint32_t seed = 1;
-  Eigen::Vector2d region_lo_ne{0, 0}, region_hi_ne{0, 0};   ///< [m]
-  Eigen::Vector2d radius_m{0.1, 0.4};                       ///< min, max
+  Eigen::Vector2d region_lo_ne{0, 0}, region_hi_ne{0, 0};  ///< [m]
+  Eigen::Vector2d radius_m{0.1, 0.4};                      ///< min, max
   double clearance_from_pipe_m = 0.5;
   Material material{"rock", {0.45, 0.42, 0.38}, 0.6};
 };
@@ -140,14 +140,14 @@ void add_rock_field(World* world, const RockField& field);
 
 /// Nearest point of any pipeline centre line (including bends) to a point.
 struct PipeQuery {
-  bool valid = false;             ///< false when the world has no pipeline
-  std::size_t pipeline = 0;       ///< index into World::pipelines
+  bool valid = false;        ///< false when the world has no pipeline
+  std::size_t pipeline = 0;  ///< index into World::pipelines
   Eigen::Vector3d closest_W{0, 0, 0};
-  double distance_m = 0;          ///< 3D distance to the centre line
-  double horizontal_distance_m = 0;   ///< distance in the north-east plane (paper's e_p)
-  double lateral_m = 0;           ///< signed horizontal offset, > 0 when the point is right of the pipe
-  double heading_rad = 0;         ///< pipe heading at the nearest point, atan2(dE, dN), (-pi, pi]
-  double arc_length_m = 0;        ///< arc length of the nearest point from the pipeline start
+  double distance_m = 0;             ///< 3D distance to the centre line
+  double horizontal_distance_m = 0;  ///< distance in the north-east plane (paper's e_p)
+  double lateral_m = 0;              ///< signed horizontal offset, > 0 when the point is right of the pipe
+  double heading_rad = 0;            ///< pipe heading at the nearest point, atan2(dE, dN), (-pi, pi]
+  double arc_length_m = 0;           ///< arc length of the nearest point from the pipeline start
 };
 
 /// Query the nearest pipeline point. `horizontal` = true measures in the north-east plane
@@ -162,7 +162,7 @@ double pipe_heading(const World& world, const Eigen::Vector3d& p_W);
 
 /// Centre line of a polyline with circular bends of radius `bend_radius_m` at its vertices,
 /// sampled every <= `step_m`.
-std::vector<Eigen::Vector3d> bent_centerline(const std::vector<Eigen::Vector3d>& points_W,
-                                             double bend_radius_m, double step_m = 0.1);
+std::vector<Eigen::Vector3d> bent_centerline(const std::vector<Eigen::Vector3d>& points_W, double bend_radius_m,
+                                             double step_m = 0.1);
 
 }  // namespace unav::scene

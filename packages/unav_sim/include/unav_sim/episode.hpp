@@ -36,7 +36,7 @@ using unav_renderer::Frame;
 /// What an episode is made of, as files (relative paths: under the resource roots' config/,
 /// see unav_common/resources.hpp) and switches. Config schema (config/learning/*.yaml `episode:`).
 struct EpisodeParams {
-  std::string vehicle_config = "vehicles/bluerov2_heavy.yaml";   ///< the plant
+  std::string vehicle_config = "vehicles/bluerov2_heavy.yaml";  ///< the plant
   std::string mpc_config = "controllers/mpc.yaml";
   std::string allocator_config = "controllers/allocator.yaml";
   std::string cameras_config = "sensors/bluerov2_cameras.yaml";
@@ -64,7 +64,10 @@ struct EpisodeParams {
     a->Visit(Field("image_height", &image_height).Range(0, 8192).Unit("px").Doc("render height, 0 = camera's"));
     a->Visit(Field("physics_dt", &physics_dt).Above(0.0).Max(0.05).Unit("s").Doc("physics step"));
     a->Visit(Field("integrator", &integrator).OneOf({"velocity_verlet", "rk4"}));
-    a->Visit(Field("control_period", &control_period).Above(0.0).Max(1.0).Unit("s")
+    a->Visit(Field("control_period", &control_period)
+                 .Above(0.0)
+                 .Max(1.0)
+                 .Unit("s")
                  .Doc("MPC + allocator period; a multiple of physics_dt"));
     a->Visit(Field("marine_snow", &marine_snow));
     a->Visit(Field("forward_scatter", &forward_scatter));
@@ -126,7 +129,7 @@ class Episode {
   Frame collect();
 
   const RigidBodyState& state() const { return sim_->state(); }
-  double time() const { return time_offset_ + sim_->time(); }   ///< s since reset()
+  double time() const { return time_offset_ + sim_->time(); }  ///< s since reset()
   const World& world() const;
   const EpisodeSetup& setup() const { return setup_; }
   const EpisodeTimings& timings() const { return timings_; }
@@ -146,7 +149,7 @@ class Episode {
   std::uint64_t seed_ = 0;
   int solver_failures_ = 0;
   int substeps_ = 50;
-  double time_offset_ = 0.0;   // time before the last teleport()
+  double time_offset_ = 0.0;  // time before the last teleport()
 };
 
 }  // namespace unav::sim

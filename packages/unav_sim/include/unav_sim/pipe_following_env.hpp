@@ -52,24 +52,31 @@ struct PipeFollowingParams {
   template <class Archive>
   void Serialize(Archive* a) {
     using unav::common::Field;
-    a->Visit(Field("dynamics", &dynamics).OneOf({"mpc", "kinematic"})
+    a->Visit(Field("dynamics", &dynamics)
+                 .OneOf({"mpc", "kinematic"})
                  .Doc("mpc: the MPC flies each waypoint; kinematic: the vehicle is placed on it (fast)"));
     a->Visit(Field("scenes", &scenes).OneOf({"random", "fixed"}).Doc("random pipe worlds or the world file"));
     a->Visit(Field("world", &world).Doc("world.yaml of scenes=fixed (relative to the resource roots)"));
     a->Visit(Field("split", &split).OneOf({"train", "eval"}).Doc("seed space of random scenes (disjoint)"));
     a->Visit(Field("camera", &camera).Doc("observation camera (of the episode's cameras)"));
     a->Visit(Field("step_length_m", &step_length_m).Above(0.0).Max(5.0).Unit("m").Doc("waypoint distance per action"));
-    a->Visit(Field("max_step_angle_deg", &max_step_angle_deg).Range(0.0, 180.0).Unit("deg")
+    a->Visit(Field("max_step_angle_deg", &max_step_angle_deg)
+                 .Range(0.0, 180.0)
+                 .Unit("deg")
                  .Doc("a1 = +-1: step direction this far right/left of the heading"));
     a->Visit(Field("max_turn_deg", &max_turn_deg).Range(0.0, 180.0).Unit("deg").Doc("a2 = +-1: heading change"));
-    a->Visit(Field("step_duration_s", &step_duration_s).Above(0.0).Max(30.0).Unit("s").Doc("simulated time per action"));
+    a->Visit(
+        Field("step_duration_s", &step_duration_s).Above(0.0).Max(30.0).Unit("s").Doc("simulated time per action"));
     a->Visit(Field("height_above_pipe_m", &height_above_pipe_m).Above(0.0).Unit("m").Doc("flight height (held)"));
-    a->Visit(Field("termination_distance_m", &termination_distance_m).Above(0.0).Unit("m").Doc("e_p beyond: terminated"));
+    a->Visit(
+        Field("termination_distance_m", &termination_distance_m).Above(0.0).Unit("m").Doc("e_p beyond: terminated"));
     a->Visit(Field("end_margin_m", &end_margin_m).Min(0.0).Unit("m").Doc("truncated this close to the pipe end"));
     a->Visit(Field("max_steps", &max_steps).Range(1, 1000000).Doc("truncated after this many actions"));
     a->Visit(Field("start_offset_m", &start_offset_m).Min(0.0).Unit("m").Doc("max lateral offset at reset"));
-    a->Visit(Field("start_heading_deg", &start_heading_deg).Range(0.0, 180.0).Unit("deg").Doc("max heading error at reset"));
-    a->Visit(Field("start_arc_fraction", &start_arc_fraction).Range(0.0, 0.9)
+    a->Visit(
+        Field("start_heading_deg", &start_heading_deg).Range(0.0, 180.0).Unit("deg").Doc("max heading error at reset"));
+    a->Visit(Field("start_arc_fraction", &start_arc_fraction)
+                 .Range(0.0, 0.9)
                  .Doc("random scenes start anywhere in this first fraction of the pipe"));
     a->Visit(Field("alive_reward", &alive_reward).Doc("r = alive - wp e_p^2 - wh e_psi"));
     a->Visit(Field("position_weight", &position_weight).Min(0.0));
@@ -91,18 +98,18 @@ void apply_override(PipeFollowingConfig* config, const std::string& key, const s
                     const std::string& source);
 
 struct PipeFollowingInfo {
-  double e_p = 0;             ///< horizontal distance to the centre line [m]
-  double e_psi = 0;           ///< heading error [rad], 0..pi
-  double lateral_m = 0;       ///< signed, > 0 right of the pipe
-  double arc_length_m = 0;    ///< nearest point's arc length from the pipe start
-  double progress = 0;        ///< arc_length / pipe length
+  double e_p = 0;           ///< horizontal distance to the centre line [m]
+  double e_psi = 0;         ///< heading error [rad], 0..pi
+  double lateral_m = 0;     ///< signed, > 0 right of the pipe
+  double arc_length_m = 0;  ///< nearest point's arc length from the pipe start
+  double progress = 0;      ///< arc_length / pipe length
   double pipe_length_m = 0;
-  double time_s = 0;          ///< simulated time since reset
+  double time_s = 0;  ///< simulated time since reset
   int steps = 0;
-  bool pipe_end = false;      ///< truncated at the pipe end
+  bool pipe_end = false;  ///< truncated at the pipe end
   std::uint64_t scene_seed = 0;
-  std::uint64_t clipped_actions = 0;    ///< since construction: components outside [-1, 1]
-  std::uint64_t rejected_actions = 0;   ///< since construction: NaN/Inf (replaced by 0, never integrated)
+  std::uint64_t clipped_actions = 0;   ///< since construction: components outside [-1, 1]
+  std::uint64_t rejected_actions = 0;  ///< since construction: NaN/Inf (replaced by 0, never integrated)
   std::array<double, 3> position_W{0, 0, 0};
   double yaw = 0;
 };
@@ -117,8 +124,7 @@ struct PipeFollowingStep {
 class PipeFollowingEnv {
  public:
   /// Throws ConfigError (bad config), EglError (no context). `context`: share an EGL context.
-  explicit PipeFollowingEnv(PipeFollowingConfig config,
-                            std::shared_ptr<unav_renderer::EglContext> context = nullptr);
+  explicit PipeFollowingEnv(PipeFollowingConfig config, std::shared_ptr<unav_renderer::EglContext> context = nullptr);
   ~PipeFollowingEnv();
 
   int obs_width() const;

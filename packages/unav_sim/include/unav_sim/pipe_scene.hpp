@@ -19,25 +19,25 @@ namespace unav::sim {
 struct PipeSceneRanges {
   /// World the lamps, materials and sun colour come from (relative to the resource roots).
   std::string base_world = "worlds/pipe_inspection/world.yaml";
-  Eigen::Vector2d first_segment_m{5.0, 9.0};   ///< straight run before the first turn
-  Eigen::Vector2d segment_m{4.0, 9.0};         ///< runs between turns and after the last
-  std::vector<int> turns{0, 3};                ///< [min, max] number of turns (uniform integer)
-  Eigen::Vector2d turn_deg{20.0, 75.0};        ///< turn angle magnitude; left or right at random
+  Eigen::Vector2d first_segment_m{5.0, 9.0};  ///< straight run before the first turn
+  Eigen::Vector2d segment_m{4.0, 9.0};        ///< runs between turns and after the last
+  std::vector<int> turns{0, 3};               ///< [min, max] number of turns (uniform integer)
+  Eigen::Vector2d turn_deg{20.0, 75.0};       ///< turn angle magnitude; left or right at random
   Eigen::Vector2d bend_radius_m{0.8, 2.5};
   Eigen::Vector2d pipe_radius_m{0.15, 0.35};
   Eigen::Vector2d burial_fraction{0.0, 0.5};
-  Eigen::Vector2d coating_albedo{0.55, 1.2};   ///< per-channel multiplier of the base coating
-  bool random_heading = true;                  ///< first run's heading uniform in [0, 360) deg, else north
+  Eigen::Vector2d coating_albedo{0.55, 1.2};  ///< per-channel multiplier of the base coating
+  bool random_heading = true;                 ///< first run's heading uniform in [0, 360) deg, else north
   Eigen::Vector2d seabed_depth_m{8.0, 14.0};
   Eigen::Vector2d relief_amplitude_m{0.0, 0.35};
   Eigen::Vector2d relief_wavelength_m{3.0, 9.0};
-  Eigen::Vector2d seabed_albedo{0.6, 1.15};    ///< multiplier of the base seabed albedo
+  Eigen::Vector2d seabed_albedo{0.6, 1.15};  ///< multiplier of the base seabed albedo
   Eigen::Vector2d rocks_per_100m2{0.0, 6.0};
-  Eigen::Vector2d rock_radius_m{0.08, 0.5};    ///< the field's min and max rock radius (fixed)
-  std::vector<std::string> waters{"I", "IA", "IB", "II", "III", "1C", "3C"};   ///< Jerlov presets, uniform
-  Eigen::Vector2d sun_irradiance{0.6, 1.3};    ///< multiplier of the base surface irradiance
-  Eigen::Vector2d sun_tilt_deg{0.0, 35.0};     ///< sun direction from the vertical, azimuth uniform
-  Eigen::Vector2d lamp_intensity{0.4, 1.6};    ///< multiplier of the base lamps
+  Eigen::Vector2d rock_radius_m{0.08, 0.5};  ///< the field's min and max rock radius (fixed)
+  std::vector<std::string> waters{"I", "IA", "IB", "II", "III", "1C", "3C"};  ///< Jerlov presets, uniform
+  Eigen::Vector2d sun_irradiance{0.6, 1.3};  ///< multiplier of the base surface irradiance
+  Eigen::Vector2d sun_tilt_deg{0.0, 35.0};   ///< sun direction from the vertical, azimuth uniform
+  Eigen::Vector2d lamp_intensity{0.4, 1.6};  ///< multiplier of the base lamps
   Eigen::Vector2d marine_snow_per_m3{0.0, 80.0};
 
   template <class Archive>
