@@ -221,12 +221,13 @@ void TrajectoryEvaluator::write_pipe_tracking(const std::string& path) {
                    {"pipe_length_m", t.pipe_length_m},
                    {"followed_fraction", t.followed_fraction},
                    {"lost", t.lost},
+                   {"completed", t.completed},
                    {"loss_distance_m", pipe_loss_m_}};
   if (t.lost) j["lost_at_s"] = ground_truth_.stamps[static_cast<std::size_t>(t.lost_at_index)];
   std::ofstream(path) << j.dump(2) << "\n";
   logger()->info("pipe tracking: mean e_p {:.3f} m, max {:.3f} m, followed {:.1f} of {:.1f} m ({:.0f} %){}",
                  t.mean_e_p_m, t.max_e_p_m, t.followed_m, t.pipe_length_m, 100.0 * t.followed_fraction,
-                 t.lost ? ", pipe lost" : "");
+                 t.lost ? ", pipe lost" : (t.completed ? ", end reached" : ""));
 }
 
 }  // namespace unav_evaluation

@@ -20,6 +20,7 @@ OnnxPipePolicy::OnnxPipePolicy(const std::string& model_path) : impl_(std::make_
   std::ifstream probe(model_path, std::ios::binary);
   if (!probe) throw std::runtime_error("drl policy: model file '" + model_path + "' cannot be opened");
   std::ifstream meta(model_path + ".json");
+  // (The graph outputs the unclipped mean action; act() clips it to [-1, 1].)
   if (!meta)
     throw std::runtime_error("drl policy: metadata '" + model_path +
                              ".json' (obs_shape) missing: export with "
@@ -36,12 +37,21 @@ OnnxPipePolicy::OnnxPipePolicy(const std::string& model_path) : impl_(std::make_
   try {
     impl_->net = cv::dnn::readNetFromONNX(model_path);
   } catch (const cv::Exception& e) {
-    throw std::runtime_error("drl policy: '" + model_path + "' is not a readable ONNX model: " + e.msg);
+    std::string why = e.msg;  // OpenCV's messages span lines: keep the error on one
+    std::replace(why.begin(), why.end(), '\n', ' ');
+    throw std::runtime_error("drl policy: '" + model_path + "' is not a readable ONNX model: " + why);
   }
   impl_->net.setPreferableBackend(cv::dnn::DNN_BACKEND_OPENCV);
   impl_->net.setPreferableTarget(cv::dnn::DNN_TARGET_CPU);
-  // One dry run: a wrong graph fails here, at start-up, not mid-mission.
-  (void)act(cv::Mat(height_, width_, CV_8UC3, cv::Scalar(0, 0, 0)));
+  // One dry run: a graph whose input is not the metadata's [h, w, 3] fails here, at start-up.
+  try {
+    (void)act(cv::Mat(height_, width_, CV_8UC3, cv::Scalar(0, 0, 0)));
+  } catch (const std::exception& e) {
+    std::string why = e.what();
+    std::replace(why.begin(), why.end(), '\n', ' ');
+    throw std::runtime_error("drl policy: '" + model_path + "' does not run on a " + std::to_string(height_) + "x" +
+                             std::to_string(width_) + "x3 image (obs_shape of its .json): " + why);
+  }
 }
 
 std::array<double, 2> OnnxPipePolicy::act(const cv::Mat& rgb) {

@@ -5,7 +5,8 @@
 
 namespace unav::scene {
 
-PipeTracking track_pipe(const World& world, const std::vector<Eigen::Vector3d>& positions_W, double loss_distance_m) {
+PipeTracking track_pipe(const World& world, const std::vector<Eigen::Vector3d>& positions_W, double loss_distance_m,
+                        double end_margin_m) {
   PipeTracking t;
   if (world.pipelines.empty()) return t;
   t.pipe_length_m = world.pipelines.front().length_m();
@@ -23,6 +24,10 @@ PipeTracking track_pipe(const World& world, const std::vector<Eigen::Vector3d>& 
       break;
     }
     t.followed_m = std::max(t.followed_m, q.arc_length_m);
+    if (q.arc_length_m >= t.pipe_length_m - end_margin_m) {
+      t.completed = true;
+      break;
+    }
   }
   if (t.samples > 0) {
     t.mean_e_p_m = sum / t.samples;

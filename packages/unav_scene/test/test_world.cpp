@@ -223,4 +223,14 @@ TEST(PipeTracking, CrossTrackErrorAndFollowedLength) {
   EXPECT_EQ(l.samples, 4);
   EXPECT_NEAR(l.followed_m, 3.0, 0.02);  // the point at north 5 after the loss does not count
   EXPECT_NEAR(l.max_e_p_m, 3.0, 1e-6);
+  EXPECT_FALSE(l.completed);
+  // Along the whole pipe and beyond its end: counting stops 1 m before the end (completed).
+  std::vector<Eigen::Vector3d> all;
+  for (const auto& c : w.pipelines[0].centerline_W) all.push_back(c);
+  for (int i = 1; i <= 40; ++i) all.push_back(w.pipelines[0].centerline_W.back() + Eigen::Vector3d(0.1 * i, 0, 0));
+  const auto c = unav::scene::track_pipe(w, all);
+  EXPECT_TRUE(c.completed);
+  EXPECT_FALSE(c.lost);
+  EXPECT_NEAR(c.mean_e_p_m, 0.0, 1e-9);
+  EXPECT_GT(c.followed_fraction, (c.pipe_length_m - 1.1) / c.pipe_length_m);
 }

@@ -122,7 +122,8 @@ def check_image(h: int, w: int) -> np.ndarray:
 
 
 class _OnnxPolicy(torch.nn.Module):
-    """uint8 NHWC image -> deterministic action (the Gaussian's mean), clipped to [-1, 1]."""
+    """NHWC image (float 0..255) -> deterministic action (the Gaussian's mean). Clipping to
+    [-1, 1] is left to the caller: OpenCV 4.6's ONNX importer cannot read opset-11 Clip."""
 
     def __init__(self, policy):
         super().__init__()
@@ -130,13 +131,12 @@ class _OnnxPolicy(torch.nn.Module):
 
     def forward(self, image):
         x = image.permute(0, 3, 1, 2).float()   # NHWC 0..255 -> NCHW; extract_features scales by 1/255
-        return torch.clamp(actor_mean(self.policy, x), -1.0, 1.0)
+        return actor_mean(self.policy, x)
 
 
 def export_onnx(model, path: str, obs_shape, metadata: dict) -> None:
     """ONNX graph for OpenCV DNN (the drl_planner node): input `image` float32 NHWC in 0..255 (RGB,
-    the observation as a float), output `action` (N, 2), the deterministic action clipped to
-    [-1, 1]. Metadata beside it (<path>.json), with a check pair: the action for a fixed
+    the observation as a float), output `action` (N, 2), the deterministic (unclipped) action. Metadata beside it (<path>.json), with a check pair: the action for a fixed
     synthetic image, which the C++ loader test reproduces."""
     module = _OnnxPolicy(model.policy).eval()
     h, w, c = obs_shape
@@ -145,9 +145,9 @@ def export_onnx(model, path: str, obs_shape, metadata: dict) -> None:
                       dynamic_axes=None)
     with torch.no_grad():
         img = check_image(h, w)
-        check = module(torch.as_tensor(img).unsqueeze(0))[0].tolist()
+        check = module(torch.as_tensor(img).unsqueeze(0))[0].clamp(-1, 1).tolist()
         # The same image rounded to uint8 values (what the C++ test feeds act(): convertTo rounds).
-        check_u8 = module(torch.as_tensor(np.round(img).astype(np.float32)).unsqueeze(0))[0].tolist()
+        check_u8 = module(torch.as_tensor(np.round(img).astype(np.float32)).unsqueeze(0))[0].clamp(-1, 1).tolist()
     metadata = dict(metadata, obs_shape=[h, w, c], check_action=check, check_action_u8=check_u8,
                     check_image="r = 255 x / (w - 1), g = 255 y / (h - 1), b = 128 (float, NHWC)")
     with open(path + ".json", "w") as f:
