@@ -58,7 +58,7 @@ def main() -> None:
             a.plot(steps[k - 1:], smooth, label=name)
         es, er, el = read_eval(os.path.join(run, "eval.csv"))
         b.plot(es, er, marker="o", label=f"{name} return")
-    a.set_xlabel("environment steps (PPO, after BC + critic warm-up)")
+    a.set_xlabel("environment steps (0-4096: critic warm-up, actor frozen; then PPO)")
     a.set_ylabel("episode return (rollouts, mean of 50)")
     a.set_title("training rollouts")
     a.grid(alpha=0.3)

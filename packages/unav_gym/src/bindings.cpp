@@ -69,7 +69,8 @@ std::array<double, 2> action_of(py::handle a) {
 
 PYBIND11_MODULE(_core, m) {
   m.doc() = "UNav-Sim pipe-following environment core (C++); use unav_gym's Gymnasium classes.";
-  py::register_exception_translator([](std::exception_ptr p) {
+  // pybind11 wants void(*)(std::exception_ptr): by value.
+  py::register_exception_translator([](std::exception_ptr p) {  // NOLINT(performance-unnecessary-value-param)
     try {
       if (p) std::rethrow_exception(p);
     } catch (const unav::ConfigError& e) {

@@ -190,10 +190,10 @@ struct Renderer::Impl {
   FrameSetup setup_frame(const Pose& X_WB, const CameraModel& c) const;
   void scene_pass(const Targets& t, const FrameSetup& f);
   void snow_pass(const FrameSetup& f, const CameraModel& c, double stamp_s);
-  bool inscatter_pass(const Targets& t, const FrameSetup& f, const CameraModel& c, float* march_max_m);
+  bool inscatter_pass(const Targets& t, const FrameSetup& f, const CameraModel& c, float* march_max_out);
   void post_pass(const Targets& t, const FrameSetup& f, const CameraModel& c, std::uint64_t seq, bool do_inscatter,
                  float march_max_m);
-  void draw(const Pose& X_WB, const CameraModel& c, double stamp_s, std::uint64_t seq);
+  void draw(const Pose& X_WB, const CameraModel& out_cam, double stamp_s, std::uint64_t seq);
   void start_readback(Slot& s, const Targets& t);
   Frame finish_readback(Slot& s);
   void collect_oldest();
@@ -222,7 +222,8 @@ void Renderer::Impl::self_test() {
   glDeleteFramebuffers(1, &fbo);
   glDeleteTextures(1, &tex);
   glDeleteProgram(p.id());
-  const int r = px[4 * 27], g = px[4 * 27 + 1], b = px[4 * 27 + 2];
+  constexpr std::size_t kPx = std::size_t{4} * 27;  // pixel (3, 3) of the 8x8 test frame
+  const int r = px[kPx], g = px[kPx + 1], b = px[kPx + 2];
   if (std::abs(r - 64) > 2 || std::abs(g - 128) > 2 || std::abs(b - 191) > 2)
     throw GlError("OpenGL context on '" + ctx->gl_renderer() + "' (" + ctx->platform() +
                   ") renders nothing usable: read back (" + std::to_string(r) + ", " + std::to_string(g) + ", " +
@@ -410,8 +411,8 @@ Renderer::Impl::FrameSetup Renderer::Impl::setup_frame(const Pose& X_WB, const C
       f.lamp_dir_C[3 * i + k] = static_cast<float>(dC[k]);
       f.lamp_I[3 * i + k] = static_cast<float>(L.intensity[k]);
     }
-    f.lamp_cos[2 * i] = static_cast<float>(std::cos(L.cone_half_angle_rad));
-    f.lamp_cos[2 * i + 1] = static_cast<float>(std::cos(0.55 * L.cone_half_angle_rad));
+    f.lamp_cos[static_cast<std::size_t>(2 * i)] = static_cast<float>(std::cos(L.cone_half_angle_rad));
+    f.lamp_cos[static_cast<std::size_t>(2 * i) + 1] = static_cast<float>(std::cos(0.55 * L.cone_half_angle_rad));
   }
 
   return f;

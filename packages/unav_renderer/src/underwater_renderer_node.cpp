@@ -58,6 +58,7 @@ UnderwaterRendererNode::UnderwaterRendererNode(const unav::NodeOptions& options)
     cams = load_cameras(cameras_path);
     if (!only.empty()) {
       std::vector<CameraModel> picked;
+      picked.reserve(only.size());
       for (const auto& n : only) picked.push_back(load_camera(cameras_path, n));  // error lists the file's cameras
       cams = std::move(picked);
     }
@@ -93,9 +94,10 @@ UnderwaterRendererNode::UnderwaterRendererNode(const unav::NodeOptions& options)
     const Eigen::Matrix3d K = c.K();
     for (int r = 0; r < 3; ++r)
       for (int k = 0; k < 3; ++k) {
-        ci.k()[static_cast<size_t>(r * 3 + k)] = K(r, k);
-        ci.r()[static_cast<size_t>(r * 3 + k)] = r == k ? 1.0 : 0.0;
-        ci.p()[static_cast<size_t>(r * 4 + k)] = K(r, k);
+        const auto rs = static_cast<size_t>(r), ks = static_cast<size_t>(k);
+        ci.k()[rs * 3 + ks] = K(r, k);
+        ci.r()[rs * 3 + ks] = r == k ? 1.0 : 0.0;
+        ci.p()[rs * 4 + ks] = K(r, k);
       }
     cameras_.push_back(std::move(p));
   }

@@ -23,7 +23,7 @@ namespace {
 const std::string kRoot = UNAV_REPO_ROOT;
 
 fs::path temp_dir(const std::string& name) {
-  const fs::path d = fs::temp_directory_path() / ("unav_scene_test_" + name + "_" + std::to_string(::getpid()));
+  fs::path d = fs::temp_directory_path() / ("unav_scene_test_" + name + "_" + std::to_string(::getpid()));
   fs::create_directories(d);
   return d;
 }

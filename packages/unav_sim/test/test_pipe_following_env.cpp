@@ -138,7 +138,7 @@ TEST(PipeFollowingEnv, VectorEnvSharesOneContextAndMatchesSingleEnvs) {
   std::vector<std::uint8_t> obs;
   const auto steps = vec.step({{0.1, 0.0}, {0.0, -0.2}, {-0.3, 0.4}}, &obs);
   ASSERT_EQ(steps.size(), 3u);
-  const std::size_t frame = 80u * 45u * 3u;
+  const std::size_t frame = std::size_t{80} * 45 * 3;
   ASSERT_EQ(obs.size(), 3 * frame);
   PipeFollowingEnv single(c);
   single.reset(102);
