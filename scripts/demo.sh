@@ -2,7 +2,8 @@
 # README command 1: install what is missing, build, and run the pipe-inspection demo headless on
 # defaults: physics (1 kHz, lockstep) + underwater renderer (front and down cameras) + dataset
 # recorder, as separate processes over DDS. Stops after DEMO_SIM_SECONDS of simulated time.
-# Then the visual-localisation benchmark (vslam_benchmark.launch.yaml; DEMO_VSLAM=0 skips it).
+# Then DRL pipe following with the shipped policy (DEMO_DRL=0 skips it) and the visual-localisation
+# benchmark (vslam_benchmark.launch.yaml; DEMO_VSLAM=0 skips it).
 set -eo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/install_deps.sh
@@ -32,7 +33,18 @@ echo "  dataset/evaluation/ (KLT RGB-D VO vs ground truth: results.md/csv/json, 
 echo "  launch.log (all node output), topics.txt (the ROS 2 topics that were live)"
 if [ -f "$OUT/dataset/evaluation/results.md" ]; then head -3 "$OUT/dataset/evaluation/results.md"; fi
 
-# Second part: the visual-localisation benchmark (the paper's Table II): the linear and the loop
+# Second part: DRL pipe following (the paper's section V-B): the shipped policy flies the pipe from
+# the down camera over DDS; the evaluator scores the cross-track error. About 15 s; DEMO_DRL=0 skips it.
+if [ "${DEMO_DRL:-1}" != "0" ]; then
+  echo "demo: DRL pipe following, learned policy (log: $OUT/pipe_following.log)"
+  rc=0
+  unav launch launch_scripts/pipe_following.launch.yaml output_dir:="$OUT/pipe_following" > "$OUT/pipe_following.log" 2>&1 || rc=$?
+  [ "$rc" -eq 0 ] || { echo "demo: pipe following failed (exit $rc); see $OUT/pipe_following.log"; exit 1; }
+  grep -h "pipe tracking" "$OUT/pipe_following.log" | sed 's/^.*\]: //' || true
+  echo "demo: outputs in $OUT/pipe_following/evaluation: pipe_tracking.json (cross-track error e_p, length followed), ground_truth.tum, top_view.png"
+fi
+
+# Third part: the visual-localisation benchmark (the paper's Table II): the linear and the loop
 # pipeline flown at once, monocular ORB SLAM + KLT VO on the 640x480 down camera, evaluated.
 # About 2 minutes on 2 cores; DEMO_VSLAM=0 skips it.
 if [ "${DEMO_VSLAM:-1}" != "0" ]; then
