@@ -4,9 +4,9 @@
 #include <cmath>
 #include <filesystem>
 
+#include "unav_common/resources.hpp"
 #include "unav_control/config.hpp"
 #include "unav_runtime/conversions.hpp"
-#include "unav_common/resources.hpp"
 #include "unav_scene/world.hpp"
 
 namespace unav::control {
@@ -46,15 +46,19 @@ auto wrap_config(F&& f) -> decltype(f()) {
 
 ControlAllocatorNode::ControlAllocatorNode(const unav::NodeOptions& options)
     : Node("control_allocator", options, "rov") {
-  const std::string file = declare_parameter<std::string>(
-      "config_file", resource("config/controllers/allocator.yaml"), {"allocator YAML", {}, {}, false});
+  ControllerFileParam fp;
+  fp.config_file = resource("config/controllers/allocator.yaml");
+  declare_params(&fp);
+  const std::string& file = fp.config_file;
   AllocatorParams params = load_allocator_params(file);
   declare_params(&params);  // params files and -p name:=value, checked by the schema
-  const AllocatorConfig cfg = make_allocator_config(params, config_root_for(file), "node '" + name() + "' (config_file " + file + ")");
+  const AllocatorConfig cfg =
+      make_allocator_config(params, config_root_for(file), "node '" + name() + "' (config_file " + file + ")");
   allocator_ = wrap_config([&] { return std::make_unique<Allocator>(make_allocator(cfg)); });
   for (const auto& t : cfg.vehicle.thrusters) names_.push_back(t.name);
-  failed_sub_ = create_subscription<std_msgs::msg::String>(
-      "thrusters/set_failed", unav::QoS::reliable(), [this](const std_msgs::msg::String& m) { on_set_failed(m.data()); });
+  failed_sub_ =
+      create_subscription<std_msgs::msg::String>("thrusters/set_failed", unav::QoS::reliable(),
+                                                 [this](const std_msgs::msg::String& m) { on_set_failed(m.data()); });
   pub_ = create_publisher<unav_msgs::msg::ThrusterCommand>("thrusters/command", unav::QoS::reliable());
   sub_ = create_subscription<geometry_msgs::msg::WrenchStamped>(
       "control/wrench_command", unav::QoS::reliable(), [this](const geometry_msgs::msg::WrenchStamped& w) {
@@ -67,7 +71,8 @@ ControlAllocatorNode::ControlAllocatorNode(const unav::NodeOptions& options)
           logger()->warn("wrench command with NaN/Inf rejected: all thrusters to zero");
         } else if ((s.status == AllocationStatus::kScaled || s.status == AllocationStatus::kInfeasible) &&
                    ++saturated_ % 100 == 1) {
-          logger()->warn("wrench saturates the thrusters (scale {:.2f}); {} saturated commands so far", s.scale, saturated_);
+          logger()->warn("wrench saturates the thrusters (scale {:.2f}); {} saturated commands so far", s.scale,
+                         saturated_);
         }
         unav_msgs::msg::ThrusterCommand cmd;
         cmd.header() = w.header();
@@ -83,8 +88,10 @@ void ControlAllocatorNode::on_set_failed(const std::string& request) {
   const std::string flag = colon == std::string::npos ? "true" : request.substr(colon + 1);
   const auto it = std::find(names_.begin(), names_.end(), name);
   if (it == names_.end() || (flag != "true" && flag != "false")) {
-    logger()->warn("thrusters/set_failed '{}' ignored: expected '<thruster>' or '<thruster>:false' with a thruster "
-                   "of this vehicle", request);
+    logger()->warn(
+        "thrusters/set_failed '{}' ignored: expected '<thruster>' or '<thruster>:false' with a thruster "
+        "of this vehicle",
+        request);
     return;
   }
   const int index = static_cast<int>(it - names_.begin());
@@ -95,17 +102,19 @@ void ControlAllocatorNode::on_set_failed(const std::string& request) {
 }
 
 MpcControllerNode::MpcControllerNode(const unav::NodeOptions& options) : Node("mpc_controller", options, "rov") {
-  const std::string file = declare_parameter<std::string>("config_file", resource("config/controllers/mpc.yaml"),
-                                                          {"MPC YAML", {}, {}, false});
+  ControllerFileParam fp;
+  fp.config_file = resource("config/controllers/mpc.yaml");
+  declare_params(&fp);
+  const std::string& file = fp.config_file;
   // One parameter system: the schema's defaults, then the config file, then this node's params
   // files and `-p name:=value` (e.g. -p horizon_steps:=30), each checked by the schema.
   MpcParams params = load_mpc_params(file);
   declare_params(&params);
   MpcConfig cfg = make_mpc_config(params, config_root_for(file), "node '" + name() + "' (config_file " + file + ")");
   dt_ = cfg.options.dt;
-  setpoint_sync_ = declare_parameter<bool>(
-      "setpoint_sync", false,
-      {"solve for a state only once a setpoint stamped at or after it arrived (deterministic lockstep)", {}, {}, false});
+  MpcNodeParams np;
+  declare_params(&np);
+  setpoint_sync_ = np.setpoint_sync;
   if (setpoint_sync_ && cfg.options.max_solve_time_ms > 0.0) {
     // Lockstep promises identical runs: a wall-clock budget would make the plan depend on load.
     logger()->info("lockstep (setpoint_sync): max_solve_time_ms {} ignored, solves bounded by {} iterations",
@@ -170,12 +179,15 @@ void MpcControllerNode::solve(const nav_msgs::msg::Odometry& m) {
   have_output_ = true;
 }
 
-WaypointFollowerNode::WaypointFollowerNode(const unav::NodeOptions& options) : Node("waypoint_follower", options, "rov") {
+WaypointFollowerNode::WaypointFollowerNode(const unav::NodeOptions& options)
+    : Node("waypoint_follower", options, "rov") {
+  WaypointFollowerParams prm;
+  declare_params(&prm);
   WaypointFollowerOptions wo;
-  wo.acceptance_radius = declare_parameter<double>("acceptance_radius", 0.3, {"waypoint reached within [m]", 1e-3, 100.0, false});
-  const auto flat = declare_parameter<std::vector<double>>("waypoints", {}, {"[x, y, z, ...] NED [m]", {}, {}, false});
-  const std::string world = declare_parameter<std::string>("pipeline_world", "", {"world.yaml whose first pipeline to follow", {}, {}, false});
-  const double height = declare_parameter<double>("height_above_pipe", 1.5, {"m above the pipe's centre line", 0.0, 50.0, false});
+  wo.acceptance_radius = prm.acceptance_radius;
+  const std::vector<double>& flat = prm.waypoints;
+  const std::string& world = prm.pipeline_world;
+  const double height = prm.height_above_pipe;
   follower_ = WaypointFollower(wo);
   std::vector<PoseSetpoint> path;
   if (!world.empty()) {
@@ -202,31 +214,34 @@ WaypointFollowerNode::WaypointFollowerNode(const unav::NodeOptions& options) : N
   std::string msg;
   if (!path.empty() && !follower_.SetPath(path, &msg)) throw unav::ParameterError("node '" + name() + "': " + msg);
   pub_ = create_publisher<geometry_msgs::msg::PoseStamped>("control/pose_setpoint", unav::QoS::reliable());
-  path_sub_ = create_subscription<nav_msgs::msg::Path>("control/path", unav::QoS::reliable(), [this](const nav_msgs::msg::Path& p) {
-    std::vector<PoseSetpoint> sp;
-    for (const auto& ps : p.poses()) {
-      PoseSetpoint s;
-      s.p_W = unav::from_msg(ps.pose().position());
-      s.q_WB = unav::from_msg(ps.pose().orientation());
-      sp.push_back(s);
-    }
-    std::string err;
-    if (!follower_.SetPath(sp, &err)) logger()->warn("path rejected: {}", err);
-    finished_logged_ = false;
-  });
-  odom_sub_ = create_subscription<nav_msgs::msg::Odometry>("ground_truth/odom", unav::QoS::reliable(), [this](const nav_msgs::msg::Odometry& m) {
-    // Without a path: a hold setpoint at the current position.
-    const WaypointUpdate u = follower_.Update(unav::from_msg(m.pose().pose().position()));
-    if (u.finished && !finished_logged_) {
-      logger()->info("path finished at t = {:.2f} s", stamp_of(m.header()));
-      finished_logged_ = true;
-    }
-    geometry_msgs::msg::PoseStamped out;
-    out.header().stamp() = m.header().stamp();
-    out.header().frame_id("world_ned");
-    out.pose() = unav::to_msg(u.setpoint.p_W, u.setpoint.q_WB);
-    pub_->publish(out);
-  });
+  path_sub_ = create_subscription<nav_msgs::msg::Path>("control/path", unav::QoS::reliable(),
+                                                       [this](const nav_msgs::msg::Path& p) {
+                                                         std::vector<PoseSetpoint> sp;
+                                                         for (const auto& ps : p.poses()) {
+                                                           PoseSetpoint s;
+                                                           s.p_W = unav::from_msg(ps.pose().position());
+                                                           s.q_WB = unav::from_msg(ps.pose().orientation());
+                                                           sp.push_back(s);
+                                                         }
+                                                         std::string err;
+                                                         if (!follower_.SetPath(sp, &err))
+                                                           logger()->warn("path rejected: {}", err);
+                                                         finished_logged_ = false;
+                                                       });
+  odom_sub_ = create_subscription<nav_msgs::msg::Odometry>(
+      "ground_truth/odom", unav::QoS::reliable(), [this](const nav_msgs::msg::Odometry& m) {
+        // Without a path: a hold setpoint at the current position.
+        const WaypointUpdate u = follower_.Update(unav::from_msg(m.pose().pose().position()));
+        if (u.finished && !finished_logged_) {
+          logger()->info("path finished at t = {:.2f} s", stamp_of(m.header()));
+          finished_logged_ = true;
+        }
+        geometry_msgs::msg::PoseStamped out;
+        out.header().stamp() = m.header().stamp();
+        out.header().frame_id("world_ned");
+        out.pose() = unav::to_msg(u.setpoint.p_W, u.setpoint.q_WB);
+        pub_->publish(out);
+      });
   logger()->info("{} waypoints", path.size());
 }
 

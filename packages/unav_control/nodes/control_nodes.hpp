@@ -34,6 +34,7 @@
 #include "nav_msgs/msg/odometry.hpp"
 #include "nav_msgs/msg/path.hpp"
 #include "std_msgs/msg/string.hpp"
+#include "unav_common/config.hpp"
 #include "unav_control/allocator.hpp"
 #include "unav_control/mpc.hpp"
 #include "unav_control/waypoint_follower.hpp"
@@ -41,6 +42,45 @@
 #include "unav_runtime/runtime.hpp"
 
 namespace unav::control {
+
+/// The YAML that control_allocator and mpc_controller start from (their schema's values are
+/// then overridden by params files and `-p`).
+struct ControllerFileParam {
+  std::string config_file;
+  template <class Archive>
+  void Serialize(Archive* a) {
+    a->Visit(unav::common::Field("config_file", &config_file).Doc("controller YAML read before the overrides"));
+  }
+};
+
+/// mpc_controller's node-level parameter (the MPC's own are MpcParams).
+struct MpcNodeParams {
+  bool setpoint_sync = false;
+  template <class Archive>
+  void Serialize(Archive* a) {
+    a->Visit(
+        unav::common::Field("setpoint_sync", &setpoint_sync)
+            .Doc("solve for a state only once a setpoint stamped at or after it arrived (deterministic lockstep)"));
+  }
+};
+
+/// waypoint_follower's parameters.
+struct WaypointFollowerParams {
+  double acceptance_radius = 0.3;
+  std::vector<double> waypoints;
+  std::string pipeline_world;
+  double height_above_pipe = 1.5;
+  template <class Archive>
+  void Serialize(Archive* a) {
+    using unav::common::Field;
+    a->Visit(
+        Field("acceptance_radius", &acceptance_radius).Range(1e-3, 100.0).Unit("m").Doc("waypoint reached within"));
+    a->Visit(Field("waypoints", &waypoints).Unit("m").Doc("[x, y, z, ...] NED"));
+    a->Visit(Field("pipeline_world", &pipeline_world).Doc("world.yaml whose first pipeline to follow"));
+    a->Visit(
+        Field("height_above_pipe", &height_above_pipe).Range(0.0, 50.0).Unit("m").Doc("above the pipe's centre line"));
+  }
+};
 
 class ControlAllocatorNode : public unav::Node {
  public:

@@ -6,6 +6,9 @@
 //   sub  camera/<camera>/image_raw, depth/image_raw, segmentation/image_raw   sensor_msgs/Image
 //   sub  camera/<camera>/camera_info   sensor_msgs/CameraInfo
 //   sub  ground_truth/odom             nav_msgs/Odometry
+//   sub  /tf_static                    tf2_msgs/TFMessage (latched): the camera mount body_frame ->
+//                                      <camera>_optical, published by the renderer (unless
+//                                      cameras_config names a camera YAML)
 //   sub  imu                           sensor_msgs/Imu (sensor_data)
 //   pub  /lockstep/ack                 unav_msgs/LockstepAck (lockstep: true; acks every odometry,
 //                                      so the physics never outruns the recorder's ground truth)
@@ -16,11 +19,14 @@
 #include "sensor_msgs/msg/camera_info.hpp"
 #include "sensor_msgs/msg/image.hpp"
 #include "sensor_msgs/msg/imu.hpp"
+#include "unav_common/config.hpp"
 #include "unav_common/resources.hpp"
 #include "unav_datagen/dataset_writer.hpp"
 #include "unav_runtime/conversions.hpp"
 #include "unav_runtime/lockstep_ack.hpp"
 #include "unav_runtime/runtime.hpp"
+#include "unav_runtime/synchronizer.hpp"
+#include "unav_runtime/tf_static.hpp"
 #include "unav_scene/camera.hpp"
 
 namespace unav_datagen {
@@ -32,26 +38,58 @@ double stamp_of(const std_msgs::msg::dds_::Header_& h) {
 
 }  // namespace
 
+struct DatasetRecorderParams {
+  std::string output_dir = "out/dataset";
+  std::string camera = "front";
+  std::string cameras_config;
+  std::string body_frame = "base_link_frd";
+  bool lockstep = false;
+  std::string lockstep_name = "recorder";
+
+  template <class Archive>
+  void Serialize(Archive* a) {
+    using unav::common::Field;
+    a->Visit(Field("output_dir", &output_dir).Doc("dataset folder"));
+    a->Visit(Field("camera", &camera).Doc("camera name to record"));
+    a->Visit(Field("cameras_config", &cameras_config)
+                 .Doc("camera YAML for the mount; empty: body_frame -> <camera>_optical from /tf_static"));
+    a->Visit(Field("body_frame", &body_frame).Doc("vehicle body frame (tf parent of the camera)"));
+    a->Visit(Field("lockstep", &lockstep).Doc("ack every odometry on /lockstep/ack"));
+    a->Visit(Field("lockstep_name", &lockstep_name).Doc("participant name in acks"));
+  }
+};
+
 class DatasetRecorder : public unav::Node {
  public:
   explicit DatasetRecorder(const unav::NodeOptions& options) : Node("dataset_recorder", options, "rov") {
-    const std::string out =
-        declare_parameter<std::string>("output_dir", "out/dataset", {"dataset folder", {}, {}, false});
-    camera_ = declare_parameter<std::string>("camera", "front", {"camera name to record", {}, {}, false});
-    const std::string cams_path = declare_parameter<std::string>(
-        "cameras_config", unav::common::try_find_resource("config/sensors/bluerov2_cameras.yaml").value_or(""),
-        {"camera YAML (for the camera's mount on the body)", {}, {}, false});
-    X_BC_ = unav::scene::load_camera(cams_path, camera_).X_BC;  // ConfigError names file and camera
+    DatasetRecorderParams prm;
+    declare_params(&prm);
+    const std::string& out = prm.output_dir;
+    camera_ = prm.camera;
+    if (!prm.cameras_config.empty()) {
+      X_BC_ = unav::scene::load_camera(prm.cameras_config, camera_).X_BC;  // ConfigError names file and camera
+      have_mount_ = true;
+    } else {
+      // The mount's owner (the renderer) publishes it on /tf_static, latched; poses wait for it.
+      tf_static_ = std::make_unique<unav::StaticTransformListener>(*this);
+      tf_static_->on_update([this, body = prm.body_frame] {
+        if (have_mount_) return;
+        if (const auto X = tf_static_->lookup(body, camera_ + "_optical")) {
+          X_BC_ = *X;
+          have_mount_ = true;
+          logger()->info("camera mount {} -> {}_optical from /tf_static", body, camera_);
+          for (const auto& [t, X_WB] : unmounted_) writer_->write_pose(t, X_WB * X_BC_, X_WB);
+          unmounted_.clear();
+        }
+      });
+    }
     try {
       writer_ = std::make_unique<DatasetWriter>(out);
     } catch (const DatasetError& e) {
       throw unav::ConfigError(e.what());
     }
-    const bool lockstep =
-        declare_parameter<bool>("lockstep", false, {"ack every odometry on /lockstep/ack", {}, {}, false});
-    ack_name_ =
-        declare_parameter<std::string>("lockstep_name", "recorder", {"participant name in acks", {}, {}, false});
-    if (lockstep) acker_ = std::make_unique<unav::lockstep::Acker>(*this, ack_name_);  // answers every state
+    ack_name_ = prm.lockstep_name;
+    if (prm.lockstep) acker_ = std::make_unique<unav::lockstep::Acker>(*this, ack_name_);  // answers every state
     const std::string base = "camera/" + camera_;
     const unav::QoS q = unav::QoS::reliable(5);
     rgb_sub_ =
@@ -59,7 +97,7 @@ class DatasetRecorder : public unav::Node {
           if (!check(m, "rgb8", 3)) return;
           const double t = stamp_of(m.header());
           writer_->write_rgb(t, static_cast<int>(m.width()), static_cast<int>(m.height()), m.data().data());
-          write_pose_at(t);
+          pose_sync_.add_first(unav::nanoseconds(m.header()), t);
         });
     depth_sub_ = create_subscription<sensor_msgs::msg::Image>(
         base + "/depth/image_raw", q, [this](const sensor_msgs::msg::Image& m) {
@@ -89,7 +127,7 @@ class DatasetRecorder : public unav::Node {
                                                                   });
     odom_sub_ = create_subscription<nav_msgs::msg::Odometry>(
         "ground_truth/odom", unav::QoS::reliable(100), [this](const nav_msgs::msg::Odometry& m) {
-          on_pose(stamp_of(m.header()), unav::from_msg(m.pose().pose()));
+          pose_sync_.add_second(unav::nanoseconds(m.header()), unav::from_msg(m.pose().pose()));
           if (acker_) acker_->ack(m.header());
         });
     // Best effort to match the IMU publisher (sensor_data), but a deep history: physics runs in
@@ -105,6 +143,11 @@ class DatasetRecorder : public unav::Node {
     logger()->info("recording camera '{}' to {}", camera_, out);
   }
   ~DatasetRecorder() override {
+    if (!unmounted_.empty())
+      logger()->error(
+          "no {}_optical mount arrived on /tf_static (is the renderer running?): {} ground-truth "
+          "poses not written (give cameras_config to record without the renderer's tf)",
+          camera_, unmounted_.size());
     writer_->close();
     logger()->info("dataset closed: {} frames in {}", writer_->frames(), writer_->root());
   }
@@ -116,38 +159,27 @@ class DatasetRecorder : public unav::Node {
                    m.data().size(), encoding, m.width(), m.height());
     return false;
   }
-  // Ground truth at the image's stamp. The renderer renders at odometry stamps, so the pose with
-  // exactly that stamp exists; it may arrive after the image (different writers), in which case
-  // the image waits for it.
-  void write_pose_at(double t) {
-    for (auto it = poses_.rbegin(); it != poses_.rend(); ++it) {
-      if (std::abs(it->first - t) < 1e-9) {
-        writer_->write_pose(t, it->second * X_BC_, it->second);
-        return;
-      }
-      if (it->first < t) break;
+  // Ground truth of an image: the renderer renders at odometry stamps, so the pose with exactly
+  // the image's stamp exists (it may arrive before or after the image: different writers).
+  void on_image_pose(double t, const Eigen::Isometry3d& X_WB) {
+    if (!have_mount_) {
+      unmounted_.emplace_back(t, X_WB);
+      return;
     }
-    waiting_.push_back(t);
-  }
-  void on_pose(double t, const Eigen::Isometry3d& X) {
-    poses_.emplace_back(t, X);
-    if (poses_.size() > 2000) poses_.pop_front();
-    for (auto it = waiting_.begin(); it != waiting_.end();) {
-      if (std::abs(*it - t) < 1e-9) {
-        writer_->write_pose(t, X * X_BC_, X);
-        it = waiting_.erase(it);
-      } else {
-        ++it;
-      }
-    }
+    writer_->write_pose(t, X_WB * X_BC_, X_WB);
   }
 
   std::string camera_;
   Eigen::Isometry3d X_BC_ = Eigen::Isometry3d::Identity();
   std::unique_ptr<DatasetWriter> writer_;
   bool camera_written_ = false;
-  std::deque<std::pair<double, Eigen::Isometry3d>> poses_;
-  std::vector<double> waiting_;  ///< image stamps whose pose has not arrived yet
+  bool have_mount_ = false;
+  std::unique_ptr<unav::StaticTransformListener> tf_static_;
+  std::vector<std::pair<double, Eigen::Isometry3d>> unmounted_;  ///< image poses before the mount arrived
+  // Image stamps paired with the odometry of the same stamp; odometry runs ahead of the images
+  // by up to a lockstep burst, hence the deep queue.
+  unav::sync::ExactTime<double, Eigen::Isometry3d> pose_sync_{
+      4000, [this](const double& t, const Eigen::Isometry3d& X_WB) { on_image_pose(t, X_WB); }};
   std::string ack_name_;
   std::unique_ptr<unav::lockstep::Acker> acker_;
   std::shared_ptr<unav::Subscription<sensor_msgs::msg::Image>> rgb_sub_, depth_sub_, seg_sub_;

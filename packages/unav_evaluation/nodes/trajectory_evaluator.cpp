@@ -64,33 +64,27 @@ class FolderLock {
 
 TrajectoryEvaluator::TrajectoryEvaluator(const unav::NodeOptions& options)
     : Node("trajectory_evaluator", options, "rov") {
-  const auto names = declare_parameter<std::vector<std::string>>("estimates", {}, {"estimator names", {}, {}, false});
-  output_dir_ = declare_parameter<std::string>("output_dir", "out/evaluation", {"results folder", {}, {}, false});
-  trajectory_name_ =
-      declare_parameter<std::string>("trajectory_name", "run", {"row label, e.g. linear", {}, {}, false});
+  TrajectoryEvaluatorParams prm;
+  declare_params(&prm);
+  const std::vector<std::string>& names = prm.estimates;
+  output_dir_ = prm.output_dir;
+  trajectory_name_ = prm.trajectory_name;
   try {
-    alignment_ = alignment_from_string(
-        declare_parameter<std::string>("alignment", "sim3", {"none|se3|sim3|scale", {}, {}, false}));
+    alignment_ = alignment_from_string(prm.alignment);
   } catch (const TrajectoryError& e) {
     throw unav::ParameterError("node '" + name() + "': parameter 'alignment': " + e.what());
   }
-  rpe_.delta = static_cast<double>(declare_parameter<int64_t>("rpe_delta", 1, {"RPE delta [frames]", 1.0, {}, false}));
-  max_diff_ =
-      declare_parameter<double>("max_time_diff", 0.02, {"association max time difference [s]", 1e-6, 10.0, false});
-  combine_ = declare_parameter<bool>(
-      "combine", false, {"share output_dir with other runs (prefixed files, one combined table)", {}, {}, false});
+  rpe_.delta = static_cast<double>(prm.rpe_delta);
+  max_diff_ = prm.max_time_diff;
+  combine_ = prm.combine;
   if (combine_ && (trajectory_name_.empty() || trajectory_name_.find_first_of("/\t") != std::string::npos))
     throw unav::ParameterError("node '" + name() + "': trajectory_name '" + trajectory_name_ +
                                "' must be a non-empty file name with combine");
-  const std::string camera = declare_parameter<std::string>(
-      "camera", "", {"estimators report this camera's optical frame (empty: base_link_frd)", {}, {}, false});
-  const std::string cams_path = declare_parameter<std::string>(
-      "cameras_config", "", {"camera YAML with `camera` (empty: the mount comes from /tf_static)", {}, {}, false});
-  body_frame_ = declare_parameter<std::string>("body_frame", "base_link_frd", {"vehicle body frame", {}, {}, false});
-  const std::string pipe_world = declare_parameter<std::string>(
-      "pipeline_world", "", {"world.yaml: also report cross-track error along its first pipeline", {}, {}, false});
-  pipe_loss_m_ =
-      declare_parameter<double>("pipe_loss_distance", 2.5, {"pipe lost beyond this e_p [m]", 0.01, 100.0, false});
+  const std::string& camera = prm.camera;
+  const std::string& cams_path = prm.cameras_config;
+  body_frame_ = prm.body_frame;
+  const std::string& pipe_world = prm.pipeline_world;
+  pipe_loss_m_ = prm.pipe_loss_distance;
   if (!pipe_world.empty()) {
     pipe_world_ = std::make_unique<unav::scene::World>(unav::scene::load_world(pipe_world));
     if (pipe_world_->pipelines.empty()) throw unav::ConfigError("pipeline_world '" + pipe_world + "' has no pipeline");
@@ -99,16 +93,15 @@ TrajectoryEvaluator::TrajectoryEvaluator(const unav::NodeOptions& options)
     // The mount's owner (the renderer) publishes it once, latched: look it up like tf2 does.
     camera_frame_ = camera + "_optical";
     have_mount_ = false;
-    tf_static_sub_ = create_subscription<tf2_msgs::msg::TFMessage>(
-        "/tf_static", unav::QoS{unav::QoS::Reliability::kReliable, unav::QoS::Durability::kTransientLocal, 100},
-        [this](const tf2_msgs::msg::TFMessage& m) {
-          for (const auto& t : m.transforms())
-            if (t.child_frame_id() == camera_frame_ && t.header().frame_id() == body_frame_) {
-              X_BE_ = unav::from_msg(t.transform());
-              if (!have_mount_) logger()->info("camera mount {} -> {} from /tf_static", body_frame_, camera_frame_);
-              have_mount_ = true;
-            }
-        });
+    tf_static_ = std::make_unique<unav::StaticTransformListener>(*this);
+    tf_static_->on_update([this] {
+      if (have_mount_) return;
+      if (const auto X = tf_static_->lookup(body_frame_, camera_frame_)) {
+        X_BE_ = *X;
+        have_mount_ = true;
+        logger()->info("camera mount {} -> {} from /tf_static", body_frame_, camera_frame_);
+      }
+    });
   } else if (!camera.empty()) {
     X_BE_ = unav::scene::load_camera(cams_path, camera).X_BC;  // ConfigError names file and camera
   }

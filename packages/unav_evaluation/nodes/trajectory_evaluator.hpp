@@ -30,11 +30,49 @@
 #include "nav_msgs/msg/odometry.hpp"
 #include "nav_msgs/msg/path.hpp"
 #include "tf2_msgs/msg/tf_message.hpp"
+#include "unav_common/config.hpp"
 #include "unav_evaluation/report.hpp"
 #include "unav_runtime/runtime.hpp"
+#include "unav_runtime/tf_static.hpp"
 #include "unav_scene/world.hpp"
 
 namespace unav_evaluation {
+
+/// The trajectory_evaluator's parameters (params file or `-p name:=value`; `--help` lists them).
+struct TrajectoryEvaluatorParams {
+  std::vector<std::string> estimates;
+  std::string output_dir = "out/evaluation";
+  std::string trajectory_name = "run";
+  std::string alignment = "sim3";
+  int64_t rpe_delta = 1;
+  double max_time_diff = 0.02;
+  bool combine = false;
+  std::string camera;
+  std::string cameras_config;
+  std::string body_frame = "base_link_frd";
+  std::string pipeline_world;
+  double pipe_loss_distance = 2.5;
+
+  template <class Archive>
+  void Serialize(Archive* a) {
+    using unav::common::Field;
+    a->Visit(Field("estimates", &estimates).Doc("estimator names (localization/<name>/odom)"));
+    a->Visit(Field("output_dir", &output_dir).Doc("results folder"));
+    a->Visit(Field("trajectory_name", &trajectory_name).Doc("row label, e.g. linear"));
+    a->Visit(Field("alignment", &alignment).OneOf({"none", "se3", "sim3", "scale"}).Doc("trajectory alignment"));
+    a->Visit(Field("rpe_delta", &rpe_delta).Min(1.0).Doc("RPE delta [frames]"));
+    a->Visit(Field("max_time_diff", &max_time_diff).Range(1e-6, 10.0).Unit("s").Doc("association max time difference"));
+    a->Visit(Field("combine", &combine).Doc("share output_dir with other runs (prefixed files, one combined table)"));
+    a->Visit(Field("camera", &camera).Doc("estimators report this camera's optical frame (empty: body_frame)"));
+    a->Visit(Field("cameras_config", &cameras_config)
+                 .Doc("camera YAML with `camera` (empty: the mount comes from /tf_static)"));
+    a->Visit(Field("body_frame", &body_frame).Doc("vehicle body frame"));
+    a->Visit(Field("pipeline_world", &pipeline_world)
+                 .Doc("world.yaml: also report cross-track error along its first pipeline"));
+    a->Visit(
+        Field("pipe_loss_distance", &pipe_loss_distance).Range(0.01, 100.0).Unit("m").Doc("pipe lost beyond this e_p"));
+  }
+};
 
 class TrajectoryEvaluator : public unav::Node {
  public:
@@ -59,7 +97,7 @@ class TrajectoryEvaluator : public unav::Node {
   Eigen::Isometry3d X_BE_ = Eigen::Isometry3d::Identity();  ///< estimated frame on the body
   std::string camera_frame_, body_frame_;                   ///< tf lookup of X_BE_ (camera_frame_ empty: not needed)
   bool have_mount_ = true;                                  ///< false until the camera mount is known
-  std::shared_ptr<unav::Subscription<tf2_msgs::msg::TFMessage>> tf_static_sub_;
+  std::unique_ptr<unav::StaticTransformListener> tf_static_;
   std::map<std::string, Trajectory> estimates_, paths_;
   std::vector<std::shared_ptr<unav::Subscription<nav_msgs::msg::Odometry>>> subs_;
   std::vector<std::shared_ptr<unav::Subscription<nav_msgs::msg::Path>>> path_subs_;

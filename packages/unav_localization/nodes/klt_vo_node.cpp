@@ -13,7 +13,8 @@
 //   pub  localization/klt_vo/path   nav_msgs/Path (every 10 frames)
 //   pub  /lockstep/ack                 unav_msgs/LockstepAck (lockstep: true): after each processed
 //                                   image at t, acks up to t + image_period - 1 ms
-// The camera's mount (cameras_config) turns camera motion into body motion. Mode rgbd publishes
+// The camera's mount (body_frame -> <camera>_optical on /tf_static, as the renderer publishes it,
+// or cameras_config when given) turns camera motion into body motion; frames wait for it. Mode rgbd publishes
 // every frame (a lost frame with a constant-velocity prediction); mode monocular publishes only
 // frames with an estimate (initialised or tracking), in arbitrary units (the first map's median
 // scene depth is 1): compare with ground truth after a Sim(3) alignment.
@@ -26,35 +27,69 @@
 #include "nav_msgs/msg/path.hpp"
 #include "sensor_msgs/msg/camera_info.hpp"
 #include "sensor_msgs/msg/image.hpp"
+#include "unav_common/config.hpp"
 #include "unav_common/resources.hpp"
 #include "unav_localization/klt_vo.hpp"
 #include "unav_runtime/lockstep_ack.hpp"
 #include "unav_runtime/runtime.hpp"
+#include "unav_runtime/tf_static.hpp"
 #include "unav_scene/camera.hpp"
 
 namespace unav_localization {
 
+struct KltVoNodeParams {
+  std::string camera = "down";
+  std::string cameras_config;
+  std::string mode = "rgbd";
+  bool lockstep = false;
+  std::string lockstep_name = "klt_vo";
+  double image_period = 0.1;
+  std::string body_frame = "base_link_frd";
+
+  template <class Archive>
+  void Serialize(Archive* a) {
+    using unav::common::Field;
+    a->Visit(Field("camera", &camera).Doc("camera name (topics camera/<camera>/...)"));
+    a->Visit(Field("cameras_config", &cameras_config)
+                 .Doc("camera YAML for the mount (rgbd); empty: body_frame -> <camera>_optical from /tf_static"));
+    a->Visit(Field("mode", &mode).OneOf({"rgbd", "monocular"}).Doc("estimator"));
+    a->Visit(Field("lockstep", &lockstep).Doc("ack every processed image on /lockstep/ack"));
+    a->Visit(Field("lockstep_name", &lockstep_name).Doc("participant name in acks"));
+    a->Visit(
+        Field("image_period", &image_period).Range(1e-3, 10.0).Unit("s").Doc("camera frame period (lockstep acks)"));
+    a->Visit(Field("body_frame", &body_frame).Doc("vehicle body frame (tf parent of the camera)"));
+  }
+};
+
 class KltVoNode : public unav::Node {
  public:
   explicit KltVoNode(const unav::NodeOptions& options) : Node("klt_vo", options, "rov") {
-    const std::string cam = declare_parameter<std::string>("camera", "down", {"camera name", {}, {}, false});
+    KltVoNodeParams prm;
+    declare_params(&prm);
+    const std::string& cam = prm.camera;
     camera_ = cam;
-    const std::string cams_path = declare_parameter<std::string>(
-        "cameras_config", unav::common::try_find_resource("config/sensors/bluerov2_cameras.yaml").value_or(""),
-        {"camera YAML", {}, {}, false});
-    X_BC_ = unav::scene::load_camera(cams_path, cam).X_BC;  // ConfigError names file and camera
-    const std::string mode = declare_parameter<std::string>("mode", "rgbd", {"rgbd | monocular", {}, {}, false});
-    if (mode == "monocular") {
-      options_.mode = KltVoOptions::Mode::kMonocular;
-    } else if (mode != "rgbd") {
-      throw unav::ParameterError("node '" + name() + "': parameter 'mode' must be 'rgbd' or 'monocular', got '" + mode +
-                                 "'");
+    if (prm.mode == "monocular") options_.mode = KltVoOptions::Mode::kMonocular;
+    lockstep_ = prm.lockstep;
+    ack_name_ = prm.lockstep_name;
+    image_period_ = prm.image_period;
+    if (!prm.cameras_config.empty()) {
+      X_BC_ = unav::scene::load_camera(prm.cameras_config, cam).X_BC;  // ConfigError names file and camera
+      have_mount_ = true;
+    } else if (!monocular()) {
+      // The mount's owner (the renderer) publishes it on /tf_static, latched; frames wait for it.
+      tf_static_ = std::make_unique<unav::StaticTransformListener>(*this);
+      tf_static_->on_update([this, body = prm.body_frame] {
+        if (have_mount_) return;
+        if (const auto X = tf_static_->lookup(body, camera_ + "_optical")) {
+          X_BC_ = *X;
+          have_mount_ = true;
+          logger()->info("camera mount {} -> {}_optical from /tf_static", body, camera_);
+          try_process();
+        }
+      });
+    } else {
+      have_mount_ = true;  // monocular reports the camera frame itself
     }
-    lockstep_ =
-        declare_parameter<bool>("lockstep", false, {"ack every processed image on /lockstep/ack", {}, {}, false});
-    ack_name_ = declare_parameter<std::string>("lockstep_name", "klt_vo", {"participant name in acks", {}, {}, false});
-    image_period_ =
-        declare_parameter<double>("image_period", 0.1, {"camera frame period [s] (lockstep acks)", 1e-3, 10.0, false});
     // A frame consumer owes nothing until its next frame: it acks up to 1 ms before it.
     if (lockstep_) acker_ = std::make_unique<unav::lockstep::Acker>(*this, ack_name_, image_period_ - 1e-3);
     const std::string base = "camera/" + cam;
@@ -119,7 +154,7 @@ class KltVoNode : public unav::Node {
   }
   // Processes, in time order, every frame whose rgb and depth have both arrived.
   void try_process() {
-    if (!vo_) return;
+    if (!vo_ || !have_mount_) return;
     if (monocular()) {
       process_monocular();
       return;
@@ -177,6 +212,8 @@ class KltVoNode : public unav::Node {
     std_msgs::msg::dds_::Header_ header;
   };
   Eigen::Isometry3d X_BC_ = Eigen::Isometry3d::Identity();
+  bool have_mount_ = false;  ///< rgbd only: X_BC_ known (monocular reports the camera frame)
+  std::unique_ptr<unav::StaticTransformListener> tf_static_;
   std::string camera_, ack_name_;
   bool lockstep_ = false;
   double image_period_ = 0.1;

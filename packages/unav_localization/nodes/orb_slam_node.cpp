@@ -24,38 +24,57 @@
 #include "nav_msgs/msg/path.hpp"
 #include "sensor_msgs/msg/camera_info.hpp"
 #include "sensor_msgs/msg/image.hpp"
+#include "unav_common/config.hpp"
 #include "unav_common/resources.hpp"
 #include "unav_localization/mono_slam.hpp"
 #include "unav_runtime/lockstep_ack.hpp"
 #include "unav_runtime/runtime.hpp"
-#include "unav_scene/camera.hpp"
 
 namespace unav_localization {
+
+struct OrbSlamNodeParams {
+  std::string camera = "down";
+  std::string vocabulary;  ///< default: the installed config/vocabulary/orb_vocabulary.bin
+  int features = 1000;
+  bool loop_closing = true;
+  bool lockstep = false;
+  std::string lockstep_name = "orb_slam";
+  double image_period = 0.1;
+  std::string frame_id = "orb_slam_map";
+
+  template <class Archive>
+  void Serialize(Archive* a) {
+    using unav::common::Field;
+    a->Visit(Field("camera", &camera).Doc("camera name (topics camera/<camera>/...; intrinsics from camera_info)"));
+    a->Visit(Field("vocabulary", &vocabulary)
+                 .Doc("bag-of-words vocabulary (unav_train_vocabulary); empty: no loop closing or relocalisation"));
+    a->Visit(Field("features", &features).Range(100, 10000).Doc("ORB features per image"));
+    a->Visit(Field("loop_closing", &loop_closing).Doc("detect and close loops"));
+    a->Visit(Field("lockstep", &lockstep).Doc("ack every processed image on /lockstep/ack"));
+    a->Visit(Field("lockstep_name", &lockstep_name).Doc("participant name in acks"));
+    a->Visit(
+        Field("image_period", &image_period).Range(1e-3, 10.0).Unit("s").Doc("camera frame period (lockstep acks)"));
+    a->Visit(Field("frame_id", &frame_id).Doc("odometry frame"));
+  }
+};
 
 class OrbSlamNode : public unav::Node {
  public:
   explicit OrbSlamNode(const unav::NodeOptions& options) : Node("orb_slam", options, "rov") {
-    const std::string cam = declare_parameter<std::string>("camera", "down", {"camera name", {}, {}, false});
+    OrbSlamNodeParams prm;
+    prm.vocabulary = unav::common::try_find_resource("config/vocabulary/orb_vocabulary.bin").value_or("");
+    declare_params(&prm);
+    const std::string& cam = prm.camera;
     camera_ = cam;
-    const std::string cams_path = declare_parameter<std::string>(
-        "cameras_config", unav::common::try_find_resource("config/sensors/bluerov2_cameras.yaml").value_or(""),
-        {"camera YAML (the camera must be in it)", {}, {}, false});
-    const std::string voc_path = declare_parameter<std::string>(
-        "vocabulary", unav::common::try_find_resource("config/vocabulary/orb_vocabulary.bin").value_or(""),
-        {"bag-of-words vocabulary (unav_train_vocabulary); empty: no loop closing or relocalisation", {}, {}, false});
-    options_.orb.features = static_cast<int>(
-        declare_parameter<int64_t>("features", 1000, {"ORB features per image", 100.0, 10000.0, false}));
-    options_.loop_closing = declare_parameter<bool>("loop_closing", true, {"detect and close loops", {}, {}, false});
-    lockstep_ =
-        declare_parameter<bool>("lockstep", false, {"ack every processed image on /lockstep/ack", {}, {}, false});
-    ack_name_ =
-        declare_parameter<std::string>("lockstep_name", "orb_slam", {"participant name in acks", {}, {}, false});
-    image_period_ =
-        declare_parameter<double>("image_period", 0.1, {"camera frame period [s] (lockstep acks)", 1e-3, 10.0, false});
-    frame_id_ = declare_parameter<std::string>("frame_id", "orb_slam_map", {"odometry frame", {}, {}, false});
+    const std::string& voc_path = prm.vocabulary;
+    options_.orb.features = prm.features;
+    options_.loop_closing = prm.loop_closing;
+    lockstep_ = prm.lockstep;
+    ack_name_ = prm.lockstep_name;
+    image_period_ = prm.image_period;
+    frame_id_ = prm.frame_id;
     std::string msg;
     if (!options_.IsValid(&msg)) throw unav::ParameterError("node '" + name() + "': " + msg);
-    (void)unav::scene::load_camera(cams_path, cam);  // the camera must exist (ConfigError names file and camera)
     if (!voc_path.empty()) {
       try {
         vocabulary_ = std::make_shared<BowVocabulary>(BowVocabulary::Load(voc_path));

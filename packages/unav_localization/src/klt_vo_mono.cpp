@@ -8,6 +8,7 @@
 #include <opencv2/video/tracking.hpp>
 #include <stdexcept>
 #include "unav_localization/klt_vo.hpp"
+#include "unav_localization/two_view.hpp"
 
 namespace unav_localization {
 
@@ -58,6 +59,13 @@ double median(std::vector<double> v) {
   const auto mid = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
   std::nth_element(v.begin(), mid, v.end());
   return *mid;
+}
+
+Eigen::Isometry3d to_isometry(const Eigen::Matrix3d& R, const Eigen::Vector3d& t) {
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.linear() = R;
+  T.translation() = t;
+  return T;
 }
 
 Eigen::Isometry3d to_isometry(const cv::Mat& R, const cv::Mat& t) {
@@ -173,40 +181,37 @@ bool KltVo::mono_initialize(VoSummary* s) {
     ref.push_back(t.birth_px);
     cur.push_back(t.px);
   }
-  const cv::Mat K(K_);
   TwoView best;
   std::string from = "none";
+  TwoViewOptions two_view;
+  two_view.homography_ransac_px = options_.ransac_reprojection_px;
+  const std::vector<TwoViewCandidate> candidates = TwoViewCandidates(ref, cur, K_, two_view);
   // Essential matrix: general 3-D scenes.
-  cv::Mat inliers;
-  const cv::Mat E = cv::findEssentialMat(ref, cur, K, cv::RANSAC, 0.999, 1.0, 1000, inliers);
-  if (E.rows == 3 && E.cols == 3) {
-    cv::Mat R, t;
-    if (cv::recoverPose(E, ref, cur, K, R, t, inliers) > 0) {
-      best = evaluate_two_view(to_isometry(R, t), ref, cur, K_, options_);
-      from = "essential";
-    }
+  for (const auto& c : candidates) {
+    if (c.model != TwoViewCandidate::Model::kEssential) continue;
+    best = evaluate_two_view(to_isometry(c.R, c.t), ref, cur, K_, options_);
+    from = "essential";
   }
   const int n_essential = best.n_good;
   // Homography: a plane (the seabed). Of its up to four decompositions keep the one that puts the
   // most points in front of both cameras with low reprojection error; it must clearly beat the
   // runner-up (two decompositions can both be physically valid for a plane seen head-on).
   int n_homography = 0;
-  const cv::Mat H = cv::findHomography(ref, cur, cv::RANSAC, options_.ransac_reprojection_px);
-  if (!H.empty()) {
-    std::vector<cv::Mat> Rs, ts, ns;
-    cv::decomposeHomographyMat(H, K, Rs, ts, ns);
-    TwoView best_h;
-    int second = 0;
-    for (size_t i = 0; i < Rs.size(); ++i) {
-      if (!(cv::norm(ts[i]) > 1e-9)) continue;  // pure rotation: no depth
-      TwoView v = evaluate_two_view(to_isometry(Rs[i], ts[i]), ref, cur, K_, options_);
-      if (v.n_good > best_h.n_good) {
-        second = best_h.n_good;
-        best_h = std::move(v);
-      } else {
-        second = std::max(second, v.n_good);
-      }
+  TwoView best_h;
+  int second = 0;
+  bool any_h = false;
+  for (const auto& c : candidates) {
+    if (c.model != TwoViewCandidate::Model::kHomography) continue;
+    any_h = true;
+    TwoView v = evaluate_two_view(to_isometry(c.R, c.t), ref, cur, K_, options_);
+    if (v.n_good > best_h.n_good) {
+      second = best_h.n_good;
+      best_h = std::move(v);
+    } else {
+      second = std::max(second, v.n_good);
     }
+  }
+  if (any_h) {
     n_homography = best_h.n_good;
     // Ties go to the homography: when one plane explains the tracks as well as a general scene
     // does, the essential matrix is the worse-conditioned model.

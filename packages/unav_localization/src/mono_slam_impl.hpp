@@ -18,6 +18,7 @@
 #include <stdexcept>
 #include "unav_localization/sim3.hpp"
 #include "unav_localization/slam_optimizer.hpp"
+#include "unav_localization/two_view.hpp"
 
 namespace unav_localization {
 

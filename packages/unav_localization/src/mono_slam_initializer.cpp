@@ -103,34 +103,15 @@ auto MonoSlam::Impl::TryInitialize(SlamFrameSummary s) -> SlamFrameSummary {
     s.message = "initialisation: waiting for parallax";
     return s;
   }
-  cv::Mat Kcv;
-  cv::eigen2cv(cam.K(), Kcv);
   std::vector<Reconstruction> candidates;
-  std::vector<uchar> maskE;
-  const cv::Mat E = cv::findEssentialMat(p1, p2, Kcv, cv::RANSAC, 0.999, 1.0, maskE);
-  if (E.rows == 3 && E.cols == 3) {
-    cv::Mat Rc, tc;
-    cv::recoverPose(E, p1, p2, Kcv, Rc, tc, maskE);
-    Eigen::Matrix3d R;
-    Eigen::Vector3d t;
-    cv::cv2eigen(Rc, R);
-    cv::cv2eigen(tc, t);
-    candidates.push_back(CheckMotion(R, t.normalized(), init_ref->f, cur.f, matches, maskE));
-  }
-  std::vector<uchar> maskH;
-  const cv::Mat H = cv::findHomography(p1, p2, cv::RANSAC, 1.5, maskH);
-  if (!H.empty()) {
-    std::vector<cv::Mat> Rs, ts, ns;
-    cv::decomposeHomographyMat(H, Kcv, Rs, ts, ns);
-    for (size_t k = 0; k < Rs.size(); ++k) {
-      Eigen::Matrix3d R;
-      Eigen::Vector3d t;
-      cv::cv2eigen(Rs[k], R);
-      cv::cv2eigen(ts[k], t);
-      if (t.norm() < 1e-9) continue;
-      candidates.push_back(CheckMotion(R, t.normalized(), init_ref->f, cur.f, matches, maskH));
-    }
-  }
+  TwoViewOptions two_view;
+  two_view.homography_ransac_px = 1.5;
+  const Eigen::Matrix3d Km = cam.K();
+  cv::Matx33d K;
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c) K(r, c) = Km(r, c);
+  for (const TwoViewCandidate& c : TwoViewCandidates(p1, p2, K, two_view))
+    candidates.push_back(CheckMotion(c.R, c.t.normalized(), init_ref->f, cur.f, matches, c.inliers));
   std::sort(candidates.begin(), candidates.end(),
             [](const auto& a, const auto& b) { return a.points.size() > b.points.size(); });
   if (candidates.empty() || static_cast<int>(candidates[0].points.size()) < opt.init_min_points ||

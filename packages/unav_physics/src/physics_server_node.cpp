@@ -4,8 +4,8 @@
 #include <cmath>
 #include <limits>
 
-#include "unav_common/resources.hpp"
 #include <fastdds/dds/publisher/DataWriter.hpp>
+#include "unav_common/resources.hpp"
 
 #include "unav_runtime/conversions.hpp"
 
@@ -26,56 +26,32 @@ int64_t steps_in(double period, double dt, const std::string& name) {
   return rounded;
 }
 
-
 }  // namespace
 
 PhysicsServer::PhysicsServer(const unav::NodeOptions& options) : Node("physics_server", options, "rov") {
-  const std::string default_vehicle = unav::common::try_find_resource("config/vehicles/bluerov2_heavy.yaml").value_or("");
-  const std::string vehicle_path = declare_parameter<std::string>(
-      "vehicle_config", default_vehicle, {"vehicle YAML (config/vehicles/*.yaml)", {}, {}, false});
-  if (vehicle_path.empty())
-    throw unav::ParameterError("node '" + name() + "': parameter 'vehicle_config' is empty and the package "
+  PhysicsServerParams p;
+  p.vehicle_config = unav::common::try_find_resource("config/vehicles/bluerov2_heavy.yaml").value_or("");
+  declare_params(&p);
+  if (p.vehicle_config.empty())
+    throw unav::ParameterError("node '" + name() +
+                               "': parameter 'vehicle_config' is empty and the package "
                                "unav_resources is not installed: give the vehicle YAML path");
-  const std::string current_path =
-      declare_parameter<std::string>("current_config", "", {"water current YAML; empty = still water", {}, {}, false});
-  const double seabed_depth =
-      declare_parameter<double>("seabed_depth", 10.0, {"flat seabed depth [m]; <= 0 = no seabed", {}, {}, false});
-  const std::string seabed_path =
-      declare_parameter<std::string>("seabed_config", "", {"seabed YAML (flat/grid/PGM); overrides seabed_depth", {}, {}, false});
-  const auto p0 = declare_parameter<std::vector<double>>("initial_position", {0.0, 0.0, 5.0},
-                                                        {"initial position NED [m]", {}, {}, false});
-  const auto rpy0 = declare_parameter<std::vector<double>>("initial_rpy", {0.0, 0.0, 0.0},
-                                                          {"initial roll, pitch, yaw [rad]", {}, {}, false});
   SimulatorOptions so;
-  so.dt = declare_parameter<double>("dt", 0.001, {"physics step [s] (1 kHz default)", 1e-5, 0.1, false});
-  const std::string integrator =
-      declare_parameter<std::string>("integrator", "velocity_verlet", {"velocity_verlet (the paper's) or rk4", {}, {}, false});
-  if (!parse_integrator(integrator, &so.integrator))
-    throw unav::ParameterError("node '" + name() + "': parameter 'integrator' = '" + integrator +
+  so.dt = p.dt;
+  if (!parse_integrator(p.integrator, &so.integrator))
+    throw unav::ParameterError("node '" + name() + "': parameter 'integrator' = '" + p.integrator +
                                "': expected velocity_verlet or rk4");
-  so.command_timeout = declare_parameter<double>(
-      "command_timeout", 0.5, {"zero thrust after this long without a command [s]; <= 0 disables", {}, {}, false});
-  const std::string mode = declare_parameter<std::string>("mode", "realtime", {"realtime or lockstep", {}, {}, false});
-  if (mode != "realtime" && mode != "lockstep")
-    throw unav::ParameterError("node '" + name() + "': parameter 'mode' = '" + mode + "': expected realtime or lockstep");
-  lockstep_ = mode == "lockstep";
-  real_time_factor_ =
-      declare_parameter<double>("real_time_factor", 1.0, {"simulated / wall time in realtime mode", 1e-3, 1e4, false});
-  const double publish_rate =
-      declare_parameter<double>("publish_rate", 200.0, {"odometry and /clock rate [Hz]", 0.1, 1e4, false});
-  const double thruster_rate =
-      declare_parameter<double>("thruster_state_rate", 100.0, {"thruster state rate [Hz]", 0.1, 1e4, false});
-  lockstep_period_ = declare_parameter<double>("lockstep_period", 0.05, {"barrier period [s]", 1e-4, 10.0, false});
-  participants_ = declare_parameter<std::vector<std::string>>("lockstep_participants", {},
-                                                             {"names that ack every barrier", {}, {}, false});
-  wait_for_command_ = declare_parameter<bool>("lockstep_wait_for_command", false,
-                                              {"hold each barrier until a command stamped at it arrives", {}, {}, false});
-  max_sim_time_ = declare_parameter<double>(
-      "max_sim_time", 0.0, {"stop (exit 0) at this simulated time [s]; 0 = run until stopped", 0.0, {}, false});
-  world_frame_ = declare_parameter<std::string>("world_frame", "world_ned", {"odometry frame", {}, {}, false});
-  body_frame_ = declare_parameter<std::string>("body_frame", "base_link_frd", {"vehicle body frame", {}, {}, false});
-  if (p0.size() != 3 || rpy0.size() != 3)
-    throw unav::ParameterError("node '" + name() + "': initial_position and initial_rpy need 3 values each");
+  so.command_timeout = p.command_timeout;
+  lockstep_ = p.mode == "lockstep";
+  real_time_factor_ = p.real_time_factor;
+  lockstep_period_ = p.lockstep_period;
+  participants_ = p.lockstep_participants;
+  wait_for_command_ = p.lockstep_wait_for_command;
+  max_sim_time_ = p.max_sim_time;
+  world_frame_ = p.world_frame;
+  body_frame_ = p.body_frame;
+  const double publish_rate = p.publish_rate;
+  const double thruster_rate = p.thruster_state_rate;
 
   steps_per_publish_ = steps_in(1.0 / publish_rate, so.dt, "publish_rate");
   steps_per_thruster_state_ = steps_in(1.0 / thruster_rate, so.dt, "thruster_state_rate");
@@ -83,16 +59,16 @@ PhysicsServer::PhysicsServer(const unav::NodeOptions& options) : Node("physics_s
   // Acks are integer-nanosecond stamps; half a physics step absorbs rounding from doubles.
   barrier_ = std::make_unique<unav::lockstep::Barrier>(participants_, std::llround(0.5 * so.dt * 1e9));
 
-  const VehicleParams vehicle = load_vehicle(vehicle_path);
-  std::unique_ptr<CurrentModel> current = current_path.empty() ? nullptr : load_current(current_path);
+  const VehicleParams vehicle = load_vehicle(p.vehicle_config);
+  std::unique_ptr<CurrentModel> current = p.current_config.empty() ? nullptr : load_current(p.current_config);
   std::unique_ptr<Seabed> seabed;
-  if (!seabed_path.empty())
-    seabed = load_seabed(seabed_path);
-  else if (seabed_depth > 0.0)
-    seabed = std::make_unique<FlatSeabed>(seabed_depth);
+  if (!p.seabed_config.empty())
+    seabed = load_seabed(p.seabed_config);
+  else if (p.seabed_depth > 0.0)
+    seabed = std::make_unique<FlatSeabed>(p.seabed_depth);
   RigidBodyState x0;
-  x0.p_WB_W = Eigen::Vector3d(p0[0], p0[1], p0[2]);
-  x0.q_WB = quaternion_from_rpy(rpy0[0], rpy0[1], rpy0[2]);
+  x0.p_WB_W = p.initial_position;
+  x0.q_WB = quaternion_from_rpy(p.initial_rpy.x(), p.initial_rpy.y(), p.initial_rpy.z());
   sim_ = std::make_unique<Simulator>(vehicle, so, std::move(current), std::move(seabed), x0);
   const SensorSuiteParams& sp = vehicle.sensors;
 
@@ -128,10 +104,10 @@ PhysicsServer::PhysicsServer(const unav::NodeOptions& options) : Node("physics_s
     timer_ = create_wall_timer(std::chrono::milliseconds(1), [this] { run_steps(); });
   } else {
     wall_start_ = wall_now_s();
-    timer_ = create_wall_timer(std::chrono::nanoseconds(static_cast<int64_t>(1e9 / publish_rate)),
-                               [this] { run_steps(); });
+    timer_ =
+        create_wall_timer(std::chrono::nanoseconds(static_cast<int64_t>(1e9 / publish_rate)), [this] { run_steps(); });
   }
-  logger()->info("{} ({} thrusters), {} at {:.0f} Hz ({}), {}{}", vehicle.name, vehicle.thrusters.size(), mode,
+  logger()->info("{} ({} thrusters), {} at {:.0f} Hz ({}), {}{}", vehicle.name, vehicle.thrusters.size(), p.mode,
                  1.0 / so.dt, to_string(so.integrator), lockstep_ ? "barrier every " : "real_time_factor ",
                  lockstep_ ? lockstep_period_ : real_time_factor_);
 }
@@ -222,9 +198,10 @@ void PhysicsServer::step_once() {
     publish_state();
     const RigidBodyState& x = sim_->state();
     const Eigen::Vector3d rpy = roll_pitch_yaw(x.q_WB);
-    logger()->info("max_sim_time reached: t = {:.3f} s, position NED [{:.4f}, {:.4f}, {:.4f}] m, rpy [{:.4f}, {:.4f}, "
-                   "{:.4f}] rad",
-                   sim_->time(), x.p_WB_W.x(), x.p_WB_W.y(), x.p_WB_W.z(), rpy.x(), rpy.y(), rpy.z());
+    logger()->info(
+        "max_sim_time reached: t = {:.3f} s, position NED [{:.4f}, {:.4f}, {:.4f}] m, rpy [{:.4f}, {:.4f}, "
+        "{:.4f}] rad",
+        sim_->time(), x.p_WB_W.x(), x.p_WB_W.y(), x.p_WB_W.z(), rpy.x(), rpy.y(), rpy.z());
     // The last state is a barrier too: stop only when every participant answered it and our own
     // samples reached their readers, so every run ends on the same instant with nothing lost.
     finishing_ = true;
@@ -350,7 +327,7 @@ void PhysicsServer::publish_sensors() {
     sensor_msgs::msg::NavSatFix m;
     fill_header(m.header(), r.gps.stamp, "gps");
     m.status().status(r.gps.valid ? 0 : -1);  // STATUS_FIX / STATUS_NO_FIX
-    m.status().service(1);                     // SERVICE_GPS
+    m.status().service(1);                    // SERVICE_GPS
     m.latitude(r.gps.latitude_deg);
     m.longitude(r.gps.longitude_deg);
     m.altitude(r.gps.altitude_m);

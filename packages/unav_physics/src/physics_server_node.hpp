@@ -37,22 +37,73 @@
 
 #include "geometry_msgs/msg/point_stamped.hpp"
 #include "nav_msgs/msg/odometry.hpp"
-#include "tf2_msgs/msg/tf_message.hpp"
-#include "unav_runtime/lockstep.hpp"
 #include "rosgraph_msgs/msg/clock.hpp"
 #include "sensor_msgs/msg/fluid_pressure.hpp"
 #include "sensor_msgs/msg/imu.hpp"
 #include "sensor_msgs/msg/magnetic_field.hpp"
 #include "sensor_msgs/msg/nav_sat_fix.hpp"
 #include "sensor_msgs/msg/range.hpp"
+#include "tf2_msgs/msg/tf_message.hpp"
+#include "unav_common/config.hpp"
 #include "unav_msgs/msg/dvl.hpp"
 #include "unav_msgs/msg/lockstep_ack.hpp"
 #include "unav_msgs/msg/thruster_command.hpp"
 #include "unav_msgs/msg/thruster_state.hpp"
 #include "unav_physics/simulator.hpp"
+#include "unav_runtime/lockstep.hpp"
 #include "unav_runtime/runtime.hpp"
 
 namespace unav::physics {
+
+/// The physics_server's parameters (params file or `-p name:=value`; `physics_server --help`).
+struct PhysicsServerParams {
+  std::string vehicle_config;  ///< default: the installed bluerov2_heavy.yaml
+  std::string current_config;
+  double seabed_depth = 10.0;
+  std::string seabed_config;
+  Eigen::Vector3d initial_position{0.0, 0.0, 5.0};
+  Eigen::Vector3d initial_rpy{0.0, 0.0, 0.0};
+  double dt = 0.001;
+  std::string integrator = "velocity_verlet";
+  double command_timeout = 0.5;
+  std::string mode = "realtime";
+  double real_time_factor = 1.0;
+  double publish_rate = 200.0;
+  double thruster_state_rate = 100.0;
+  double lockstep_period = 0.05;
+  std::vector<std::string> lockstep_participants;
+  bool lockstep_wait_for_command = false;
+  double max_sim_time = 0.0;
+  std::string world_frame = "world_ned";
+  std::string body_frame = "base_link_frd";
+
+  template <class Archive>
+  void Serialize(Archive* a) {
+    using unav::common::Field;
+    a->Visit(Field("vehicle_config", &vehicle_config).Doc("vehicle YAML (config/vehicles/*.yaml)"));
+    a->Visit(Field("current_config", &current_config).Doc("water current YAML; empty = still water"));
+    a->Visit(Field("seabed_depth", &seabed_depth).Unit("m").Doc("flat seabed depth; <= 0 = no seabed"));
+    a->Visit(Field("seabed_config", &seabed_config).Doc("seabed YAML (flat/grid/PGM); overrides seabed_depth"));
+    a->Visit(Field("initial_position", &initial_position).Unit("m").Doc("initial position, NED"));
+    a->Visit(Field("initial_rpy", &initial_rpy).Unit("rad").Doc("initial roll, pitch, yaw"));
+    a->Visit(Field("dt", &dt).Range(1e-5, 0.1).Unit("s").Doc("physics step (1 kHz default)"));
+    a->Visit(Field("integrator", &integrator).OneOf({"velocity_verlet", "rk4"}).Doc("velocity_verlet is the paper's"));
+    a->Visit(Field("command_timeout", &command_timeout)
+                 .Unit("s")
+                 .Doc("zero thrust after this long without a command; <= 0 disables"));
+    a->Visit(Field("mode", &mode).OneOf({"realtime", "lockstep"}).Doc("time mode (see physics_server_node.hpp)"));
+    a->Visit(Field("real_time_factor", &real_time_factor).Range(1e-3, 1e4).Doc("simulated / wall time (realtime)"));
+    a->Visit(Field("publish_rate", &publish_rate).Range(0.1, 1e4).Unit("Hz").Doc("odometry, /tf and /clock rate"));
+    a->Visit(Field("thruster_state_rate", &thruster_state_rate).Range(0.1, 1e4).Unit("Hz").Doc("thruster state rate"));
+    a->Visit(Field("lockstep_period", &lockstep_period).Range(1e-4, 10.0).Unit("s").Doc("barrier period"));
+    a->Visit(Field("lockstep_participants", &lockstep_participants).Doc("names that ack every barrier"));
+    a->Visit(Field("lockstep_wait_for_command", &lockstep_wait_for_command)
+                 .Doc("hold each barrier until a command stamped at it arrives"));
+    a->Visit(Field("max_sim_time", &max_sim_time).Min(0.0).Unit("s").Doc("stop (exit 0) here; 0 = run until stopped"));
+    a->Visit(Field("world_frame", &world_frame).Doc("odometry and /tf parent frame"));
+    a->Visit(Field("body_frame", &body_frame).Doc("vehicle body frame"));
+  }
+};
 
 class PhysicsServer : public unav::Node {
  public:
@@ -85,13 +136,13 @@ class PhysicsServer : public unav::Node {
   int64_t steps_per_publish_ = 5, steps_per_thruster_state_ = 10, steps_per_barrier_ = 50;
 
   // Lockstep bookkeeping (simulated seconds).
-  double barrier_t_ = -1.0;  ///< barrier the server is holding at, < 0 when running
+  double barrier_t_ = -1.0;                           ///< barrier the server is holding at, < 0 when running
   std::unique_ptr<unav::lockstep::Barrier> barrier_;  ///< who must ack (lockstep mode)
-  int64_t last_command_ns_ = INT64_MIN;              ///< newest thruster command stamp
+  int64_t last_command_ns_ = INT64_MIN;               ///< newest thruster command stamp
   double held_since_ = -1.0, last_republish_ = 0.0, last_wait_log_ = 0.0;  ///< wall s
   double wall_start_ = 0.0;  ///< realtime: wall time [s] that maps to simulated time 0
   bool timeout_logged_ = false;
-  bool finishing_ = false;      ///< max_sim_time reached: waiting for the last acks, then exit
+  bool finishing_ = false;       ///< max_sim_time reached: waiting for the last acks, then exit
   double finish_started_ = 0.0;  ///< wall time [s] the finishing began
   void finish();
   std::uint64_t rejected_logged_ = 0;

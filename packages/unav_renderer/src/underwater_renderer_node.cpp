@@ -27,24 +27,24 @@ void fill_image(sensor_msgs::msg::Image& m, int w, int h, const char* encoding, 
 
 UnderwaterRendererNode::UnderwaterRendererNode(const unav::NodeOptions& options)
     : Node("underwater_renderer", options, "rov") {
-  const std::string world_path = declare_parameter<std::string>("world", resource("worlds/pipe_inspection/world.yaml"),
-                                                                {"world.yaml path", {}, {}, false});
-  const std::string cameras_path = declare_parameter<std::string>(
-      "cameras_config", resource("config/sensors/bluerov2_cameras.yaml"), {"camera YAML path", {}, {}, false});
-  const std::string water = declare_parameter<std::string>(
-      "water", "", {"Jerlov preset (I, II, 3C, ...) or water YAML path; empty = the world's", {}, {}, false});
-  const auto only = declare_parameter<std::vector<std::string>>(
-      "cameras", {}, {"cameras of cameras_config to render; [] = all", {}, {}, false});
-  const double rate = declare_parameter<double>("rate", 10.0, {"frame rate per camera [Hz]", 0.01, 1000.0, false});
-  lockstep_ = declare_parameter<bool>("lockstep", false, {"ack every odometry on /lockstep/ack", {}, {}, false});
-  ack_name_ = declare_parameter<std::string>("lockstep_name", "renderer", {"participant name in acks", {}, {}, false});
-  publish_depth_ = declare_parameter<bool>("publish_depth", true, {"publish depth images", {}, {}, false});
-  publish_seg_ = declare_parameter<bool>("publish_segmentation", true, {"publish segmentation images", {}, {}, false});
+  UnderwaterRendererParams prm;
+  prm.world = resource("worlds/pipe_inspection/world.yaml");
+  prm.cameras_config = resource("config/sensors/bluerov2_cameras.yaml");
+  declare_params(&prm);
+  const std::string& world_path = prm.world;
+  const std::string& cameras_path = prm.cameras_config;
+  const std::string& water = prm.water;
+  const std::vector<std::string>& only = prm.cameras;
+  const double rate = prm.rate;
+  lockstep_ = prm.lockstep;
+  ack_name_ = prm.lockstep_name;
+  publish_depth_ = prm.publish_depth;
+  publish_seg_ = prm.publish_segmentation;
   RenderOptions ro;
-  ro.noise = declare_parameter<bool>("noise", true, {"camera noise", {}, {}, false});
-  ro.marine_snow = declare_parameter<bool>("marine_snow", true, {"marine snow particles", {}, {}, false});
-  ro.forward_scatter = declare_parameter<bool>("forward_scatter", true, {"range-dependent blur", {}, {}, false});
-  ro.seed = static_cast<std::uint64_t>(declare_parameter<int64_t>("seed", 1, {"noise seed", 0.0, {}, false}));
+  ro.noise = prm.noise;
+  ro.marine_snow = prm.marine_snow;
+  ro.forward_scatter = prm.forward_scatter;
+  ro.seed = static_cast<std::uint64_t>(prm.seed);
   period_ = 1.0 / rate;
   if (world_path.empty() || cameras_path.empty())
     throw unav::ParameterError("node '" + name() +
@@ -103,8 +103,7 @@ UnderwaterRendererNode::UnderwaterRendererNode(const unav::NodeOptions& options)
   }
   // Camera mounts, published once and latched by their owner: ROS 2 tools (RViz, Foxglove, tf2)
   // and our estimators and evaluator look them up instead of reading the camera YAML.
-  const std::string body_frame = declare_parameter<std::string>(
-      "body_frame", "base_link_frd", {"vehicle body frame (tf parent of the cameras)", {}, {}, false});
+  const std::string& body_frame = prm.body_frame;
   tf_static_pub_ = create_publisher<tf2_msgs::msg::TFMessage>("/tf_static", unav::QoS::static_latched());
   tf2_msgs::msg::TFMessage mounts;
   for (const auto& c : cams)

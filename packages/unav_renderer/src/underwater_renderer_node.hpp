@@ -24,11 +24,49 @@
 #include "sensor_msgs/msg/camera_info.hpp"
 #include "sensor_msgs/msg/image.hpp"
 #include "tf2_msgs/msg/tf_message.hpp"
+#include "unav_common/config.hpp"
 #include "unav_renderer/renderer.hpp"
 #include "unav_runtime/lockstep_ack.hpp"
 #include "unav_runtime/runtime.hpp"
 
 namespace unav_renderer {
+
+/// The underwater_renderer's parameters (params file or `-p name:=value`; `--help` lists them).
+struct UnderwaterRendererParams {
+  std::string world;           ///< default: the installed worlds/pipe_inspection/world.yaml
+  std::string cameras_config;  ///< default: the installed config/sensors/bluerov2_cameras.yaml
+  std::string water;
+  std::vector<std::string> cameras;
+  double rate = 10.0;
+  bool lockstep = false;
+  std::string lockstep_name = "renderer";
+  bool publish_depth = true;
+  bool publish_segmentation = true;
+  bool noise = true;
+  bool marine_snow = true;
+  bool forward_scatter = true;
+  int64_t seed = 1;
+  std::string body_frame = "base_link_frd";
+
+  template <class Archive>
+  void Serialize(Archive* a) {
+    using unav::common::Field;
+    a->Visit(Field("world", &world).Doc("world.yaml path"));
+    a->Visit(Field("cameras_config", &cameras_config).Doc("camera YAML path"));
+    a->Visit(Field("water", &water).Doc("Jerlov preset (I, II, 3C, ...) or water YAML path; empty = the world's"));
+    a->Visit(Field("cameras", &cameras).Doc("cameras of cameras_config to render; [] = all"));
+    a->Visit(Field("rate", &rate).Range(0.01, 1000.0).Unit("Hz").Doc("frame rate per camera"));
+    a->Visit(Field("lockstep", &lockstep).Doc("ack every odometry on /lockstep/ack"));
+    a->Visit(Field("lockstep_name", &lockstep_name).Doc("participant name in acks"));
+    a->Visit(Field("publish_depth", &publish_depth).Doc("publish depth images"));
+    a->Visit(Field("publish_segmentation", &publish_segmentation).Doc("publish segmentation images"));
+    a->Visit(Field("noise", &noise).Doc("camera noise"));
+    a->Visit(Field("marine_snow", &marine_snow).Doc("marine snow particles"));
+    a->Visit(Field("forward_scatter", &forward_scatter).Doc("range-dependent blur"));
+    a->Visit(Field("seed", &seed).Min(0.0).Doc("noise seed"));
+    a->Visit(Field("body_frame", &body_frame).Doc("vehicle body frame (tf parent of the cameras)"));
+  }
+};
 
 class UnderwaterRendererNode : public unav::Node {
  public:

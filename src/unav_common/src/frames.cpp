@@ -40,4 +40,28 @@ Eigen::Matrix3d R_camera_body_to_optical() {
   return R;
 }
 
+void TransformGraph::set(const std::string& parent, const std::string& child, const Pose& X_PC) {
+  parent_of_[child] = {parent, X_PC};
+}
+
+std::optional<Pose> TransformGraph::lookup(const std::string& target, const std::string& source) const {
+  // X_RF of every ancestor R of `frame` (the frame itself first), walking up to its root.
+  const auto chain = [this](const std::string& frame) {
+    std::vector<std::pair<std::string, Pose>> up{{frame, Pose::Identity()}};
+    Pose X = Pose::Identity();
+    for (auto it = parent_of_.find(frame); it != parent_of_.end() && up.size() <= parent_of_.size();
+         it = parent_of_.find(it->second.first)) {
+      X = it->second.second * X;
+      up.emplace_back(it->second.first, X);
+    }
+    return up;
+  };
+  const auto from_source = chain(source);  // (A, X_AS)
+  const auto from_target = chain(target);  // (A, X_AT)
+  for (const auto& [a, X_AT] : from_target)
+    for (const auto& [b, X_BS] : from_source)
+      if (a == b) return X_AT.inverse() * X_BS;  // first common ancestor
+  return std::nullopt;
+}
+
 }  // namespace unav::common

@@ -119,3 +119,50 @@ TEST(Time, FromSecondsRoundsToTheNearestNanosecond) {
 }
 
 }  // namespace
+
+namespace {
+
+unav::common::Pose pose(double x, double y, double z, double roll, double pitch, double yaw) {
+  return unav::common::pose_from_xyz_rpy(Eigen::Vector3d(x, y, z), Eigen::Vector3d(roll, pitch, yaw));
+}
+
+}  // namespace
+
+// A mount chain base -> camera_link -> camera_optical and a sibling base -> imu: lookups compose
+// the edges up to the common ancestor and back down, in either direction, as tf2 does.
+TEST(TransformGraph, ComposesChainsThroughTheCommonAncestor) {
+  unav::common::TransformGraph g;
+  const auto X_BL = pose(0.2, 0.0, 0.1, 0.0, -0.5, 0.0);
+  const auto X_LO = pose(0.0, 0.01, 0.0, 0.3, 0.0, 1.2);
+  const auto X_BI = pose(-0.1, 0.05, 0.0, 0.0, 0.0, 3.0);
+  g.set("base", "camera_link", X_BL);
+  g.set("camera_link", "camera_optical", X_LO);
+  g.set("base", "imu", X_BI);
+  ASSERT_EQ(g.size(), 3u);
+  const auto X_BO = g.lookup("base", "camera_optical");
+  ASSERT_TRUE(X_BO.has_value());
+  EXPECT_TRUE(X_BO->isApprox(X_BL * X_LO, 1e-12));
+  const auto X_OB = g.lookup("camera_optical", "base");
+  ASSERT_TRUE(X_OB.has_value());
+  EXPECT_TRUE(X_OB->isApprox((X_BL * X_LO).inverse(), 1e-12));
+  const auto X_IO = g.lookup("imu", "camera_optical");
+  ASSERT_TRUE(X_IO.has_value());
+  EXPECT_TRUE(X_IO->isApprox(X_BI.inverse() * X_BL * X_LO, 1e-12));
+  EXPECT_TRUE(g.lookup("imu", "imu")->isApprox(unav::common::Pose::Identity()));
+}
+
+TEST(TransformGraph, UnknownOrDisconnectedFramesHaveNoTransform) {
+  unav::common::TransformGraph g;
+  g.set("base", "camera_optical", pose(1, 2, 3, 0, 0, 0));
+  g.set("world", "buoy", pose(0, 0, 0, 0, 0, 1));
+  EXPECT_FALSE(g.lookup("base", "buoy").has_value());
+  EXPECT_FALSE(g.lookup("base", "nowhere").has_value());
+  // A second parent replaces the first (one parent per frame), and a cycle does not hang.
+  g.set("world", "base", pose(0, 0, 5, 0, 0, 0));
+  EXPECT_TRUE(g.lookup("buoy", "camera_optical")
+                  ->translation()
+                  .isApprox(pose(0, 0, 0, 0, 0, 1).inverse() * Eigen::Vector3d(1, 2, 8), 1e-12));
+  g.set("camera_optical", "world", pose(0, 0, 0, 0, 0, 0));
+  EXPECT_FALSE(g.lookup("base", "elsewhere").has_value());
+  (void)g.lookup("world", "buoy");  // terminates
+}

@@ -3,14 +3,25 @@
 // Ports:   sub  chatter  std_msgs/msg/String  reliable, keep last 10
 // Params:  exit_after (int, >= 0): exit after this many messages; 0 = run until Ctrl-C
 #include "std_msgs/msg/string.hpp"
+#include "unav_common/config.hpp"
 #include "unav_runtime/runtime.hpp"
 
 namespace unav_examples {
 
+struct ListenerParams {
+  int64_t exit_after = 0;
+  template <class Archive>
+  void Serialize(Archive* a) {
+    a->Visit(unav::common::Field("exit_after", &exit_after).Min(0.0).Doc("exit after N messages, 0 = never"));
+  }
+};
+
 class Listener : public unav::Node {
  public:
   explicit Listener(const unav::NodeOptions& options) : Node("listener", options) {
-    exit_after_ = declare_parameter<int64_t>("exit_after", 0, {"exit after N messages, 0 = never", 0.0, {}, false});
+    ListenerParams prm;
+    declare_params(&prm);
+    exit_after_ = prm.exit_after;
     sub_ = create_subscription<std_msgs::msg::String>("chatter", unav::QoS::reliable(),
                                                       [this](const std_msgs::msg::String& m) { on_message(m); });
   }

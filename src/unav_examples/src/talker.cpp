@@ -4,15 +4,28 @@
 // Params:  rate (double, Hz, (0, 1000]): publish rate
 //          message (string): text before the counter
 #include "std_msgs/msg/string.hpp"
+#include "unav_common/config.hpp"
 #include "unav_runtime/runtime.hpp"
 
 namespace unav_examples {
 
+struct TalkerParams {
+  double rate = 2.0;
+  std::string message = "Hello World";
+  template <class Archive>
+  void Serialize(Archive* a) {
+    a->Visit(unav::common::Field("rate", &rate).Range(1e-3, 1000.0).Unit("Hz").Doc("publish rate"));
+    a->Visit(unav::common::Field("message", &message).Doc("text before the counter"));
+  }
+};
+
 class Talker : public unav::Node {
  public:
   explicit Talker(const unav::NodeOptions& options) : Node("talker", options) {
-    const double rate = declare_parameter<double>("rate", 2.0, {"publish rate [Hz]", 1e-3, 1000.0, false});
-    prefix_ = declare_parameter<std::string>("message", "Hello World", {"text before the counter", {}, {}, false});
+    TalkerParams prm;
+    declare_params(&prm);
+    const double rate = prm.rate;
+    prefix_ = prm.message;
     pub_ = create_publisher<std_msgs::msg::String>("chatter", unav::QoS::reliable());
     timer_ = create_wall_timer(std::chrono::nanoseconds(static_cast<int64_t>(1e9 / rate)), [this] { tick(); });
   }

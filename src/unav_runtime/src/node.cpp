@@ -9,28 +9,25 @@
 namespace unav {
 namespace {
 
+// Parameters every node has (rclcpp declares use_sim_time on every node too).
+struct NodeCommonParams {
+  bool use_sim_time = false;
+  template <class Archive>
+  void Serialize(Archive* a) {
+    a->Visit(common::Field("use_sim_time", &use_sim_time).Doc("follow /clock instead of the system clock"));
+  }
+};
+
 Context& require_context(const NodeOptions& o) {
   if (!o.context) throw ConfigError("NodeOptions.context is null: create a unav::Context first");
   return *o.context;
 }
 
-std::string flow_text(const YAML::Node& n) {
-  if (!n.IsDefined() || n.IsNull()) return "null";
-  YAML::Emitter e;
-  e << YAML::Flow << n;
-  return e.c_str();
-}
-
-std::string format_number(double v) {
-  std::ostringstream os;
-  os << v;
-  return os.str();
-}
-
 // Flattens nested maps into dotted names (as params files are flattened).
 void flatten(const YAML::Node& n, const std::string& prefix, std::map<std::string, YAML::Node>* out) {
   if (n.IsMap()) {
-    for (const auto& kv : n) flatten(kv.second, prefix.empty() ? kv.first.as<std::string>() : prefix + "." + kv.first.as<std::string>(), out);
+    for (const auto& kv : n)
+      flatten(kv.second, prefix.empty() ? kv.first.as<std::string>() : prefix + "." + kv.first.as<std::string>(), out);
   } else {
     (*out)[prefix] = n;
   }
@@ -45,22 +42,6 @@ bool wants_help(int argc, char** argv) {
 }
 
 }  // namespace
-
-void Node::record_parameter(const std::string& name, const char* type, const YAML::Node& default_value,
-                            const ParameterDescriptor& desc) {
-  common::FieldInfo f;
-  f.name = name;
-  f.type = type;
-  f.default_value = flow_text(default_value);
-  if (desc.min && desc.max)
-    f.rule = "[" + format_number(*desc.min) + ", " + format_number(*desc.max) + "]";
-  else if (desc.min)
-    f.rule = ">= " + format_number(*desc.min);
-  else if (desc.max)
-    f.rule = "<= " + format_number(*desc.max);
-  f.doc = desc.description;
-  table_.push_back(std::move(f));
-}
 
 void Node::record_params(const std::vector<common::FieldInfo>& fields, const YAML::Node& effective) {
   for (const auto& f : fields) {
@@ -81,8 +62,9 @@ Node::Node(const std::string& default_name, const NodeOptions& options, const st
   namespace_ = normalize_namespace(args.node_namespace.empty() ? default_namespace : args.node_namespace);
   logger_ = make_logger(fully_qualified_name());
   overrides_ = ParameterOverrides(args, namespace_, name_);
-  if (declare_parameter<bool>("use_sim_time", false, {"follow /clock instead of the system clock", {}, {}, false}))
-    ctx_.enable_sim_time();
+  NodeCommonParams common;
+  declare_params(&common);
+  if (common.use_sim_time) ctx_.enable_sim_time();
   ctx_.add_node(this);
 }
 

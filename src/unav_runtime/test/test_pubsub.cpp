@@ -9,6 +9,7 @@
 #include "unav_msgs/msg/thruster_command.hpp"
 #include "unav_runtime/runtime.hpp"
 #include "unav_runtime/testing.hpp"
+#include "unav_runtime/tf_static.hpp"
 
 using namespace std::chrono_literals;
 using namespace unav;
@@ -103,15 +104,30 @@ TEST(PubSub, SimTimeFollowsClockAndDrivesTimers) {
   for (int i = 1; i <= 10; ++i) {
     c.clock().sec(0);
     c.clock().nanosec(static_cast<uint32_t>(i * 100000000));
-    ASSERT_TRUE(spin_until({&ctx_phys}, [&] {
-      clock_pub->publish(c);
-      return spin_until({&ctx_sim}, [&] { return sim_node.now().ns >= i * 100000000LL; }, 100ms);
-    })) << "clock " << i;
+    ASSERT_TRUE(spin_until({&ctx_phys},
+                           [&] {
+                             clock_pub->publish(c);
+                             return spin_until(
+                                 {&ctx_sim}, [&] { return sim_node.now().ns >= i * 100000000LL; }, 100ms);
+                           }))
+        << "clock " << i;
   }
   EXPECT_EQ(sim_node.now().ns, 1000000000LL);
   EXPECT_GE(ticks, 9);
   EXPECT_LE(ticks, 10);
 }
+
+struct TestNodeParams {
+  double rate = 1.0;
+  std::string name = "x";
+  int64_t missing = 7;
+  template <class Archive>
+  void Serialize(Archive* a) {
+    a->Visit(unav::common::Field("rate", &rate).Range(0.0, 100.0).Unit("Hz"));
+    a->Visit(unav::common::Field("name", &name));
+    a->Visit(unav::common::Field("missing", &missing));
+  }
+};
 
 TEST(PubSub, NodeParametersFromFileAndCommandLine) {
   const std::string path = ::testing::TempDir() + "node_params.yaml";
@@ -121,9 +137,12 @@ TEST(PubSub, NodeParametersFromFileAndCommandLine) {
   Context ctx(8, argv, test_context_options());
   Node n("talker", {&ctx});
   EXPECT_EQ(n.fully_qualified_name(), "/rov/talker");
-  EXPECT_EQ(n.declare_parameter<double>("rate", 1.0, {"Hz", 0.0, 100.0}), 5.0);
-  EXPECT_EQ(n.declare_parameter<std::string>("name", "x"), "cli");
-  EXPECT_EQ(n.declare_parameter<int64_t>("missing", 7), 7);
+  TestNodeParams p;
+  n.declare_params(&p);
+  EXPECT_EQ(p.rate, 5.0);
+  EXPECT_EQ(p.name, "cli");
+  EXPECT_EQ(p.missing, 7);
+  EXPECT_EQ(n.parameters().at("rate").as<double>(), 5.0);
   try {
     n.check_undeclared_parameters();
     FAIL() << "typo_key should be reported";
@@ -131,7 +150,8 @@ TEST(PubSub, NodeParametersFromFileAndCommandLine) {
     EXPECT_NE(std::string(e.what()).find("typo_key"), std::string::npos);
     EXPECT_NE(std::string(e.what()).find("node_params.yaml"), std::string::npos);
   }
-  EXPECT_THROW(n.declare_parameter<double>("rate", 1.0), ParameterError);  // declared twice
+  TestNodeParams again;
+  EXPECT_THROW(n.declare_params(&again), ParameterError);  // declared twice
 }
 
 TEST(PubSub, WrongParameterTypeNamesFileKeyAndValue) {
@@ -141,12 +161,98 @@ TEST(PubSub, WrongParameterTypeNamesFileKeyAndValue) {
   Context ctx(4, argv, test_context_options());
   Node n("talker", {&ctx});
   try {
-    n.declare_parameter<double>("rate", 1.0);
+    TestNodeParams p;
+    n.declare_params(&p);
     FAIL();
-  } catch (const ParameterError& e) {
+  } catch (const ConfigError& e) {
     const std::string msg = e.what();
     EXPECT_NE(msg.find("bad_type.yaml"), std::string::npos) << msg;
-    EXPECT_NE(msg.find("'rate'"), std::string::npos) << msg;
-    EXPECT_NE(msg.find("'fast'"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("rate"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("fast"), std::string::npos) << msg;
   }
+}
+
+// The values a params file or `-p` gives are typed and checked by the node's schema: integers
+// are valid doubles, `-p name:=` is the empty string (as in ROS 2), and a wrong type, a value
+// out of range or NaN is an error naming the source, key and value.
+struct OverrideParams {
+  double rate = 1.0;
+  std::string name = "x";
+  std::vector<double> gains{1.0, 2.0};
+  bool on = false;
+  template <class Archive>
+  void Serialize(Archive* a) {
+    a->Visit(unav::common::Field("rate", &rate).Range(0.1, 100.0).Unit("Hz"));
+    a->Visit(unav::common::Field("name", &name));
+    a->Visit(unav::common::Field("gains", &gains));
+    a->Visit(unav::common::Field("on", &on));
+  }
+};
+
+TEST(PubSub, ParameterOverridesAreTypedAndCheckedByTheSchema) {
+  const auto declare = [](std::vector<std::string> overrides) {
+    std::vector<std::string> args{"t", "--ros-args"};
+    for (const auto& o : overrides) {
+      args.push_back("-p");
+      args.push_back(o);
+    }
+    std::vector<const char*> argv;
+    for (const auto& a : args) argv.push_back(a.c_str());
+    Context ctx(static_cast<int>(argv.size()), argv.data(), test_context_options());
+    Node n("talker", {&ctx});
+    OverrideParams p;
+    n.declare_params(&p);
+    return p;
+  };
+  const auto error_of = [&](std::vector<std::string> overrides) {
+    try {
+      declare(std::move(overrides));
+    } catch (const ConfigError& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  const OverrideParams p = declare({"rate:=5", "name:=", "gains:=[1, 2.5]", "on:=true"});
+  EXPECT_EQ(p.rate, 5.0);
+  EXPECT_EQ(p.name, "");
+  EXPECT_EQ(p.gains, (std::vector<double>{1.0, 2.5}));
+  EXPECT_TRUE(p.on);
+  const std::string wrong_type = error_of({"rate:=fast"});
+  EXPECT_NE(wrong_type.find("rate:=fast"), std::string::npos) << wrong_type;  // the source
+  EXPECT_NE(wrong_type.find("number"), std::string::npos) << wrong_type;
+  const std::string range = error_of({"rate:=1000"});
+  EXPECT_NE(range.find("[0.1, 100]"), std::string::npos) << range;
+  EXPECT_NE(error_of({"rate:=.nan"}), "");
+  EXPECT_NE(error_of({"on:=3"}), "");
+  EXPECT_NE(error_of({"name:=[1]"}), "");
+  EXPECT_NE(error_of({"gains:=[1, x]"}).find("gains[1]"), std::string::npos) << error_of({"gains:=[1, x]"});
+}
+
+// A mount published once, latched, before the listener exists, reaches it (transient local, as
+// tf2's static broadcaster relies on), and the listener composes a chain of two static edges.
+TEST(PubSub, StaticTransformListenerGetsLatchedMountsAsALateJoiner) {
+  Context ctx_a(test_context_options()), ctx_b(test_context_options());
+  Node owner("renderer", {&ctx_a}, "rov");
+  auto pub = owner.create_publisher<tf2_msgs::msg::TFMessage>("/tf_static", QoS::static_latched());
+  Eigen::Isometry3d X_BL = Eigen::Isometry3d::Identity(), X_LO = Eigen::Isometry3d::Identity();
+  X_BL.translation() << 0.2, 0.0, 0.1;
+  X_BL.linear() = Eigen::AngleAxisd(-M_PI / 2, Eigen::Vector3d::UnitY()).toRotationMatrix();
+  X_LO.linear() = Eigen::AngleAxisd(M_PI / 2, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  tf2_msgs::msg::TFMessage m;
+  m.transforms().push_back(to_transform_stamped(X_BL, 0.0, "base_link_frd", "down_link"));
+  m.transforms().push_back(to_transform_stamped(X_LO, 0.0, "down_link", "down_optical"));
+  pub->publish(m);  // before anyone listens
+
+  Node late("estimator", {&ctx_b}, "rov");
+  StaticTransformListener tf(late);
+  int updates = 0;
+  tf.on_update([&] { ++updates; });
+  ASSERT_TRUE(unav::testing::wait_for_match({&ctx_a, &ctx_b}, {make_link(*pub, *tf.subscription())}));
+  ASSERT_TRUE(spin_until(
+      {&ctx_a, &ctx_b}, [&] { return tf.lookup("base_link_frd", "down_optical").has_value(); }, 10s));
+  EXPECT_EQ(updates, 1);
+  // Through the message (double -> quaternion -> double): equal to ~1e-15.
+  EXPECT_TRUE(tf.lookup("base_link_frd", "down_optical")->isApprox(X_BL * X_LO, 1e-12));
+  EXPECT_TRUE(tf.lookup("down_optical", "base_link_frd")->isApprox((X_BL * X_LO).inverse(), 1e-12));
+  EXPECT_FALSE(tf.lookup("base_link_frd", "front_optical").has_value());
 }

@@ -8,6 +8,12 @@
 // Rx(roll)) only for configuration and display.
 #pragma once
 
+#include <map>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
 #include <Eigen/Geometry>
 
 namespace unav::common {
@@ -38,5 +44,23 @@ Pose pose_from_xyz_rpy(const Eigen::Vector3d& xyz_m, const Eigen::Vector3d& rpy_
 /// with rpy = (0, 0, 0) looks along body x; rpy = (0, -90 deg, 0) looks down (image top =
 /// body forward).
 Eigen::Matrix3d R_camera_body_to_optical();
+
+/// Static transforms between named frames, as tf2's buffer holds /tf_static: each edge is
+/// X_PC (frame C in its parent P); lookup() composes edges along the tree in either direction.
+/// DDS-free (unav_runtime's StaticTransformListener fills one from /tf_static).
+class TransformGraph {
+ public:
+  /// Sets (or replaces) the edge parent -> child. A frame has one parent (tf2's rule): a second
+  /// parent for `child` replaces the first.
+  void set(const std::string& parent, const std::string& child, const Pose& X_PC);
+  /// X_TS: frame `source` in frame `target` (p_T = X_TS * p_S), through any chain of edges;
+  /// nullopt when the frames are not connected (or unknown). lookup(f, f) is the identity.
+  std::optional<Pose> lookup(const std::string& target, const std::string& source) const;
+  /// Number of edges.
+  std::size_t size() const { return parent_of_.size(); }
+
+ private:
+  std::map<std::string, std::pair<std::string, Pose>> parent_of_;  ///< child -> (parent, X_PC)
+};
 
 }  // namespace unav::common

@@ -63,10 +63,6 @@ class Node {
   /// Timer on the node clock: follows simulated time when use_sim_time is true.
   std::shared_ptr<Timer> create_timer(std::chrono::nanoseconds period, std::function<void()> callback);
 
-  /// Declares a parameter and returns its value: the override from a params file or `-p`, else
-  /// `default_value`. Throws ParameterError naming the source, parameter, value and rule.
-  template <typename T>
-  T declare_parameter(const std::string& name, const T& default_value, const ParameterDescriptor& desc = {});
   /// Declares every field of a config schema (unav_common/config.hpp: a struct whose
   /// Serialize() names each field once with type, default, range, unit, doc) as parameters of
   /// this node: a params file or `-p name:=value` overrides a field (nested fields as `a.b`),
@@ -78,7 +74,7 @@ class Node {
   const std::vector<common::FieldInfo>& parameter_table() const { return table_; }
   /// Value of a declared parameter as YAML (for tools and logs).
   const std::map<std::string, YAML::Node>& parameters() const { return values_; }
-  /// Throws ParameterError listing overrides no declare_parameter() asked for (typos in YAML).
+  /// Throws ParameterError listing overrides no declare_params() asked for (typos in YAML).
   void check_undeclared_parameters() const;
 
   // Graph introspection for ros_discovery_info.
@@ -93,34 +89,10 @@ class Node {
   ParameterOverrides overrides_;
   std::map<std::string, YAML::Node> values_;
   std::vector<common::FieldInfo> table_;
-  void record_parameter(const std::string& name, const char* type, const YAML::Node& default_value,
-                        const ParameterDescriptor& desc);
   void record_params(const std::vector<common::FieldInfo>& fields, const YAML::Node& effective);
   std::vector<std::shared_ptr<PublisherBase>> publishers_;
   std::vector<std::shared_ptr<SubscriptionBase>> subscriptions_;
 };
-
-template <typename T>
-T Node::declare_parameter(const std::string& name, const T& default_value, const ParameterDescriptor& desc) {
-  if (values_.count(name)) throw ParameterError("node '" + name_ + "': parameter '" + name + "' declared twice");
-  T value = default_value;
-  if (const ParameterOverride* o = overrides_.find(name)) {
-    overrides_.mark_used(name);
-    value = parameter_as<T>(o->value, desc, o->source + ": node '" + name_ + "' parameter '" + name + "'");
-  } else {
-    // Defaults are checked too: a wrong default is a bug worth hearing about at start-up.
-    YAML::Node d;
-    d = default_value;
-    (void)parameter_as<T>(d, desc, "node '" + name_ + "' default of parameter '" + name + "'");
-  }
-  YAML::Node stored;
-  stored = value;
-  values_[name] = stored;
-  YAML::Node d;
-  d = default_value;
-  record_parameter(name, parameter_type_name<T>(), d, desc);
-  return value;
-}
 
 template <class T>
 void Node::declare_params(T* config) {
@@ -129,7 +101,9 @@ void Node::declare_params(T* config) {
     if (f.type == "mapping" || f.type == "mapping[]") continue;  // overrides name leaves
     if (const ParameterOverride* o = overrides_.find(f.name)) {
       overrides_.mark_used(f.name);
-      common::ApplyOverride(config, f.name, YAML::Dump(o->value), o->source + ": node '" + name_ + "'");
+      // `-p name:=` (nothing after :=) is the empty string for a string parameter, as in ROS 2.
+      const std::string text = o->value.IsNull() && f.type == "string" ? "\"\"" : YAML::Dump(o->value);
+      common::ApplyOverride(config, f.name, text, o->source + ": node '" + name_ + "'");
     }
   }
   record_params(fields, common::ToYaml(*config));
