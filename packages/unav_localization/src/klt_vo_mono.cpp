@@ -41,8 +41,8 @@ PointCheck check_point(const Eigen::Vector3d& p_1, const Eigen::Isometry3d& T_21
                        const cv::Point2f& u2, const cv::Matx33d& K, const KltVoOptions& o) {
   if (!p_1.allFinite()) return PointCheck::kLowParallax;
   const Eigen::Vector3d c2_1 = T_21.inverse().translation();
-  const Eigen::Vector3d r1 = p_1, r2 = p_1 - c2_1;
-  const double cos_angle = r1.dot(r2) / (r1.norm() * r2.norm());
+  const Eigen::Vector3d r2 = p_1 - c2_1;
+  const double cos_angle = p_1.dot(r2) / (p_1.norm() * r2.norm());
   if (!(std::acos(std::clamp(cos_angle, -1.0, 1.0)) >= o.min_triangulation_angle_rad)) return PointCheck::kLowParallax;
   const Eigen::Vector3d p_2 = T_21 * p_1;
   if (!(p_1.z() > 0) || !(p_2.z() > 0)) return PointCheck::kBad;
@@ -148,7 +148,7 @@ void KltVo::mono_detect(const cv::Mat& gray) {
   for (size_t i = 0; i < all.size() && added < want; ++i) {
     const int cx = std::min(options_.grid_cols - 1, static_cast<int>(all[i].x * options_.grid_cols / gray.cols));
     const int cy = std::min(options_.grid_rows - 1, static_cast<int>(all[i].y * options_.grid_rows / gray.rows));
-    int& n = count[static_cast<size_t>(cy * options_.grid_cols + cx)];
+    int& n = count[static_cast<size_t>(cy) * static_cast<size_t>(options_.grid_cols) + static_cast<size_t>(cx)];
     if (n < per_cell) {
       ++n;
       add(i);

@@ -5,9 +5,8 @@
 
 namespace unav_localization {
 
-std::vector<TwoViewCandidate> TwoViewCandidates(const std::vector<cv::Point2f>& p1,
-                                                const std::vector<cv::Point2f>& p2, const cv::Matx33d& K,
-                                                const TwoViewOptions& options) {
+std::vector<TwoViewCandidate> TwoViewCandidates(const std::vector<cv::Point2f>& p1, const std::vector<cv::Point2f>& p2,
+                                                const cv::Matx33d& K, const TwoViewOptions& options) {
   std::vector<TwoViewCandidate> out;
   if (p1.size() < 5 || p1.size() != p2.size()) return out;
   const cv::Mat Kcv(K);

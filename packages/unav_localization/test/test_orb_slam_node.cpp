@@ -21,7 +21,7 @@
 #include "unav_scene/world.hpp"
 
 #define UNAV_ORB_SLAM_NO_MAIN
-#include "../nodes/orb_slam_node.cpp"
+#include "../nodes/orb_slam_node.cpp"  // NOLINT(bugprone-suspicious-include): the node under test
 
 using namespace std::chrono_literals;
 

@@ -39,6 +39,7 @@ TEST(TwoView, EssentialCandidateRecoversAGeneralMotion) {
   std::mt19937 rng(3);
   std::uniform_real_distribution<double> xy(-2.0, 2.0), z(3.0, 8.0);
   std::vector<Eigen::Vector3d> pts;
+  pts.reserve(200);
   for (int i = 0; i < 200; ++i) pts.emplace_back(xy(rng), xy(rng), z(rng));
   const Eigen::Matrix3d R = Eigen::AngleAxisd(0.08, Eigen::Vector3d(0.2, 1.0, 0.1).normalized()).toRotationMatrix();
   const Eigen::Vector3d t(-0.4, 0.05, 0.1);
@@ -62,6 +63,7 @@ TEST(TwoView, HomographyCandidatesContainThePlaneMotion) {
   std::mt19937 rng(5);
   std::uniform_real_distribution<double> xy(-3.0, 3.0);
   std::vector<Eigen::Vector3d> pts;
+  pts.reserve(150);
   for (int i = 0; i < 150; ++i) pts.emplace_back(xy(rng), xy(rng), 4.0);
   const Eigen::Matrix3d R = Eigen::AngleAxisd(0.05, Eigen::Vector3d::UnitZ()).toRotationMatrix();
   const Eigen::Vector3d t(0.0, -0.5, 0.0);

@@ -32,6 +32,7 @@ Child spawn(const std::vector<std::string>& argv) {
     FILE* f = freopen(c.err_path.c_str(), "w", stderr);
     (void)f;
     std::vector<char*> args;
+    args.reserve(argv.size() + 1);
     for (const auto& a : argv) args.push_back(const_cast<char*>(a.c_str()));
     args.push_back(nullptr);
     execv(args[0], args.data());

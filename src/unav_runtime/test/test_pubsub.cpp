@@ -132,8 +132,7 @@ struct TestNodeParams {
 TEST(PubSub, NodeParametersFromFileAndCommandLine) {
   const std::string path = ::testing::TempDir() + "node_params.yaml";
   std::ofstream(path) << "talker:\n  ros__parameters:\n    rate: 5.0\n    name: abc\n    typo_key: 1\n";
-  const std::string pf = path;
-  const char* argv[] = {"t", "--ros-args", "--params-file", pf.c_str(), "-p", "name:=cli", "-r", "__ns:=/rov"};
+  const char* argv[] = {"t", "--ros-args", "--params-file", path.c_str(), "-p", "name:=cli", "-r", "__ns:=/rov"};
   Context ctx(8, argv, test_context_options());
   Node n("talker", {&ctx});
   EXPECT_EQ(n.fully_qualified_name(), "/rov/talker");
@@ -190,13 +189,14 @@ struct OverrideParams {
 };
 
 TEST(PubSub, ParameterOverridesAreTypedAndCheckedByTheSchema) {
-  const auto declare = [](std::vector<std::string> overrides) {
+  const auto declare = [](const std::vector<std::string>& overrides) {
     std::vector<std::string> args{"t", "--ros-args"};
     for (const auto& o : overrides) {
       args.push_back("-p");
       args.push_back(o);
     }
     std::vector<const char*> argv;
+    argv.reserve(args.size());
     for (const auto& a : args) argv.push_back(a.c_str());
     Context ctx(static_cast<int>(argv.size()), argv.data(), test_context_options());
     Node n("talker", {&ctx});

@@ -13,10 +13,10 @@
 namespace unav_localization {
 
 struct TwoViewOptions {
-  double essential_ransac_px = 1.0;    ///< epipolar RANSAC threshold
+  double essential_ransac_px = 1.0;  ///< epipolar RANSAC threshold
   double essential_confidence = 0.999;
   int essential_max_iterations = 1000;
-  double homography_ransac_px = 1.5;   ///< reprojection RANSAC threshold
+  double homography_ransac_px = 1.5;  ///< reprojection RANSAC threshold
 };
 
 /// One motion hypothesis: x_2 = R x_1 + t for points x_1 of view 1 (t as OpenCV returns it:
@@ -34,8 +34,7 @@ struct TwoViewCandidate {
 /// The candidates for pixel correspondences p1[i] <-> p2[i] of a camera with matrix K:
 /// the essential-matrix motion first (absent when RANSAC or recoverPose finds none), then the
 /// homography decompositions with a non-zero translation (a pure rotation gives no depth).
-std::vector<TwoViewCandidate> TwoViewCandidates(const std::vector<cv::Point2f>& p1,
-                                                const std::vector<cv::Point2f>& p2, const cv::Matx33d& K,
-                                                const TwoViewOptions& options = {});
+std::vector<TwoViewCandidate> TwoViewCandidates(const std::vector<cv::Point2f>& p1, const std::vector<cv::Point2f>& p2,
+                                                const cv::Matx33d& K, const TwoViewOptions& options = {});
 
 }  // namespace unav_localization

@@ -25,7 +25,8 @@ class StaticTransformListener {
       : sub_(node.create_subscription<tf2_msgs::msg::TFMessage>(
             "/tf_static", QoS{QoS::Reliability::kReliable, QoS::Durability::kTransientLocal, 100},
             [this](const tf2_msgs::msg::TFMessage& m) {
-              for (const auto& t : m.transforms()) graph_.set(t.header().frame_id(), t.child_frame_id(), from_msg(t.transform()));
+              for (const auto& t : m.transforms())
+                graph_.set(t.header().frame_id(), t.child_frame_id(), from_msg(t.transform()));
               if (on_update_) on_update_();
             })) {}
   StaticTransformListener(const StaticTransformListener&) = delete;  // the callback holds `this`
