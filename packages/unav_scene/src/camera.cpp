@@ -2,8 +2,9 @@
 
 #include <cmath>
 
+#include "unav_common/config.hpp"
+#include "unav_common/frames.hpp"
 #include "unav_scene/errors.hpp"
-#include "yaml_util.hpp"
 
 namespace unav::scene {
 
@@ -41,74 +42,136 @@ void CameraModel::validate(const std::string& where) const {
   if (!(exposure > 0.0)) throw ConfigError(pre + "exposure must be > 0");
 }
 
+namespace {
+
+// The camera YAML's schema (layout: config/sensors/bluerov2_cameras.yaml). Zero/negative
+// defaults mark "not given" where the loader derives a value (fy = fx, centred principal point,
+// focal length from hfov_deg).
+struct IntrinsicsSpec {
+  double fx = 0, fy = 0, cx = -1, cy = -1;
+  template <class Archive>
+  void Serialize(Archive* a) {
+    using common::Field;
+    a->Visit(Field("fx", &fx).Min(0.0).Unit("px").Doc("focal length (required with intrinsics)"));
+    a->Visit(Field("fy", &fy).Min(0.0).Unit("px").Doc("0 = fx"));
+    a->Visit(Field("cx", &cx).Min(-1.0).Unit("px").Doc("-1 = (width - 1) / 2"));
+    a->Visit(Field("cy", &cy).Min(-1.0).Unit("px").Doc("-1 = (height - 1) / 2"));
+  }
+};
+
+struct MountSpec {
+  Eigen::Vector3d xyz_m = Eigen::Vector3d::Zero();
+  Eigen::Vector3d rpy_deg = Eigen::Vector3d::Zero();
+  std::string frame = common::kBodyFrame;
+  template <class Archive>
+  void Serialize(Archive* a) {
+    using common::Field;
+    a->Visit(Field("xyz_m", &xyz_m).Unit("m").Doc("position on the body"));
+    a->Visit(Field("rpy_deg", &rpy_deg)
+                 .Unit("deg")
+                 .Doc("camera body (x = optical axis) roll, pitch, yaw; [0, -90, 0] looks down"));
+    a->Visit(Field("frame", &frame).OneOf({common::kBodyFrame}).Doc("parent frame"));
+  }
+};
+
+struct DistortionSpec {
+  std::string model = "plumb_bob";
+  double k1 = 0, k2 = 0, p1 = 0, p2 = 0, k3 = 0;
+  template <class Archive>
+  void Serialize(Archive* a) {
+    using common::Field;
+    a->Visit(Field("model", &model).OneOf({"plumb_bob"}).Doc("OpenCV radial-tangential"));
+    a->Visit(Field("k1", &k1));
+    a->Visit(Field("k2", &k2));
+    a->Visit(Field("p1", &p1));
+    a->Visit(Field("p2", &p2));
+    a->Visit(Field("k3", &k3));
+  }
+};
+
+struct CameraSpec {
+  std::string name;
+  MountSpec mount;
+  int width = 0, height = 0;
+  double hfov_deg = 0.0;
+  IntrinsicsSpec intrinsics;
+  DistortionSpec distortion;
+  double noise_stddev = 0.0;
+  double exposure = 1.0;
+  double near_m = 0.05, far_m = 200.0;
+  template <class Archive>
+  void Serialize(Archive* a) {
+    using common::Field;
+    a->Visit(Field("name", &name).Doc("camera name (topics camera/<name>/..., frame <name>_optical); required"));
+    a->Visit(Field("mount", &mount).Doc("pose on base_link_frd"));
+    a->Visit(Field("width", &width).Range(0, 8192).Unit("px").Doc("required"));
+    a->Visit(Field("height", &height).Range(0, 8192).Unit("px").Doc("required"));
+    a->Visit(
+        Field("hfov_deg", &hfov_deg).Min(0.0).Below(180.0).Unit("deg").Doc("horizontal field of view, or intrinsics"));
+    a->Visit(Field("intrinsics", &intrinsics).Doc("pinhole intrinsics instead of hfov_deg"));
+    a->Visit(Field("distortion", &distortion).Doc("lens distortion; all zero = none"));
+    a->Visit(Field("noise_stddev", &noise_stddev).Min(0.0).Doc("additive Gaussian noise, fraction of full scale"));
+    a->Visit(Field("exposure", &exposure).Above(0.0).Doc("linear gain before sRGB encoding"));
+    a->Visit(Field("near_m", &near_m).Above(0.0).Unit("m").Doc("near clip plane"));
+    a->Visit(Field("far_m", &far_m).Above(0.0).Unit("m").Doc("far clip plane"));
+  }
+};
+
+struct CameraFile {
+  std::string description;
+  std::vector<CameraSpec> cameras;
+  template <class Archive>
+  void Serialize(Archive* a) {
+    a->Visit(common::Field("description", &description));
+    a->Visit(common::Field("cameras", &cameras).Doc("the cameras of the vehicle"));
+  }
+};
+
+CameraModel make_camera(const CameraSpec& s, const std::string& file, const std::string& key) {
+  if (s.name.empty()) throw ConfigError(file, key + ".name", "", "a camera needs a name");
+  if (s.width <= 0 || s.height <= 0)
+    throw ConfigError(file, key, std::to_string(s.width) + "x" + std::to_string(s.height),
+                      "width and height are required and positive");
+  CameraModel cam;
+  if (s.intrinsics.fx > 0.0) {
+    cam.name = s.name;
+    cam.width = s.width;
+    cam.height = s.height;
+    cam.fx = s.intrinsics.fx;
+    cam.fy = s.intrinsics.fy > 0.0 ? s.intrinsics.fy : cam.fx;
+    cam.cx = s.intrinsics.cx >= 0.0 ? s.intrinsics.cx : 0.5 * (s.width - 1);
+    cam.cy = s.intrinsics.cy >= 0.0 ? s.intrinsics.cy : 0.5 * (s.height - 1);
+  } else {
+    if (!(s.hfov_deg > 0.0))
+      throw ConfigError(file, key + ".hfov_deg", std::to_string(s.hfov_deg),
+                        "need hfov_deg in (0, 180) or intrinsics with fx > 0");
+    cam = CameraModel::from_hfov(s.name, s.width, s.height, s.hfov_deg * M_PI / 180.0);
+  }
+  // rpy orients the camera body (x = optical axis, FRD-like); optical = that * fixed R.
+  cam.X_BC = pose_from_xyz_rpy(s.mount.xyz_m, s.mount.rpy_deg * M_PI / 180.0);
+  cam.X_BC.linear() = cam.X_BC.linear() * R_camera_body_to_optical();
+  const DistortionSpec& d = s.distortion;
+  cam.distortion << d.k1, d.k2, d.p1, d.p2, d.k3;
+  cam.noise_stddev = s.noise_stddev;
+  cam.exposure = s.exposure;
+  cam.near_m = s.near_m;
+  cam.far_m = s.far_m;
+  cam.validate(file);
+  return cam;
+}
+
+}  // namespace
+
 std::vector<CameraModel> load_cameras(const std::string& path) {
-  using namespace detail;
-  YamlCtx c{path};
-  const YAML::Node root = load_yaml_file(path);
-  check_keys(c, root, "", {"cameras", "description"});
-  const YAML::Node list = root["cameras"];
-  if (!list || !list.IsSequence()) c.fail("cameras", "expected a list of cameras");
+  const auto file = common::LoadYamlFile<CameraFile>(path);
+  if (file.cameras.empty()) throw ConfigError(path, "cameras", "", "expected a non-empty list of cameras");
   std::vector<CameraModel> out;
-  for (std::size_t i = 0; i < list.size(); ++i) {
-    const YAML::Node n = list[i];
-    const std::string p = "cameras[" + std::to_string(i) + "]";
-    check_keys(c, n, p,
-               {"name", "mount", "width", "height", "hfov_deg", "intrinsics", "distortion", "noise_stddev", "exposure",
-                "near_m", "far_m"});
-    const std::string name = get_string(c, n, p, "name", "");
-    if (name.empty()) c.fail(join_key(p, "name"), "missing camera name");
-    const int w = static_cast<int>(get_double(c, n, p, "width", 0));
-    const int h = static_cast<int>(get_double(c, n, p, "height", 0));
-    if (w <= 0 || h <= 0) c.fail(p + " (" + name + ")", "width and height must be positive");
-    CameraModel cam;
-    if (n["intrinsics"]) {
-      const YAML::Node k = n["intrinsics"];
-      const std::string kp = join_key(p, "intrinsics");
-      check_keys(c, k, kp, {"fx", "fy", "cx", "cy"});
-      cam.name = name;
-      cam.width = w;
-      cam.height = h;
-      cam.fx = get_double(c, k, kp, "fx", 0);
-      cam.fy = get_double(c, k, kp, "fy", cam.fx);
-      cam.cx = get_double(c, k, kp, "cx", 0.5 * (w - 1));
-      cam.cy = get_double(c, k, kp, "cy", 0.5 * (h - 1));
-      if (!(cam.fx > 0) || !(cam.fy > 0)) c.fail(join_key(kp, "fx"), "focal lengths must be positive");
-    } else {
-      const double hfov_deg = get_double(c, n, p, "hfov_deg", -1.0);
-      if (!n["hfov_deg"]) c.fail(join_key(p, "hfov_deg"), "need hfov_deg or intrinsics");
-      if (!(hfov_deg > 0.0 && hfov_deg < 180.0))
-        c.fail(join_key(p, "hfov_deg"), "field of view must be in (0, 180) deg (got " + std::to_string(hfov_deg) + ")");
-      cam = CameraModel::from_hfov(name, w, h, hfov_deg * M_PI / 180.0);
-    }
-    if (const YAML::Node m = n["mount"]) {
-      const std::string mp = join_key(p, "mount");
-      check_keys(c, m, mp, {"xyz_m", "rpy_deg", "frame"});
-      const std::string frame = get_string(c, m, mp, "frame", "base_link_frd");
-      if (frame != "base_link_frd") c.fail(join_key(mp, "frame"), "only base_link_frd is supported");
-      const Eigen::Vector3d xyz = get_vec<3>(c, m, mp, "xyz_m", Eigen::Vector3d::Zero());
-      const Eigen::Vector3d rpy = get_vec<3>(c, m, mp, "rpy_deg", Eigen::Vector3d::Zero()) * M_PI / 180.0;
-      // rpy orients the camera body (x = optical axis, FRD-like); optical = that * fixed R.
-      cam.X_BC = pose_from_xyz_rpy(xyz, rpy);
-      cam.X_BC.linear() = cam.X_BC.linear() * R_camera_body_to_optical();
-    } else {
-      cam.X_BC.linear() = R_camera_body_to_optical();
-    }
-    if (const YAML::Node d = n["distortion"]) {
-      const std::string dp = join_key(p, "distortion");
-      check_keys(c, d, dp, {"model", "k1", "k2", "p1", "p2", "k3"});
-      const std::string model = get_string(c, d, dp, "model", "plumb_bob");
-      if (model != "plumb_bob") c.fail(join_key(dp, "model"), "only plumb_bob is supported");
-      cam.distortion << get_double(c, d, dp, "k1", 0), get_double(c, d, dp, "k2", 0), get_double(c, d, dp, "p1", 0),
-          get_double(c, d, dp, "p2", 0), get_double(c, d, dp, "k3", 0);
-    }
-    cam.noise_stddev = get_double(c, n, p, "noise_stddev", 0.0);
-    cam.exposure = get_double(c, n, p, "exposure", 1.0);
-    cam.near_m = get_double(c, n, p, "near_m", cam.near_m);
-    cam.far_m = get_double(c, n, p, "far_m", cam.far_m);
-    cam.validate(path);
-    for (const auto& o : out)
-      if (o.name == name) c.fail(join_key(p, "name"), "duplicate camera name '" + name + "'");
-    out.push_back(cam);
+  for (std::size_t i = 0; i < file.cameras.size(); ++i) {
+    const std::string key = "cameras[" + std::to_string(i) + "]";
+    out.push_back(make_camera(file.cameras[i], path, key));
+    for (std::size_t j = 0; j + 1 < out.size(); ++j)
+      if (out[j].name == out.back().name)
+        throw ConfigError(path, key + ".name", out.back().name, "duplicate camera name");
   }
   return out;
 }
