@@ -6,6 +6,7 @@
 
 #include <fastdds/dds/publisher/DataWriter.hpp>
 #include "unav_common/resources.hpp"
+#include "unav_scene/world.hpp"
 
 #include "unav_runtime/conversions.hpp"
 
@@ -27,6 +28,14 @@ int64_t steps_in(double period, double dt, const std::string& name) {
 }
 
 }  // namespace
+
+std::unique_ptr<Seabed> seabed_from_world(const unav::scene::World& world) {
+  const unav::scene::Seabed& sb = world.seabed;
+  if (!sb.enabled) return nullptr;
+  if (sb.is_flat()) return std::make_unique<FlatSeabed>(sb.depth_m);
+  unav::scene::SeabedGrid g = unav::scene::sample_seabed(sb);
+  return std::make_unique<GridSeabed>(g.origin_n, g.origin_e, g.resolution_m, std::move(g.depths_m));
+}
 
 PhysicsServer::PhysicsServer(const unav::NodeOptions& options) : Node("physics_server", options, "rov") {
   PhysicsServerParams p;
@@ -60,12 +69,26 @@ PhysicsServer::PhysicsServer(const unav::NodeOptions& options) : Node("physics_s
   barrier_ = std::make_unique<unav::lockstep::Barrier>(participants_, std::llround(0.5 * so.dt * 1e9));
 
   const VehicleParams vehicle = load_vehicle(p.vehicle_config);
-  std::unique_ptr<CurrentModel> current = p.current_config.empty() ? nullptr : load_current(p.current_config);
+  // The world file (the renderer's scene) drives the seabed and the current unless a node
+  // parameter names its own.
+  unav::scene::World world;
+  if (!p.world.empty()) world = unav::scene::load_world(p.world);
+  std::string current_file = p.current_config;
+  if (current_file.empty()) current_file = world.current_file;
+  std::unique_ptr<CurrentModel> current = current_file.empty() ? nullptr : load_current(current_file);
   std::unique_ptr<Seabed> seabed;
-  if (!p.seabed_config.empty())
+  std::string seabed_from = "none";
+  if (!p.seabed_config.empty()) {
     seabed = load_seabed(p.seabed_config);
-  else if (p.seabed_depth > 0.0)
+    seabed_from = p.seabed_config;
+  } else if (!p.world.empty()) {
+    seabed = seabed_from_world(world);
+    if (seabed) seabed_from = p.world + (world.seabed.is_flat() ? " (flat)" : " (sampled grid)");
+  } else if (p.seabed_depth > 0.0) {
     seabed = std::make_unique<FlatSeabed>(p.seabed_depth);
+    seabed_from = "flat at " + std::to_string(p.seabed_depth) + " m";
+  }
+  logger()->info("seabed: {}; current: {}", seabed_from, current_file.empty() ? "still water" : current_file);
   RigidBodyState x0;
   x0.p_WB_W = p.initial_position;
   x0.q_WB = quaternion_from_rpy(p.initial_rpy.x(), p.initial_rpy.y(), p.initial_rpy.z());
@@ -356,7 +379,7 @@ void PhysicsServer::on_command(const unav_msgs::msg::ThrusterCommand& msg) {
 }
 
 void PhysicsServer::on_ack(const unav_msgs::msg::LockstepAck& msg) {
-  const std::string who = msg.participant();
+  const std::string& who = msg.participant();
   const bool known = barrier_->has_acked(who);
   if (!barrier_->on_ack(who, unav::nanoseconds(msg.header())) && !known)
     logger()->warn("lockstep ack from '{}', which is not in lockstep_participants", who);

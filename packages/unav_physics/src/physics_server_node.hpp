@@ -28,6 +28,8 @@
 //             holds, the barrier's state is published again every wall second (late joiners)
 //             and a warning names the missing participants every 5 s.
 // Failsafe: no command for command_timeout seconds of simulated time -> zero thrust, logged once.
+// World: with `world` set, the world file's seabed (flat, relief, heightmap; the renderer's scene)
+// is the contact surface and the DVL/altimeter target, and its `current` is the water current.
 #pragma once
 
 #include <memory>
@@ -52,12 +54,18 @@
 #include "unav_physics/simulator.hpp"
 #include "unav_runtime/lockstep.hpp"
 #include "unav_runtime/runtime.hpp"
+#include "unav_scene/world.hpp"
 
 namespace unav::physics {
+
+/// The physics seabed of a world: flat when the world's is, else its patch sampled on the render
+/// grid (bilinear between nodes, nearest edge beyond); nullptr when the world disables its seabed.
+std::unique_ptr<Seabed> seabed_from_world(const unav::scene::World& world);
 
 /// The physics_server's parameters (params file or `-p name:=value`; `physics_server --help`).
 struct PhysicsServerParams {
   std::string vehicle_config;  ///< default: the installed bluerov2_heavy.yaml
+  std::string world;
   std::string current_config;
   double seabed_depth = 10.0;
   std::string seabed_config;
@@ -81,9 +89,13 @@ struct PhysicsServerParams {
   void Serialize(Archive* a) {
     using unav::common::Field;
     a->Visit(Field("vehicle_config", &vehicle_config).Doc("vehicle YAML (config/vehicles/*.yaml)"));
-    a->Visit(Field("current_config", &current_config).Doc("water current YAML; empty = still water"));
-    a->Visit(Field("seabed_depth", &seabed_depth).Unit("m").Doc("flat seabed depth; <= 0 = no seabed"));
-    a->Visit(Field("seabed_config", &seabed_config).Doc("seabed YAML (flat/grid/PGM); overrides seabed_depth"));
+    a->Visit(Field("world", &world)
+                 .Doc("world.yaml: its seabed (relief, heightmap) and current drive the physics; "
+                      "current_config/seabed_config override them"));
+    a->Visit(Field("current_config", &current_config).Doc("water current YAML; empty = the world's or still water"));
+    a->Visit(Field("seabed_depth", &seabed_depth).Unit("m").Doc("flat seabed depth without a world; <= 0 = none"));
+    a->Visit(
+        Field("seabed_config", &seabed_config).Doc("seabed YAML (flat/grid/PGM); overrides world and seabed_depth"));
     a->Visit(Field("initial_position", &initial_position).Unit("m").Doc("initial position, NED"));
     a->Visit(Field("initial_rpy", &initial_rpy).Unit("rad").Doc("initial roll, pitch, yaw"));
     a->Visit(Field("dt", &dt).Range(1e-5, 0.1).Unit("s").Doc("physics step (1 kHz default)"));

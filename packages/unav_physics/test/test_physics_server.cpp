@@ -2,6 +2,10 @@
 // the test's own, spun alternately from this thread.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <filesystem>
+#include <fstream>
+
 #include "physics_server_node.hpp"
 #include "unav_runtime/testing.hpp"
 
@@ -43,7 +47,8 @@ struct Harness {
     test_ctx = std::make_unique<unav::Context>(unav::testing::test_context_options());
     probe = std::make_unique<unav::Node>("probe", unav::NodeOptions{test_ctx.get()});
     odom_sub = probe->create_subscription<nav_msgs::msg::Odometry>(
-        "/rov/ground_truth/odom", unav::QoS::reliable(100), [this](const nav_msgs::msg::Odometry& m) { odoms.push_back(m); });
+        "/rov/ground_truth/odom", unav::QoS::reliable(100),
+        [this](const nav_msgs::msg::Odometry& m) { odoms.push_back(m); });
     clock_sub = probe->create_subscription<rosgraph_msgs::msg::Clock>(
         "/clock", unav::QoS::reliable(100), [this](const rosgraph_msgs::msg::Clock& c) {
           clocks.push_back(unav::Time::from_msg(c.clock().sec(), c.clock().nanosec()).seconds());
@@ -91,8 +96,8 @@ const std::vector<double> kSurge = {0.5, 0.5, -0.5, -0.5, 0, 0, 0, 0};
 }  // namespace
 
 TEST(PhysicsServer, LockstepHoldsEachBarrierUntilTheCommandArrives) {
-  Harness h({"-p", "mode:=lockstep", "-p", "lockstep_wait_for_command:=true", "-p", "lockstep_period:=0.05",
-             "-p", "publish_rate:=20.0"});
+  Harness h({"-p", "mode:=lockstep", "-p", "lockstep_wait_for_command:=true", "-p", "lockstep_period:=0.05", "-p",
+             "publish_rate:=20.0"});
   // Closed loop over DDS: answer each barrier's odometry with a command stamped at its time.
   double answered = -1.0;
   for (int k = 0; k <= 20; ++k) {
@@ -135,8 +140,8 @@ TEST(PhysicsServer, LockstepWaitsForEveryParticipantAck) {
 TEST(PhysicsServer, RealtimeFailsafeAndBadCommands) {
   Harness h({"-p", "command_timeout:=0.2", "-p", "real_time_factor:=1.0"});
   h.command(0.0, kSurge);
-  h.command(0.0, {0.1, 0.2});                          // wrong length: rejected
-  h.command(0.0, {NAN, 0, 0, 0, 0, 0, 0, 0});          // NaN: rejected
+  h.command(0.0, {0.1, 0.2});                  // wrong length: rejected
+  h.command(0.0, {NAN, 0, 0, 0, 0, 0, 0, 0});  // NaN: rejected
   ASSERT_TRUE(h.spin_until([&] { return h.server->simulator().command_stats().rejected_non_finite == 1; }, 5s));
   EXPECT_EQ(h.server->simulator().command_stats().rejected_wrong_length, 1u);
   EXPECT_EQ(h.server->simulator().command_stats().accepted, 1u);
@@ -151,4 +156,78 @@ TEST(PhysicsServer, RealtimeFailsafeAndBadCommands) {
   // 1 s after the command.
   EXPECT_LT(h.server->simulator().thrusters().thrust().cwiseAbs().maxCoeff(), 0.1);
   EXPECT_FALSE(h.odoms.empty());
+}
+
+namespace {
+
+std::string write_world(const std::string& name, const std::string& body) {
+  const std::string dir = ::testing::TempDir() + "unav_physics_world_" + name + "_" + std::to_string(::getpid());
+  std::filesystem::create_directories(dir);
+  std::ofstream(dir + "/world.yaml") << body;
+  return dir + "/world.yaml";
+}
+
+}  // namespace
+
+// The world file drives the physics: its relief seabed becomes the contact/DVL/altimeter surface
+// (exact at the render grid's nodes, bilinear between them) and its current moves the water.
+TEST(PhysicsServer, WorldFileDrivesTheSeabedAndTheCurrent) {
+  const std::string current = std::string(UNAV_CONFIG_DIR) + "/water/currents/constant.yaml";
+  const std::string world_path =
+      write_world("relief",
+                  "seabed:\n  depth_m: 12.0\n  center_ne: [2.0, -3.0]\n  size_m: [20.0, 16.0]\n  resolution_m: 0.5\n"
+                  "  relief: {amplitude_m: 0.4, wavelength_m: 4.0, seed: 5}\ncurrent: {file: " +
+                      current + "}\n");
+  const unav::scene::World world = unav::scene::load_world(world_path);
+  ASSERT_FALSE(world.seabed.is_flat());
+  std::unique_ptr<unav::Context> ctx = make_context({"-p", "world:=" + world_path});
+  PhysicsServer server(unav::NodeOptions{ctx.get()});
+  const unav::physics::Seabed* sb = server.simulator().seabed();
+  ASSERT_NE(sb, nullptr);
+  // Grid nodes: origin (2 - 10, -3 - 8), every 0.5 m: the same depth as the renderer's mesh vertices.
+  double max_node_err = 0.0, max_relief = 0.0;
+  for (int i = 0; i <= 40; i += 3)
+    for (int j = 0; j <= 32; j += 3) {
+      const double n = -8.0 + 0.5 * i, e = -11.0 + 0.5 * j;
+      max_node_err = std::max(max_node_err, std::abs(sb->depth_at(n, e) - world.seabed.depth_at(n, e)));
+      max_relief = std::max(max_relief, std::abs(world.seabed.depth_at(n, e) - 12.0));
+    }
+  EXPECT_LT(max_node_err, 1e-12);
+  EXPECT_GT(max_relief, 0.05) << "the relief must actually vary the depth";
+  // Between nodes a bilinear patch stays within its cell's corner depths.
+  for (const auto& [n, e] : std::vector<std::pair<double, double>>{{0.26, 0.13}, {-5.1, 4.37}, {7.9, -10.6}}) {
+    const double n0 = -8.0 + 0.5 * std::floor((n + 8.0) / 0.5), e0 = -11.0 + 0.5 * std::floor((e + 11.0) / 0.5);
+    const double c[4] = {world.seabed.depth_at(n0, e0), world.seabed.depth_at(n0 + 0.5, e0),
+                         world.seabed.depth_at(n0, e0 + 0.5), world.seabed.depth_at(n0 + 0.5, e0 + 0.5)};
+    EXPECT_GE(sb->depth_at(n, e), *std::min_element(c, c + 4) - 1e-12);
+    EXPECT_LE(sb->depth_at(n, e), *std::max_element(c, c + 4) + 1e-12);
+  }
+  // The world's current (config/water/currents/constant.yaml: 0.2 N, 0.1 E m/s).
+  EXPECT_TRUE(server.simulator().current_velocity_W().isApprox(Eigen::Vector3d(0.2, 0.1, 0.0), 1e-12));
+}
+
+TEST(PhysicsServer, NodeParametersOverrideTheWorld) {
+  const std::string world_path = write_world("flat", "seabed: {depth_m: 7.5}\n");
+  {
+    std::unique_ptr<unav::Context> ctx = make_context({"-p", "world:=" + world_path});
+    PhysicsServer server(unav::NodeOptions{ctx.get()});
+    ASSERT_NE(server.simulator().seabed(), nullptr);
+    EXPECT_DOUBLE_EQ(server.simulator().seabed()->depth_at(3.0, -40.0), 7.5);  // flat world: flat seabed
+    EXPECT_TRUE(server.simulator().current_velocity_W().isZero()) << "no current in the world: still water";
+  }
+  {
+    const std::string current = std::string(UNAV_CONFIG_DIR) + "/water/currents/constant.yaml";
+    const std::string seabed = std::string(UNAV_TEST_DATA_DIR) + "/seabed_grid.yaml";
+    std::unique_ptr<unav::Context> ctx = make_context(
+        {"-p", "world:=" + world_path, "-p", "seabed_config:=" + seabed, "-p", "current_config:=" + current});
+    PhysicsServer server(unav::NodeOptions{ctx.get()});
+    const auto expected = unav::physics::load_seabed(seabed);
+    EXPECT_DOUBLE_EQ(server.simulator().seabed()->depth_at(0.3, 0.6), expected->depth_at(0.3, 0.6));
+    EXPECT_FALSE(server.simulator().current_velocity_W().isZero());
+  }
+  {
+    std::unique_ptr<unav::Context> ctx = make_context({});  // no world: flat at seabed_depth (10 m)
+    PhysicsServer server(unav::NodeOptions{ctx.get()});
+    EXPECT_DOUBLE_EQ(server.simulator().seabed()->depth_at(0.0, 0.0), 10.0);
+  }
 }

@@ -2,6 +2,7 @@
 
 #include <opencv2/imgcodecs.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -44,6 +45,22 @@ double Seabed::depth_at(double n_m, double e_m) const {
     d -= heightmap_range_m * h;  // white = shallower
   }
   return d;
+}
+
+SeabedGrid sample_seabed(const Seabed& sb) {
+  SeabedGrid g;
+  g.resolution_m = sb.resolution_m;
+  g.origin_n = sb.center_ne.x() - 0.5 * sb.size_m.x();
+  g.origin_e = sb.center_ne.y() - 0.5 * sb.size_m.y();
+  // Cover the whole patch (the last row/column may lie up to one cell beyond it).
+  const int rows = std::max(2, static_cast<int>(std::ceil(sb.size_m.x() / sb.resolution_m - 1e-9)) + 1);
+  const int cols = std::max(2, static_cast<int>(std::ceil(sb.size_m.y() / sb.resolution_m - 1e-9)) + 1);
+  g.depths_m.assign(static_cast<std::size_t>(rows), std::vector<double>(static_cast<std::size_t>(cols)));
+  for (int i = 0; i < rows; ++i)
+    for (int j = 0; j < cols; ++j)
+      g.depths_m[static_cast<std::size_t>(i)][static_cast<std::size_t>(j)] =
+          sb.depth_at(g.origin_n + i * g.resolution_m, g.origin_e + j * g.resolution_m);
+  return g;
 }
 
 std::vector<Eigen::Vector3d> bent_centerline(const std::vector<Eigen::Vector3d>& P, double bend_radius_m,
@@ -425,8 +442,9 @@ void add_rock_field(World* world, const RockField& f) {
 World load_world(const std::string& path) {
   YamlCtx c{path};
   const YAML::Node root = detail::load_yaml_file(path);
-  check_keys(c, root, "",
-             {"name", "description", "water", "seabed", "pipelines", "rocks", "rock_field", "objects", "lights"});
+  check_keys(
+      c, root, "",
+      {"name", "description", "water", "seabed", "pipelines", "rocks", "rock_field", "objects", "lights", "current"});
   World w;
   w.file = path;
   w.dir = fs::path(path).parent_path().string();
@@ -438,6 +456,12 @@ World load_world(const std::string& path) {
   parse_rocks(c, root, w);
   parse_objects(c, root, w);
   parse_lights(c, root, w);
+  if (const YAML::Node cur = root["current"]) {
+    check_keys(c, cur, "current", {"file"});
+    if (!cur["file"]) c.fail("current", "needs 'file' (a config/water/currents YAML)");
+    w.current_file = resolve(w.dir, get_string(c, cur, "current", "file", ""));
+    require_readable(c, "current.file", w.current_file);
+  }
   return w;
 }
 

@@ -149,6 +149,49 @@ TEST(WorldErrors, BadValuesNameTheKey) {
                       {"seabed.material.texture", "marble"});
 }
 
+// The seabed as a depth grid on the render mesh's nodes (what the physics server interpolates).
+TEST(World, SeabedGridSamplesTheReliefOnTheMeshNodes) {
+  const World w = load_world(kRoot + "/worlds/pipe_inspection/world.yaml");
+  ASSERT_FALSE(w.seabed.is_flat());
+  const SeabedGrid g = sample_seabed(w.seabed);
+  // 64 m at 1 m: 65 x 65 nodes from (10 - 32, -2 - 32).
+  ASSERT_EQ(g.depths_m.size(), 65u);
+  ASSERT_EQ(g.depths_m[0].size(), 65u);
+  EXPECT_DOUBLE_EQ(g.origin_n, -22.0);
+  EXPECT_DOUBLE_EQ(g.origin_e, -34.0);
+  const MeshData mesh = make_seabed_mesh(w.seabed);
+  ASSERT_EQ(mesh.positions.size(), 3u * 65u * 65u);
+  double max_err = 0.0;
+  for (std::size_t i = 0; i < 65; ++i)
+    for (std::size_t j = 0; j < 65; ++j) {
+      const std::size_t v = 3 * (i * 65 + j);
+      EXPECT_NEAR(mesh.positions[v], g.origin_n + static_cast<double>(i), 1e-5);
+      EXPECT_NEAR(mesh.positions[v + 1], g.origin_e + static_cast<double>(j), 1e-5);
+      max_err = std::max(max_err, std::abs(mesh.positions[v + 2] - g.depths_m[i][j]));
+    }
+  EXPECT_LT(max_err, 1e-5) << "grid depths must be the mesh vertices' (float positions)";
+  // A flat seabed is flat; a 0.7 m resolution over 2 m covers the patch with a 4th node.
+  Seabed flat;
+  flat.size_m = {2.0, 2.0};
+  flat.resolution_m = 0.7;
+  EXPECT_TRUE(flat.is_flat());
+  const SeabedGrid fg = sample_seabed(flat);
+  EXPECT_EQ(fg.depths_m.size(), 4u);
+  EXPECT_DOUBLE_EQ(fg.depths_m[3][3], flat.depth_m);
+}
+
+TEST(World, CurrentFileIsResolvedAndChecked) {
+  const auto d = temp_dir("current");
+  write_file(d / "still.yaml", "current: {type: constant, velocity: [0, 0, 0]}\n");
+  const World w = load_world(write_file(d / "world.yaml", "current: {file: still.yaml}\n"));
+  EXPECT_EQ(w.current_file, (d / "still.yaml").string());
+  expect_config_error([&] { load_world(write_file(d / "b.yaml", "current: {file: nowhere.yaml}\n")); },
+                      {"current.file", (d / "nowhere.yaml").string()});
+  expect_config_error([&] { load_world(write_file(d / "c.yaml", "current: {velocity: [1, 0, 0]}\n")); },
+                      {"current.velocity", "unknown key"});
+  EXPECT_TRUE(load_world(kRoot + "/worlds/pipe_inspection/world.yaml").current_file.empty());
+}
+
 TEST(Meshes, AssimpLoadsObjPlyGltfGlbFbx) {
   // The repository's boulder (OBJ, written by unav_make_rock) re-exported by assimp into the
   // other formats; each must load back with the same triangle count.

@@ -42,6 +42,8 @@ struct Seabed {
 
   /// Seabed depth (NED z, metres) at (north, east) from relief/heightmap (not the mesh).
   double depth_at(double n_m, double e_m) const;
+  /// True when depth_at() is depth_m everywhere (no relief, no heightmap).
+  bool is_flat() const { return !(relief_amplitude_m > 0.0) && hm_values.empty(); }
   // Heightmap samples (filled by load_world when heightmap_file is set), row-major, 0..1.
   int hm_width = 0, hm_height = 0;
   std::vector<float> hm_values;
@@ -115,7 +117,20 @@ struct World {
   Sun sun;
   std::vector<Lamp> lamps;
   MarineSnow marine_snow;
+  /// Water current model for the physics server (world.yaml `current: {file: ...}`, a
+  /// config/water/currents YAML; absolute path); empty = still water.
+  std::string current_file;
 };
+
+/// The seabed patch as a regular depth grid, for a consumer that interpolates bilinearly (the
+/// physics server's contact, DVL and altimeter): depths_m[i][j] = seabed.depth_at(origin_n + i *
+/// resolution_m, origin_e + j * resolution_m), rows running north. Nodes are the render mesh's
+/// vertices when the patch size is a multiple of the resolution (both worlds shipped).
+struct SeabedGrid {
+  double origin_n = 0.0, origin_e = 0.0, resolution_m = 1.0;
+  std::vector<std::vector<double>> depths_m;
+};
+SeabedGrid sample_seabed(const Seabed& seabed);
 
 /// Load and validate worlds/<name>/world.yaml. Throws ConfigError naming the file and the key
 /// (unknown key, wrong type, non-positive radius, missing mesh file, bad water preset ...).
