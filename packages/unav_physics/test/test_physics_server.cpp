@@ -20,6 +20,7 @@ std::unique_ptr<unav::Context> make_context(std::vector<std::string> args) {
   args.insert(args.begin(), {"physics_server", "--ros-args", "-p",
                              std::string("vehicle_config:=") + UNAV_CONFIG_DIR + "/vehicles/bluerov2_heavy.yaml"});
   std::vector<const char*> argv;
+  argv.reserve(args.size());
   for (const auto& a : args) argv.push_back(a.c_str());
   return std::make_unique<unav::Context>(static_cast<int>(argv.size()), argv.data(), o);
 }

@@ -47,7 +47,8 @@ double Seabed::depth_at(double n_m, double e_m) const {
   return d;
 }
 
-SeabedGrid sample_seabed(const Seabed& sb) {
+SeabedGrid sample_seabed(const Seabed& seabed) {
+  const Seabed& sb = seabed;
   SeabedGrid g;
   g.resolution_m = sb.resolution_m;
   g.origin_n = sb.center_ne.x() - 0.5 * sb.size_m.x();

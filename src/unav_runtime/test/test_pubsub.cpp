@@ -204,9 +204,9 @@ TEST(PubSub, ParameterOverridesAreTypedAndCheckedByTheSchema) {
     n.declare_params(&p);
     return p;
   };
-  const auto error_of = [&](std::vector<std::string> overrides) {
+  const auto error_of = [&](const std::vector<std::string>& overrides) {
     try {
-      declare(std::move(overrides));
+      declare(overrides);
     } catch (const ConfigError& e) {
       return std::string(e.what());
     }
