@@ -1,6 +1,7 @@
 // dataset_recorder: writes one camera's rgb/depth/segmentation frames with ground-truth poses and
-// IMU in the TUM RGB-D layout (see unav_datagen/dataset_writer.hpp). Every line is flushed as it
-// is written, so Ctrl-C loses nothing.
+// IMU in a dataset layout: `format` tum (TUM RGB-D, default), euroc (EuRoC/ASL) or kitti (KITTI
+// odometry); see unav_datagen/dataset_writer.hpp, euroc_writer.hpp, kitti_writer.hpp. Every line
+// is flushed as it is written, so Ctrl-C loses nothing.
 //
 // Ports (relative to the node namespace, default /rov):
 //   sub  camera/<camera>/image_raw, depth/image_raw, segmentation/image_raw   sensor_msgs/Image
@@ -40,6 +41,7 @@ double stamp_of(const std_msgs::msg::dds_::Header_& h) {
 
 struct DatasetRecorderParams {
   std::string output_dir = "out/dataset";
+  std::string format = "tum";
   std::string camera = "front";
   std::string cameras_config;
   std::string body_frame = "base_link_frd";
@@ -50,6 +52,7 @@ struct DatasetRecorderParams {
   void Serialize(Archive* a) {
     using unav::common::Field;
     a->Visit(Field("output_dir", &output_dir).Doc("dataset folder"));
+    a->Visit(Field("format", &format).OneOf(sequence_formats()).Doc("dataset layout: tum, euroc or kitti"));
     a->Visit(Field("camera", &camera).Doc("camera name to record"));
     a->Visit(Field("cameras_config", &cameras_config)
                  .Doc("camera YAML for the mount; empty: body_frame -> <camera>_optical from /tf_static"));
@@ -66,9 +69,15 @@ class DatasetRecorder : public unav::Node {
     declare_params(&prm);
     const std::string& out = prm.output_dir;
     camera_ = prm.camera;
+    try {
+      writer_ = make_sequence_writer(prm.format, out);
+    } catch (const DatasetError& e) {
+      throw unav::ConfigError(e.what());
+    }
     if (!prm.cameras_config.empty()) {
       X_BC_ = unav::scene::load_camera(prm.cameras_config, camera_).X_BC;  // ConfigError names file and camera
       have_mount_ = true;
+      writer_->set_camera_mount(X_BC_);
     } else {
       // The mount's owner (the renderer) publishes it on /tf_static, latched; poses wait for it.
       tf_static_ = std::make_unique<unav::StaticTransformListener>(*this);
@@ -77,16 +86,12 @@ class DatasetRecorder : public unav::Node {
         if (const auto X = tf_static_->lookup(body, camera_ + "_optical")) {
           X_BC_ = *X;
           have_mount_ = true;
+          writer_->set_camera_mount(X_BC_);
           logger()->info("camera mount {} -> {}_optical from /tf_static", body, camera_);
           for (const auto& [t, X_WB] : unmounted_) writer_->write_pose(t, X_WB * X_BC_, X_WB);
           unmounted_.clear();
         }
       });
-    }
-    try {
-      writer_ = std::make_unique<DatasetWriter>(out);
-    } catch (const DatasetError& e) {
-      throw unav::ConfigError(e.what());
     }
     ack_name_ = prm.lockstep_name;
     if (prm.lockstep) acker_ = std::make_unique<unav::lockstep::Acker>(*this, ack_name_);  // answers every state
@@ -140,7 +145,7 @@ class DatasetRecorder : public unav::Node {
               Eigen::Vector3d(m.angular_velocity().x(), m.angular_velocity().y(), m.angular_velocity().z()),
               Eigen::Vector3d(m.linear_acceleration().x(), m.linear_acceleration().y(), m.linear_acceleration().z()));
         });
-    logger()->info("recording camera '{}' to {}", camera_, out);
+    logger()->info("recording camera '{}' to {} ({} layout)", camera_, out, prm.format);
   }
   ~DatasetRecorder() override {
     if (!unmounted_.empty())
@@ -149,6 +154,7 @@ class DatasetRecorder : public unav::Node {
           "poses not written (give cameras_config to record without the renderer's tf)",
           camera_, unmounted_.size());
     writer_->close();
+    for (const auto& w : writer_->warnings()) logger()->warn("{}", w);
     logger()->info("dataset closed: {} frames in {}", writer_->frames(), writer_->root());
   }
 
@@ -171,7 +177,7 @@ class DatasetRecorder : public unav::Node {
 
   std::string camera_;
   Eigen::Isometry3d X_BC_ = Eigen::Isometry3d::Identity();
-  std::unique_ptr<DatasetWriter> writer_;
+  std::unique_ptr<SequenceWriter> writer_;
   bool camera_written_ = false;
   bool have_mount_ = false;
   std::unique_ptr<unav::StaticTransformListener> tf_static_;

@@ -49,9 +49,11 @@ DatasetWriter::DatasetWriter(const std::string& root) : root_(root) {
   }
   rgb_txt_ = open_text(root + "/rgb.txt", "timestamp filename (rgb8 PNG)");
   depth_txt_ = open_text(root + "/depth.txt", "timestamp filename (uint16 PNG, metres * 5000)");
-  seg_txt_ = open_text(root + "/segmentation.txt", "timestamp filename (class ids: 0 water 1 seabed 2 pipeline 3 rock 4 other)");
+  seg_txt_ = open_text(root + "/segmentation.txt",
+                       "timestamp filename (class ids: 0 water 1 seabed 2 pipeline 3 rock 4 other)");
   gt_txt_ = open_text(root + "/groundtruth.txt", "timestamp tx ty tz qx qy qz qw (camera optical frame in world_ned)");
-  gt_body_txt_ = open_text(root + "/groundtruth_body.txt", "timestamp tx ty tz qx qy qz qw (base_link_frd in world_ned)");
+  gt_body_txt_ =
+      open_text(root + "/groundtruth_body.txt", "timestamp tx ty tz qx qy qz qw (base_link_frd in world_ned)");
   imu_txt_ = open_text(root + "/imu.txt", "timestamp wx wy wz [rad/s] ax ay az [m/s^2] (base_link_frd)");
 }
 
@@ -71,8 +73,9 @@ std::string DatasetWriter::stamp_name(double stamp) {
 void DatasetWriter::write_camera(const CameraIntrinsics& k) {
   std::ofstream f(root_ + "/camera.yaml");
   if (!f) throw DatasetError(root_ + "/camera.yaml: cannot be written");
-  f << std::setprecision(12) << "# pinhole + plumb_bob (OpenCV order), pixels\nwidth: " << k.width << "\nheight: "
-    << k.height << "\nfx: " << k.fx << "\nfy: " << k.fy << "\ncx: " << k.cx << "\ncy: " << k.cy << "\ndistortion: [";
+  f << std::setprecision(12) << "# pinhole + plumb_bob (OpenCV order), pixels\nwidth: " << k.width
+    << "\nheight: " << k.height << "\nfx: " << k.fx << "\nfy: " << k.fy << "\ncx: " << k.cx << "\ncy: " << k.cy
+    << "\ndistortion: [";
   for (size_t i = 0; i < k.distortion.size(); ++i) f << (i ? ", " : "") << k.distortion[i];
   f << "]\ndepth_scale: " << kDepthScale << "\n";
 }
@@ -109,9 +112,9 @@ void DatasetWriter::write_pose(double stamp, const Eigen::Isometry3d& X_WC, cons
   pose_line(gt_body_txt_, stamp, X_WB);
 }
 
-void DatasetWriter::write_imu(double stamp, const Eigen::Vector3d& w, const Eigen::Vector3d& a) {
-  imu_txt_ << stamp << ' ' << w.x() << ' ' << w.y() << ' ' << w.z() << ' ' << a.x() << ' ' << a.y() << ' ' << a.z()
-           << '\n';
+void DatasetWriter::write_imu(double stamp, const Eigen::Vector3d& gyro, const Eigen::Vector3d& accel) {
+  imu_txt_ << stamp << ' ' << gyro.x() << ' ' << gyro.y() << ' ' << gyro.z() << ' ' << accel.x() << ' ' << accel.y()
+           << ' ' << accel.z() << '\n';
   imu_txt_.flush();
 }
 

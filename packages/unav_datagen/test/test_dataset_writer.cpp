@@ -1,5 +1,8 @@
 #include <gtest/gtest.h>
 
+#include <yaml-cpp/yaml.h>
+
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -26,7 +29,8 @@ TEST(DatasetWriter, WritesTumLayoutThatReadsBack) {
   {
     DatasetWriter w(root);
     w.write_camera({4, 2, 100, 100, 2, 1, {0.1, 0, 0, 0, 0}});
-    const std::uint8_t rgb[4 * 2 * 3] = {255, 0, 0, 0, 255, 0, 0, 0, 255, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15};
+    const std::uint8_t rgb[4 * 2 * 3] = {255, 0, 0, 0, 255, 0, 0,  0,  255, 1,  2,  3,
+                                         4,   5, 6, 7, 8,   9, 10, 11, 12,  13, 14, 15};
     const float depth[8] = {1.0f, 2.5f, 0.0f, 3.0f, 1.0f, 1.0f, 1.0f, 13.0f};
     const std::uint8_t seg[8] = {0, 1, 2, 3, 4, 1, 1, 1};
     Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
@@ -64,5 +68,151 @@ TEST(DatasetWriter, UnwritableRootIsAnError) {
     FAIL();
   } catch (const DatasetError& e) {
     EXPECT_NE(std::string(e.what()).find("/proc/unav_cannot_write_here"), std::string::npos);
+  }
+}
+
+// ---------------------------------------------------------------- EuRoC and KITTI layouts
+
+namespace {
+
+std::vector<std::string> lines_of(const std::string& path) {
+  std::ifstream f(path);
+  std::vector<std::string> out;
+  for (std::string l; std::getline(f, l);) out.push_back(l);
+  return out;
+}
+
+std::vector<double> numbers_of(const std::string& line, char sep) {
+  std::vector<double> v;
+  std::stringstream ss(line);
+  for (std::string tok; std::getline(ss, tok, sep);)
+    if (!tok.empty()) v.push_back(std::stod(tok));
+  return v;
+}
+
+Eigen::Isometry3d pose(double yaw, const Eigen::Vector3d& p) {
+  Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
+  X.linear() = (Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()) * Eigen::AngleAxisd(0.2, Eigen::Vector3d::UnitX()))
+                   .toRotationMatrix();
+  X.translation() = p;
+  return X;
+}
+
+// A 3-frame flight at 10 Hz with 200 Hz IMU; the camera looks down from 0.16 m ahead.
+struct Flight {
+  static constexpr int kW = 4, kH = 2;
+  std::uint8_t rgb[kW * kH * 3] = {255, 0,  0,  0, 255, 0, 0, 0, 255, 255, 255, 255,
+                                   10,  20, 30, 0, 0,   0, 1, 2, 3,   9,   9,   9};
+  Eigen::Isometry3d X_BC = pose(0.0, Eigen::Vector3d(0.16, 0.0, 0.1));
+  CameraIntrinsics k{kW, kH, 100.0, 101.0, 1.5, 0.5, {0, 0, 0, 0, 0}};
+  Eigen::Isometry3d X_WB(int i) const { return pose(0.3 * i, Eigen::Vector3d(1.0 + i, -2.0 + 0.5 * i, 8.0)); }
+  double t(int i) const { return 1.0 + 0.1 * i; }
+  void record(SequenceWriter* w, const std::vector<int>& frames_with_pose = {0, 1, 2}) const {
+    w->write_camera(k);
+    w->set_camera_mount(X_BC);
+    for (int j = 0; j <= 40; ++j)
+      w->write_imu(1.0 + 0.005 * j, Eigen::Vector3d(0, 0, 0.1), Eigen::Vector3d(0, 0, -9.81));
+    for (int i = 0; i < 3; ++i) {
+      w->write_rgb(t(i), kW, kH, rgb);
+      if (std::find(frames_with_pose.begin(), frames_with_pose.end(), i) != frames_with_pose.end())
+        w->write_pose(t(i), X_WB(i) * X_BC, X_WB(i));
+    }
+    w->close();
+  }
+};
+
+}  // namespace
+
+TEST(EurocWriter, WritesTheAslLayoutWithNanosecondStampsAndSensorYamls) {
+  const std::string root = ::testing::TempDir() + "euroc_test";
+  std::filesystem::remove_all(root);
+  Flight f;
+  auto w = make_sequence_writer("euroc", root);
+  f.record(w.get());
+  EXPECT_EQ(w->frames(), 3u);
+  EXPECT_TRUE(w->warnings().empty());
+  const auto cam = lines_of(root + "/mav0/cam0/data.csv");
+  ASSERT_EQ(cam.size(), 4u);
+  EXPECT_EQ(cam[0], "#timestamp [ns],filename");
+  EXPECT_EQ(cam[2], "1100000000,1100000000.png");
+  // Grey images: OpenCV's RGB -> grey weights (0.299, 0.587, 0.114): red 255 -> 76.
+  const cv::Mat img = cv::imread(root + "/mav0/cam0/data/1100000000.png", cv::IMREAD_UNCHANGED);
+  ASSERT_EQ(img.type(), CV_8UC1);
+  EXPECT_EQ(img.at<std::uint8_t>(0, 0), 76);
+  EXPECT_EQ(img.at<std::uint8_t>(0, 3), 255);
+  const auto imu = lines_of(root + "/mav0/imu0/data.csv");
+  ASSERT_EQ(imu.size(), 42u);
+  const auto imu1 = numbers_of(imu[1], ',');
+  ASSERT_EQ(imu1.size(), 7u);
+  EXPECT_EQ(imu1[0], 1e9);
+  EXPECT_DOUBLE_EQ(imu1[6], -9.81);
+  // Ground truth: body pose, quaternion w first.
+  const auto gt = lines_of(root + "/mav0/state_groundtruth_estimate0/data.csv");
+  ASSERT_EQ(gt.size(), 4u);
+  const auto g2 = numbers_of(gt[3], ',');
+  ASSERT_EQ(g2.size(), 8u);
+  EXPECT_EQ(g2[0], 1.2e9);
+  const Eigen::Quaterniond q2(f.X_WB(2).linear());
+  EXPECT_NEAR(g2[1], 3.0, 1e-9);
+  EXPECT_NEAR(g2[2], -1.0, 1e-9);
+  EXPECT_NEAR(std::abs(g2[4] * q2.w() + g2[5] * q2.x() + g2[6] * q2.y() + g2[7] * q2.z()), 1.0, 1e-8);
+  // sensor.yaml: the mount, the measured rates, the intrinsics.
+  const YAML::Node c = YAML::LoadFile(root + "/mav0/cam0/sensor.yaml");
+  const auto T = c["T_BS"]["data"].as<std::vector<double>>();
+  ASSERT_EQ(T.size(), 16u);
+  for (int r = 0; r < 4; ++r)
+    for (int col = 0; col < 4; ++col) EXPECT_NEAR(T[4 * r + col], f.X_BC.matrix()(r, col), 1e-12);
+  EXPECT_NEAR(c["rate_hz"].as<double>(), 10.0, 1e-9);
+  EXPECT_EQ(c["intrinsics"].as<std::vector<double>>(), (std::vector<double>{100.0, 101.0, 1.5, 0.5}));
+  EXPECT_EQ(c["resolution"].as<std::vector<int>>(), (std::vector<int>{4, 2}));
+  EXPECT_NEAR(YAML::LoadFile(root + "/mav0/imu0/sensor.yaml")["rate_hz"].as<double>(), 200.0, 1e-9);
+}
+
+TEST(KittiWriter, PosesAreCameraPosesInTheFirstCameraFrameOnePerImage) {
+  const std::string root = ::testing::TempDir() + "kitti_test";
+  std::filesystem::remove_all(root);
+  Flight f;
+  auto w = make_sequence_writer("kitti", root);
+  f.record(w.get());
+  EXPECT_TRUE(w->warnings().empty());
+  const auto times = lines_of(root + "/sequences/00/times.txt");
+  ASSERT_EQ(times.size(), 3u);
+  EXPECT_NEAR(std::stod(times[2]), 0.2, 1e-6);
+  const auto calib = numbers_of(lines_of(root + "/sequences/00/calib.txt")[0].substr(4), ' ');
+  EXPECT_EQ(calib, (std::vector<double>{100.0, 0, 1.5, 0, 0, 101.0, 0.5, 0, 0, 0, 1, 0}));
+  ASSERT_EQ(cv::imread(root + "/sequences/00/image_0/000002.png", cv::IMREAD_UNCHANGED).type(), CV_8UC1);
+  const auto poses = lines_of(root + "/poses/00.txt");
+  ASSERT_EQ(poses.size(), 3u);
+  const Eigen::Isometry3d X_C0W = (f.X_WB(0) * f.X_BC).inverse();
+  for (int i = 0; i < 3; ++i) {
+    const auto v = numbers_of(poses[static_cast<std::size_t>(i)], ' ');
+    ASSERT_EQ(v.size(), 12u);
+    const Eigen::Matrix4d T = (X_C0W * f.X_WB(i) * f.X_BC).matrix();
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 4; ++c) EXPECT_NEAR(v[static_cast<std::size_t>(4 * r + c)], T(r, c), 1e-8) << i;
+  }
+  EXPECT_NEAR(numbers_of(poses[0], ' ')[0], 1.0, 1e-12);  // the first camera is the origin
+}
+
+TEST(KittiWriter, AnImageWithoutGroundTruthEndsThePosesAndIsReported) {
+  const std::string root = ::testing::TempDir() + "kitti_gap_test";
+  std::filesystem::remove_all(root);
+  Flight f;
+  f.k.distortion = {0.1, 0, 0, 0, 0};
+  auto w = make_sequence_writer("kitti", root);
+  f.record(w.get(), {0, 2});
+  EXPECT_EQ(lines_of(root + "/poses/00.txt").size(), 1u) << "line i must stay image i's";
+  const auto warn = w->warnings();
+  ASSERT_EQ(warn.size(), 3u);
+  EXPECT_NE(warn[0].find("2 of 3 images have no ground-truth pose"), std::string::npos) << warn[0];
+  EXPECT_NE(warn[2].find("lens distortion"), std::string::npos) << warn[2];
+}
+
+TEST(SequenceWriter, UnknownFormatNamesTheValidOnes) {
+  try {
+    make_sequence_writer("rosbag", ::testing::TempDir() + "x");
+    FAIL() << "no error";
+  } catch (const DatasetError& e) {
+    EXPECT_NE(std::string(e.what()).find("'rosbag' (valid: tum, euroc, kitti)"), std::string::npos) << e.what();
   }
 }

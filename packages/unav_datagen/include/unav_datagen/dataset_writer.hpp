@@ -1,4 +1,10 @@
-// Writes synchronized camera frames and ground truth in the TUM RGB-D dataset layout:
+// Sequence writers: one camera's frames with ground truth and IMU, in a dataset layout that
+// existing tools read. SequenceWriter is the interface; make_sequence_writer() picks a layout:
+//   tum    TUM RGB-D (DatasetWriter, below)
+//   euroc  EuRoC/ASL MAV (EurocWriter, euroc_writer.hpp)
+//   kitti  KITTI odometry (KittiWriter, kitti_writer.hpp)
+//
+// DatasetWriter writes synchronized camera frames and ground truth in the TUM RGB-D dataset layout:
 //   <root>/rgb/<stamp>.png          rgb8 images (PNG, stored BGR as OpenCV writes it)
 //   <root>/depth/<stamp>.png        16-bit depth, value = metres * 5000 (TUM), 0 = no return
 //   <root>/segmentation/<stamp>.png 8-bit class ids (0 water, 1 seabed, 2 pipeline, 3 rock, 4 other)
@@ -12,6 +18,7 @@
 
 #include <cstdint>
 #include <fstream>
+#include <memory>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -36,23 +43,53 @@ constexpr double kDepthScale = 5000.0;
 /// Metres to TUM 16-bit depth: 0 for non-finite, non-positive or too-far values.
 std::uint16_t encode_depth(float metres);
 
-class DatasetWriter {
+/// One camera's sequence. Calls arrive in stamp order per stream; a layout ignores the streams
+/// it has no place for (e.g. KITTI has no IMU file). Every writer flushes each record as it
+/// writes it, so a run stopped with Ctrl-C keeps what it recorded; close() (also the destructor)
+/// writes what needs the whole sequence (rates, summaries).
+class SequenceWriter {
+ public:
+  virtual ~SequenceWriter() = default;
+  virtual void write_camera(const CameraIntrinsics& k) = 0;
+  /// The camera optical frame in the body frame (X_BC), once known; layouts that store extrinsics
+  /// (EuRoC's T_BS) use it.
+  virtual void set_camera_mount(const Eigen::Isometry3d& /*X_BC*/) {}
+  /// Each image is written once per stamp; `rgb` is width*height*3 bytes in RGB order.
+  virtual void write_rgb(double stamp, int width, int height, const std::uint8_t* rgb) = 0;
+  virtual void write_depth(double /*stamp*/, int /*width*/, int /*height*/, const float* /*depth_m*/) {}
+  virtual void write_segmentation(double /*stamp*/, int /*width*/, int /*height*/, const std::uint8_t* /*ids*/) {}
+  /// Ground truth of the image with this stamp: camera optical frame and body in world_ned.
+  virtual void write_pose(double stamp, const Eigen::Isometry3d& X_WC, const Eigen::Isometry3d& X_WB) = 0;
+  virtual void write_imu(double /*stamp*/, const Eigen::Vector3d& /*gyro*/, const Eigen::Vector3d& /*accel*/) {}
+  virtual void close() = 0;
+  /// Images written so far.
+  virtual std::size_t frames() const = 0;
+  virtual const std::string& root() const = 0;
+  /// Problems found while writing (e.g. an image without ground truth), one line each.
+  virtual std::vector<std::string> warnings() const { return {}; }
+};
+
+/// The layouts make_sequence_writer() knows: "tum", "euroc", "kitti".
+std::vector<std::string> sequence_formats();
+/// Throws DatasetError naming the format (and the valid ones) or the path it cannot create.
+std::unique_ptr<SequenceWriter> make_sequence_writer(const std::string& format, const std::string& root);
+
+class DatasetWriter final : public SequenceWriter {
  public:
   /// Creates the folders. Throws DatasetError naming the path when it cannot.
   explicit DatasetWriter(const std::string& root);
-  ~DatasetWriter();
+  ~DatasetWriter() override;
 
-  void write_camera(const CameraIntrinsics& k);
-  /// Each image is written once per stamp; `rgb` is width*height*3 bytes in RGB order.
-  void write_rgb(double stamp, int width, int height, const std::uint8_t* rgb);
-  void write_depth(double stamp, int width, int height, const float* depth_m);
-  void write_segmentation(double stamp, int width, int height, const std::uint8_t* ids);
-  void write_pose(double stamp, const Eigen::Isometry3d& X_WC, const Eigen::Isometry3d& X_WB);
-  void write_imu(double stamp, const Eigen::Vector3d& gyro, const Eigen::Vector3d& accel);
+  void write_camera(const CameraIntrinsics& k) override;
+  void write_rgb(double stamp, int width, int height, const std::uint8_t* rgb) override;
+  void write_depth(double stamp, int width, int height, const float* depth_m) override;
+  void write_segmentation(double stamp, int width, int height, const std::uint8_t* ids) override;
+  void write_pose(double stamp, const Eigen::Isometry3d& X_WC, const Eigen::Isometry3d& X_WB) override;
+  void write_imu(double stamp, const Eigen::Vector3d& gyro, const Eigen::Vector3d& accel) override;
   /// Flushes and closes every file (also done by the destructor).
-  void close();
-  std::size_t frames() const { return frames_; }
-  const std::string& root() const { return root_; }
+  void close() override;
+  std::size_t frames() const override { return frames_; }
+  const std::string& root() const override { return root_; }
 
  private:
   static std::string stamp_name(double stamp);

@@ -1,0 +1,57 @@
+// EuRoC/ASL MAV dataset layout (the format of the EuRoC MAV sequences, read by ORB-SLAM3's EuRoC
+// examples, OpenVINS, Kalibr, evo's `euroc` reader):
+//   <root>/mav0/cam0/data/<t_ns>.png                     8-bit grey images (EuRoC's cameras are mono)
+//   <root>/mav0/cam0/data.csv                            "#timestamp [ns],filename"
+//   <root>/mav0/cam0/sensor.yaml                         T_BS (camera in the body), rate_hz, resolution,
+//                                                        pinhole intrinsics [fu, fv, cu, cv],
+//                                                        radial-tangential [k1, k2, p1, p2]
+//   <root>/mav0/imu0/data.csv                            "#timestamp [ns],w_RS_S_x [rad s^-1],...,a_RS_S_z [m s^-2]"
+//   <root>/mav0/imu0/sensor.yaml                         T_BS = identity (the IMU is the body frame), rate_hz
+//   <root>/mav0/state_groundtruth_estimate0/data.csv     "#timestamp, p_RS_R_x [m], ..., q_RS_w [], q_RS_x [], ..."
+// Frames: R = world_ned, S = B = base_link_frd (the IMU and ground truth are the body's), camera =
+// the optical frame (x right, y down, z forward). Ground truth has the pose columns only (evo and
+// the EuRoC tools read columns 0-7); simulated velocity and bias columns are not invented.
+// Time stamps are integer nanoseconds of simulated time. rate_hz in sensor.yaml is measured from
+// the stamps when the writer closes.
+#pragma once
+
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include "unav_datagen/dataset_writer.hpp"
+
+namespace unav_datagen {
+
+class EurocWriter final : public SequenceWriter {
+ public:
+  /// Creates the folders. Throws DatasetError naming the path when it cannot.
+  explicit EurocWriter(const std::string& root);
+  ~EurocWriter() override;
+
+  void write_camera(const CameraIntrinsics& k) override;
+  void set_camera_mount(const Eigen::Isometry3d& X_BC) override;
+  void write_rgb(double stamp, int width, int height, const std::uint8_t* rgb) override;
+  void write_pose(double stamp, const Eigen::Isometry3d& X_WC, const Eigen::Isometry3d& X_WB) override;
+  void write_imu(double stamp, const Eigen::Vector3d& gyro, const Eigen::Vector3d& accel) override;
+  void close() override;
+  std::size_t frames() const override { return image_ns_.size(); }
+  const std::string& root() const override { return root_; }
+  std::vector<std::string> warnings() const override;
+
+  /// Seconds to EuRoC's integer nanoseconds (rounded).
+  static long long to_ns(double stamp);
+
+ private:
+  void write_sensor_yamls();
+  std::string root_, mav_;
+  std::ofstream cam_csv_, imu_csv_, gt_csv_;
+  CameraIntrinsics k_;
+  bool have_k_ = false, have_mount_ = false, closed_ = false;
+  Eigen::Isometry3d X_BC_ = Eigen::Isometry3d::Identity();
+  std::vector<long long> image_ns_;
+  long long imu_first_ns_ = -1, imu_last_ns_ = -1;
+  std::size_t imu_samples_ = 0;
+};
+
+}  // namespace unav_datagen
