@@ -30,7 +30,7 @@
 #include "unav_runtime/tf_static.hpp"
 #include "unav_scene/camera.hpp"
 
-namespace unav_datagen {
+namespace unav::datagen {
 namespace {
 
 double stamp_of(const std_msgs::msg::dds_::Header_& h) {
@@ -194,6 +194,6 @@ class DatasetRecorder : public unav::Node {
   std::shared_ptr<unav::Subscription<sensor_msgs::msg::Imu>> imu_sub_;
 };
 
-}  // namespace unav_datagen
+}  // namespace unav::datagen
 
-int main(int argc, char** argv) { return unav::run_node<unav_datagen::DatasetRecorder>(argc, argv); }
+int main(int argc, char** argv) { return unav::run_node<unav::datagen::DatasetRecorder>(argc, argv); }

@@ -8,7 +8,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
-namespace unav_datagen {
+namespace unav::datagen {
 namespace fs = std::filesystem;
 
 std::uint16_t encode_depth(float metres) {
@@ -118,4 +118,4 @@ void DatasetWriter::write_imu(double stamp, const Eigen::Vector3d& gyro, const E
   imu_txt_.flush();
 }
 
-}  // namespace unav_datagen
+}  // namespace unav::datagen

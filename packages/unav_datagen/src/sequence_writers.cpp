@@ -13,7 +13,7 @@
 #include "unav_datagen/euroc_writer.hpp"
 #include "unav_datagen/kitti_writer.hpp"
 
-namespace unav_datagen {
+namespace unav::datagen {
 namespace fs = std::filesystem;
 
 namespace {
@@ -239,4 +239,4 @@ std::vector<std::string> KittiWriter::warnings() const {
   return w;
 }
 
-}  // namespace unav_datagen
+}  // namespace unav::datagen

@@ -11,7 +11,7 @@
 
 #include "unav_datagen/dataset_writer.hpp"
 
-using namespace unav_datagen;
+using namespace unav::datagen;
 
 TEST(DatasetWriter, DepthEncodingFollowsTum) {
   EXPECT_EQ(encode_depth(1.0f), 5000);

@@ -16,7 +16,7 @@
 #include "unav_runtime/conversions.hpp"
 #include "unav_scene/camera.hpp"
 
-namespace unav_evaluation {
+namespace unav::evaluation {
 namespace {
 
 void append(Trajectory& t, const nav_msgs::msg::Odometry& m) {
@@ -223,4 +223,4 @@ void TrajectoryEvaluator::write_pipe_tracking(const std::string& path) {
                  t.lost ? ", pipe lost" : (t.completed ? ", end reached" : ""));
 }
 
-}  // namespace unav_evaluation
+}  // namespace unav::evaluation

@@ -36,7 +36,7 @@
 #include "unav_runtime/tf_static.hpp"
 #include "unav_scene/world.hpp"
 
-namespace unav_evaluation {
+namespace unav::evaluation {
 
 /// The trajectory_evaluator's parameters (params file or `-p name:=value`; `--help` lists them).
 struct TrajectoryEvaluatorParams {
@@ -103,4 +103,4 @@ class TrajectoryEvaluator : public unav::Node {
   std::vector<std::shared_ptr<unav::Subscription<nav_msgs::msg::Path>>> path_subs_;
 };
 
-}  // namespace unav_evaluation
+}  // namespace unav::evaluation

@@ -1,3 +1,3 @@
 #include "trajectory_evaluator.hpp"
 
-int main(int argc, char** argv) { return unav::run_node<unav_evaluation::TrajectoryEvaluator>(argc, argv); }
+int main(int argc, char** argv) { return unav::run_node<unav::evaluation::TrajectoryEvaluator>(argc, argv); }

@@ -6,7 +6,7 @@
 
 #include <Eigen/SVD>
 
-namespace unav_evaluation {
+namespace unav::evaluation {
 namespace {
 
 double rotation_angle(const Eigen::Matrix3d& R) {
@@ -106,11 +106,13 @@ std::vector<std::pair<size_t, size_t>> rpe_pairs(const Trajectory& est, const Rp
   } else if (o.all_pairs) {
     // For each start, the end whose path length from it is nearest delta, within tolerance.
     std::vector<double> acc(n, 0.0);
-    for (size_t i = 1; i < n; ++i) acc[i] = acc[i - 1] + (est.poses[i].translation() - est.poses[i - 1].translation()).norm();
+    for (size_t i = 1; i < n; ++i)
+      acc[i] = acc[i - 1] + (est.poses[i].translation() - est.poses[i - 1].translation()).norm();
     const double tol = o.delta * o.rel_tol;
     for (size_t i = 0; i < n; ++i) {
       const double target = acc[i] + o.delta;
-      const size_t j = static_cast<size_t>(std::lower_bound(acc.begin() + static_cast<long>(i), acc.end(), target) - acc.begin());
+      const size_t j =
+          static_cast<size_t>(std::lower_bound(acc.begin() + static_cast<long>(i), acc.end(), target) - acc.begin());
       size_t best = n;
       double best_res = tol;
       for (size_t k : {j == 0 ? 0 : j - 1, j}) {
@@ -174,4 +176,4 @@ Statistics statistics(const std::vector<double>& errors) {
   return s;
 }
 
-}  // namespace unav_evaluation
+}  // namespace unav::evaluation

@@ -8,7 +8,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
-namespace unav_evaluation {
+namespace unav::evaluation {
 
 AlgorithmResult evaluate(const Trajectory& gt, const Trajectory& est, const std::string& trajectory,
                          const std::string& algorithm, Alignment alignment, const RpeOptions& rpe_options,
@@ -51,11 +51,12 @@ void write_results(const std::string& stem, const std::vector<AlgorithmResult>& 
     md << "| " << r.trajectory << " | " << r.algorithm << " | " << std::setprecision(3) << r.ape_m.rmse << " | "
        << r.rpe_m.rmse << " | " << r.ape_rad.rmse << " | " << r.rpe_rad.rmse << " | " << r.poses << " | "
        << std::setprecision(4) << r.scale << " |\n";
-  const char* how = alignment == Alignment::kSim3   ? "Sim(3) Umeyama alignment"
-                    : alignment == Alignment::kSE3  ? "SE(3) Umeyama alignment"
+  const char* how = alignment == Alignment::kSim3        ? "Sim(3) Umeyama alignment"
+                    : alignment == Alignment::kSE3       ? "SE(3) Umeyama alignment"
                     : alignment == Alignment::kScaleOnly ? "scale-only alignment"
                                                          : "no alignment";
-  md << "\nRMSE values; " << how << "; metrics as evo defines them (APE: pose error after "
+  md << "\nRMSE values; " << how
+     << "; metrics as evo defines them (APE: pose error after "
         "alignment; RPE: relative motion error between consecutive pose pairs).\n";
   std::ofstream csv = open_out(stem + ".csv");
   csv << "trajectory,algorithm,ape_m,rpe_m,ape_rad,rpe_rad,poses,scale\n" << std::setprecision(9);
@@ -104,7 +105,8 @@ void write_top_view_png(const std::string& path, const Trajectory& gt,
   };
   draw(gt, cv::Scalar(0, 0, 0), 2);
   int y = 30;
-  cv::putText(img, "ground truth", cv::Point(margin, y), cv::FONT_HERSHEY_SIMPLEX, 0.6, cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
+  cv::putText(img, "ground truth", cv::Point(margin, y), cv::FONT_HERSHEY_SIMPLEX, 0.6, cv::Scalar(0, 0, 0), 1,
+              cv::LINE_AA);
   for (size_t k = 0; k < estimates.size(); ++k) {
     const cv::Scalar c = colours[k % 4];
     draw(estimates[k].second, c, 1);
@@ -115,8 +117,8 @@ void write_top_view_png(const std::string& path, const Trajectory& gt,
   const double bar_m = span > 20 ? 5.0 : 1.0;
   const cv::Point b0(size_px - margin - static_cast<int>(bar_m * px_per_m), size_px - 25);
   cv::line(img, b0, cv::Point(size_px - margin, size_px - 25), cv::Scalar(0, 0, 0), 2);
-  cv::putText(img, std::to_string(static_cast<int>(bar_m)) + " m", cv::Point(b0.x, size_px - 32), cv::FONT_HERSHEY_SIMPLEX,
-              0.5, cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
+  cv::putText(img, std::to_string(static_cast<int>(bar_m)) + " m", cv::Point(b0.x, size_px - 32),
+              cv::FONT_HERSHEY_SIMPLEX, 0.5, cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
   cv::putText(img, "north ^  east >  (top view, world_ned)", cv::Point(margin, size_px - 10), cv::FONT_HERSHEY_SIMPLEX,
               0.45, cv::Scalar(90, 90, 90), 1, cv::LINE_AA);
   if (!cv::imwrite(path, img)) throw TrajectoryError(path + ": PNG write failed");
@@ -125,8 +127,8 @@ void write_top_view_png(const std::string& path, const Trajectory& gt,
 namespace {
 constexpr int kRowFields = 4 + 4 * 8;
 void put_stats(std::ostream& o, const Statistics& st) {
-  o << '\t' << st.rmse << '\t' << st.mean << '\t' << st.median << '\t' << st.std << '\t' << st.min << '\t' << st.max << '\t'
-    << st.sse << '\t' << st.count;
+  o << '\t' << st.rmse << '\t' << st.mean << '\t' << st.median << '\t' << st.std << '\t' << st.min << '\t' << st.max
+    << '\t' << st.sse << '\t' << st.count;
 }
 }  // namespace
 
@@ -159,8 +161,8 @@ std::vector<AlgorithmResult> read_result_rows(const std::string& path) {
     std::string cell;
     while (std::getline(ss, cell, '\t')) f.push_back(cell);
     if (static_cast<int>(f.size()) != kRowFields)
-      throw TrajectoryError(path + ":" + std::to_string(n) + ": expected " + std::to_string(kRowFields) + " tab-separated fields, got " +
-                            std::to_string(f.size()));
+      throw TrajectoryError(path + ":" + std::to_string(n) + ": expected " + std::to_string(kRowFields) +
+                            " tab-separated fields, got " + std::to_string(f.size()));
     AlgorithmResult r;
     try {
       r.trajectory = f[0];
@@ -186,4 +188,4 @@ std::vector<AlgorithmResult> read_result_rows(const std::string& path) {
   return out;
 }
 
-}  // namespace unav_evaluation
+}  // namespace unav::evaluation

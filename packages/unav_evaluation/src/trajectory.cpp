@@ -6,7 +6,7 @@
 #include <iomanip>
 #include <sstream>
 
-namespace unav_evaluation {
+namespace unav::evaluation {
 
 double Trajectory::path_length() const {
   double length = 0.0;
@@ -32,18 +32,18 @@ Trajectory read_tum(const std::string& path) {
     while (ss >> tok) {
       char* end = nullptr;
       const double x = std::strtod(tok.c_str(), &end);
-      if (*end != '\0')
-        throw TrajectoryError(path + ":" + std::to_string(line_no) + ": '" + tok + "' is not a number");
+      if (*end != '\0') throw TrajectoryError(path + ":" + std::to_string(line_no) + ": '" + tok + "' is not a number");
       if (!std::isfinite(x))
         throw TrajectoryError(path + ":" + std::to_string(line_no) + ": value '" + tok + "' is not finite");
       v.push_back(x);
     }
     if (v.size() != 8)
-      throw TrajectoryError(path + ":" + std::to_string(line_no) + ": expected 8 columns (timestamp tx ty tz qx qy qz qw), got " +
-                            std::to_string(v.size()));
+      throw TrajectoryError(path + ":" + std::to_string(line_no) +
+                            ": expected 8 columns (timestamp tx ty tz qx qy qz qw), got " + std::to_string(v.size()));
     if (!traj.empty() && v[0] <= traj.stamps.back())
-      throw TrajectoryError(path + ":" + std::to_string(line_no) + ": timestamp " + tok + " is not after the previous one (" +
-                            std::to_string(traj.stamps.back()) + "): times must increase");
+      throw TrajectoryError(path + ":" + std::to_string(line_no) + ": timestamp " + tok +
+                            " is not after the previous one (" + std::to_string(traj.stamps.back()) +
+                            "): times must increase");
     Eigen::Quaterniond q(v[7], v[4], v[5], v[6]);
     if (std::abs(q.norm() - 1.0) > 1e-3)
       throw TrajectoryError(path + ":" + std::to_string(line_no) + ": quaternion norm " + std::to_string(q.norm()) +
@@ -100,8 +100,9 @@ std::pair<Trajectory, Trajectory> associate(const Trajectory& first, const Traje
   }
   if (out_short.empty()) {
     std::ostringstream os;
-    os << "no pose pairs within max_diff " << max_diff_s << " s: the trajectories do not overlap in time (first: "
-       << (first.empty() ? 0.0 : first.stamps.front()) << ".." << (first.empty() ? 0.0 : first.stamps.back())
+    os << "no pose pairs within max_diff " << max_diff_s
+       << " s: the trajectories do not overlap in time (first: " << (first.empty() ? 0.0 : first.stamps.front()) << ".."
+       << (first.empty() ? 0.0 : first.stamps.back())
        << " s, second: " << (second.empty() ? 0.0 : second.stamps.front()) << ".."
        << (second.empty() ? 0.0 : second.stamps.back()) << " s)";
     throw TrajectoryError(os.str());
@@ -110,4 +111,4 @@ std::pair<Trajectory, Trajectory> associate(const Trajectory& first, const Traje
   return {out_long, out_short};
 }
 
-}  // namespace unav_evaluation
+}  // namespace unav::evaluation

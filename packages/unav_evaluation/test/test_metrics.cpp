@@ -6,7 +6,7 @@
 
 #include "unav_evaluation/metrics.hpp"
 
-using namespace unav_evaluation;
+using namespace unav::evaluation;
 
 namespace {
 
@@ -17,7 +17,8 @@ Trajectory ground_truth() {
     const double s = 0.1 * i;
     Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
     T.translation() = Eigen::Vector3d(5 * std::sin(0.3 * s), 3 * std::sin(0.6 * s), 10 + 0.5 * std::cos(0.2 * s));
-    T.linear() = (Eigen::AngleAxisd(0.3 * s, Eigen::Vector3d::UnitZ()) * Eigen::AngleAxisd(0.1 * std::sin(s), Eigen::Vector3d::UnitX()))
+    T.linear() = (Eigen::AngleAxisd(0.3 * s, Eigen::Vector3d::UnitZ()) *
+                  Eigen::AngleAxisd(0.1 * std::sin(s), Eigen::Vector3d::UnitX()))
                      .toRotationMatrix();
     t.push_back(100.0 + s, T);
   }
@@ -157,12 +158,17 @@ TEST(Tum, RoundTripAndAssociation) {
 }
 
 TEST(Tum, BadFilesGiveLineNumberedErrors) {
-  EXPECT_NE(error_of([&] { read_tum(write_temp("cols.tum", "# x\n1 0 0 0 0 0 0 1\n2 0 0 0 0 0 1\n")); }).find("cols.tum:3: expected 8 columns"),
+  EXPECT_NE(error_of([&] {
+              read_tum(write_temp("cols.tum", "# x\n1 0 0 0 0 0 0 1\n2 0 0 0 0 0 1\n"));
+            }).find("cols.tum:3: expected 8 columns"),
             std::string::npos);
-  EXPECT_NE(error_of([&] { read_tum(write_temp("time.tum", "2 0 0 0 0 0 0 1\n1 0 0 0 0 0 0 1\n")); }).find("time.tum:2"),
+  EXPECT_NE(
+      error_of([&] { read_tum(write_temp("time.tum", "2 0 0 0 0 0 0 1\n1 0 0 0 0 0 0 1\n")); }).find("time.tum:2"),
+      std::string::npos);
+  EXPECT_NE(error_of([&] { read_tum(write_temp("nan.tum", "1 nan 0 0 0 0 0 1\n")); }).find("nan.tum:1"),
             std::string::npos);
-  EXPECT_NE(error_of([&] { read_tum(write_temp("nan.tum", "1 nan 0 0 0 0 0 1\n")); }).find("nan.tum:1"), std::string::npos);
-  EXPECT_NE(error_of([&] { read_tum(write_temp("quat.tum", "1 0 0 0 0 0 0 2\n")); }).find("quaternion"), std::string::npos);
+  EXPECT_NE(error_of([&] { read_tum(write_temp("quat.tum", "1 0 0 0 0 0 0 2\n")); }).find("quaternion"),
+            std::string::npos);
   Trajectory a, b;
   a.push_back(0, Eigen::Isometry3d::Identity());
   b.push_back(50, Eigen::Isometry3d::Identity());

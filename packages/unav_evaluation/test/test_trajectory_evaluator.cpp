@@ -23,14 +23,15 @@ TEST(TrajectoryEvaluator, WritesTableTumAndPlotOnShutdown) {
   const std::string out = ::testing::TempDir() + "eval_node_out";
   std::filesystem::remove_all(out);
   const std::string p_out = "output_dir:=" + out;
-  const char* argv[] = {"trajectory_evaluator", "--ros-args", "-p", p_out.c_str(), "-p", "estimates:=[mono]",
-                        "-p", "trajectory_name:=linear"};
+  const char* argv[] = {"trajectory_evaluator",   "--ros-args", "-p", p_out.c_str(), "-p", "estimates:=[mono]", "-p",
+                        "trajectory_name:=linear"};
   unav::Context node_ctx(8, argv, o);
-  auto node = std::make_unique<unav_evaluation::TrajectoryEvaluator>(unav::NodeOptions{&node_ctx});
+  auto node = std::make_unique<unav::evaluation::TrajectoryEvaluator>(unav::NodeOptions{&node_ctx});
   unav::Context test_ctx(o);
   unav::Node probe("probe", {&test_ctx});
   auto gt_pub = probe.create_publisher<nav_msgs::msg::Odometry>("/rov/ground_truth/odom", unav::QoS::reliable(100));
-  auto est_pub = probe.create_publisher<nav_msgs::msg::Odometry>("/rov/localization/mono/odom", unav::QoS::reliable(100));
+  auto est_pub =
+      probe.create_publisher<nav_msgs::msg::Odometry>("/rov/localization/mono/odom", unav::QoS::reliable(100));
   auto spin = [&](std::chrono::milliseconds d, const std::function<bool()>& done) {
     return unav::testing::spin_until({&node_ctx, &test_ctx}, done, d);
   };
@@ -96,14 +97,27 @@ void RunCombined(const std::string& out, const std::string& run, int domain, boo
   o.domain_id = domain;
   o.handle_signals = false;
   const std::string p_out = "output_dir:=" + out, p_run = "trajectory_name:=" + run, p_cams = "cameras_config:=" + cams;
-  const char* argv[] = {"trajectory_evaluator", "--ros-args", "-p", p_out.c_str(), "-p", "estimates:=[mono]", "-p", p_run.c_str(),
-                        "-p", "combine:=true", "-p", "camera:=down", "-p", p_cams.c_str()};
+  const char* argv[] = {"trajectory_evaluator",
+                        "--ros-args",
+                        "-p",
+                        p_out.c_str(),
+                        "-p",
+                        "estimates:=[mono]",
+                        "-p",
+                        p_run.c_str(),
+                        "-p",
+                        "combine:=true",
+                        "-p",
+                        "camera:=down",
+                        "-p",
+                        p_cams.c_str()};
   unav::Context node_ctx(mount_on_tf ? 12 : 14, argv, o);
-  auto node = std::make_unique<unav_evaluation::TrajectoryEvaluator>(unav::NodeOptions{&node_ctx});
+  auto node = std::make_unique<unav::evaluation::TrajectoryEvaluator>(unav::NodeOptions{&node_ctx});
   unav::Context test_ctx(o);
   unav::Node probe("probe", {&test_ctx});
   auto gt_pub = probe.create_publisher<nav_msgs::msg::Odometry>("/rov/ground_truth/odom", unav::QoS::reliable(100));
-  auto est_pub = probe.create_publisher<nav_msgs::msg::Odometry>("/rov/localization/mono/odom", unav::QoS::reliable(100));
+  auto est_pub =
+      probe.create_publisher<nav_msgs::msg::Odometry>("/rov/localization/mono/odom", unav::QoS::reliable(100));
   auto path_pub = probe.create_publisher<nav_msgs::msg::Path>("/rov/localization/mono/path", unav::QoS::reliable(2));
   auto spin = [&](std::chrono::milliseconds d, const std::function<bool()>& done) {
     return unav::testing::spin_until({&node_ctx, &test_ctx}, done, d);
@@ -143,7 +157,7 @@ void RunCombined(const std::string& out, const std::string& run, int domain, boo
     X_WB.linear() = Eigen::AngleAxisd(a, Eigen::Vector3d::UnitZ()).toRotationMatrix();
     gt_pub->publish(pose_msg(t, X_WB));
     Eigen::Isometry3d X_C = G * X_WB * X_BC;  // the camera, in another frame
-    X_C.translation() *= 0.5;                  // and another scale
+    X_C.translation() *= 0.5;                 // and another scale
     if (i < 50) {
       Eigen::Isometry3d wrong = X_C;
       wrong.translation().x() += 3.0;
@@ -173,8 +187,9 @@ TEST(TrajectoryEvaluator, CombinesRunsPrefersPathsAndComparesInTheCameraFrame) {
   const int domain = unav::testing::unique_domain_id();
   RunCombined(out, "linear", domain, false);
   RunCombined(out, "with_loop", domain, true);
-  for (const char* f : {"linear_ground_truth.tum", "linear_mono.tum", "linear_top_view.png", "with_loop_mono.tum",
-                        "with_loop_top_view.png", "rows/linear.tsv", "rows/with_loop.tsv", "results.md", "results.json"})
+  for (const char* f :
+       {"linear_ground_truth.tum", "linear_mono.tum", "linear_top_view.png", "with_loop_mono.tum",
+        "with_loop_top_view.png", "rows/linear.tsv", "rows/with_loop.tsv", "results.md", "results.json"})
     EXPECT_TRUE(std::filesystem::exists(out + "/" + f)) << f;
   nlohmann::json j;
   std::ifstream(out + "/results.json") >> j;

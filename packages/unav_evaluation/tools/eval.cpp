@@ -23,8 +23,8 @@ struct EvalOptions {
   bool all_pairs = false;
 };
 
-unav_evaluation::PoseRelation relation_from(const std::string& r) {
-  using unav_evaluation::PoseRelation;
+unav::evaluation::PoseRelation relation_from(const std::string& r) {
+  using unav::evaluation::PoseRelation;
   if (r == "trans" || r == "trans_part") return PoseRelation::kTranslation;
   if (r == "angle_rad") return PoseRelation::kRotationAngleRad;
   if (r == "angle_deg") return PoseRelation::kRotationAngleDeg;
@@ -34,7 +34,7 @@ unav_evaluation::PoseRelation relation_from(const std::string& r) {
 
 // `unav eval ape|rpe`: evo_ape / evo_rpe on two TUM files, printed like evo.
 int eval(bool is_ape, const EvalOptions& o) {
-  namespace ev = unav_evaluation;
+  namespace ev = unav::evaluation;
   try {
     const ev::Trajectory ref_all = ev::read_tum(o.ref);
     const ev::Trajectory est_all = ev::read_tum(o.est);

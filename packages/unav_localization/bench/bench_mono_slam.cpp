@@ -14,24 +14,26 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "unav_common/resources.hpp"
 #include "unav_localization/image_sequence.hpp"
 #include "unav_localization/klt_vo.hpp"
 #include "unav_localization/mono_slam.hpp"
-#include "unav_scene/camera.hpp"
 #include "unav_renderer/renderer.hpp"
+#include "unav_scene/camera.hpp"
 #include "unav_scene/world.hpp"
-#include "unav_common/resources.hpp"
 
-namespace ul = unav_localization;
+namespace ul = unav::localization;
 
 namespace {
 
 void Report(const char* what, std::vector<double> ms, const char* unit = "frames/s") {
   std::sort(ms.begin(), ms.end());
   const double mean = std::accumulate(ms.begin(), ms.end(), 0.0) / static_cast<double>(ms.size());
-  auto pct = [&](double q) { return ms[std::min(ms.size() - 1, static_cast<size_t>(q * static_cast<double>(ms.size())))]; };
-  std::printf("  %-30s mean %7.2f ms  p50 %7.2f  p90 %7.2f  p99 %7.2f  max %7.2f  -> %6.1f %s\n", what, mean, pct(0.5), pct(0.9),
-              pct(0.99), ms.back(), 1000.0 / mean, unit);
+  auto pct = [&](double q) {
+    return ms[std::min(ms.size() - 1, static_cast<size_t>(q * static_cast<double>(ms.size())))];
+  };
+  std::printf("  %-30s mean %7.2f ms  p50 %7.2f  p90 %7.2f  p99 %7.2f  max %7.2f  -> %6.1f %s\n", what, mean, pct(0.5),
+              pct(0.9), pct(0.99), ms.back(), 1000.0 / mean, unit);
 }
 
 }  // namespace
@@ -55,7 +57,7 @@ int main(int argc, char** argv) {
   } else {
     const auto world = unav::scene::load_world(unav::common::find_resource("worlds/pipe_inspection/world.yaml"));
     const auto model = unav::scene::CameraModel::from_hfov("down", 640, 480, 90.0 * M_PI / 180.0);
-    unav_renderer::Renderer renderer(world, {model}, {});
+    unav::renderer::Renderer renderer(world, {model}, {});
     for (int k = 0; k < 300; ++k) {
       Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
       X.translation() = Eigen::Vector3d(-1.0 + 0.06 * k, 0.3 * std::sin(0.05 * k), 8.35);
@@ -69,7 +71,8 @@ int main(int argc, char** argv) {
     cam = ul::PinholeCamera::FromK(model.K(), 640, 480);
     source = "300 rendered frames (pipe_inspection seabed, 6 cm/frame, 1.4 m range)";
   }
-  std::printf("bench_mono_slam: %zu frames of %dx%d from %s, one thread\n", frames.size(), cam.width, cam.height, source.c_str());
+  std::printf("bench_mono_slam: %zu frames of %dx%d from %s, one thread\n", frames.size(), cam.width, cam.height,
+              source.c_str());
 
   std::shared_ptr<const ul::BowVocabulary> voc;
   const std::string voc_path = unav::common::find_resource("config/vocabulary/orb_vocabulary.bin");
@@ -83,8 +86,8 @@ int main(int argc, char** argv) {
     if (s.keyframe && s.mapping_ms > 0) kf_mapping.push_back(s.mapping_ms);
   }
   const auto st = slam.stats();
-  std::printf("orb_slam: %d tracked, %d lost, %d keyframes, %d points, %d loops\n", st.tracked_frames, st.lost_frames, st.keyframes,
-              st.points, st.loops);
+  std::printf("orb_slam: %d tracked, %d lost, %d keyframes, %d points, %d loops\n", st.tracked_frames, st.lost_frames,
+              st.keyframes, st.points, st.loops);
   Report("tracking (ORB + pose)", track);
   Report("tracking + mapping", total);
   if (!kf_mapping.empty()) Report("mapping per keyframe", kf_mapping, "keyframes/s");

@@ -35,7 +35,7 @@
 #include "unav_runtime/tf_static.hpp"
 #include "unav_scene/camera.hpp"
 
-namespace unav_localization {
+namespace unav::localization {
 
 struct KltVoNodeParams {
   std::string camera = "down";
@@ -231,6 +231,6 @@ class KltVoNode : public unav::Node {
   std::shared_ptr<unav::Subscription<sensor_msgs::msg::Image>> rgb_sub_, depth_sub_;
 };
 
-}  // namespace unav_localization
+}  // namespace unav::localization
 
-int main(int argc, char** argv) { return unav::run_node<unav_localization::KltVoNode>(argc, argv); }
+int main(int argc, char** argv) { return unav::run_node<unav::localization::KltVoNode>(argc, argv); }

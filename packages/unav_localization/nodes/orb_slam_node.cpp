@@ -1,4 +1,4 @@
-// orb_slam: the monocular ORB SLAM (unav_localization::MonoSlam) as a node.
+// orb_slam: the monocular ORB SLAM (unav::localization::MonoSlam) as a node.
 //
 // Ports (relative to the node namespace, default /rov):
 //   sub  camera/<camera>/image_raw     sensor_msgs/Image (rgb8, bgr8 or mono8)
@@ -30,7 +30,7 @@
 #include "unav_runtime/lockstep_ack.hpp"
 #include "unav_runtime/runtime.hpp"
 
-namespace unav_localization {
+namespace unav::localization {
 
 struct OrbSlamNodeParams {
   std::string camera = "down";
@@ -227,8 +227,8 @@ class OrbSlamNode : public unav::Node {
   std::shared_ptr<unav::Subscription<sensor_msgs::msg::Image>> image_sub_;
 };
 
-}  // namespace unav_localization
+}  // namespace unav::localization
 
 #ifndef UNAV_ORB_SLAM_NO_MAIN
-int main(int argc, char** argv) { return unav::run_node<unav_localization::OrbSlamNode>(argc, argv); }
+int main(int argc, char** argv) { return unav::run_node<unav::localization::OrbSlamNode>(argc, argv); }
 #endif

@@ -20,17 +20,17 @@
 #define UNAV_BOW_POPCNT_CLONES
 #endif
 
-namespace unav_localization {
+namespace unav::localization {
 
 namespace {
 
 constexpr int kDescriptorBytes = 32;
 constexpr char kMagic[8] = {'U', 'N', 'A', 'V', 'B', 'O', 'W', '1'};
 constexpr uint32_t kFormatVersion = 1;
-constexpr size_t kHeaderBytes = 8 + 5 * 4;          // magic, version, k, L, nodes, words
+constexpr size_t kHeaderBytes = 8 + 5 * 4;               // magic, version, k, L, nodes, words
 constexpr size_t kNodeBytes = 4 * 4 + kDescriptorBytes;  // parent, first child, children, word, centre
-constexpr size_t kWordBytes = 8;                    // idf weight (IEEE double)
-constexpr size_t kFooterBytes = 8;                  // FNV-1a 64 of everything before
+constexpr size_t kWordBytes = 8;                         // idf weight (IEEE double)
+constexpr size_t kFooterBytes = 8;                       // FNV-1a 64 of everything before
 
 void CheckDescriptorMatrix(const cv::Mat& m, const char* what) {
   if (m.empty()) return;
@@ -130,15 +130,14 @@ class BowVocabularyImpl {
   }
 
   __attribute__((always_inline)) static inline int Hamming(const Descriptor& a, const Descriptor& b) {
-    return __builtin_popcountll(a[0] ^ b[0]) + __builtin_popcountll(a[1] ^ b[1]) +
-           __builtin_popcountll(a[2] ^ b[2]) + __builtin_popcountll(a[3] ^ b[3]);
+    return __builtin_popcountll(a[0] ^ b[0]) + __builtin_popcountll(a[1] ^ b[1]) + __builtin_popcountll(a[2] ^ b[2]) +
+           __builtin_popcountll(a[3] ^ b[3]);
   }
 
   /// For each descriptor: its leaf, and (if group != nullptr) the node at depth group_depth on
   /// its path, or the leaf when the path ends above that depth.
-  UNAV_BOW_POPCNT_CLONES static void DescendBatch(const Node* nodes, const Descriptor* centres,
-                                                  const Descriptor* ds, size_t n, uint32_t group_depth,
-                                                  NodeId* leaf, NodeId* group) {
+  UNAV_BOW_POPCNT_CLONES static void DescendBatch(const Node* nodes, const Descriptor* centres, const Descriptor* ds,
+                                                  size_t n, uint32_t group_depth, NodeId* leaf, NodeId* group) {
     for (size_t i = 0; i < n; ++i) {
       const Descriptor& d = ds[i];
       NodeId node = 0, g = 0;
@@ -186,8 +185,8 @@ class BowVocabularyImpl {
 
   /// d2[i] = min(d2[i], Hamming(c, all[idx[i]])^2); returns the sum of the new d2 (without
   /// writing it when write == false).
-  UNAV_BOW_POPCNT_CLONES static double UpdatePotential(const Descriptor& c, const Descriptor* all,
-                                                       const uint32_t* idx, size_t n, uint32_t* d2, bool write) {
+  UNAV_BOW_POPCNT_CLONES static double UpdatePotential(const Descriptor& c, const Descriptor* all, const uint32_t* idx,
+                                                       size_t n, uint32_t* d2, bool write) {
     uint64_t sum = 0;
     for (size_t i = 0; i < n; ++i) {
       const uint32_t h = static_cast<uint32_t>(Hamming(c, all[idx[i]]));
@@ -610,4 +609,4 @@ std::vector<std::pair<int, double>> BowDatabase::Query(const BowVector& v, doubl
   return out;
 }
 
-}  // namespace unav_localization
+}  // namespace unav::localization

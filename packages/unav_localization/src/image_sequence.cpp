@@ -8,7 +8,7 @@
 
 #include <yaml-cpp/yaml.h>
 
-namespace unav_localization {
+namespace unav::localization {
 namespace fs = std::filesystem;
 
 namespace {
@@ -43,13 +43,15 @@ CameraFile LoadCameraFile(const std::string& path) {
     k.width = static_cast<int>(Number(y["image_width"], path, "image_width"));
     k.height = static_cast<int>(Number(y["image_height"], path, "image_height"));
     const YAML::Node d = y["camera_matrix"]["data"];
-    if (!d || !d.IsSequence() || d.size() != 9) throw InputError(path + ": key 'camera_matrix.data' must hold 9 numbers");
+    if (!d || !d.IsSequence() || d.size() != 9)
+      throw InputError(path + ": key 'camera_matrix.data' must hold 9 numbers");
     k.fx = Number(d[0], path, "camera_matrix.data[0]");
     k.cx = Number(d[2], path, "camera_matrix.data[2]");
     k.fy = Number(d[4], path, "camera_matrix.data[4]");
     k.cy = Number(d[5], path, "camera_matrix.data[5]");
     if (const YAML::Node dist = y["distortion_coefficients"]["data"])
-      for (size_t i = 0; i < dist.size(); ++i) c.distortion.push_back(Number(dist[i], path, "distortion_coefficients.data"));
+      for (size_t i = 0; i < dist.size(); ++i)
+        c.distortion.push_back(Number(dist[i], path, "distortion_coefficients.data"));
   } else {
     k.width = static_cast<int>(Number(y["width"], path, "width"));
     k.height = static_cast<int>(Number(y["height"], path, "height"));
@@ -67,9 +69,11 @@ CameraFile LoadCameraFile(const std::string& path) {
     }
   }
   if (k.width <= 0 || k.height <= 0)
-    throw InputError(path + ": image size must be positive, got " + std::to_string(k.width) + "x" + std::to_string(k.height));
+    throw InputError(path + ": image size must be positive, got " + std::to_string(k.width) + "x" +
+                     std::to_string(k.height));
   if (!(k.fx > 0 && k.fy > 0)) throw InputError(path + ": fx and fy must be > 0");
-  if (c.distortion.size() > 8) throw InputError(path + ": at most 8 distortion coefficients, got " + std::to_string(c.distortion.size()));
+  if (c.distortion.size() > 8)
+    throw InputError(path + ": at most 8 distortion coefficients, got " + std::to_string(c.distortion.size()));
   return c;
 }
 
@@ -88,10 +92,13 @@ std::vector<SequenceImage> ListImages(const std::string& dir, double fps) {
       double stamp;
       std::string rel, extra;
       if (!(is >> stamp >> rel) || (is >> extra))
-        throw InputError(list.string() + ":" + std::to_string(n) + ": expected 'timestamp filename', got '" + line + "'");
-      if (!std::isfinite(stamp)) throw InputError(list.string() + ":" + std::to_string(n) + ": timestamp must be finite");
+        throw InputError(list.string() + ":" + std::to_string(n) + ": expected 'timestamp filename', got '" + line +
+                         "'");
+      if (!std::isfinite(stamp))
+        throw InputError(list.string() + ":" + std::to_string(n) + ": timestamp must be finite");
       if (!out.empty() && stamp <= out.back().stamp)
-        throw InputError(list.string() + ":" + std::to_string(n) + ": timestamp " + std::to_string(stamp) + " is not after the previous one");
+        throw InputError(list.string() + ":" + std::to_string(n) + ": timestamp " + std::to_string(stamp) +
+                         " is not after the previous one");
       out.push_back({stamp, (fs::path(dir) / rel).string()});
     }
   } else {
@@ -120,7 +127,8 @@ std::vector<SequenceImage> ListImages(const std::string& dir, double fps) {
       std::sort(order.begin(), order.end(), [&](size_t a, size_t b) { return stamps[a] < stamps[b]; });
       for (size_t i : order) out.push_back({stamps[i], files[i].string()});
       for (size_t i = 1; i < out.size(); ++i)
-        if (out[i].stamp <= out[i - 1].stamp) throw InputError(dir + ": two images have the stamp " + std::to_string(out[i].stamp));
+        if (out[i].stamp <= out[i - 1].stamp)
+          throw InputError(dir + ": two images have the stamp " + std::to_string(out[i].stamp));
     } else {
       if (!(fps > 0)) throw InputError(dir + ": images are not named by time and fps is not positive");
       for (size_t i = 0; i < files.size(); ++i) out.push_back({static_cast<double>(i) / fps, files[i].string()});
@@ -130,4 +138,4 @@ std::vector<SequenceImage> ListImages(const std::string& dir, double fps) {
   return out;
 }
 
-}  // namespace unav_localization
+}  // namespace unav::localization

@@ -8,7 +8,7 @@
 #include <opencv2/imgproc.hpp>
 #include <opencv2/video/tracking.hpp>
 
-namespace unav_localization {
+namespace unav::localization {
 
 bool KltVoOptions::IsValid(std::string* msg) const {
   auto fail = [&](const std::string& m) {
@@ -23,21 +23,24 @@ bool KltVoOptions::IsValid(std::string* msg) const {
   if (!(min_depth_m > 0) || !(max_depth_m > min_depth_m)) return fail("need 0 < min_depth_m < max_depth_m");
   if (!(max_step_rotation_rad > 0) || !(max_step_translation_m > 0)) return fail("step limits must be > 0");
   if (mode != Mode::kRgbd && mode != Mode::kMonocular) return fail("mode must be kRgbd or kMonocular");
-  if (!(min_init_parallax_px > 0)) return fail("min_init_parallax_px must be > 0, got " + std::to_string(min_init_parallax_px));
+  if (!(min_init_parallax_px > 0))
+    return fail("min_init_parallax_px must be > 0, got " + std::to_string(min_init_parallax_px));
   if (min_init_tracks < 8 || min_init_tracks > max_features)
     return fail("min_init_tracks must be in [8, max_features = " + std::to_string(max_features) + "], got " +
                 std::to_string(min_init_tracks));
   if (min_init_points < min_inliers || min_init_points > min_init_tracks)
-    return fail("min_init_points must be in [min_inliers = " + std::to_string(min_inliers) + ", min_init_tracks = " +
-                std::to_string(min_init_tracks) + "], got " + std::to_string(min_init_points));
-  if (!(keyframe_parallax_px > 0)) return fail("keyframe_parallax_px must be > 0, got " + std::to_string(keyframe_parallax_px));
+    return fail("min_init_points must be in [min_inliers = " + std::to_string(min_inliers) +
+                ", min_init_tracks = " + std::to_string(min_init_tracks) + "], got " + std::to_string(min_init_points));
+  if (!(keyframe_parallax_px > 0))
+    return fail("keyframe_parallax_px must be > 0, got " + std::to_string(keyframe_parallax_px));
   if (keyframe_min_points < min_inliers || keyframe_min_points > max_features)
-    return fail("keyframe_min_points must be in [min_inliers = " + std::to_string(min_inliers) + ", max_features = " +
-                std::to_string(max_features) + "], got " + std::to_string(keyframe_min_points));
+    return fail("keyframe_min_points must be in [min_inliers = " + std::to_string(min_inliers) +
+                ", max_features = " + std::to_string(max_features) + "], got " + std::to_string(keyframe_min_points));
   if (!(min_triangulation_angle_rad > 0) || !(min_triangulation_angle_rad < M_PI / 2))
     return fail("min_triangulation_angle_rad must be in (0, pi/2), got " + std::to_string(min_triangulation_angle_rad));
   if (!(max_triangulation_reprojection_px > 0))
-    return fail("max_triangulation_reprojection_px must be > 0, got " + std::to_string(max_triangulation_reprojection_px));
+    return fail("max_triangulation_reprojection_px must be > 0, got " +
+                std::to_string(max_triangulation_reprojection_px));
   if (!(max_step_translation_depth > 0))
     return fail("max_step_translation_depth must be > 0, got " + std::to_string(max_step_translation_depth));
   if (grid_cols < 1 || grid_rows < 1 || grid_cols * grid_rows > max_features)
@@ -48,11 +51,16 @@ bool KltVoOptions::IsValid(std::string* msg) const {
 
 const char* to_string(VoStatus s) {
   switch (s) {
-    case VoStatus::kInitialized: return "initialized";
-    case VoStatus::kTracking: return "tracking";
-    case VoStatus::kLost: return "lost";
-    case VoStatus::kInvalidInput: return "invalid input";
-    case VoStatus::kInitializing: return "initializing";
+    case VoStatus::kInitialized:
+      return "initialized";
+    case VoStatus::kTracking:
+      return "tracking";
+    case VoStatus::kLost:
+      return "lost";
+    case VoStatus::kInvalidInput:
+      return "invalid input";
+    case VoStatus::kInitializing:
+      return "initializing";
   }
   return "?";
 }
@@ -68,7 +76,8 @@ KltVo::KltVo(const Eigen::Matrix3d& K, const KltVoOptions& options) : options_(o
 
 void KltVo::detect(const cv::Mat& gray) {
   cv::Mat mask(gray.size(), CV_8UC1, cv::Scalar(255));
-  for (const auto& p : prev_pts_) cv::circle(mask, p, static_cast<int>(options_.min_corner_distance), cv::Scalar(0), -1);
+  for (const auto& p : prev_pts_)
+    cv::circle(mask, p, static_cast<int>(options_.min_corner_distance), cv::Scalar(0), -1);
   std::vector<cv::Point2f> fresh;
   const int want = options_.max_features - static_cast<int>(prev_pts_.size());
   if (want <= 0) return;
@@ -86,7 +95,8 @@ float depth_at(const cv::Mat& depth, const cv::Point2f& p) {
   const float d00 = depth.at<float>(v, u), d01 = depth.at<float>(v, u + 1), d10 = depth.at<float>(v + 1, u),
               d11 = depth.at<float>(v + 1, u + 1);
   // Depth edges (pipe against sand) would interpolate to a surface that is not there.
-  const float lo = std::min(std::min(d00, d01), std::min(d10, d11)), hi = std::max(std::max(d00, d01), std::max(d10, d11));
+  const float lo = std::min(std::min(d00, d01), std::min(d10, d11)),
+              hi = std::max(std::max(d00, d01), std::max(d10, d11));
   if (!(hi - lo < 0.05f * lo)) return NAN;
   return (1 - a) * (1 - b) * d00 + a * (1 - b) * d01 + (1 - a) * b * d10 + a * b * d11;
 }
@@ -154,8 +164,9 @@ VoSummary KltVo::ProcessFrame(const cv::Mat& gray, const cv::Mat& depth, Eigen::
   if (static_cast<int>(obj.size()) >= options_.min_inliers) {
     cv::Mat rvec, tvec;
     std::vector<int> inliers;
-    ok = cv::solvePnPRansac(obj, img, K_, cv::noArray(), rvec, tvec, false, 200,
-                            static_cast<float>(options_.ransac_reprojection_px), 0.999, inliers, cv::SOLVEPNP_ITERATIVE);
+    ok =
+        cv::solvePnPRansac(obj, img, K_, cv::noArray(), rvec, tvec, false, 200,
+                           static_cast<float>(options_.ransac_reprojection_px), 0.999, inliers, cv::SOLVEPNP_ITERATIVE);
     s.inliers = static_cast<int>(inliers.size());
     ok = ok && s.inliers >= options_.min_inliers && 10 * s.inliers >= 3 * static_cast<int>(obj.size());
     if (ok) {
@@ -208,4 +219,4 @@ VoSummary KltVo::ProcessFrame(const cv::Mat& gray, const cv::Mat& depth, Eigen::
 // ---------------------------------------------------------------------------------------------
 // Monocular mode.
 
-}  // namespace unav_localization
+}  // namespace unav::localization

@@ -10,7 +10,7 @@
 #include "unav_localization/klt_vo.hpp"
 #include "unav_localization/two_view.hpp"
 
-namespace unav_localization {
+namespace unav::localization {
 
 namespace {
 
@@ -433,4 +433,4 @@ VoSummary KltVo::ProcessFrame(const cv::Mat& gray, Eigen::Isometry3d* T_C0C) {
   return finish();
 }
 
-}  // namespace unav_localization
+}  // namespace unav::localization

@@ -2,7 +2,7 @@
 // public API; the stages live in mono_slam_*.cpp.
 #include "mono_slam_impl.hpp"
 
-namespace unav_localization {
+namespace unav::localization {
 
 using namespace slam_internal;  // NOLINT(google-build-using-namespace)
 
@@ -18,31 +18,41 @@ bool MonoSlamOptions::IsValid(std::string* msg) const {
     return fail("init_min_parallax_deg must be in (0, 30), got " + std::to_string(init_min_parallax_deg));
   if (init_min_points < 20) return fail("init_min_points must be >= 20, got " + std::to_string(init_min_points));
   if (init_max_frames < 2) return fail("init_max_frames must be >= 2, got " + std::to_string(init_max_frames));
-  if (min_tracked_inliers < 10) return fail("min_tracked_inliers must be >= 10, got " + std::to_string(min_tracked_inliers));
+  if (min_tracked_inliers < 10)
+    return fail("min_tracked_inliers must be >= 10, got " + std::to_string(min_tracked_inliers));
   if (keyframe_min_gap < 0 || keyframe_max_gap < 1 || keyframe_min_gap > keyframe_max_gap)
     return fail("keyframe gaps must satisfy 0 <= keyframe_min_gap <= keyframe_max_gap, >= 1; got " +
                 std::to_string(keyframe_min_gap) + ", " + std::to_string(keyframe_max_gap));
   if (!(keyframe_tracked_ratio > 0 && keyframe_tracked_ratio < 1))
     return fail("keyframe_tracked_ratio must be in (0, 1), got " + std::to_string(keyframe_tracked_ratio));
   if (local_ba_keyframes < 2) return fail("local_ba_keyframes must be >= 2, got " + std::to_string(local_ba_keyframes));
-  if (local_ba_iterations < 1) return fail("local_ba_iterations must be >= 1, got " + std::to_string(local_ba_iterations));
+  if (local_ba_iterations < 1)
+    return fail("local_ba_iterations must be >= 1, got " + std::to_string(local_ba_iterations));
   if (mapping_neighbours < 1) return fail("mapping_neighbours must be >= 1, got " + std::to_string(mapping_neighbours));
   if (loop_consistency < 0) return fail("loop_consistency must be >= 0, got " + std::to_string(loop_consistency));
   if (loop_min_inliers < 20) return fail("loop_min_inliers must be >= 20, got " + std::to_string(loop_min_inliers));
-  if (!(loop_max_correction_ratio > 0)) return fail("loop_max_correction_ratio must be > 0, got " + std::to_string(loop_max_correction_ratio));
-  if (loop_min_keyframe_gap < 5) return fail("loop_min_keyframe_gap must be >= 5, got " + std::to_string(loop_min_keyframe_gap));
-  if (global_ba_iterations < 1) return fail("global_ba_iterations must be >= 1, got " + std::to_string(global_ba_iterations));
+  if (!(loop_max_correction_ratio > 0))
+    return fail("loop_max_correction_ratio must be > 0, got " + std::to_string(loop_max_correction_ratio));
+  if (loop_min_keyframe_gap < 5)
+    return fail("loop_min_keyframe_gap must be >= 5, got " + std::to_string(loop_min_keyframe_gap));
+  if (global_ba_iterations < 1)
+    return fail("global_ba_iterations must be >= 1, got " + std::to_string(global_ba_iterations));
   if (relocalize_frames < 0) return fail("relocalize_frames must be >= 0, got " + std::to_string(relocalize_frames));
   return true;
 }
 
 const char* to_string(SlamState state) {
   switch (state) {
-    case SlamState::kInitializing: return "initializing";
-    case SlamState::kTracking: return "tracking";
-    case SlamState::kRelocalized: return "relocalized";
-    case SlamState::kLost: return "lost";
-    case SlamState::kInvalidInput: return "invalid_input";
+    case SlamState::kInitializing:
+      return "initializing";
+    case SlamState::kTracking:
+      return "tracking";
+    case SlamState::kRelocalized:
+      return "relocalized";
+    case SlamState::kLost:
+      return "lost";
+    case SlamState::kInvalidInput:
+      return "invalid_input";
   }
   return "?";
 }
@@ -93,8 +103,10 @@ auto MonoSlam::Impl::ResetForReinitialization() -> void {
 auto MonoSlam::Impl::Track(const cv::Mat& gray, double stamp) -> SlamFrameSummary {
   const auto t0 = Clock::now();
   SlamFrameSummary s;
-  if (gray.empty() || gray.type() != CV_8UC1 || gray.cols != cam.width || gray.rows != cam.height || !std::isfinite(stamp)) {
-    s.message = "expected a CV_8UC1 image of " + std::to_string(cam.width) + "x" + std::to_string(cam.height) + " and a finite stamp";
+  if (gray.empty() || gray.type() != CV_8UC1 || gray.cols != cam.width || gray.rows != cam.height ||
+      !std::isfinite(stamp)) {
+    s.message = "expected a CV_8UC1 image of " + std::to_string(cam.width) + "x" + std::to_string(cam.height) +
+                " and a finite stamp";
     return s;
   }
   ++stats.frames;
@@ -147,7 +159,8 @@ auto MonoSlam::Impl::Track(const cv::Mat& gray, double stamp) -> SlamFrameSummar
       ResetForReinitialization();
       s.reinitialized = true;
     } else {
-      s.message = "tracking lost; relocalising (" + std::to_string(lost_frames_in_row) + "/" + std::to_string(opt.relocalize_frames) + ")";
+      s.message = "tracking lost; relocalising (" + std::to_string(lost_frames_in_row) + "/" +
+                  std::to_string(opt.relocalize_frames) + ")";
       last_tracked = false;
     }
     const Eigen::Isometry3d pred = has_velocity ? velocity * last.T_cw : last.T_cw;
@@ -187,13 +200,13 @@ auto MonoSlam::Impl::UpdateGoodPose() -> void {
   last_good_ref_kf = ref_kf;
 }
 
-
 MonoSlam::MonoSlam(const PinholeCamera& camera, const std::vector<double>& distortion, const MonoSlamOptions& options,
                    std::shared_ptr<const BowVocabulary> vocabulary)
     : impl_(std::make_unique<Impl>()) {
   std::string msg;
   if (!options.IsValid(&msg)) throw std::invalid_argument("MonoSlam: " + msg);
-  if (!(camera.fx > 0 && camera.fy > 0 && camera.width > 0 && camera.height > 0 && std::isfinite(camera.cx) && std::isfinite(camera.cy)))
+  if (!(camera.fx > 0 && camera.fy > 0 && camera.width > 0 && camera.height > 0 && std::isfinite(camera.cx) &&
+        std::isfinite(camera.cy)))
     throw std::invalid_argument("MonoSlam: camera needs fx, fy > 0 and a positive image size");
   for (double d : distortion)
     if (!std::isfinite(d)) throw std::invalid_argument("MonoSlam: distortion coefficients must be finite");
@@ -235,7 +248,8 @@ std::vector<MonoSlam::StampedPose> MonoSlam::Trajectory() const {
     const auto t = impl_->CurrentTrajectory();
     out.insert(out.end(), t.begin(), t.end());
   }
-  std::stable_sort(out.begin(), out.end(), [](const StampedPose& a, const StampedPose& b) { return a.stamp < b.stamp; });
+  std::stable_sort(out.begin(), out.end(),
+                   [](const StampedPose& a, const StampedPose& b) { return a.stamp < b.stamp; });
   return out;
 }
 
@@ -256,4 +270,4 @@ SlamStats MonoSlam::stats() const {
 
 const Map& MonoSlam::map() const { return *impl_->map; }
 
-}  // namespace unav_localization
+}  // namespace unav::localization

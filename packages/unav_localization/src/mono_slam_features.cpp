@@ -1,7 +1,7 @@
 // MonoSlam, features: extraction, bag of words, scale prediction, matching by appearance.
 #include "mono_slam_impl.hpp"
 
-namespace unav_localization {
+namespace unav::localization {
 
 using namespace slam_internal;  // NOLINT(google-build-using-namespace): the SLAM's own constants
 
@@ -77,4 +77,4 @@ auto MonoSlam::Impl::MatchByAppearance(const Features& a, const std::function<bo
   return out;
 }
 
-}  // namespace unav_localization
+}  // namespace unav::localization

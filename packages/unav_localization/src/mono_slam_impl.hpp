@@ -20,7 +20,7 @@
 #include "unav_localization/slam_optimizer.hpp"
 #include "unav_localization/two_view.hpp"
 
-namespace unav_localization {
+namespace unav::localization {
 
 namespace slam_internal {
 constexpr int kThHigh = 100;  // descriptor distance accepted when projection already constrains
@@ -191,4 +191,4 @@ struct MonoSlam::Impl {
   void UpdateGoodPose();
 };
 
-}  // namespace unav_localization
+}  // namespace unav::localization

@@ -1,7 +1,7 @@
 // MonoSlam, two-view initialisation: essential / homography candidates, triangulation, initial map.
 #include "mono_slam_impl.hpp"
 
-namespace unav_localization {
+namespace unav::localization {
 
 using namespace slam_internal;  // NOLINT(google-build-using-namespace): the SLAM's own constants
 
@@ -207,4 +207,4 @@ auto MonoSlam::Impl::CreateInitialMap(const Reconstruction& rec, const std::vect
   init_ref.reset();
 }
 
-}  // namespace unav_localization
+}  // namespace unav::localization

@@ -1,7 +1,7 @@
 // MonoSlam, local mapping: keyframe decision, point culling, new points, fusion, local BA.
 #include "mono_slam_impl.hpp"
 
-namespace unav_localization {
+namespace unav::localization {
 
 using namespace slam_internal;  // NOLINT(google-build-using-namespace): the SLAM's own constants
 
@@ -162,4 +162,4 @@ auto MonoSlam::Impl::InsertKeyFrame() -> void {
     LocalBundleAdjustment(map.get(), cam, sigma2, kid, opt.local_ba_keyframes, opt.local_ba_iterations);
 }
 
-}  // namespace unav_localization
+}  // namespace unav::localization

@@ -1,7 +1,7 @@
 // MonoSlam, loop closing: BoW candidates, Sim(3) RANSAC, correction, essential graph, global BA.
 #include "mono_slam_impl.hpp"
 
-namespace unav_localization {
+namespace unav::localization {
 
 using namespace slam_internal;  // NOLINT(google-build-using-namespace): the SLAM's own constants
 
@@ -260,4 +260,4 @@ auto MonoSlam::Impl::LoopClosing(int kid) -> bool {
   return closed;
 }
 
-}  // namespace unav_localization
+}  // namespace unav::localization

@@ -1,7 +1,7 @@
 // MonoSlam, tracking: motion model, reference keyframe, local map, pose optimisation, relocalisation.
 #include "mono_slam_impl.hpp"
 
-namespace unav_localization {
+namespace unav::localization {
 
 using namespace slam_internal;  // NOLINT(google-build-using-namespace): the SLAM's own constants
 
@@ -200,4 +200,4 @@ auto MonoSlam::Impl::Relocalize() -> bool {
   return false;
 }
 
-}  // namespace unav_localization
+}  // namespace unav::localization

@@ -4,7 +4,7 @@
 #include <cstring>
 #include <stdexcept>
 
-namespace unav_localization {
+namespace unav::localization {
 
 bool OrbOptions::IsValid(std::string* msg) const {
   auto fail = [msg](const std::string& m) {
@@ -12,9 +12,11 @@ bool OrbOptions::IsValid(std::string* msg) const {
     return false;
   };
   if (features < 50) return fail("orb.features must be >= 50, got " + std::to_string(features));
-  if (!(scale_factor > 1.0 && scale_factor < 2.0)) return fail("orb.scale_factor must be in (1, 2), got " + std::to_string(scale_factor));
+  if (!(scale_factor > 1.0 && scale_factor < 2.0))
+    return fail("orb.scale_factor must be in (1, 2), got " + std::to_string(scale_factor));
   if (levels < 1 || levels > 16) return fail("orb.levels must be in [1, 16], got " + std::to_string(levels));
-  if (fast_threshold < 1 || fast_threshold > 100) return fail("orb.fast_threshold must be in [1, 100], got " + std::to_string(fast_threshold));
+  if (fast_threshold < 1 || fast_threshold > 100)
+    return fail("orb.fast_threshold must be in [1, 100], got " + std::to_string(fast_threshold));
   if (cell_px < 8) return fail("orb.cell_px must be >= 8, got " + std::to_string(cell_px));
   if (edge_px < 16) return fail("orb.edge_px must be >= 16 (the ORB patch), got " + std::to_string(edge_px));
   return true;
@@ -76,4 +78,4 @@ int DescriptorDistance(const uint8_t* a, const uint8_t* b) {
   return d;
 }
 
-}  // namespace unav_localization
+}  // namespace unav::localization

@@ -6,7 +6,7 @@
 #include "unav_localization/orb_extractor.hpp"
 #include "unav_localization/sim3.hpp"
 
-namespace unav_localization {
+namespace unav::localization {
 
 void Features::BuildGrid(int width, int height, double cell) {
   cell_px = cell;
@@ -14,7 +14,8 @@ void Features::BuildGrid(int width, int height, double cell) {
   grid_rows = std::max(1, static_cast<int>(std::ceil(height / cell)));
   grid.assign(static_cast<size_t>(grid_cols * grid_rows), {});
   for (size_t i = 0; i < un.size(); ++i) {
-    const int cx = static_cast<int>(std::floor(un[i].x() / cell_px)), cy = static_cast<int>(std::floor(un[i].y() / cell_px));
+    const int cx = static_cast<int>(std::floor(un[i].x() / cell_px)),
+              cy = static_cast<int>(std::floor(un[i].y() / cell_px));
     if (cx < 0 || cy < 0 || cx >= grid_cols || cy >= grid_rows) continue;
     grid[static_cast<size_t>(cy * grid_cols + cx)].push_back(static_cast<int>(i));
   }
@@ -41,7 +42,8 @@ std::vector<int> Features::InArea(const Eigen::Vector2d& uv, double radius, int 
 std::vector<int> KeyFrame::BestCovisible(size_t n) const {
   std::vector<std::pair<int, int>> v;
   for (const auto& [id, w] : covisibility) v.emplace_back(w, id);
-  std::sort(v.begin(), v.end(), [](const auto& a, const auto& b) { return a.first != b.first ? a.first > b.first : a.second < b.second; });
+  std::sort(v.begin(), v.end(),
+            [](const auto& a, const auto& b) { return a.first != b.first ? a.first > b.first : a.second < b.second; });
   std::vector<int> out;
   for (size_t i = 0; i < v.size() && i < n; ++i) out.push_back(v[i].second);
   return out;
@@ -200,4 +202,4 @@ bool EstimateSim3(const Eigen::Matrix3Xd& from, const Eigen::Matrix3Xd& to, bool
   return r.ok();
 }
 
-}  // namespace unav_localization
+}  // namespace unav::localization

@@ -8,7 +8,7 @@
 #include <ceres/ceres.h>
 #include <ceres/rotation.h>
 
-namespace unav_localization {
+namespace unav::localization {
 namespace {
 
 constexpr double kChi2Mono = 5.991;  // 95% chi-square gate, 2 dof
@@ -39,7 +39,8 @@ void Project(const PinholeCamera& c, const T* p, T* uv) {
 
 // Reprojection of a point X_w (3) through a pose (angle-axis + translation of T_cw).
 struct ReprojectionError {
-  ReprojectionError(const PinholeCamera& c, const Eigen::Vector2d& uv, double inv_sigma) : cam(c), obs(uv), w(inv_sigma) {}
+  ReprojectionError(const PinholeCamera& c, const Eigen::Vector2d& uv, double inv_sigma)
+      : cam(c), obs(uv), w(inv_sigma) {}
   template <typename T>
   bool operator()(const T* pose, const T* X, T* r) const {
     T p[3];
@@ -74,8 +75,8 @@ struct PoseOnlyError {
   double w;
 };
 
-double Chi2(const PinholeCamera& cam, const Eigen::Isometry3d& T_cw, const Eigen::Vector3d& X_w, const Eigen::Vector2d& uv,
-            double inv_sigma2, bool* behind = nullptr) {
+double Chi2(const PinholeCamera& cam, const Eigen::Isometry3d& T_cw, const Eigen::Vector3d& X_w,
+            const Eigen::Vector2d& uv, double inv_sigma2, bool* behind = nullptr) {
   const Eigen::Vector3d p = T_cw * X_w;
   if (behind) *behind = p.z() <= 0;
   if (p.z() <= 0) return 1e9;
@@ -115,7 +116,8 @@ int OptimizePose(const PinholeCamera& cam, std::vector<PoseObservation>* obs, Ei
     int n = 0;
     for (const auto& o : *obs) {
       if (o.outlier) continue;
-      auto* cost = new ceres::AutoDiffCostFunction<PoseOnlyError, 2, 6>(new PoseOnlyError(cam, o.X_w, o.uv, std::sqrt(o.inv_sigma2)));
+      auto* cost = new ceres::AutoDiffCostFunction<PoseOnlyError, 2, 6>(
+          new PoseOnlyError(cam, o.X_w, o.uv, std::sqrt(o.inv_sigma2)));
       problem.AddResidualBlock(cost, round < 3 ? new ceres::HuberLoss(std::sqrt(kChi2Mono)) : nullptr, pose);
       ++n;
     }
@@ -162,8 +164,8 @@ BundleAdjustmentSummary RunBundleAdjustment(Map* map, const PinholeCamera& cam, 
     const KeyFrame& kf = map->kf(o.kf);
     const auto& kp = kf.f.keypoints[static_cast<size_t>(o.feature)];
     const auto& x = X[o.point];
-    return Chi2(cam, FromParams(poses[o.kf].data()), Eigen::Vector3d(x[0], x[1], x[2]), kf.f.un[static_cast<size_t>(o.feature)],
-                1.0 / level_sigma2[static_cast<size_t>(kp.octave)]);
+    return Chi2(cam, FromParams(poses[o.kf].data()), Eigen::Vector3d(x[0], x[1], x[2]),
+                kf.f.un[static_cast<size_t>(o.feature)], 1.0 / level_sigma2[static_cast<size_t>(kp.octave)]);
   };
   for (int stage = 0; stage < 2; ++stage) {
     ceres::Problem problem;
@@ -172,8 +174,8 @@ BundleAdjustmentSummary RunBundleAdjustment(Map* map, const PinholeCamera& cam, 
       const Obs& o = all[n];
       const KeyFrame& kf = map->kf(o.kf);
       const int level = kf.f.keypoints[static_cast<size_t>(o.feature)].octave;
-      auto* cost = new ceres::AutoDiffCostFunction<ReprojectionError, 2, 6, 3>(
-          new ReprojectionError(cam, kf.f.un[static_cast<size_t>(o.feature)], 1.0 / std::sqrt(level_sigma2[static_cast<size_t>(level)])));
+      auto* cost = new ceres::AutoDiffCostFunction<ReprojectionError, 2, 6, 3>(new ReprojectionError(
+          cam, kf.f.un[static_cast<size_t>(o.feature)], 1.0 / std::sqrt(level_sigma2[static_cast<size_t>(level)])));
       problem.AddResidualBlock(cost, new ceres::HuberLoss(std::sqrt(kChi2Mono)), poses[o.kf].data(), X[o.point].data());
     }
     for (auto& [k, p] : poses)
@@ -201,8 +203,9 @@ BundleAdjustmentSummary RunBundleAdjustment(Map* map, const PinholeCamera& cam, 
 
 }  // namespace
 
-BundleAdjustmentSummary LocalBundleAdjustment(Map* map, const PinholeCamera& cam, const std::vector<double>& level_sigma2,
-                                              int kf_id, int max_local, int iterations) {
+BundleAdjustmentSummary LocalBundleAdjustment(Map* map, const PinholeCamera& cam,
+                                              const std::vector<double>& level_sigma2, int kf_id, int max_local,
+                                              int iterations) {
   std::vector<int> local{kf_id};
   for (int k : map->kf(kf_id).BestCovisible(static_cast<size_t>(std::max(0, max_local - 1))))
     if (!map->kf(k).bad) local.push_back(k);
@@ -218,19 +221,23 @@ BundleAdjustmentSummary LocalBundleAdjustment(Map* map, const PinholeCamera& cam
       if (!local_set.count(k) && !map->kf(k).bad) fixed_set.insert(k);
   std::vector<int> opt, fixed(fixed_set.begin(), fixed_set.end());
   for (int k : local) {
-    if (k == 0) fixed.push_back(k);  // the gauge
-    else opt.push_back(k);
+    if (k == 0)
+      fixed.push_back(k);  // the gauge
+    else
+      opt.push_back(k);
   }
   return RunBundleAdjustment(map, cam, level_sigma2, opt, fixed, pts, iterations);
 }
 
-BundleAdjustmentSummary GlobalBundleAdjustment(Map* map, const PinholeCamera& cam, const std::vector<double>& level_sigma2,
-                                               int iterations) {
+BundleAdjustmentSummary GlobalBundleAdjustment(Map* map, const PinholeCamera& cam,
+                                               const std::vector<double>& level_sigma2, int iterations) {
   std::vector<int> opt, fixed, pts;
   for (const auto& k : map->keyframes) {
     if (k->bad) continue;
-    if (k->id == 0) fixed.push_back(k->id);
-    else opt.push_back(k->id);
+    if (k->id == 0)
+      fixed.push_back(k->id);
+    else
+      opt.push_back(k->id);
   }
   for (const auto& p : map->points)
     if (!p->bad && p->obs.size() >= 2) pts.push_back(p->id);
@@ -310,15 +317,17 @@ int OptimizeSim3(const PinholeCamera& cam, std::vector<Sim3Match>* matches, Sim3
     const Sim3 s = Sim3FromParams(S);
     const Eigen::Vector3d p1 = s * m.X2_c2, p2 = s.inverse() * m.X1_c1;
     if (p1.z() <= 0 || p2.z() <= 0) return 1e9;
-    return std::max((cam.Project(p1) - m.uv1).squaredNorm() * m.inv_sigma2_1, (cam.Project(p2) - m.uv2).squaredNorm() * m.inv_sigma2_2);
+    return std::max((cam.Project(p1) - m.uv1).squaredNorm() * m.inv_sigma2_1,
+                    (cam.Project(p2) - m.uv2).squaredNorm() * m.inv_sigma2_2);
   };
   int inliers = 0;
   for (int round = 0; round < 2; ++round) {
     ceres::Problem problem;
     for (const auto& m : *matches) {
       if (m.outlier) continue;
-      problem.AddResidualBlock(new ceres::AutoDiffCostFunction<Sim3ReprojectionError, 4, 7>(new Sim3ReprojectionError(cam, m)),
-                               new ceres::HuberLoss(std::sqrt(chi2_gate)), S);
+      problem.AddResidualBlock(
+          new ceres::AutoDiffCostFunction<Sim3ReprojectionError, 4, 7>(new Sim3ReprojectionError(cam, m)),
+          new ceres::HuberLoss(std::sqrt(chi2_gate)), S);
     }
     if (problem.NumResidualBlocks() < 3) return 0;
     ceres::Solver::Summary summary;
@@ -367,18 +376,19 @@ struct PoseGraphError {
 
 }  // namespace
 
-void OptimizePoseGraph(std::vector<Sim3>* S_iw, const std::vector<bool>& active, const std::vector<PoseGraphEdge>& edges,
-                       const std::vector<int>& fixed, int iterations) {
+void OptimizePoseGraph(std::vector<Sim3>* S_iw, const std::vector<bool>& active,
+                       const std::vector<PoseGraphEdge>& edges, const std::vector<int>& fixed, int iterations) {
   std::vector<std::array<double, 7>> p(S_iw->size());
   for (size_t k = 0; k < S_iw->size(); ++k) Sim3ToParams((*S_iw)[k], p[k].data());
   ceres::Problem problem;
   for (const auto& e : edges) {
     if (!active[static_cast<size_t>(e.i)] || !active[static_cast<size_t>(e.j)]) continue;
-    problem.AddResidualBlock(new ceres::AutoDiffCostFunction<PoseGraphError, 7, 7, 7>(new PoseGraphError(e.S_ij)), nullptr,
-                             p[static_cast<size_t>(e.i)].data(), p[static_cast<size_t>(e.j)].data());
+    problem.AddResidualBlock(new ceres::AutoDiffCostFunction<PoseGraphError, 7, 7, 7>(new PoseGraphError(e.S_ij)),
+                             nullptr, p[static_cast<size_t>(e.i)].data(), p[static_cast<size_t>(e.j)].data());
   }
   for (int f : fixed)
-    if (problem.HasParameterBlock(p[static_cast<size_t>(f)].data())) problem.SetParameterBlockConstant(p[static_cast<size_t>(f)].data());
+    if (problem.HasParameterBlock(p[static_cast<size_t>(f)].data()))
+      problem.SetParameterBlockConstant(p[static_cast<size_t>(f)].data());
   ceres::Solver::Options o = BaOptions(iterations);
   o.linear_solver_type = ceres::SPARSE_NORMAL_CHOLESKY;
   ceres::Solver::Summary summary;
@@ -387,4 +397,4 @@ void OptimizePoseGraph(std::vector<Sim3>* S_iw, const std::vector<bool>& active,
     if (active[k]) (*S_iw)[k] = Sim3FromParams(p[k].data());
 }
 
-}  // namespace unav_localization
+}  // namespace unav::localization

@@ -3,7 +3,7 @@
 #include <opencv2/calib3d.hpp>
 #include <opencv2/core/eigen.hpp>
 
-namespace unav_localization {
+namespace unav::localization {
 
 std::vector<TwoViewCandidate> TwoViewCandidates(const std::vector<cv::Point2f>& p1, const std::vector<cv::Point2f>& p2,
                                                 const cv::Matx33d& K, const TwoViewOptions& options) {
@@ -42,4 +42,4 @@ std::vector<TwoViewCandidate> TwoViewCandidates(const std::vector<cv::Point2f>& 
   return out;
 }
 
-}  // namespace unav_localization
+}  // namespace unav::localization

@@ -12,7 +12,7 @@
 #include <opencv2/features2d.hpp>
 #include <opencv2/imgproc.hpp>
 
-namespace ul = unav_localization;
+namespace ul = unav::localization;
 namespace fs = std::filesystem;
 
 namespace {
@@ -71,9 +71,9 @@ cv::Mat Orb(const cv::Mat& gray, int features = 500) {
 struct TempDir {
   fs::path path;
   TempDir() {
-    path = fs::temp_directory_path() /
-           ("bow_test_" + std::to_string(::testing::UnitTest::GetInstance()->random_seed()) + "_" +
-            ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    path =
+        fs::temp_directory_path() / ("bow_test_" + std::to_string(::testing::UnitTest::GetInstance()->random_seed()) +
+                                     "_" + ::testing::UnitTest::GetInstance()->current_test_info()->name());
     fs::create_directories(path);
   }
   ~TempDir() {
@@ -172,7 +172,7 @@ TEST(BowVocabulary, DegenerateTrainingSets) {
   std::set<ul::WordId> words;
   for (int r = 0; r < 3; ++r) words.insert(voc.Word(three.row(r)));
   EXPECT_EQ(words.size(), 3u);
-  EXPECT_EQ(voc.Weight(voc.Word(three.row(0))), 0.0);                 // in both images
+  EXPECT_EQ(voc.Weight(voc.Word(three.row(0))), 0.0);                   // in both images
   EXPECT_DOUBLE_EQ(voc.Weight(voc.Word(three.row(1))), std::log(2.0));  // in one of two
 }
 
@@ -539,8 +539,8 @@ TEST(BowVocabulary, RealOrbFeaturesRelocalise) {
     voc.Transform(Orb(view), &q);
     const auto res = db.Query(q, 0.0);
     ASSERT_GE(res.size(), 2u);
-    std::printf("relocalise %d: best %d (%.3f), second %d (%.3f)\n", target, res[0].first, res[0].second,
-                res[1].first, res[1].second);
+    std::printf("relocalise %d: best %d (%.3f), second %d (%.3f)\n", target, res[0].first, res[0].second, res[1].first,
+                res[1].second);
     EXPECT_EQ(res[0].first, target);
     EXPECT_GT(res[0].second, 2.0 * res[1].second);
   }
@@ -561,7 +561,8 @@ TEST(BowVocabulary, WordTiming) {
   for (int rep = 0; rep < 20; ++rep) {
     const auto t1 = std::chrono::steady_clock::now();
     for (int r = 0; r < probe.rows; ++r) sink += voc.Word(probe.row(r));
-    best_ms = std::min(best_ms, std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t1).count());
+    best_ms =
+        std::min(best_ms, std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t1).count());
   }
   std::printf("train 20000 descriptors: %.3f s, %zu words; Word() x1000: %.3f ms (sink %llu)\n", train_s, voc.size(),
               best_ms, static_cast<unsigned long long>(sink));

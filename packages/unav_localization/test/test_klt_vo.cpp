@@ -12,13 +12,13 @@
 #include <opencv2/imgproc.hpp>
 
 #include "unav_localization/klt_vo.hpp"
-#include "unav_scene/camera.hpp"
 #include "unav_renderer/renderer.hpp"
+#include "unav_scene/camera.hpp"
 #include "unav_scene/world.hpp"
 
-using unav_localization::KltVo;
-using unav_localization::KltVoOptions;
-using unav_localization::VoStatus;
+using unav::localization::KltVo;
+using unav::localization::KltVoOptions;
+using unav::localization::VoStatus;
 
 namespace {
 
@@ -37,12 +37,12 @@ const Sequence& rendered_sequence() {
     unav::scene::World world =
         unav::scene::load_world(std::string(UNAV_REPO_ROOT) + "/worlds/pipe_inspection/world.yaml");
     unav::scene::CameraModel cam = unav::scene::CameraModel::from_hfov("down", 320, 180, 90.0 * M_PI / 180.0);
-    unav_renderer::RenderOptions ro;
+    unav::renderer::RenderOptions ro;
     ro.noise = false;
     ro.marine_snow = false;  // particles move independently of the scene
     ro.lamps = false;        // the lamp pool moves with the camera: a moving brightness pattern
     ro.forward_scatter = false;
-    unav_renderer::Renderer renderer(world, {cam}, ro);
+    unav::renderer::Renderer renderer(world, {cam}, ro);
     Sequence s;
     s.K = cam.K();
     Eigen::Isometry3d X_WC0 = Eigen::Isometry3d::Identity();
@@ -50,7 +50,7 @@ const Sequence& rendered_sequence() {
       Eigen::Isometry3d X_WB = Eigen::Isometry3d::Identity();
       X_WB.translation() = Eigen::Vector3d(-2.0 + 0.05 * k, 1.5, 7.8 + 0.005 * k);
       X_WB.linear() = Eigen::AngleAxisd(0.005 * k, Eigen::Vector3d::UnitZ()).toRotationMatrix();
-      const unav_renderer::Frame f = renderer.render(X_WB, "down", 0.1 * k);
+      const unav::renderer::Frame f = renderer.render(X_WB, "down", 0.1 * k);
       cv::Mat rgb(f.height, f.width, CV_8UC3, const_cast<uint8_t*>(f.rgb.data())), gray;
       cv::cvtColor(rgb, gray, cv::COLOR_RGB2GRAY);
       if (k == 0) {
@@ -98,14 +98,15 @@ KltVoOptions monocular() {
 }  // namespace
 
 TEST(KltVo, RgbdTracksARenderedSequenceWithKnownMotion) {
-  unav::scene::World world = unav::scene::load_world(std::string(UNAV_REPO_ROOT) + "/worlds/pipe_inspection/world.yaml");
+  unav::scene::World world =
+      unav::scene::load_world(std::string(UNAV_REPO_ROOT) + "/worlds/pipe_inspection/world.yaml");
   unav::scene::CameraModel cam = unav::scene::CameraModel::from_hfov("down", 320, 180, 90.0 * M_PI / 180.0);
-  unav_renderer::RenderOptions ro;
+  unav::renderer::RenderOptions ro;
   ro.noise = false;
-  ro.marine_snow = false;      // particles move independently of the scene
-  ro.lamps = false;            // the lamp pool moves with the camera: a moving brightness pattern
+  ro.marine_snow = false;  // particles move independently of the scene
+  ro.lamps = false;        // the lamp pool moves with the camera: a moving brightness pattern
   ro.forward_scatter = false;
-  unav_renderer::Renderer renderer(world, {cam}, ro);
+  unav::renderer::Renderer renderer(world, {cam}, ro);
   KltVo vo(cam.K());
   // 60 frames: 3 m north at 5 cm per frame, yawing 0.3 rad in total, sinking 0.3 m.
   const int n = 60;
@@ -117,7 +118,7 @@ TEST(KltVo, RgbdTracksARenderedSequenceWithKnownMotion) {
     Eigen::Isometry3d X_WB = Eigen::Isometry3d::Identity();
     X_WB.translation() = Eigen::Vector3d(-2.0 + 0.05 * k, 1.5, 7.8 + 0.005 * k);
     X_WB.linear() = Eigen::AngleAxisd(0.005 * k, Eigen::Vector3d::UnitZ()).toRotationMatrix();
-    const unav_renderer::Frame f = renderer.render(X_WB, "down", 0.1 * k);
+    const unav::renderer::Frame f = renderer.render(X_WB, "down", 0.1 * k);
     cv::Mat rgb(f.height, f.width, CV_8UC3, const_cast<uint8_t*>(f.rgb.data())), gray;
     cv::cvtColor(rgb, gray, cv::COLOR_RGB2GRAY);
     cv::Mat depth(f.height, f.width, CV_32FC1, const_cast<float*>(f.depth.data()));
@@ -154,7 +155,7 @@ TEST(KltVo, RgbdTracksARenderedSequenceWithKnownMotion) {
 TEST(KltVo, BadInputIsRejectedNotCrashing) {
   Eigen::Matrix3d K;
   K << 100, 0, 50, 0, 100, 40, 0, 0, 1;
-  unav_localization::KltVoOptions bad;
+  unav::localization::KltVoOptions bad;
   bad.min_inliers = 2;
   EXPECT_THROW(KltVo(K, bad), std::invalid_argument);
   EXPECT_THROW(KltVo(Eigen::Matrix3d::Zero()), std::invalid_argument);
@@ -204,11 +205,12 @@ TEST(KltVo, MonocularTracksARenderedSequenceUpToSimilarity) {
   EXPECT_EQ(lost, 0);
   double scale = 0.0, final_error = 0.0;
   const double rmse = aligned_rmse(est, gt, &scale, &final_error), path = path_length(gt);
-  std::printf("KLT monocular VO: %zu poses from frame %d, path %.3f m, Sim(3)-aligned position RMSE %.4f m (%.2f%% of "
-              "the path), final error %.4f m (%.2f%%), scale %.3f m per map unit (median depth of frame 0: %.3f m), "
-              "%.2f ms per frame\n",
-              est.size(), init_frame, path, rmse, 100 * rmse / path, final_error, 100 * final_error / path, scale,
-              seq.median_depth0_m, ms / n);
+  std::printf(
+      "KLT monocular VO: %zu poses from frame %d, path %.3f m, Sim(3)-aligned position RMSE %.4f m (%.2f%% of "
+      "the path), final error %.4f m (%.2f%%), scale %.3f m per map unit (median depth of frame 0: %.3f m), "
+      "%.2f ms per frame\n",
+      est.size(), init_frame, path, rmse, 100 * rmse / path, final_error, 100 * final_error / path, scale,
+      seq.median_depth0_m, ms / n);
   // Bound: 2% of the distance travelled, the figure usually quoted for monocular VO after Sim(3)
   // alignment (the RGB-D test's bound, with the scale given away to the alignment). Seen: 0.19%
   // RMSE, 0.33% at the last frame, initialised at frame 6 from the homography. The error left is
@@ -257,9 +259,10 @@ TEST(KltVo, MonocularRecoversAfterTheTextureIsGone) {
   double scale_before = 0.0, scale_after = 0.0;
   const double rmse_before = aligned_rmse(est_before, gt_before, &scale_before);
   const double rmse_after = aligned_rmse(est_after, gt_after, &scale_after);
-  std::printf("lost at frame %d, tracking again at frame %d; before: RMSE %.4f m, scale %.3f; after: RMSE %.4f m, "
-              "scale %.3f\n",
-              first_lost, recovered, rmse_before, scale_before, rmse_after, scale_after);
+  std::printf(
+      "lost at frame %d, tracking again at frame %d; before: RMSE %.4f m, scale %.3f; after: RMSE %.4f m, "
+      "scale %.3f\n",
+      first_lost, recovered, rmse_before, scale_before, rmse_after, scale_after);
   // The new map keeps the old map's median depth: the camera's altitude changed by 3 cm of 2 m
   // while blind, so the scale should carry over to within a few percent; 10% leaves room for the
   // scale drift of each map (seen: 1.4%; re-initialised at frame 40, tracking at 41).

@@ -3,9 +3,9 @@
 // camera over the pipe-inspection seabed, a straight run and a closed square loop.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <algorithm>
 #include <random>
 #include <set>
 
@@ -15,11 +15,11 @@
 #include "unav_localization/orb_extractor.hpp"
 #include "unav_localization/sim3.hpp"
 #include "unav_localization/slam_optimizer.hpp"
-#include "unav_scene/camera.hpp"
 #include "unav_renderer/renderer.hpp"
+#include "unav_scene/camera.hpp"
 #include "unav_scene/world.hpp"
 
-namespace ul = unav_localization;
+namespace ul = unav::localization;
 
 namespace {
 
@@ -30,7 +30,8 @@ Eigen::Matrix3d Rot(double roll, double pitch, double yaw) {
 }
 
 // Sim(3)-aligned position RMSE of est against gt (same length, paired by index).
-double AlignedRmse(const std::vector<Eigen::Vector3d>& gt, const std::vector<Eigen::Vector3d>& est, double* scale = nullptr) {
+double AlignedRmse(const std::vector<Eigen::Vector3d>& gt, const std::vector<Eigen::Vector3d>& est,
+                   double* scale = nullptr) {
   Eigen::Matrix3Xd a(3, static_cast<long>(est.size())), b(3, static_cast<long>(gt.size()));
   for (size_t i = 0; i < est.size(); ++i) {
     a.col(static_cast<long>(i)) = est[i];
@@ -53,15 +54,16 @@ struct RenderedRun {
 
 // Renders the down camera (640 x 480, 90 deg) along body poses X_WB.
 RenderedRun Render(const std::vector<Eigen::Isometry3d>& X_WB) {
-  unav::scene::World world = unav::scene::load_world(std::string(UNAV_REPO_ROOT) + "/worlds/pipe_inspection/world.yaml");
+  unav::scene::World world =
+      unav::scene::load_world(std::string(UNAV_REPO_ROOT) + "/worlds/pipe_inspection/world.yaml");
   unav::scene::CameraModel cam = unav::scene::CameraModel::from_hfov("down", 640, 480, 90.0 * M_PI / 180.0);
-  unav_renderer::RenderOptions ro;
+  unav::renderer::RenderOptions ro;
   ro.marine_snow = false;  // particles move on their own: not part of the static scene
-  unav_renderer::Renderer renderer(world, {cam}, ro);
+  unav::renderer::Renderer renderer(world, {cam}, ro);
   RenderedRun run;
   run.K = cam.K();
   for (size_t k = 0; k < X_WB.size(); ++k) {
-    const unav_renderer::Frame f = renderer.render(X_WB[k], "down", 0.1 * static_cast<double>(k));
+    const unav::renderer::Frame f = renderer.render(X_WB[k], "down", 0.1 * static_cast<double>(k));
     cv::Mat rgb(f.height, f.width, CV_8UC3, const_cast<uint8_t*>(f.rgb.data())), gray;
     cv::cvtColor(rgb, gray, cv::COLOR_RGB2GRAY);
     run.gray.push_back(gray);
@@ -77,7 +79,8 @@ ul::PinholeCamera Pinhole(const Eigen::Matrix3d& K) { return ul::PinholeCamera::
 double Ape(const ul::MonoSlam& slam, const RenderedRun& run, size_t* n_poses, double* path) {
   std::vector<Eigen::Vector3d> gt, est;
   *path = 0;
-  for (size_t k = 1; k < run.X_WC.size(); ++k) *path += (run.X_WC[k].translation() - run.X_WC[k - 1].translation()).norm();
+  for (size_t k = 1; k < run.X_WC.size(); ++k)
+    *path += (run.X_WC[k].translation() - run.X_WC[k - 1].translation()).norm();
   for (const auto& p : slam.Trajectory()) {
     const size_t k = static_cast<size_t>(std::lround(p.stamp / 0.1));
     gt.push_back(run.X_WC[k].translation());
@@ -131,14 +134,15 @@ TEST(OrbExtractor, SpreadsFeaturesOverWeakTexture) {
     return static_cast<double>(cells.size()) / (15 * 20);
   };
   auto right_share = [](const std::vector<cv::KeyPoint>& k) {
-    return static_cast<double>(std::count_if(k.begin(), k.end(), [](const cv::KeyPoint& p) { return p.pt.x >= 427; })) / k.size();
+    return static_cast<double>(std::count_if(k.begin(), k.end(), [](const cv::KeyPoint& p) { return p.pt.x >= 427; })) /
+           k.size();
   };
   std::vector<cv::KeyPoint> plain, ours;
   cv::ORB::create(1000)->detect(img, plain);
   cv::Mat desc;
   ul::OrbExtractor().Extract(img, &ours, &desc);
-  std::printf("cells covered: plain ORB %.2f, grid %.2f; right third: plain %.2f, grid %.2f\n", coverage(plain), coverage(ours),
-              right_share(plain), right_share(ours));
+  std::printf("cells covered: plain ORB %.2f, grid %.2f; right third: plain %.2f, grid %.2f\n", coverage(plain),
+              coverage(ours), right_share(plain), right_share(ours));
   EXPECT_EQ(desc.rows, static_cast<int>(ours.size()));
   EXPECT_EQ(desc.cols, 32);
   EXPECT_GE(ours.size(), 900u);
@@ -172,7 +176,10 @@ TEST(OrbExtractor, SpreadsFeaturesOverWeakTexture) {
     const cv::Point2f p = k0[static_cast<size_t>(i)].pt;
     const cv::Point2f q(static_cast<float>(R.at<double>(0, 0) * p.x + R.at<double>(0, 1) * p.y + R.at<double>(0, 2)),
                         static_cast<float>(R.at<double>(1, 0) * p.x + R.at<double>(1, 1) * p.y + R.at<double>(1, 2)));
-    correct += cv::norm(q - k1[static_cast<size_t>(bj)].pt) < 3.0 * (1 << std::max(0, k1[static_cast<size_t>(bj)].octave / 2)) ? 1 : 0;
+    correct +=
+        cv::norm(q - k1[static_cast<size_t>(bj)].pt) < 3.0 * (1 << std::max(0, k1[static_cast<size_t>(bj)].octave / 2))
+            ? 1
+            : 0;
   }
   std::printf("rotated 30 deg: %d confident matches, %d at the right place\n", confident, correct);
   EXPECT_GT(confident, 200);
@@ -193,12 +200,14 @@ TEST(PoseGraph, LoopEdgeRemovesAccumulatedDrift) {
     truth[static_cast<size_t>(k)] = ul::Sim3(T_wc.inverse());
   }
   std::vector<ul::PoseGraphEdge> edges;
-  for (int k = 1; k < n; ++k) edges.push_back({k, k - 1, truth[static_cast<size_t>(k)] * truth[static_cast<size_t>(k - 1)].inverse()});
+  for (int k = 1; k < n; ++k)
+    edges.push_back({k, k - 1, truth[static_cast<size_t>(k)] * truth[static_cast<size_t>(k - 1)].inverse()});
   edges.push_back({n - 1, 0, truth[static_cast<size_t>(n - 1)] * truth[0].inverse()});
   // Drifted chain: each relative step is perturbed by 0.01 rad of yaw and 1% of scale.
   guess[0] = truth[0];
   const ul::Sim3 drift(1.01, Rot(0, 0, 0.01), Eigen::Vector3d::Zero());
-  for (int k = 1; k < n; ++k) guess[static_cast<size_t>(k)] = drift * edges[static_cast<size_t>(k - 1)].S_ij * guess[static_cast<size_t>(k - 1)];
+  for (int k = 1; k < n; ++k)
+    guess[static_cast<size_t>(k)] = drift * edges[static_cast<size_t>(k - 1)].S_ij * guess[static_cast<size_t>(k - 1)];
   auto max_err = [&](const std::vector<ul::Sim3>& S) {
     double e = 0;
     for (int k = 0; k < n; ++k)
@@ -245,7 +254,8 @@ const RenderedRun& StraightRun() {
 }
 
 std::shared_ptr<const ul::BowVocabulary> Vocabulary() {
-  return std::make_shared<ul::BowVocabulary>(ul::BowVocabulary::Load(std::string(UNAV_REPO_ROOT) + "/config/vocabulary/orb_vocabulary.bin"));
+  return std::make_shared<ul::BowVocabulary>(
+      ul::BowVocabulary::Load(std::string(UNAV_REPO_ROOT) + "/config/vocabulary/orb_vocabulary.bin"));
 }
 
 TEST(MonoSlam, StraightRunOverTheSeabedWithKnownMotion) {
@@ -261,8 +271,10 @@ TEST(MonoSlam, StraightRunOverTheSeabedWithKnownMotion) {
   double path = 0;
   const double ape = Ape(slam, run, &n, &path);
   const auto st = slam.stats();
-  std::printf("straight run: initialised at frame %d, %zu poses, %d lost, %d keyframes, %d points; APE %.4f m over %.2f m (%.2f%%)\n",
-              first_tracked, n, lost, st.keyframes, st.points, ape, path, 100 * ape / path);
+  std::printf(
+      "straight run: initialised at frame %d, %zu poses, %d lost, %d keyframes, %d points; APE %.4f m over %.2f m "
+      "(%.2f%%)\n",
+      first_tracked, n, lost, st.keyframes, st.points, ape, path, 100 * ape / path);
   EXPECT_GE(first_tracked, 1);
   EXPECT_LE(first_tracked, 15);  // needs parallax: a few frames of 6 cm at 1.4 m
   EXPECT_EQ(lost, 0);
@@ -286,21 +298,24 @@ TEST(MonoSlam, SaysWhenTrackingIsLostAndRelocalises) {
       ++lost_in_gap;
       EXPECT_FALSE(s.message.empty());
     }
-    if (!blank && k > 50 && s.state == ul::SlamState::kRelocalized && relocalized_at < 0) relocalized_at = static_cast<int>(k);
+    if (!blank && k > 50 && s.state == ul::SlamState::kRelocalized && relocalized_at < 0)
+      relocalized_at = static_cast<int>(k);
     if (!blank && k > 55 && relocalized_at >= 0 && s.state == ul::SlamState::kLost) ++lost_after;
   }
   size_t n = 0;
   double path = 0;
   const double ape = Ape(slam, run, &n, &path);
   const auto st = slam.stats();
-  std::printf("blank frames 50-54: %d reported lost, relocalised at frame %d, %d re-initialisations; APE %.4f m over %.2f m, %zu poses\n",
-              lost_in_gap, relocalized_at, st.reinitializations, ape, path, n);
+  std::printf(
+      "blank frames 50-54: %d reported lost, relocalised at frame %d, %d re-initialisations; APE %.4f m over %.2f m, "
+      "%zu poses\n",
+      lost_in_gap, relocalized_at, st.reinitializations, ape, path, n);
   EXPECT_EQ(lost_in_gap, 5);
   EXPECT_EQ(relocalized_at, 55);  // the first image after the gap: 30 cm further, still over mapped seabed
   EXPECT_EQ(lost_after, 0);
   EXPECT_EQ(st.reinitializations, 0);
   EXPECT_EQ(st.loops, 0);  // a straight run has no loop to close (the seabed must not alias)
-  EXPECT_GE(n, 90u);  // every frame but the 5 blank ones and the few before initialisation
+  EXPECT_GE(n, 90u);       // every frame but the 5 blank ones and the few before initialisation
   EXPECT_LT(ape, 0.01 * path);
 }
 
@@ -319,8 +334,8 @@ TEST(MonoSlam, ReinitialisesWhenItCannotRelocalise) {
   }
   const auto traj = slam.Trajectory();
   ASSERT_FALSE(traj.empty());
-  std::printf("re-initialised: %d, tracking after the gap: %d frames, %zu poses, last map %d\n", reinit ? 1 : 0, tracking_after,
-              traj.size(), traj.back().map);
+  std::printf("re-initialised: %d, tracking after the gap: %d frames, %zu poses, last map %d\n", reinit ? 1 : 0,
+              tracking_after, traj.size(), traj.back().map);
   EXPECT_TRUE(reinit);
   EXPECT_EQ(slam.stats().reinitializations, 1);
   EXPECT_EQ(traj.back().map, 1);
@@ -360,8 +375,8 @@ TEST(MonoSlam, ClosesALoopAroundASquare) {
   size_t n = 0;
   double path = 0;
   const double ape = Ape(slam, run, &n, &path);
-  std::printf("square: loop closed at frame %d (%zu frames), %d loops; APE %.4f m over %.2f m, %zu poses\n", loop_frame, run.gray.size(),
-              slam.stats().loops, ape, path, n);
+  std::printf("square: loop closed at frame %d (%zu frames), %d loops; APE %.4f m over %.2f m, %zu poses\n", loop_frame,
+              run.gray.size(), slam.stats().loops, ape, path, n);
   EXPECT_GE(slam.stats().loops, 1);
   EXPECT_GE(loop_frame, 200);  // only once the start area is in view again
   EXPECT_LT(ape, 0.005 * path);

@@ -29,15 +29,15 @@ TEST(OrbSlamNode, TracksRenderedImagesOverDdsAndAcksLockstep) {
   const std::string root = UNAV_REPO_ROOT;
   const auto cams = unav::scene::load_cameras(root + "/config/sensors/bluerov2_down_vslam.yaml");
   const auto world = unav::scene::load_world(root + "/worlds/pipe_inspection/world.yaml");
-  unav_renderer::RenderOptions ro;
+  unav::renderer::RenderOptions ro;
   ro.marine_snow = false;
-  unav_renderer::Renderer renderer(world, cams, ro);
+  unav::renderer::Renderer renderer(world, cams, ro);
 
   const unav::ContextOptions o = unav::testing::test_context_options();
   const std::string p_voc = "vocabulary:=" + root + "/config/vocabulary/orb_vocabulary.bin";
   const char* argv[] = {"orb_slam", "--ros-args", "-p", p_voc.c_str(), "-p", "lockstep:=true"};
   unav::Context node_ctx(6, argv, o);
-  auto node = std::make_unique<unav_localization::OrbSlamNode>(unav::NodeOptions{&node_ctx});
+  auto node = std::make_unique<unav::localization::OrbSlamNode>(unav::NodeOptions{&node_ctx});
   unav::Context test_ctx(o);
   unav::Node probe("probe", {&test_ctx});
   auto info_pub =
@@ -79,7 +79,7 @@ TEST(OrbSlamNode, TracksRenderedImagesOverDdsAndAcksLockstep) {
     Eigen::Isometry3d X_WB = Eigen::Isometry3d::Identity();
     X_WB.translation() = Eigen::Vector3d(-1.0 + 0.06 * k, 0.2 * std::sin(0.1 * k), 8.35);
     X_WB.linear() = Eigen::AngleAxisd(0.05 * std::sin(0.08 * k), Eigen::Vector3d::UnitZ()).toRotationMatrix();
-    const unav_renderer::Frame f = renderer.render(X_WB, "down", 0.1 * k);
+    const unav::renderer::Frame f = renderer.render(X_WB, "down", 0.1 * k);
     const unav::Time t{static_cast<int64_t>(k) * 100000000};
     truth[t.ns] = f.X_WC.translation();
     sensor_msgs::msg::CameraInfo info;
@@ -117,8 +117,8 @@ TEST(OrbSlamNode, TracksRenderedImagesOverDdsAndAcksLockstep) {
     a.col(static_cast<long>(i)) = est[i];
     b.col(static_cast<long>(i)) = gt[i];
   }
-  unav_localization::Sim3 S;
-  ASSERT_TRUE(unav_localization::EstimateSim3(a, b, false, &S));
+  unav::localization::Sim3 S;
+  ASSERT_TRUE(unav::localization::EstimateSim3(a, b, false, &S));
   double se = 0;
   for (size_t i = 0; i < est.size(); ++i) se += (S * est[i] - gt[i]).squaredNorm();
   const double rmse = std::sqrt(se / static_cast<double>(est.size()));

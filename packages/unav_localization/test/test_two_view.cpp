@@ -9,7 +9,7 @@
 
 #include "unav_localization/two_view.hpp"
 
-namespace ul = unav_localization;
+namespace ul = unav::localization;
 
 namespace {
 

@@ -20,16 +20,16 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "unav_evaluation/report.hpp"
-#include "unav_evaluation/trajectory.hpp"
 #include "unav_common/errors.hpp"
 #include "unav_common/resources.hpp"
+#include "unav_evaluation/report.hpp"
+#include "unav_evaluation/trajectory.hpp"
 #include "unav_localization/image_sequence.hpp"
 #include "unav_localization/klt_vo.hpp"
 #include "unav_localization/mono_slam.hpp"
 
-namespace ul = unav_localization;
-namespace ue = unav_evaluation;
+namespace ul = unav::localization;
+namespace ue = unav::evaluation;
 
 namespace {
 
@@ -65,10 +65,13 @@ int main(int argc, char** argv) {
   int features = 1000;
   app.add_option("--images", images, "image folder (TUM RGB-D dataset folder or .png/.jpg files)")->required();
   app.add_option("--camera", camera_path, "camera YAML (dataset camera.yaml or ROS camera_info YAML)")->required();
-  app.add_option("--method", method, "orb_slam | klt_mono | klt_rgbd")->check(CLI::IsMember({"orb_slam", "klt_mono", "klt_rgbd"}));
-  app.add_option("--vocabulary", vocabulary, "bag-of-words vocabulary (default: unav_resources config/vocabulary/orb_vocabulary.bin)");
+  app.add_option("--method", method, "orb_slam | klt_mono | klt_rgbd")
+      ->check(CLI::IsMember({"orb_slam", "klt_mono", "klt_rgbd"}));
+  app.add_option("--vocabulary", vocabulary,
+                 "bag-of-words vocabulary (default: unav_resources config/vocabulary/orb_vocabulary.bin)");
   app.add_option("--output", output, "TUM trajectory to write (default: <method>_trajectory.txt)");
-  app.add_option("--groundtruth", groundtruth, "TUM ground truth of the camera (default: DIR/groundtruth.txt if present)");
+  app.add_option("--groundtruth", groundtruth,
+                 "TUM ground truth of the camera (default: DIR/groundtruth.txt if present)");
   app.add_option("--max-frames", max_frames, "process at most N frames (0: all)")->check(CLI::NonNegativeNumber);
   app.add_option("--fps", fps, "frame rate for images not named by time")->check(CLI::PositiveNumber);
   app.add_flag("--quiet", quiet, "no per-frame lines");
@@ -139,7 +142,8 @@ int main(int argc, char** argv) {
           s = klt->ProcessFrame(gray, &T);
         } else {
           const auto it = depths.lower_bound(im.stamp - 1e-4);
-          if (it == depths.end() || std::abs(it->first - im.stamp) > 1e-3) throw ul::InputError(im.path + ": no depth image with its stamp");
+          if (it == depths.end() || std::abs(it->first - im.stamp) > 1e-3)
+            throw ul::InputError(im.path + ": no depth image with its stamp");
           cv::Mat d16 = cv::imread(it->second, cv::IMREAD_ANYDEPTH), depth;
           if (d16.empty()) throw ul::InputError(it->second + ": cannot be read as a depth image");
           d16.convertTo(depth, CV_32F, 1.0 / depth_scale);
@@ -150,7 +154,8 @@ int main(int argc, char** argv) {
         track_ms.push_back(ms);
         total_ms.push_back(ms);
         if (s.status == ul::VoStatus::kLost) ++lost;
-        if (!quiet && s.status != ul::VoStatus::kTracking) std::printf("%.3f %s %s\n", im.stamp, ul::to_string(s.status), s.message.c_str());
+        if (!quiet && s.status != ul::VoStatus::kTracking)
+          std::printf("%.3f %s %s\n", im.stamp, ul::to_string(s.status), s.message.c_str());
         if (s.status == ul::VoStatus::kTracking || s.status == ul::VoStatus::kInitialized) est.push_back(im.stamp, T);
       }
     }
@@ -164,25 +169,29 @@ int main(int argc, char** argv) {
     double mean_track = 0, mean_total = 0;
     for (double v : track_ms) mean_track += v / static_cast<double>(track_ms.size());
     for (double v : total_ms) mean_total += v / static_cast<double>(total_ms.size());
-    std::printf("%s: %d frames, %zu poses, %d lost; per frame: tracking mean %.2f ms (p50 %.2f, p90 %.2f), with mapping mean %.2f ms (p99 %.1f) -> %.1f frames/s\n",
-                method.c_str(), n, est.size(), lost, mean_track, Percentile(track_ms, 0.5), Percentile(track_ms, 0.9), mean_total,
-                Percentile(total_ms, 0.99), 1000.0 / std::max(mean_total, 1e-9));
+    std::printf(
+        "%s: %d frames, %zu poses, %d lost; per frame: tracking mean %.2f ms (p50 %.2f, p90 %.2f), with mapping mean "
+        "%.2f ms (p99 %.1f) -> %.1f frames/s\n",
+        method.c_str(), n, est.size(), lost, mean_track, Percentile(track_ms, 0.5), Percentile(track_ms, 0.9),
+        mean_total, Percentile(total_ms, 0.99), 1000.0 / std::max(mean_total, 1e-9));
     if (slam) {
       const auto st = slam->stats();
-      std::printf("orb_slam: %d keyframes, %d points, %d loops closed, %d relocalisations, %d re-initialisations\n", st.keyframes, st.points,
-                  st.loops, st.relocalizations, st.reinitializations);
+      std::printf("orb_slam: %d keyframes, %d points, %d loops closed, %d relocalisations, %d re-initialisations\n",
+                  st.keyframes, st.points, st.loops, st.relocalizations, st.reinitializations);
     }
     std::printf("trajectory: %s\n", output.c_str());
-    if (groundtruth.empty() && std::filesystem::exists(images + "/groundtruth.txt")) groundtruth = images + "/groundtruth.txt";
+    if (groundtruth.empty() && std::filesystem::exists(images + "/groundtruth.txt"))
+      groundtruth = images + "/groundtruth.txt";
     if (!groundtruth.empty()) {
       const ue::Trajectory gt = ue::read_tum(groundtruth);
       const auto align = method == "klt_rgbd" ? ue::Alignment::kSE3 : ue::Alignment::kSim3;
       const auto r = ue::evaluate(gt, est, "sequence", method, align);
-      std::printf("APE (%s-aligned, %zu poses, scale %.4f): rmse %.4f m, mean %.4f m, max %.4f m; rotation rmse %.4f rad\n",
-                  align == ue::Alignment::kSE3 ? "SE(3)" : "Sim(3)", r.poses, r.scale, r.ape_m.rmse, r.ape_m.mean, r.ape_m.max,
-                  r.ape_rad.rmse);
-      std::printf("RPE (1 frame): rmse %.4f m, rotation rmse %.5f rad; ground-truth path %.2f m\n", r.rpe_m.rmse, r.rpe_rad.rmse,
-                  gt.path_length());
+      std::printf(
+          "APE (%s-aligned, %zu poses, scale %.4f): rmse %.4f m, mean %.4f m, max %.4f m; rotation rmse %.4f rad\n",
+          align == ue::Alignment::kSE3 ? "SE(3)" : "Sim(3)", r.poses, r.scale, r.ape_m.rmse, r.ape_m.mean, r.ape_m.max,
+          r.ape_rad.rmse);
+      std::printf("RPE (1 frame): rmse %.4f m, rotation rmse %.5f rad; ground-truth path %.2f m\n", r.rpe_m.rmse,
+                  r.rpe_rad.rmse, gt.path_length());
     }
   } catch (const ul::InputError& e) {
     std::fprintf(stderr, "unav_localize: %s\n", e.what());

@@ -1,4 +1,4 @@
-// unav_train_vocabulary: trains a bag-of-binary-words vocabulary (unav_localization::BowVocabulary)
+// unav_train_vocabulary: trains a bag-of-binary-words vocabulary (unav::localization::BowVocabulary)
 // on ORB features of the png/jpg images in one or more directories and saves it.
 //
 //   unav_train_vocabulary --images DIR [--images DIR2 ...] --out FILE [--features 1000]
@@ -25,7 +25,7 @@
 #include "unav_localization/orb_extractor.hpp"
 
 namespace fs = std::filesystem;
-namespace ul = unav_localization;
+namespace ul = unav::localization;
 
 namespace {
 
@@ -93,9 +93,9 @@ int Run(const std::vector<std::string>& dirs, const std::string& out, int featur
   std::fflush(stdout);
   const auto t_extract = std::chrono::steady_clock::now();
   // The SLAM's own extractor (grid-spread ORB), so the words describe the features it matches.
-  unav_localization::OrbOptions orb_options;
+  unav::localization::OrbOptions orb_options;
   orb_options.features = features;
-  const unav_localization::OrbExtractor orb(orb_options);
+  const unav::localization::OrbExtractor orb(orb_options);
   std::vector<cv::Mat> descriptors;
   size_t total = 0, skipped = 0;
   for (const fs::path& p : images) {
@@ -118,14 +118,13 @@ int Run(const std::vector<std::string>& dirs, const std::string& out, int featur
     return 1;
   }
   std::printf("%s: %zu images (%zu skipped), %zu descriptors (%.1f per image), extraction %.2f s\n", kName,
-              descriptors.size(), skipped, total, static_cast<double>(total) / descriptors.size(),
-              Seconds(t_extract));
+              descriptors.size(), skipped, total, static_cast<double>(total) / descriptors.size(), Seconds(t_extract));
   std::fflush(stdout);
 
   const auto t_train = std::chrono::steady_clock::now();
   const ul::BowVocabulary voc = ul::BowVocabulary::Train(descriptors, options);
-  std::printf("%s: trained k = %d, L = %d: %zu words in %.2f s\n", kName, options.branching, options.levels,
-              voc.size(), Seconds(t_train));
+  std::printf("%s: trained k = %d, L = %d: %zu words in %.2f s\n", kName, options.branching, options.levels, voc.size(),
+              Seconds(t_train));
   voc.Save(out);
   std::printf("%s: wrote %s (%ju bytes)\n", kName, out.c_str(), static_cast<uintmax_t>(fs::file_size(out, ec)));
   return 0;
@@ -143,7 +142,8 @@ int main(int argc, char** argv) {
   app.add_option("--images", dirs, "directory of training images (repeatable; not recursive, sorted by name)")
       ->required();
   app.add_option("--out", out, "vocabulary file to write")->required();
-  app.add_option("--features", features, "ORB features per image (the SLAM's extractor: grid-spread, scale 1.2, 8 levels)");
+  app.add_option("--features", features,
+                 "ORB features per image (the SLAM's extractor: grid-spread, scale 1.2, 8 levels)");
   app.add_option("--branching", options.branching, "children per tree node, k");
   app.add_option("--levels", options.levels, "tree depth, L (up to k^L words)");
   app.add_option("--max-images", max_images, "use at most N images, evenly spaced over the sorted list (0: all)");

@@ -9,10 +9,10 @@
 #include <string>
 #include <vector>
 
-#include "unav_renderer/renderer.hpp"
 #include "unav_common/resources.hpp"
+#include "unav_renderer/renderer.hpp"
 
-using namespace unav_renderer;
+using namespace unav::renderer;
 using Clock = std::chrono::steady_clock;
 
 namespace {
@@ -27,7 +27,7 @@ struct Result {
 };
 
 Result measure(Renderer& r, const std::string& cam, int frames) {
-  for (int i = 0; i < 3; ++i) r.render(pose_at(i), cam, 0.0);   // warm-up (shader JIT)
+  for (int i = 0; i < 3; ++i) r.render(pose_at(i), cam, 0.0);  // warm-up (shader JIT)
   std::vector<double> ms;
   const auto t0 = Clock::now();
   for (int i = 0; i < frames; ++i) {
@@ -54,8 +54,7 @@ Result measure(Renderer& r, const std::string& cam, int frames) {
 
 int main(int argc, char** argv) {
   const int frames = argc > 1 ? std::atoi(argv[1]) : 40;
-  const std::string world_path =
-      argc > 2 ? argv[2] : unav::common::find_resource("worlds/pipe_inspection/world.yaml");
+  const std::string world_path = argc > 2 ? argv[2] : unav::common::find_resource("worlds/pipe_inspection/world.yaml");
   World world = load_world(world_path);
   CameraModel small = CameraModel::from_hfov("w320x180", 320, 180, 90.0 * M_PI / 180.0);
   small.X_BC.linear() = rotation_from_rpy(0, -M_PI / 2, 0) * R_camera_body_to_optical();
@@ -67,8 +66,8 @@ int main(int argc, char** argv) {
   RenderOptions opt;
   Renderer r(world, {small, vga, vga_dist}, opt);
   std::printf("unav_renderer bench: %s via %s, GL %s, %zu triangles, %d frames each\n",
-              r.context().gl_renderer().c_str(), r.context().platform().c_str(),
-              r.context().gl_version().c_str(), r.triangle_count(), frames);
+              r.context().gl_renderer().c_str(), r.context().platform().c_str(), r.context().gl_version().c_str(),
+              r.triangle_count(), frames);
   std::printf("%-34s %-20s %10s %10s %12s\n", "configuration", "camera", "fps sync", "fps pipe", "median ms");
   struct Config {
     const char* name;
@@ -89,8 +88,7 @@ int main(int argc, char** argv) {
     for (const char* cam : {"w320x180", "w640x480", "w640x480_distorted"}) {
       if (c.name != configs.front().name && std::string(cam) == "w640x480_distorted") continue;
       const Result res = measure(r, cam, frames);
-      std::printf("%-34s %-20s %10.1f %10.1f %12.2f\n", c.name, cam, res.fps_sync, res.fps_pipelined,
-                  res.median_ms);
+      std::printf("%-34s %-20s %10.1f %10.1f %12.2f\n", c.name, cam, res.fps_sync, res.fps_pipelined, res.median_ms);
     }
   }
   // Where the time goes (glFinish after each pass; default options).

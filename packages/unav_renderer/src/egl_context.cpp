@@ -11,22 +11,33 @@
 
 #include "unav_renderer/errors.hpp"
 
-namespace unav_renderer {
+namespace unav::renderer {
 namespace {
 
 std::string egl_error_name(EGLint e) {
   switch (e) {
-    case EGL_SUCCESS: return "EGL_SUCCESS";
-    case EGL_NOT_INITIALIZED: return "EGL_NOT_INITIALIZED";
-    case EGL_BAD_ACCESS: return "EGL_BAD_ACCESS";
-    case EGL_BAD_ALLOC: return "EGL_BAD_ALLOC";
-    case EGL_BAD_ATTRIBUTE: return "EGL_BAD_ATTRIBUTE";
-    case EGL_BAD_CONFIG: return "EGL_BAD_CONFIG";
-    case EGL_BAD_CONTEXT: return "EGL_BAD_CONTEXT";
-    case EGL_BAD_DISPLAY: return "EGL_BAD_DISPLAY";
-    case EGL_BAD_MATCH: return "EGL_BAD_MATCH";
-    case EGL_BAD_PARAMETER: return "EGL_BAD_PARAMETER";
-    default: return "EGL error 0x" + std::to_string(e);
+    case EGL_SUCCESS:
+      return "EGL_SUCCESS";
+    case EGL_NOT_INITIALIZED:
+      return "EGL_NOT_INITIALIZED";
+    case EGL_BAD_ACCESS:
+      return "EGL_BAD_ACCESS";
+    case EGL_BAD_ALLOC:
+      return "EGL_BAD_ALLOC";
+    case EGL_BAD_ATTRIBUTE:
+      return "EGL_BAD_ATTRIBUTE";
+    case EGL_BAD_CONFIG:
+      return "EGL_BAD_CONFIG";
+    case EGL_BAD_CONTEXT:
+      return "EGL_BAD_CONTEXT";
+    case EGL_BAD_DISPLAY:
+      return "EGL_BAD_DISPLAY";
+    case EGL_BAD_MATCH:
+      return "EGL_BAD_MATCH";
+    case EGL_BAD_PARAMETER:
+      return "EGL_BAD_PARAMETER";
+    default:
+      return "EGL error 0x" + std::to_string(e);
   }
 }
 
@@ -85,17 +96,16 @@ bool try_display(EGLDisplay dpy, const std::string& label, Attempt* out, std::st
   EGLConfig cfg = nullptr;
   EGLint ncfg = 0;
   const EGLint cfg_attr[] = {EGL_RENDERABLE_TYPE, EGL_OPENGL_BIT, EGL_NONE};
-  if (!has_ext(dext, "EGL_KHR_no_config_context") &&
-      (!eglChooseConfig(dpy, cfg_attr, &cfg, 1, &ncfg) || ncfg < 1)) {
+  if (!has_ext(dext, "EGL_KHR_no_config_context") && (!eglChooseConfig(dpy, cfg_attr, &cfg, 1, &ncfg) || ncfg < 1)) {
     *why += label + ": no OpenGL-renderable EGL config; ";
     release_display(dpy);
     return false;
   }
   const int versions[][2] = {{4, 5}, {4, 3}, {4, 1}, {3, 3}};
   for (const auto& v : versions) {
-    const EGLint ctx_attr[] = {EGL_CONTEXT_MAJOR_VERSION, v[0], EGL_CONTEXT_MINOR_VERSION, v[1],
-                               EGL_CONTEXT_OPENGL_PROFILE_MASK,
-                               EGL_CONTEXT_OPENGL_CORE_PROFILE_BIT, EGL_NONE};
+    const EGLint ctx_attr[] = {
+        EGL_CONTEXT_MAJOR_VERSION,           v[0],    EGL_CONTEXT_MINOR_VERSION, v[1], EGL_CONTEXT_OPENGL_PROFILE_MASK,
+        EGL_CONTEXT_OPENGL_CORE_PROFILE_BIT, EGL_NONE};
     EGLContext ctx = eglCreateContext(dpy, ncfg ? cfg : EGL_NO_CONFIG_KHR, EGL_NO_CONTEXT, ctx_attr);
     if (ctx == EGL_NO_CONTEXT) continue;
     if (!eglMakeCurrent(dpy, EGL_NO_SURFACE, EGL_NO_SURFACE, ctx)) {
@@ -137,7 +147,8 @@ std::unique_ptr<EglContext> EglContext::create(const EglOptions& options) {
       if (device_index >= 0 && device_index >= n)
         throw EglError("EGL device " + std::to_string(device_index) +
                        " requested (EglOptions::device_index or UNAV_EGL_DEVICE) but "
-                       "eglQueryDevicesEXT found " + std::to_string(n) + " device(s)");
+                       "eglQueryDevicesEXT found " +
+                       std::to_string(n) + " device(s)");
       if (n == 0) why += "device platform: eglQueryDevicesEXT found no EGL device; ";
       for (EGLint i = 0; i < n && !a.context; ++i) {
         if (device_index >= 0 && i != device_index) continue;
@@ -172,8 +183,7 @@ std::unique_ptr<EglContext> EglContext::create(const EglOptions& options) {
   ctx->renderer_ = str(GL_RENDERER);
   ctx->version_ = str(GL_VERSION);
   if (epoxy_gl_version() < 33)
-    throw EglError("OpenGL " + ctx->version_ + " on " + ctx->renderer_ + " (" + platform +
-                   "): need 3.3 core or newer");
+    throw EglError("OpenGL " + ctx->version_ + " on " + ctx->renderer_ + " (" + platform + "): need 3.3 core or newer");
   return ctx;
 }
 
@@ -191,4 +201,4 @@ void EglContext::make_current() {
     throw EglError("eglMakeCurrent failed (" + egl_error_name(eglGetError()) + ")");
 }
 
-}  // namespace unav_renderer
+}  // namespace unav::renderer

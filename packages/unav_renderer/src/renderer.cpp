@@ -20,7 +20,7 @@
 #include "unav_scene/noise.hpp"
 #include "unav_scene/scene_geometry.hpp"
 
-namespace unav_renderer {
+namespace unav::renderer {
 namespace {
 
 using Clock = std::chrono::steady_clock;
@@ -868,4 +868,4 @@ std::vector<std::uint8_t> read_png_rgb(const std::string& path, int* width, int*
   return std::vector<std::uint8_t>(rgb.data, rgb.data + rgb.total() * 3);
 }
 
-}  // namespace unav_renderer
+}  // namespace unav::renderer

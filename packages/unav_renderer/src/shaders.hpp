@@ -2,7 +2,7 @@
 // z forward). Radiometry in linear "display units" (E0 = 1 gives white on an albedo-1 surface).
 #pragma once
 
-namespace unav_renderer::detail {
+namespace unav::renderer::detail {
 
 // ---------------------------------------------------------------- scene pass (geometry)
 inline constexpr const char* kSceneVS = R"GLSL(
@@ -365,4 +365,4 @@ out vec4 o;
 void main() { o = vec4(0.25, 0.5, 0.75, 1.0); }
 )GLSL";
 
-}  // namespace unav_renderer::detail
+}  // namespace unav::renderer::detail

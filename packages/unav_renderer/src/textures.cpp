@@ -3,10 +3,10 @@
 #include <algorithm>
 #include <cmath>
 
-#include "unav_scene/noise.hpp"
 #include "unav_renderer/errors.hpp"
+#include "unav_scene/noise.hpp"
 
-namespace unav_renderer::detail {
+namespace unav::renderer::detail {
 namespace {
 
 using namespace unav::scene::noise;
@@ -34,14 +34,16 @@ C3 sand(double u, double v) {
   base = mul(base, shade * (0.90 + 0.20 * grain));
   // Shell fragments and dark grains.
   const double speck = lattice(static_cast<int>(u * 512), static_cast<int>(v * 512), 3, 99);
-  if (speck > 0.996) base = C3{0.95, 0.93, 0.88};
-  else if (speck < 0.006) base = mul(base, 0.45);
+  if (speck > 0.996)
+    base = C3{0.95, 0.93, 0.88};
+  else if (speck < 0.006)
+    base = mul(base, 0.45);
   return base;
 }
 
 C3 rock(double u, double v) {
   const double f = fbm2(u * 8, v * 8, 31, 5, 8);
-  const double ridge = 1.0 - std::abs(2.0 * fbm2(u * 6, v * 6, 37, 3, 6) - 1.0);   // cracks
+  const double ridge = 1.0 - std::abs(2.0 * fbm2(u * 6, v * 6, 37, 3, 6) - 1.0);  // cracks
   C3 base = mix(C3{0.55, 0.52, 0.47}, C3{0.75, 0.71, 0.64}, f);
   base = mul(base, 0.65 + 0.35 * (1.0 - std::pow(ridge, 8.0)));
   const double algae = fbm2(u * 4 + 3, v * 4 + 7, 41, 4, 4);
@@ -77,11 +79,16 @@ C3 checker(double u, double v) {
 std::vector<std::uint8_t> make_texture(const std::string& name, int size) {
   if (name == "none") return {255, 255, 255};
   C3 (*fn)(double, double) = nullptr;
-  if (name == "sand") fn = sand;
-  else if (name == "rock") fn = rock;
-  else if (name == "pipe_coating") fn = pipe_coating;
-  else if (name == "checker") fn = checker;
-  else throw ConfigError("unknown procedural texture '" + name + "'");
+  if (name == "sand")
+    fn = sand;
+  else if (name == "rock")
+    fn = rock;
+  else if (name == "pipe_coating")
+    fn = pipe_coating;
+  else if (name == "checker")
+    fn = checker;
+  else
+    throw ConfigError("unknown procedural texture '" + name + "'");
   std::vector<std::uint8_t> px(static_cast<std::size_t>(size) * size * 3);
   for (int j = 0; j < size; ++j)
     for (int i = 0; i < size; ++i) {
@@ -94,4 +101,4 @@ std::vector<std::uint8_t> make_texture(const std::string& name, int size) {
   return px;
 }
 
-}  // namespace unav_renderer::detail
+}  // namespace unav::renderer::detail

@@ -5,9 +5,9 @@
 #include <string>
 #include <vector>
 
-namespace unav_renderer::detail {
+namespace unav::renderer::detail {
 
 /// name: none (white), sand, rock, pipe_coating, checker. Throws ConfigError for others.
 std::vector<std::uint8_t> make_texture(const std::string& name, int size);
 
-}  // namespace unav_renderer::detail
+}  // namespace unav::renderer::detail

@@ -9,7 +9,7 @@
 #include "unav_scene/water.hpp"
 #include "unav_scene/world.hpp"
 
-namespace unav_renderer {
+namespace unav::renderer {
 namespace {
 
 // Installed data file (config/, worlds/), or "" when unav_resources is not installed.
@@ -155,4 +155,4 @@ void UnderwaterRendererNode::render_and_publish(const Pose& X_WB, const std_msgs
   ++frames_;
 }
 
-}  // namespace unav_renderer
+}  // namespace unav::renderer

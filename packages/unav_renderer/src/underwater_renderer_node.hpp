@@ -29,7 +29,7 @@
 #include "unav_runtime/lockstep_ack.hpp"
 #include "unav_runtime/runtime.hpp"
 
-namespace unav_renderer {
+namespace unav::renderer {
 
 /// The underwater_renderer's parameters (params file or `-p name:=value`; `--help` lists them).
 struct UnderwaterRendererParams {
@@ -98,4 +98,4 @@ class UnderwaterRendererNode : public unav::Node {
   std::shared_ptr<unav::Publisher<tf2_msgs::msg::TFMessage>> tf_static_pub_;
 };
 
-}  // namespace unav_renderer
+}  // namespace unav::renderer

@@ -10,7 +10,7 @@
 
 #include "unav_renderer/renderer.hpp"
 
-using namespace unav_renderer;
+using namespace unav::renderer;
 
 namespace {
 
@@ -67,7 +67,8 @@ TEST(Golden, PipeInspectionFrontAndDownInTwoWaters) {
   Renderer r(world, {front, down}, o);
   // Above the first leg, 2 m over the seabed, looking along the pipe towards the turns.
   const Pose X_WB = pose_from_xyz_rpy({3.0, 0.2, 8.0}, {0, 0, 0.1});
-  for (const Case& c : {Case{"pipe_front_jerlov_IB", "front", "jerlov_IB"}, Case{"pipe_down_jerlov_IB", "down", "jerlov_IB"},
-                        Case{"pipe_front_jerlov_5C", "front", "jerlov_5C"}, Case{"pipe_down_jerlov_5C", "down", "jerlov_5C"}})
+  for (const Case& c :
+       {Case{"pipe_front_jerlov_IB", "front", "jerlov_IB"}, Case{"pipe_down_jerlov_IB", "down", "jerlov_IB"},
+        Case{"pipe_front_jerlov_5C", "front", "jerlov_5C"}, Case{"pipe_down_jerlov_5C", "down", "jerlov_5C"}})
     check_golden(r, c, X_WB);
 }

@@ -8,7 +8,7 @@
 #include "unav_renderer/errors.hpp"
 #include "unav_renderer/renderer.hpp"
 
-using namespace unav_renderer;
+using namespace unav::renderer;
 
 namespace {
 
@@ -109,7 +109,7 @@ TEST(Render, DepthOfPlaneAtKnownDistance) {
   up.name = "up";
   up.X_BC.linear() = rotation_from_rpy(0, M_PI / 2, 0) * R_camera_body_to_optical();
   Renderer r2(w, {up}, exact_options());
-  const Frame f = r2.render(body_at({30.0, 0, 12.0}), "up");   // beyond the plane edge
+  const Frame f = r2.render(body_at({30.0, 0, 12.0}), "up");  // beyond the plane edge
   for (std::size_t i = 0; i < f.depth.size(); ++i) {
     ASSERT_TRUE(std::isinf(f.depth[i]));
     ASSERT_EQ(f.seg[i], 0);
@@ -122,7 +122,7 @@ TEST(Render, PointLandsOnPixelPredictedByK) {
   // square whose centroid is the projection of its centre; the centroid of its pixels is
   // within 0.5 px (rasterisation of a ~16 px square).
   World w = empty_world();
-  const Eigen::Vector3d target_W(6.0, 0.8, -0.5);   // 6 m ahead, right and up of the axis
+  const Eigen::Vector3d target_W(6.0, 0.8, -0.5);  // 6 m ahead, right and up of the axis
   w.objects.push_back(plane(target_W, {0, M_PI / 2, 0}, 0.25, SegClass::kOther));
   Renderer r(w, {front_camera(160, 120, 380.0, 372.0, 83.3, 57.6)}, exact_options());
   const Frame f = r.render(Pose::Identity(), "front");
@@ -257,18 +257,18 @@ TEST(Render, SegmentationIdsMatchGeometry) {
   w.objects.push_back(box);
   CameraModel down = down_camera(160, 120, 90.0);
   CameraModel front = front_camera(80, 60, 60, 60, 39.5, 29.5);
-  front.X_BC.linear() = rotation_from_rpy(0, 0.2, 0) * R_camera_body_to_optical();   // tilted up 11.5 deg
+  front.X_BC.linear() = rotation_from_rpy(0, 0.2, 0) * R_camera_body_to_optical();  // tilted up 11.5 deg
   Renderer r(w, {down, front}, exact_options());
   const Frame f = r.render(body_at({3.0, 0.0, 7.0}), "down");
-  EXPECT_EQ(seg_at(f, project(f, {3.0, 0.0, 9.55})), 2);    // pipe top
+  EXPECT_EQ(seg_at(f, project(f, {3.0, 0.0, 9.55})), 2);  // pipe top
   EXPECT_EQ(seg_at(f, project(f, {2.0, 0.0, 9.55})), 2);
-  EXPECT_EQ(seg_at(f, project(f, {3.0, 1.6, 9.6})), 3);     // rock top
-  EXPECT_EQ(seg_at(f, project(f, {3.0, -1.6, 9.5})), 4);    // box top
-  EXPECT_EQ(seg_at(f, project(f, {4.5, 0.9, 10.0})), 1);    // sand
+  EXPECT_EQ(seg_at(f, project(f, {3.0, 1.6, 9.6})), 3);   // rock top
+  EXPECT_EQ(seg_at(f, project(f, {3.0, -1.6, 9.5})), 4);  // box top
+  EXPECT_EQ(seg_at(f, project(f, {4.5, 0.9, 10.0})), 1);  // sand
   EXPECT_EQ(seg_at(f, project(f, {1.5, -0.8, 10.0})), 1);
   const Frame g = r.render(body_at({3.0, 0.0, 7.0}), "front");
-  for (int u = 0; u < g.width; ++u) EXPECT_EQ(g.seg[u], 0) << u;   // top row: open water
-  EXPECT_EQ(g.seg[(g.height - 1) * g.width + g.width / 2], 1);     // bottom row: seabed ahead
+  for (int u = 0; u < g.width; ++u) EXPECT_EQ(g.seg[u], 0) << u;  // top row: open water
+  EXPECT_EQ(g.seg[(g.height - 1) * g.width + g.width / 2], 1);    // bottom row: seabed ahead
 }
 
 TEST(Render, AsyncReadbackReturnsFramesInOrderAndMatchesSync) {

@@ -4,10 +4,10 @@
 #include <cmath>
 #include <fstream>
 
-#include "underwater_renderer_node.hpp"
 #include "unav_runtime/conversions.hpp"
 #include "unav_runtime/testing.hpp"
 #include "unav_scene/camera.hpp"
+#include "underwater_renderer_node.hpp"
 
 using namespace std::chrono_literals;
 using unav::testing::make_link;
@@ -27,19 +27,22 @@ std::string small_cameras() {
 TEST(UnderwaterRendererNode, PublishesImagesStampedWithThePoseTimeAndAcks) {
   const std::string world = std::string("world:=") + UNAV_REPO_ROOT + "/worlds/pipe_inspection/world.yaml";
   const std::string cams = "cameras_config:=" + small_cameras();
-  const char* argv[] = {"underwater_renderer", "--ros-args", "-p", world.c_str(), "-p", cams.c_str(),
-                        "-p", "lockstep:=true", "-p", "rate:=10.0", "-p", "noise:=false"};
+  const char* argv[] = {
+      "underwater_renderer", "--ros-args", "-p",         world.c_str(), "-p",          cams.c_str(), "-p",
+      "lockstep:=true",      "-p",         "rate:=10.0", "-p",          "noise:=false"};
   unav::Context node_ctx(12, argv, unav::testing::test_context_options());
-  unav_renderer::UnderwaterRendererNode node({&node_ctx});
+  unav::renderer::UnderwaterRendererNode node({&node_ctx});
   unav::Context test_ctx(unav::testing::test_context_options());
   unav::Node probe("probe", {&test_ctx});
   auto odom_pub = probe.create_publisher<nav_msgs::msg::Odometry>("/rov/ground_truth/odom", unav::QoS::reliable());
   std::vector<sensor_msgs::msg::Image> images, depths, segs;
   std::vector<double> acks;
   auto img_sub = probe.create_subscription<sensor_msgs::msg::Image>(
-      "/rov/camera/down/image_raw", unav::QoS::reliable(), [&](const sensor_msgs::msg::Image& m) { images.push_back(m); });
+      "/rov/camera/down/image_raw", unav::QoS::reliable(),
+      [&](const sensor_msgs::msg::Image& m) { images.push_back(m); });
   auto depth_sub = probe.create_subscription<sensor_msgs::msg::Image>(
-      "/rov/camera/down/depth/image_raw", unav::QoS::reliable(), [&](const sensor_msgs::msg::Image& m) { depths.push_back(m); });
+      "/rov/camera/down/depth/image_raw", unav::QoS::reliable(),
+      [&](const sensor_msgs::msg::Image& m) { depths.push_back(m); });
   auto seg_sub = probe.create_subscription<sensor_msgs::msg::Image>(
       "/rov/camera/down/segmentation/image_raw", unav::QoS::reliable(),
       [&](const sensor_msgs::msg::Image& m) { segs.push_back(m); });
@@ -72,15 +75,18 @@ TEST(UnderwaterRendererNode, PublishesImagesStampedWithThePoseTimeAndAcks) {
   send(1.5);   // a frame is due (first odometry)
   send(1.55);  // not due at 10 Hz: ack only
   send(1.6);   // due
-  ASSERT_TRUE(spin_until([&] { return acks.size() == 3 && images.size() == 2 && depths.size() == 2 && segs.size() == 2; }))
-      << acks.size() << " acks, " << images.size() << " images";
+  ASSERT_TRUE(spin_until([&] {
+    return acks.size() == 3 && images.size() == 2 && depths.size() == 2 && segs.size() == 2;
+  })) << acks.size()
+      << " acks, " << images.size() << " images";
   const auto& img = images[0];
   EXPECT_EQ(unav::Time::from_msg(img.header().stamp().sec(), img.header().stamp().nanosec()).seconds(), 1.5);
   EXPECT_EQ(img.header().frame_id(), "down_optical");
   EXPECT_EQ(img.encoding(), "rgb8");
   EXPECT_EQ(img.width(), 80u);
   EXPECT_EQ(img.data().size(), 80u * 48u * 3u);
-  EXPECT_NEAR(unav::Time::from_msg(images[1].header().stamp().sec(), images[1].header().stamp().nanosec()).seconds(), 1.6, 1e-9);
+  EXPECT_NEAR(unav::Time::from_msg(images[1].header().stamp().sec(), images[1].header().stamp().nanosec()).seconds(),
+              1.6, 1e-9);
   EXPECT_EQ(acks, (std::vector<double>{1.5, 1.55, 1.6}));
   // Depth at the image centre, looking straight down from 8 m over a 10 m seabed: the optical
   // axis meets sand (or the pipe top, radius <= 0.5 m) between 1.4 and 2.05 m away.
@@ -103,7 +109,7 @@ TEST(UnderwaterRendererNode, PublishesCameraMountsOnTfStaticForLateJoiners) {
   const std::string cams = "cameras_config:=" + cams_path;
   const char* argv[] = {"underwater_renderer", "--ros-args", "-p", world.c_str(), "-p", cams.c_str()};
   unav::Context node_ctx(6, argv, unav::testing::test_context_options());
-  unav_renderer::UnderwaterRendererNode node({&node_ctx});
+  unav::renderer::UnderwaterRendererNode node({&node_ctx});
   unav::Context test_ctx(unav::testing::test_context_options());
   unav::Node probe("probe", {&test_ctx});
   std::vector<tf2_msgs::msg::TFMessage> got;

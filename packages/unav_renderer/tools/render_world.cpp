@@ -8,7 +8,7 @@
 
 #include "unav_renderer/renderer.hpp"
 
-using namespace unav_renderer;
+using namespace unav::renderer;
 
 int main(int argc, char** argv) {
   if (argc < 4) {
@@ -43,8 +43,8 @@ int main(int argc, char** argv) {
       }
     }
     Renderer r(world, cams, opt);
-    std::cout << "GL: " << r.context().gl_renderer() << " via " << r.context().platform()
-              << ", triangles " << r.triangle_count() << "\n";
+    std::cout << "GL: " << r.context().gl_renderer() << " via " << r.context().platform() << ", triangles "
+              << r.triangle_count() << "\n";
     const Pose X_WB = pose_from_xyz_rpy(pose.head<3>(), {0.0, 0.0, pose[3] * M_PI / 180.0});
     for (const auto& name : r.camera_names()) {
       if (!only.empty() && name != only) continue;

@@ -77,14 +77,14 @@ EpisodeSetup load_episode_setup(const EpisodeParams& params) {
   return s;
 }
 
-Episode::Episode(EpisodeSetup setup, World world, std::shared_ptr<unav_renderer::EglContext> context)
+Episode::Episode(EpisodeSetup setup, World world, std::shared_ptr<unav::renderer::EglContext> context)
     : setup_(std::move(setup)) {
   sim_ = std::make_unique<physics::Simulator>(setup_.plant, setup_.simulator);
   control::MpcOptions mo = setup_.mpc.options;
   mpc_ = std::make_unique<control::Mpc>(setup_.mpc.model, mo, setup_.simulator.environment);
   allocator_ = std::make_unique<control::Allocator>(control::make_allocator(setup_.allocator));
   renderer_ =
-      std::make_unique<unav_renderer::Renderer>(std::move(world), setup_.cameras, setup_.render, std::move(context));
+      std::make_unique<unav::renderer::Renderer>(std::move(world), setup_.cameras, setup_.render, std::move(context));
   substeps_ = static_cast<int>(std::lround(setup_.params.control_period / setup_.params.physics_dt));
   reset(0, RigidBodyState{});
 }
@@ -99,7 +99,7 @@ void Episode::reset(std::uint64_t seed, const RigidBodyState& initial, const Wor
   sim_->reset(initial);
   time_offset_ = 0.0;
   mpc_->Reset();
-  unav_renderer::RenderOptions ro = renderer_->options();
+  unav::renderer::RenderOptions ro = renderer_->options();
   ro.seed = mix(seed);
   renderer_->set_options(ro);
   renderer_->set_next_sequence(0);

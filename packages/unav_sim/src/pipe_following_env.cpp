@@ -88,7 +88,7 @@ void apply_override(PipeFollowingConfig* config, const std::string& key, const s
   *config = std::move(c);
 }
 
-PipeFollowingEnv::PipeFollowingEnv(PipeFollowingConfig config, std::shared_ptr<unav_renderer::EglContext> context)
+PipeFollowingEnv::PipeFollowingEnv(PipeFollowingConfig config, std::shared_ptr<unav::renderer::EglContext> context)
     : config_(std::move(config)) {
   unav::common::Validate(config_.env, "env");
   config_.scenes.validate("pipe_scenes");
@@ -243,7 +243,7 @@ VectorPipeFollowingEnv::VectorPipeFollowingEnv(const PipeFollowingConfig& config
   if (num_threads < 0) throw ConfigError("vector env", "num_threads", std::to_string(num_threads), "must be >= 0");
   threads_ = num_threads > 0 ? num_threads : std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
   threads_ = std::min(threads_, num_envs);
-  std::shared_ptr<unav_renderer::EglContext> ctx;
+  std::shared_ptr<unav::renderer::EglContext> ctx;
   for (int i = 0; i < num_envs; ++i) {
     envs_.push_back(std::make_unique<PipeFollowingEnv>(config, ctx));
     ctx = envs_.back()->episode().renderer().shared_context();

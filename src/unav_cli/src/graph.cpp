@@ -3,18 +3,18 @@
 #include <cstdio>
 #include <cstdlib>
 
+#include <fastdds/rtps/reader/ReaderDiscoveryInfo.h>
+#include <fastdds/rtps/writer/WriterDiscoveryInfo.h>
 #include <fastdds/dds/domain/DomainParticipantListener.hpp>
 #include <fastdds/dds/subscriber/DataReader.hpp>
 #include <fastdds/dds/subscriber/SampleInfo.hpp>
-#include <fastdds/rtps/reader/ReaderDiscoveryInfo.h>
-#include <fastdds/rtps/writer/WriterDiscoveryInfo.h>
 
 #include "rmw_dds_common/msg/participant_entities_info.hpp"
 
 namespace fdds = eprosima::fastdds::dds;
 namespace rtps = eprosima::fastrtps::rtps;
 
-namespace unav_cli {
+namespace unav::cli {
 
 struct Graph::Listener : fdds::DomainParticipantListener {
   mutable std::mutex mutex;
@@ -45,7 +45,8 @@ struct Graph::Listener : fdds::DomainParticipantListener {
 };
 
 std::chrono::milliseconds default_spin_time() {
-  if (const char* s = std::getenv("UNAV_SPIN_TIME")) return std::chrono::milliseconds(static_cast<int64_t>(std::atof(s) * 1000));
+  if (const char* s = std::getenv("UNAV_SPIN_TIME"))
+    return std::chrono::milliseconds(static_cast<int64_t>(std::atof(s) * 1000));
   return std::chrono::milliseconds(2000);
 }
 
@@ -154,4 +155,4 @@ std::vector<std::string> Graph::nodes() {
   return {all.begin(), all.end()};
 }
 
-}  // namespace unav_cli
+}  // namespace unav::cli

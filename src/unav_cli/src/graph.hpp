@@ -12,7 +12,7 @@
 
 #include "unav_runtime/runtime.hpp"
 
-namespace unav_cli {
+namespace unav::cli {
 
 struct EndpointInfo {
   std::string dds_topic;
@@ -50,4 +50,4 @@ class Graph {
 /// Milliseconds to wait for discovery: UNAV_SPIN_TIME (seconds) or 2 s.
 std::chrono::milliseconds default_spin_time();
 
-}  // namespace unav_cli
+}  // namespace unav::cli

@@ -1,13 +1,13 @@
 // unav: the command-line tool, modelled on ros2 (topic, node, launch).
 #include <CLI/CLI.hpp>
 
+#include <unistd.h>
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <iostream>
 #include <numeric>
-#include <unistd.h>
 
 #include <fastdds/dds/publisher/DataWriter.hpp>
 
@@ -20,9 +20,9 @@
 #include "unav_launch/supervisor.hpp"
 
 using namespace std::chrono_literals;
-namespace intro = unav_introspection;
+namespace intro = unav::introspection;
 
-namespace unav_cli {
+namespace unav::cli {
 namespace {
 
 /// A user-facing error: printed as one line, exit code 2.
@@ -80,9 +80,7 @@ intro::TypeRegistry make_registry() {
   return reg;
 }
 
-std::string normalize_topic(const std::string& t) {
-  return unav::resolve_topic_name(t, "/", "unav_cli");
-}
+std::string normalize_topic(const std::string& t) { return unav::resolve_topic_name(t, "/", "unav_cli"); }
 
 int topic_list(bool show_types) {
   Graph g;
@@ -113,8 +111,8 @@ std::shared_ptr<RawSubscription> subscribe_any(Graph& g, const std::string& topi
     while (dds_type.empty() && g.context().ok()) dds_type = g.wait_for_type(topic, 500ms);
     if (dds_type.empty()) return nullptr;
   }
-  auto sub = std::make_shared<RawSubscription>(g.context(), unav::to_dds_topic(topic), dds_type,
-                                               g.matching_qos(topic), std::move(cb));
+  auto sub = std::make_shared<RawSubscription>(g.context(), unav::to_dds_topic(topic), dds_type, g.matching_qos(topic),
+                                               std::move(cb));
   sub->start(g.matching_qos(topic));
   return sub;
 }
@@ -155,21 +153,24 @@ int topic_hz(const std::string& topic_in, size_t window) {
     if (stamps.size() > window + 1) stamps.pop_front();
   });
   if (!sub) return 0;
-  auto timer = std::make_shared<unav::Timer>(1s, [&] {
-    if (stamps.size() < 2) {
-      std::cout << "no new messages" << std::endl;
-      return;
-    }
-    std::vector<double> d;
-    for (size_t i = 1; i < stamps.size(); ++i) d.push_back(stamps[i] - stamps[i - 1]);
-    const double mean = std::accumulate(d.begin(), d.end(), 0.0) / static_cast<double>(d.size());
-    double var = 0;
-    for (double x : d) var += (x - mean) * (x - mean);
-    const double sd = std::sqrt(var / static_cast<double>(d.size()));
-    std::printf("average rate: %.3f\n\tmin: %.3fs max: %.3fs std dev: %.5fs window: %zu\n", 1.0 / mean,
-                *std::min_element(d.begin(), d.end()), *std::max_element(d.begin(), d.end()), sd, stamps.size());
-    std::fflush(stdout);
-  }, false);
+  auto timer = std::make_shared<unav::Timer>(
+      1s,
+      [&] {
+        if (stamps.size() < 2) {
+          std::cout << "no new messages" << std::endl;
+          return;
+        }
+        std::vector<double> d;
+        for (size_t i = 1; i < stamps.size(); ++i) d.push_back(stamps[i] - stamps[i - 1]);
+        const double mean = std::accumulate(d.begin(), d.end(), 0.0) / static_cast<double>(d.size());
+        double var = 0;
+        for (double x : d) var += (x - mean) * (x - mean);
+        const double sd = std::sqrt(var / static_cast<double>(d.size()));
+        std::printf("average rate: %.3f\n\tmin: %.3fs max: %.3fs std dev: %.5fs window: %zu\n", 1.0 / mean,
+                    *std::min_element(d.begin(), d.end()), *std::max_element(d.begin(), d.end()), sd, stamps.size());
+        std::fflush(stdout);
+      },
+      false);
   g.context().executor().add_timer(timer);
   g.context().spin();
   return 0;
@@ -198,21 +199,24 @@ int topic_bw(const std::string& topic_in, size_t window) {
   });
   if (!sub) return 0;
   std::cout << "Subscribed to [" << topic << "]" << std::endl;
-  auto timer = std::make_shared<unav::Timer>(1s, [&] {
-    if (samples.size() < 2) return;
-    const double dt = std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count() -
-                      samples.front().first;
-    size_t total = 0, mn = SIZE_MAX, mx = 0;
-    for (const auto& s : samples) {
-      total += s.second;
-      mn = std::min(mn, s.second);
-      mx = std::max(mx, s.second);
-    }
-    std::cout << human_bytes(static_cast<double>(total) / dt, "B/s") << " from " << samples.size() << " messages\n"
-              << "\tMessage size mean: " << human_bytes(static_cast<double>(total) / samples.size(), "B")
-              << " min: " << human_bytes(static_cast<double>(mn), "B") << " max: " << human_bytes(static_cast<double>(mx), "B")
-              << std::endl;
-  }, false);
+  auto timer = std::make_shared<unav::Timer>(
+      1s,
+      [&] {
+        if (samples.size() < 2) return;
+        const double dt = std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count() -
+                          samples.front().first;
+        size_t total = 0, mn = SIZE_MAX, mx = 0;
+        for (const auto& s : samples) {
+          total += s.second;
+          mn = std::min(mn, s.second);
+          mx = std::max(mx, s.second);
+        }
+        std::cout << human_bytes(static_cast<double>(total) / dt, "B/s") << " from " << samples.size() << " messages\n"
+                  << "\tMessage size mean: " << human_bytes(static_cast<double>(total) / samples.size(), "B")
+                  << " min: " << human_bytes(static_cast<double>(mn), "B")
+                  << " max: " << human_bytes(static_cast<double>(mx), "B") << std::endl;
+      },
+      false);
   g.context().executor().add_timer(timer);
   g.context().spin();
   return 0;
@@ -253,8 +257,9 @@ int topic_pub(const std::string& topic_in, const std::string& type_name, const s
   const int limit = once ? 1 : times;
   while (g.context().ok()) {
     pub.publish(sample);
-    std::cout << "publishing #" << ++count << ": " << unav::ros_type_from_dds(unav::dds_type_from_ros(type_name))
-              << "(" << flow.c_str() << ")\n" << std::endl;
+    std::cout << "publishing #" << ++count << ": " << unav::ros_type_from_dds(unav::dds_type_from_ros(type_name)) << "("
+              << flow.c_str() << ")\n"
+              << std::endl;
     if (limit > 0 && count >= limit) break;
     g.context().spin_until([] { return false; }, std::chrono::nanoseconds(static_cast<int64_t>(1e9 / rate)));
   }
@@ -281,7 +286,7 @@ int launch(const std::string& file, const std::vector<std::string>& args) {
 }
 
 }  // namespace
-}  // namespace unav_cli
+}  // namespace unav::cli
 
 // `unav localize ...` and `unav eval ...` run a capability package's tool with the same
 // arguments (as `ros2 <verb>` extensions do), so the framework links no capability.
@@ -304,7 +309,7 @@ int run_package_tool(const char* package, const char* executable, int argc, char
 }
 
 int main(int argc, char** argv) {
-  using namespace unav_cli;
+  using namespace unav::cli;
   if (argc >= 2 && std::string(argv[1]) == "localize")
     return run_package_tool("unav_localization", "unav_localize", argc, argv);
   if (argc >= 2 && std::string(argv[1]) == "eval") return run_package_tool("unav_evaluation", "unav_eval", argc, argv);

@@ -6,10 +6,10 @@
 #include <string>
 #include <vector>
 
-#include <fastdds/dds/topic/TopicDataType.hpp>
 #include <fastdds/rtps/common/SerializedPayload.h>
+#include <fastdds/dds/topic/TopicDataType.hpp>
 
-namespace unav_cli {
+namespace unav::cli {
 
 struct RawSample {
   std::vector<uint8_t> bytes;
@@ -42,4 +42,4 @@ class RawType : public eprosima::fastdds::dds::TopicDataType {
   bool getKey(void*, eprosima::fastrtps::rtps::InstanceHandle_t*, bool) override { return false; }
 };
 
-}  // namespace unav_cli
+}  // namespace unav::cli

@@ -18,7 +18,7 @@
 #include "unav_msgs/msg/thruster_command.hpp"
 #include "unav_runtime/publisher.hpp"
 
-namespace intro = unav_introspection;
+namespace intro = unav::introspection;
 
 namespace {
 
@@ -129,15 +129,16 @@ TEST(CodecVsGenerated, SequencesOfStructsAndBytesAgree) {
 
 TEST(CodecVsGenerated, YamlEncodedByCodecReadsBackInGeneratedType) {
   const auto& type = registry().load("unav_msgs/msg/ThrusterCommand");
-  const auto bytes = intro::encode(type, YAML::Load("{header: {stamp: {sec: 7}, frame_id: base_link_frd}, u: [0.5, -1]}"));
+  const auto bytes =
+      intro::encode(type, YAML::Load("{header: {stamp: {sec: 7}, frame_id: base_link_frd}, u: [0.5, -1]}"));
   const auto cmd = from_bytes<unav_msgs::msg::ThrusterCommand>(bytes);
   EXPECT_EQ(cmd.header().stamp().sec(), 7);
   EXPECT_EQ(cmd.header().frame_id(), "base_link_frd");
   EXPECT_EQ(cmd.u(), (std::vector<double>{0.5, -1.0}));
 
   const auto& odom_type = registry().load("nav_msgs/msg/Odometry");
-  const auto odom = from_bytes<nav_msgs::msg::Odometry>(
-      intro::encode(odom_type, YAML::Load("{pose: {pose: {position: {x: 1.5}}}}")));
+  const auto odom =
+      from_bytes<nav_msgs::msg::Odometry>(intro::encode(odom_type, YAML::Load("{pose: {pose: {position: {x: 1.5}}}}")));
   EXPECT_EQ(odom.pose().pose().position().x(), 1.5);
   EXPECT_EQ(odom.pose().pose().orientation().w(), 1.0);  // IDL @default, as ROS 2 fills it
 }

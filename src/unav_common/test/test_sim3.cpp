@@ -1,5 +1,5 @@
 // Sim(3) and Umeyama: the one implementation must give bit-identical results to the two it
-// replaces, unav_localization::EstimateSim3 (SLAM) and unav_evaluation::umeyama (evo metrics).
+// replaces, unav::localization::EstimateSim3 (SLAM) and unav::evaluation::umeyama (evo metrics).
 // Verbatim copies of both (and of the localization Sim3 operations) are kept here as the
 // reference; every coefficient is compared with EXPECT_EQ.
 #include "unav_common/sim3.hpp"

@@ -1,7 +1,7 @@
 // Plain CDR (XCDR1) decoding into a value tree / YAML, driven by StructType.
 #include "cdr_internal.hpp"
 
-namespace unav_introspection {
+namespace unav::introspection {
 
 using namespace cdr_detail;  // NOLINT(google-build-using-namespace)
 
@@ -282,4 +282,4 @@ Value cdr_detail::decode_value(const StructType& type, const uint8_t* data, size
   return Decoder(data, size, echo).run(type);
 }
 
-}  // namespace unav_introspection
+}  // namespace unav::introspection

@@ -1,7 +1,7 @@
 // `ros2 topic echo` printing: PyYAML-compatible YAML of a decoded sample.
 #include "cdr_internal.hpp"
 
-namespace unav_introspection {
+namespace unav::introspection {
 
 using namespace cdr_detail;  // NOLINT(google-build-using-namespace)
 
@@ -292,4 +292,4 @@ std::string format_float_like_python(double value) {
   return out;
 }
 
-}  // namespace unav_introspection
+}  // namespace unav::introspection

@@ -1,7 +1,7 @@
 // Plain CDR (XCDR1) encoding of YAML values, driven by StructType (see cdr_codec.hpp for the wire rules).
 #include "cdr_internal.hpp"
 
-namespace unav_introspection {
+namespace unav::introspection {
 
 using namespace cdr_detail;  // NOLINT(google-build-using-namespace)
 
@@ -280,4 +280,4 @@ class Encoder {
 
 std::vector<uint8_t> encode(const StructType& type, const YAML::Node& value) { return Encoder().run(type, value); }
 
-}  // namespace unav_introspection
+}  // namespace unav::introspection

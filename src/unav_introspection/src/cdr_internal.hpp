@@ -17,7 +17,7 @@
 #include "unav_introspection/cdr_codec.hpp"
 #include "unav_introspection/type_registry.hpp"
 
-namespace unav_introspection::cdr_detail {
+namespace unav::introspection::cdr_detail {
 
 constexpr size_t kHeaderSize = 4;
 constexpr const char* kDummyMember = "structure_needs_at_least_one_member";
@@ -136,4 +136,4 @@ inline std::string encode_utf8(const std::u32string& s, size_t begin = 0, size_t
 /// none). Throws DecodeError as decode() does.
 Value decode_value(const StructType& type, const uint8_t* data, size_t size, const EchoOptions* echo);
 
-}  // namespace unav_introspection::cdr_detail
+}  // namespace unav::introspection::cdr_detail

@@ -17,7 +17,7 @@
 
 #include "unav_introspection/type_registry.hpp"
 
-namespace unav_introspection {
+namespace unav::introspection {
 
 namespace fs = std::filesystem;
 
@@ -150,4 +150,4 @@ std::vector<const StructType*> parse(detail::RegistryState& registry, const std:
                                      std::vector<Token> tokens);
 }  // namespace idl
 
-}  // namespace unav_introspection
+}  // namespace unav::introspection

@@ -1,7 +1,7 @@
 // IDL lexer and recursive-descent parser for the subset rosidl and our interfaces use.
 #include "idl_internal.hpp"
 
-namespace unav_introspection {
+namespace unav::introspection {
 
 namespace idl {
 
@@ -585,4 +585,4 @@ std::vector<const StructType*> parse(detail::RegistryState& registry, const std:
 
 }  // namespace idl
 
-}  // namespace unav_introspection
+}  // namespace unav::introspection

@@ -2,7 +2,7 @@
 
 #include "unav_introspection/type_registry.hpp"
 
-namespace unav_introspection {
+namespace unav::introspection {
 
 size_t primitive_size(PrimitiveKind kind) {
   switch (kind) {
@@ -29,19 +29,32 @@ size_t primitive_size(PrimitiveKind kind) {
 
 const char* primitive_name(PrimitiveKind kind) {
   switch (kind) {
-    case PrimitiveKind::kBool: return "boolean";
-    case PrimitiveKind::kOctet: return "octet";
-    case PrimitiveKind::kChar: return "char";
-    case PrimitiveKind::kInt8: return "int8";
-    case PrimitiveKind::kUint8: return "uint8";
-    case PrimitiveKind::kInt16: return "int16";
-    case PrimitiveKind::kUint16: return "uint16";
-    case PrimitiveKind::kInt32: return "int32";
-    case PrimitiveKind::kUint32: return "uint32";
-    case PrimitiveKind::kInt64: return "int64";
-    case PrimitiveKind::kUint64: return "uint64";
-    case PrimitiveKind::kFloat: return "float";
-    case PrimitiveKind::kDouble: return "double";
+    case PrimitiveKind::kBool:
+      return "boolean";
+    case PrimitiveKind::kOctet:
+      return "octet";
+    case PrimitiveKind::kChar:
+      return "char";
+    case PrimitiveKind::kInt8:
+      return "int8";
+    case PrimitiveKind::kUint8:
+      return "uint8";
+    case PrimitiveKind::kInt16:
+      return "int16";
+    case PrimitiveKind::kUint16:
+      return "uint16";
+    case PrimitiveKind::kInt32:
+      return "int32";
+    case PrimitiveKind::kUint32:
+      return "uint32";
+    case PrimitiveKind::kInt64:
+      return "int64";
+    case PrimitiveKind::kUint64:
+      return "uint64";
+    case PrimitiveKind::kFloat:
+      return "float";
+    case PrimitiveKind::kDouble:
+      return "double";
   }
   return "?";
 }
@@ -70,11 +83,10 @@ std::string field_type_string(const Field& field) {
     case Field::Container::kArray:
       return element + "[" + std::to_string(field.array_size) + "]";
     case Field::Container::kSequence:
-      return field.sequence_bound
-                 ? "sequence<" + element + ", " + std::to_string(field.sequence_bound) + ">"
-                 : "sequence<" + element + ">";
+      return field.sequence_bound ? "sequence<" + element + ", " + std::to_string(field.sequence_bound) + ">"
+                                  : "sequence<" + element + ">";
   }
   return element;
 }
 
-}  // namespace unav_introspection
+}  // namespace unav::introspection

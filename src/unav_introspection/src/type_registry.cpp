@@ -2,21 +2,18 @@
 // (idl_parser.cpp) read; ROS <-> DDS type names.
 #include "idl_internal.hpp"
 
-namespace unav_introspection {
+namespace unav::introspection {
 
 IdlError::IdlError(const std::string& file, int line, const std::string& message)
-    : std::runtime_error(line > 0 ? file + ":" + std::to_string(line) + ": " + message
-                                  : file + ": " + message),
+    : std::runtime_error(line > 0 ? file + ":" + std::to_string(line) + ": " + message : file + ": " + message),
       file_(file),
       line_(line) {}
 
 std::string ros_to_dds_name(const std::string& ros_name) {
   const std::vector<std::string> parts = split(ros_name, "/");
-  const bool ok = (parts.size() == 2 || parts.size() == 3) &&
-                  std::all_of(parts.begin(), parts.end(), is_identifier);
+  const bool ok = (parts.size() == 2 || parts.size() == 3) && std::all_of(parts.begin(), parts.end(), is_identifier);
   if (!ok) {
-    throw UnknownTypeError("malformed ROS type name '" + ros_name +
-                           "' (expected 'pkg/msg/Type' or 'pkg/Type')");
+    throw UnknownTypeError("malformed ROS type name '" + ros_name + "' (expected 'pkg/msg/Type' or 'pkg/Type')");
   }
   const std::string& kind = parts.size() == 3 ? parts[1] : std::string("msg");
   return parts[0] + "::" + kind + "::dds_::" + parts.back() + "_";
@@ -27,8 +24,7 @@ std::string dds_to_ros_name(const std::string& dds_name) {
   if (name.rfind("::", 0) == 0) name = name.substr(2);
   const std::vector<std::string> parts = split(name, "::");
   const bool ids = std::all_of(parts.begin(), parts.end(), is_identifier);
-  if (ids && parts.size() == 4 && parts[2] == "dds_" && parts[3].size() > 1 &&
-      parts[3].back() == '_') {
+  if (ids && parts.size() == 4 && parts[2] == "dds_" && parts[3].size() > 1 && parts[3].back() == '_') {
     return parts[0] + "/" + parts[1] + "/" + parts[3].substr(0, parts[3].size() - 1);
   }
   if (ids && parts.size() == 3 && parts[1] != "dds_") {
@@ -41,7 +37,6 @@ std::string dds_to_ros_name(const std::string& dds_name) {
 struct TypeRegistry::Impl : detail::RegistryState {};
 
 namespace {
-
 
 // Relative IDL path for a scoped name: "a::msg::dds_::B_" and "a::msg::B" -> "a/msg/B.idl".
 std::optional<std::string> relative_idl_path(const std::string& scoped_name) {
@@ -61,8 +56,7 @@ std::vector<std::string> candidate_names(const std::string& type_name) {
   if (type_name.find('/') != std::string::npos) {
     const std::string dds = ros_to_dds_name(type_name);
     const std::vector<std::string> parts = split(dds, "::");
-    const std::string plain =
-        parts[0] + "::" + parts[1] + "::" + parts[3].substr(0, parts[3].size() - 1);
+    const std::string plain = parts[0] + "::" + parts[1] + "::" + parts[3].substr(0, parts[3].size() - 1);
     return {dds, plain};
   }
   std::string name = type_name;
@@ -71,7 +65,6 @@ std::vector<std::string> candidate_names(const std::string& type_name) {
 }
 
 }  // namespace
-
 
 std::string detail::RegistryState::roots_text() const {
   return roots.empty() ? std::string("(none)") : join(roots, ", ");
@@ -89,8 +82,7 @@ std::string detail::RegistryState::root_of(const fs::path& path) const {
   return canonical.parent_path().parent_path().parent_path().string();
 }
 
-std::vector<const StructType*> detail::RegistryState::parse_file(const fs::path& path,
-                                                              const std::string& root) {
+std::vector<const StructType*> detail::RegistryState::parse_file(const fs::path& path, const std::string& root) {
   std::error_code ec;
   const std::string key = fs::weakly_canonical(path, ec).string();
   if (files_seen.count(key)) return file_structs[key];  // done, or in progress (include cycle)
@@ -100,7 +92,8 @@ std::vector<const StructType*> detail::RegistryState::parse_file(const fs::path&
   buffer << in.rdbuf();
   files_seen.insert(key);
   try {
-    std::vector<const StructType*> declared = idl::parse(*this, path.string(), root, tokenize(buffer.str(), path.string()));
+    std::vector<const StructType*> declared =
+        idl::parse(*this, path.string(), root, tokenize(buffer.str(), path.string()));
     file_structs[key] = declared;
     return declared;
   } catch (...) {
@@ -137,8 +130,7 @@ void TypeRegistry::add_root(const std::string& path) {
 size_t TypeRegistry::add_install_prefix(const std::string& prefix) {
   std::vector<std::string> found;
   std::error_code ec;
-  for (fs::directory_iterator it(fs::path(prefix) / "share", ec), end; !ec && it != end;
-       it.increment(ec)) {
+  for (fs::directory_iterator it(fs::path(prefix) / "share", ec), end; !ec && it != end; it.increment(ec)) {
     const fs::path idl = it->path() / "idl";
     std::error_code ec2;
     if (fs::is_directory(idl, ec2)) found.push_back(idl.string());
@@ -172,8 +164,7 @@ const StructType& TypeRegistry::load(const std::string& type_name) {
   }
   const auto rel = relative_idl_path(names.front());
   throw UnknownTypeError("unknown type '" + type_name + "': no " +
-                         (rel ? "file " + *rel + " declaring " + names.front()
-                              : std::string("IDL file declaring it")) +
+                         (rel ? "file " + *rel + " declaring " + names.front() : std::string("IDL file declaring it")) +
                          " under the IDL roots: " + impl_->roots_text());
 }
 
@@ -198,12 +189,11 @@ std::vector<std::string> TypeRegistry::list() const {
       for (fs::directory_iterator kind(pkg->path(), ec2); !ec2 && kind != end; kind.increment(ec2)) {
         std::error_code ec3;
         if (!kind->is_directory(ec3)) continue;
-        for (fs::directory_iterator file(kind->path(), ec3); !ec3 && file != end;
-             file.increment(ec3)) {
+        for (fs::directory_iterator file(kind->path(), ec3); !ec3 && file != end; file.increment(ec3)) {
           const fs::path& p = file->path();
           if (p.extension() != ".idl") continue;
-          names.insert(pkg->path().filename().string() + "/" + kind->path().filename().string() +
-                       "/" + p.stem().string());
+          names.insert(pkg->path().filename().string() + "/" + kind->path().filename().string() + "/" +
+                       p.stem().string());
         }
       }
     }
@@ -211,4 +201,4 @@ std::vector<std::string> TypeRegistry::list() const {
   return {names.begin(), names.end()};
 }
 
-}  // namespace unav_introspection
+}  // namespace unav::introspection

@@ -9,15 +9,14 @@
 
 #include <gtest/gtest.h>
 
-namespace unav_introspection::test {
+namespace unav::introspection::test {
 
 class IdlFixture : public ::testing::Test {
  protected:
   void SetUp() override {
     const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
     base_ = std::filesystem::temp_directory_path() /
-            ("unav_introspection_" + std::to_string(::getpid()) + "_" + info->test_suite_name() +
-             "_" + info->name());
+            ("unav_introspection_" + std::to_string(::getpid()) + "_" + info->test_suite_name() + "_" + info->name());
     std::filesystem::remove_all(base_);
     std::filesystem::create_directories(base_);
   }
@@ -61,4 +60,4 @@ module std_msgs { module msg { module dds_ {
   std::filesystem::path base_;
 };
 
-}  // namespace unav_introspection::test
+}  // namespace unav::introspection::test

@@ -8,7 +8,7 @@
 #include "unav_introspection/cdr_codec.hpp"
 #include "unav_introspection/type_registry.hpp"
 
-namespace unav_introspection::test {
+namespace unav::introspection::test {
 namespace {
 
 using Bytes = std::vector<uint8_t>;
@@ -114,30 +114,29 @@ mode: -3
 };
 
 TEST_F(CodecTest, HeaderBytesMatchHandComputedCdr) {
-  const Bytes bytes = encode(type("std_msgs/msg/Header"),
-                             YAML::Load("{stamp: {sec: 1, nanosec: 2}, frame_id: ab}"));
-  const Bytes expected = {0x00, 0x01, 0x00, 0x00,   // CDR_LE encapsulation
-                          0x01, 0x00, 0x00, 0x00,   // stamp.sec
-                          0x02, 0x00, 0x00, 0x00,   // stamp.nanosec
-                          0x03, 0x00, 0x00, 0x00,   // frame_id length incl. NUL
-                          0x61, 0x62, 0x00};        // "ab\0"
+  const Bytes bytes = encode(type("std_msgs/msg/Header"), YAML::Load("{stamp: {sec: 1, nanosec: 2}, frame_id: ab}"));
+  const Bytes expected = {0x00, 0x01, 0x00, 0x00,  // CDR_LE encapsulation
+                          0x01, 0x00, 0x00, 0x00,  // stamp.sec
+                          0x02, 0x00, 0x00, 0x00,  // stamp.nanosec
+                          0x03, 0x00, 0x00, 0x00,  // frame_id length incl. NUL
+                          0x61, 0x62, 0x00};       // "ab\0"
   EXPECT_EQ(bytes, expected);
 }
 
 TEST_F(CodecTest, DoubleAfterUint8IsAlignedToEight) {
   const Bytes bytes = encode(type("test_msgs/Padding"), YAML::Load("{a: 7, b: 1.0}"));
-  const Bytes expected = {0x00, 0x01, 0x00, 0x00,                          // header
-                          0x07, 0, 0, 0, 0, 0, 0, 0,                       // a + 7 padding
+  const Bytes expected = {0x00, 0x01, 0x00, 0x00,                           // header
+                          0x07, 0,    0,    0,    0,    0,    0,    0,      // a + 7 padding
                           0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0xF0, 0x3F};  // 1.0 = 0x3FF0...
   EXPECT_EQ(bytes, expected);
 }
 
 TEST_F(CodecTest, SequenceOfStructsAlignsEachElement) {
-  const Bytes bytes = encode(type("test_msgs/msg/ItemList"),
-                             YAML::Load("{items: [{id: 1, value: 10}, {id: 2, value: 11}]}"));
-  const Bytes expected = {0x00, 0x01, 0x00, 0x00,   // header
-                          0x02, 0x00, 0x00, 0x00,   // 2 elements
-                          0x01, 0x00, 0x0A, 0x00,   // id, pad, value
+  const Bytes bytes =
+      encode(type("test_msgs/msg/ItemList"), YAML::Load("{items: [{id: 1, value: 10}, {id: 2, value: 11}]}"));
+  const Bytes expected = {0x00, 0x01, 0x00, 0x00,  // header
+                          0x02, 0x00, 0x00, 0x00,  // 2 elements
+                          0x01, 0x00, 0x0A, 0x00,  // id, pad, value
                           0x02, 0x00, 0x0B, 0x00};
   EXPECT_EQ(bytes, expected);
   const YAML::Node back = decode(type("test_msgs/msg/ItemList"), bytes.data(), bytes.size());
@@ -147,38 +146,34 @@ TEST_F(CodecTest, SequenceOfStructsAlignsEachElement) {
 TEST_F(CodecTest, FixedArraysHaveNoLengthPrefix) {
   const StructType& fixed = type("test_msgs/msg/Fixed");
   const Bytes bytes = encode(fixed, YAML::Load("{values: [1, 2, 3], d: [1.0, -2.0]}"));
-  const Bytes expected = {0x00, 0x01, 0x00, 0x00,                     // header
-                          0x01, 0x00, 0x02, 0x00, 0x03, 0x00, 0, 0,   // int16[3] + 2 padding
-                          0, 0, 0, 0, 0, 0, 0xF0, 0x3F,               // 1.0
-                          0, 0, 0, 0, 0, 0, 0x00, 0xC0};              // -2.0
+  const Bytes expected = {0x00, 0x01, 0x00, 0x00,                           // header
+                          0x01, 0x00, 0x02, 0x00, 0x03, 0x00, 0,    0,      // int16[3] + 2 padding
+                          0,    0,    0,    0,    0,    0,    0xF0, 0x3F,   // 1.0
+                          0,    0,    0,    0,    0,    0,    0x00, 0xC0};  // -2.0
   EXPECT_EQ(bytes, expected);
-  EXPECT_EQ(error_of(fixed, "{values: [1, 2]}"),
-            "values: expected exactly 3 elements for int16[3], got 2");
+  EXPECT_EQ(error_of(fixed, "{values: [1, 2]}"), "values: expected exactly 3 elements for int16[3], got 2");
 }
 
 TEST_F(CodecTest, MissingFieldsTakeDefaultOrZero) {
   const Bytes bytes = encode(type("test_msgs/msg/Limits"), YAML::Load("{}"));
-  const Bytes expected = {0x00, 0x01, 0x00, 0x00,   // header
-                          0, 0, 0, 0,               // bounded: 0 elements
-                          1, 0, 0, 0, 0,            // name: "" (length 1, NUL)
-                          0,                        // small
-                          0, 0,                     // padding to 4
-                          0x00, 0x00, 0xC0, 0x3F,   // gain = @default 1.5f
-                          0,                        // flag
-                          0, 0, 0, 0, 0, 0, 0,      // padding to 8
-                          0, 0, 0, 0, 0, 0, 0, 0,   // big
-                          0, 0};                    // letter, raw
+  const Bytes expected = {0x00, 0x01, 0x00, 0x00,              // header
+                          0,    0,    0,    0,                 // bounded: 0 elements
+                          1,    0,    0,    0,    0,           // name: "" (length 1, NUL)
+                          0,                                   // small
+                          0,    0,                             // padding to 4
+                          0x00, 0x00, 0xC0, 0x3F,              // gain = @default 1.5f
+                          0,                                   // flag
+                          0,    0,    0,    0,    0, 0, 0,     // padding to 8
+                          0,    0,    0,    0,    0, 0, 0, 0,  // big
+                          0,    0};                            // letter, raw
   EXPECT_EQ(bytes, expected);
 }
 
 TEST_F(CodecTest, ValueErrorsNameFieldPathValueAndRule) {
   const StructType& limits = type("test_msgs/msg/Limits");
-  EXPECT_EQ(error_of(limits, "{bounded: [1, 2, 3, 4]}"),
-            "bounded: 4 elements exceed the bound of sequence<int16, 3>");
-  EXPECT_EQ(error_of(limits, "{name: abcde}"),
-            "name: string of 5 bytes exceeds the bound of string<4>");
-  EXPECT_EQ(error_of(limits, "{small: 300}"),
-            "small: value '300' is out of range for uint8 [0, 255]");
+  EXPECT_EQ(error_of(limits, "{bounded: [1, 2, 3, 4]}"), "bounded: 4 elements exceed the bound of sequence<int16, 3>");
+  EXPECT_EQ(error_of(limits, "{name: abcde}"), "name: string of 5 bytes exceeds the bound of string<4>");
+  EXPECT_EQ(error_of(limits, "{small: 300}"), "small: value '300' is out of range for uint8 [0, 255]");
   EXPECT_EQ(error_of(limits, "{small: -1}"), "small: value '-1' is out of range for uint8 [0, 255]");
   EXPECT_EQ(error_of(limits, "{small: 1.5}"), "small: value '1.5' is not an integer (uint8)");
   EXPECT_EQ(error_of(limits, "{flag: 2}"), "flag: value '2' is not a boolean (true or false)");
@@ -190,8 +185,7 @@ TEST_F(CodecTest, ValueErrorsNameFieldPathValueAndRule) {
   const StructType& header = type("std_msgs/msg/Header");
   EXPECT_EQ(error_of(header, "{stamp: {sec: 1, nsec: 2}}"),
             "stamp.nsec: unknown field of builtin_interfaces/msg/Time (fields: sec, nanosec)");
-  EXPECT_EQ(error_of(header, "{stamp: {sec: {a: 1}}}"),
-            "stamp.sec: expected int32, got a mapping {a: 1}");
+  EXPECT_EQ(error_of(header, "{stamp: {sec: {a: 1}}}"), "stamp.sec: expected int32, got a mapping {a: 1}");
   EXPECT_EQ(error_of(type("test_msgs/msg/ItemList"), "{items: [{id: 1}, {value: x}]}"),
             "items[1].value: value 'x' is not an integer (uint16)");
 
@@ -239,8 +233,7 @@ TEST_F(CodecTest, TruncatedOrMalformedInputThrows) {
   Bytes list = {0x00, 0x01, 0x00, 0x00, 0xFF, 0xFF, 0xFF, 0x7F, 1, 0, 2, 0};
   EXPECT_THROW(decode(type("test_msgs/msg/ItemList"), list.data(), list.size()), CodecError);
   Bytes bad_encapsulation = {0x00, 0x03, 0x00, 0x00, 7, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0};
-  EXPECT_THROW(decode(type("test_msgs/msg/Padding"), bad_encapsulation.data(), bad_encapsulation.size()),
-               CodecError);
+  EXPECT_THROW(decode(type("test_msgs/msg/Padding"), bad_encapsulation.data(), bad_encapsulation.size()), CodecError);
   Bytes limits = encode(type("test_msgs/msg/Limits"), YAML::Load("{}"));
   limits[4 + 16] = 2;  // flag byte: neither 0 nor 1
   EXPECT_THROW(decode(type("test_msgs/msg/Limits"), limits.data(), limits.size()), CodecError);
@@ -253,18 +246,18 @@ TEST_F(CodecTest, TruncatedOrMalformedInputThrows) {
 }
 
 TEST_F(CodecTest, DecodesBigEndianWithByteSwapping) {
-  const Bytes header_be = {0x00, 0x00, 0x00, 0x00,   // CDR_BE
-                           0x00, 0x00, 0x00, 0x01,   // sec
-                           0x00, 0x00, 0x00, 0x02,   // nanosec
-                           0x00, 0x00, 0x00, 0x03,   // length
+  const Bytes header_be = {0x00, 0x00, 0x00, 0x00,  // CDR_BE
+                           0x00, 0x00, 0x00, 0x01,  // sec
+                           0x00, 0x00, 0x00, 0x02,  // nanosec
+                           0x00, 0x00, 0x00, 0x03,  // length
                            0x61, 0x62, 0x00};
   const YAML::Node header = decode(type("std_msgs/msg/Header"), header_be.data(), header_be.size());
   EXPECT_EQ(header["stamp"]["sec"].as<int>(), 1);
   EXPECT_EQ(header["stamp"]["nanosec"].as<int>(), 2);
   EXPECT_EQ(header["frame_id"].as<std::string>(), "ab");
 
-  const Bytes padding_be = {0x00, 0x00, 0x00, 0x00, 0x07, 0, 0, 0, 0, 0, 0, 0,
-                            0xC0, 0x04, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00};  // -2.5
+  const Bytes padding_be = {0x00, 0x00, 0x00, 0x00, 0x07, 0,    0,    0,    0,    0,
+                            0,    0,    0xC0, 0x04, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00};  // -2.5
   const YAML::Node padding = decode(type("test_msgs/msg/Padding"), padding_be.data(), padding_be.size());
   EXPECT_EQ(padding["a"].as<int>(), 7);
   EXPECT_EQ(padding["b"].as<std::string>(), "-2.5");
@@ -395,4 +388,4 @@ TEST(FloatFormat, MatchesPythonRepr) {
 }
 
 }  // namespace
-}  // namespace unav_introspection::test
+}  // namespace unav::introspection::test

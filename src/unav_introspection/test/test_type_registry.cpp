@@ -5,7 +5,7 @@
 #include "idl_fixture.hpp"
 #include "unav_introspection/type_registry.hpp"
 
-namespace unav_introspection::test {
+namespace unav::introspection::test {
 namespace {
 
 using RegistryTest = IdlFixture;
@@ -86,8 +86,7 @@ module test_msgs { module msg {
     FAIL() << "expected IdlError";
   } catch (const IdlError& e) {
     EXPECT_EQ(e.line(), 25) << e.what();
-    EXPECT_NE(std::string(e.what()).find("Everything.idl:25: unknown type 'Header_Alias'"),
-              std::string::npos)
+    EXPECT_NE(std::string(e.what()).find("Everything.idl:25: unknown type 'Header_Alias'"), std::string::npos)
         << e.what();
   }
 
@@ -166,8 +165,7 @@ TEST_F(RegistryTest, ParseErrorsReportFileAndLine) {
        "unknown type 'float128'"},
       {"module a { module msg { module dds_ {\n struct B_ {\n  int32 x\n };\n}; }; };\n", 4,
        "expected ';' after member"},
-      {"module a { module msg { module dds_ {\n\n struct B_ {\n  int32 x;\n", 3,
-       "missing '}' to close struct 'B_'"},
+      {"module a { module msg { module dds_ {\n\n struct B_ {\n  int32 x;\n", 3, "missing '}' to close struct 'B_'"},
       {"module a { module msg { module dds_ {\n struct B_ {\n  wstring w;\n };\n}; }; };\n", 3,
        "type 'wstring' is not supported"},
       {"module a {\n enum Color { RED };\n};\n", 2, "'enum' is not supported"},
@@ -213,15 +211,16 @@ TEST_F(RegistryTest, UnknownTypeNamesTypeAndRoots) {
 TEST_F(RegistryTest, IncludesResolveInTheSameRootFirst) {
   // Both roots hold pkg/msg/Inner.idl with different members; Outer lives in the second root
   // and must get the second root's Inner even though the first root is searched first otherwise.
-  const std::string first = write("first", "pkg/msg/Inner.idl",
-                                  "module pkg { module msg { module dds_ { struct Inner_ { int8 from_first; }; }; }; };");
-  const std::string second = write("second", "pkg/msg/Inner.idl",
-                                   "module pkg { module msg { module dds_ { struct Inner_ { int8 from_second; }; }; }; };");
+  const std::string first =
+      write("first", "pkg/msg/Inner.idl",
+            "module pkg { module msg { module dds_ { struct Inner_ { int8 from_first; }; }; }; };");
+  const std::string second =
+      write("second", "pkg/msg/Inner.idl",
+            "module pkg { module msg { module dds_ { struct Inner_ { int8 from_second; }; }; }; };");
   write("second", "pkg/msg/Outer.idl", R"IDL(#include "pkg/msg/Inner.idl"
 #include "other/msg/Only.idl"
 module pkg { module msg { module dds_ { struct Outer_ { Inner_ inner; other::msg::dds_::Only_ only; }; }; }; };)IDL");
-  write("first", "other/msg/Only.idl",
-        "module other { module msg { module dds_ { struct Only_ { uint8 x; }; }; }; };");
+  write("first", "other/msg/Only.idl", "module other { module msg { module dds_ { struct Only_ { uint8 x; }; }; }; };");
   TypeRegistry registry;
   registry.add_root(first);
   registry.add_root(second);
@@ -254,7 +253,8 @@ TEST_F(RegistryTest, ListsTypesUnderAllRoots) {
 
 TEST_F(RegistryTest, AddsIdlFoldersOfAnInstallPrefix) {
   write("prefix", "share/std_msgs/idl/std_msgs/msg/Empty.idl",
-        "module std_msgs { module msg { module dds_ { struct Empty_ { uint8 structure_needs_at_least_one_member; }; }; }; };");
+        "module std_msgs { module msg { module dds_ { struct Empty_ { uint8 structure_needs_at_least_one_member; }; }; "
+        "}; };");
   write("prefix", "share/other/cmake/x.cmake", "");
   TypeRegistry registry;
   EXPECT_EQ(registry.add_install_prefix(path("prefix", "")), 1u);
@@ -262,4 +262,4 @@ TEST_F(RegistryTest, AddsIdlFoldersOfAnInstallPrefix) {
 }
 
 }  // namespace
-}  // namespace unav_introspection::test
+}  // namespace unav::introspection::test

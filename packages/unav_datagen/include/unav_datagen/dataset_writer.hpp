@@ -25,7 +25,7 @@
 
 #include <Eigen/Geometry>
 
-namespace unav_datagen {
+namespace unav::datagen {
 
 class DatasetError : public std::runtime_error {
  public:
@@ -98,4 +98,4 @@ class DatasetWriter final : public SequenceWriter {
   std::size_t frames_ = 0;
 };
 
-}  // namespace unav_datagen
+}  // namespace unav::datagen

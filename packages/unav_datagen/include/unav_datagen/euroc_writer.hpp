@@ -21,7 +21,7 @@
 
 #include "unav_datagen/dataset_writer.hpp"
 
-namespace unav_datagen {
+namespace unav::datagen {
 
 class EurocWriter final : public SequenceWriter {
  public:
@@ -54,4 +54,4 @@ class EurocWriter final : public SequenceWriter {
   std::size_t imu_samples_ = 0;
 };
 
-}  // namespace unav_datagen
+}  // namespace unav::datagen

@@ -17,7 +17,7 @@
 
 #include "unav_datagen/dataset_writer.hpp"
 
-namespace unav_datagen {
+namespace unav::datagen {
 
 class KittiWriter final : public SequenceWriter {
  public:
@@ -43,4 +43,4 @@ class KittiWriter final : public SequenceWriter {
   Eigen::Isometry3d X_C0W_ = Eigen::Isometry3d::Identity();  ///< inverse of the first camera pose
 };
 
-}  // namespace unav_datagen
+}  // namespace unav::datagen

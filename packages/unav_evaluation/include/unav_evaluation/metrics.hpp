@@ -7,7 +7,7 @@
 #include "unav_common/sim3.hpp"
 #include "unav_evaluation/trajectory.hpp"
 
-namespace unav_evaluation {
+namespace unav::evaluation {
 
 /// y = s * R * x + t (the workspace's one Sim(3), unav_common/sim3.hpp).
 using Sim3 = unav::common::Sim3;
@@ -53,4 +53,4 @@ struct Statistics {
 };
 Statistics statistics(const std::vector<double>& errors);
 
-}  // namespace unav_evaluation
+}  // namespace unav::evaluation

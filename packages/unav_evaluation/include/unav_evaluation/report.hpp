@@ -7,14 +7,14 @@
 
 #include "unav_evaluation/metrics.hpp"
 
-namespace unav_evaluation {
+namespace unav::evaluation {
 
 struct AlgorithmResult {
   std::string trajectory;  ///< e.g. "linear", "with loop"
   std::string algorithm;   ///< e.g. "orb_slam", "klt_vo"
   Statistics ape_m, rpe_m, ape_rad, rpe_rad;
-  std::size_t poses = 0;   ///< associated poses
-  double scale = 1.0;      ///< Sim(3) scale applied to the estimate
+  std::size_t poses = 0;  ///< associated poses
+  double scale = 1.0;     ///< Sim(3) scale applied to the estimate
 };
 
 /// Evaluates one estimate against ground truth: association (max_diff), alignment, APE and RPE
@@ -39,4 +39,4 @@ std::vector<AlgorithmResult> read_result_rows(const std::string& path);
 void write_top_view_png(const std::string& path, const Trajectory& ground_truth,
                         const std::vector<std::pair<std::string, Trajectory>>& estimates, int size_px = 800);
 
-}  // namespace unav_evaluation
+}  // namespace unav::evaluation

@@ -7,7 +7,7 @@
 
 #include <Eigen/Geometry>
 
-namespace unav_evaluation {
+namespace unav::evaluation {
 
 /// A trajectory file or pairing is unusable; what() names the file, line and rule.
 class TrajectoryError : public std::runtime_error {
@@ -41,7 +41,7 @@ void write_tum(const std::string& path, const Trajectory& traj);
 /// trajectory takes the nearest stamp of the longer one (after adding `offset_s` to the second
 /// trajectory's stamps) when it is within `max_diff_s`. Returns the two reduced trajectories in
 /// the argument order. Throws TrajectoryError when no pair is found (no overlap in time).
-std::pair<Trajectory, Trajectory> associate(const Trajectory& first, const Trajectory& second,
-                                            double max_diff_s = 0.01, double offset_s = 0.0);
+std::pair<Trajectory, Trajectory> associate(const Trajectory& first, const Trajectory& second, double max_diff_s = 0.01,
+                                            double offset_s = 0.0);
 
-}  // namespace unav_evaluation
+}  // namespace unav::evaluation

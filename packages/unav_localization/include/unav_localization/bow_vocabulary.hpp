@@ -25,7 +25,7 @@
 
 #include <opencv2/core.hpp>
 
-namespace unav_localization {
+namespace unav::localization {
 
 using WordId = uint32_t;
 using NodeId = uint32_t;
@@ -61,8 +61,7 @@ class BowVocabulary {
   /// descriptors included), n = how many of them have a descriptor that reaches the word.
   /// Throws std::invalid_argument for invalid options, no images, a descriptor matrix of the
   /// wrong type or width, or no descriptors at all.
-  static BowVocabulary Train(const std::vector<cv::Mat>& descriptors_per_image,
-                             const VocabularyOptions& options);
+  static BowVocabulary Train(const std::vector<cv::Mat>& descriptors_per_image, const VocabularyOptions& options);
 
   /// Writes a compact binary file (magic "UNAVBOW1", format version, tree, idf weights,
   /// checksum). Throws std::runtime_error naming the path when it cannot be written.
@@ -93,8 +92,7 @@ class BowVocabulary {
   /// features under the root 0; a path ending above that depth uses its leaf). With a full tree
   /// this is the ancestor levels_up levels above the leaf. fv also holds the features of
   /// zero-weight words. Throws like Word, and std::invalid_argument for levels_up < 0.
-  void Transform(const cv::Mat& descriptors, BowVector* bow, FeatureVector* fv = nullptr,
-                 int levels_up = 2) const;
+  void Transform(const cv::Mat& descriptors, BowVector* bow, FeatureVector* fv = nullptr, int levels_up = 2) const;
 
   /// DBoW2 L1 score of two L1-normalised vectors with non-negative weights:
   /// 1 - 0.5 * |a - b|_1 = sum over shared words of min(a_w, b_w), in [0, 1]; 1 for identical
@@ -107,7 +105,7 @@ class BowVocabulary {
     NodeId parent = 0;
     NodeId first_child = 0;  ///< children are stored contiguously: [first_child, +num_children)
     uint32_t num_children = 0;
-    WordId word = kNoWord;   ///< leaf word id, kNoWord for inner nodes
+    WordId word = kNoWord;  ///< leaf word id, kNoWord for inner nodes
   };
   static constexpr WordId kNoWord = 0xFFFFFFFFu;
 
@@ -117,10 +115,10 @@ class BowVocabulary {
 
   int branching_ = 0;
   int levels_ = 0;
-  std::vector<Node> nodes_;              ///< nodes_[0] is the root
-  std::vector<Descriptor> centres_;      ///< per node (the root's is unused)
-  std::vector<NodeId> words_;            ///< word id -> leaf node
-  std::vector<double> weights_;          ///< word id -> idf weight
+  std::vector<Node> nodes_;          ///< nodes_[0] is the root
+  std::vector<Descriptor> centres_;  ///< per node (the root's is unused)
+  std::vector<NodeId> words_;        ///< word id -> leaf node
+  std::vector<double> weights_;      ///< word id -> idf weight
 
   friend class BowVocabularyImpl;  // training and distance kernels (bow_vocabulary.cpp)
 };
@@ -137,8 +135,7 @@ class BowDatabase {
   /// Entries sharing at least one word with v, with BowVocabulary::Score(v, entry), best first
   /// (equal scores: lower id first), only those with score >= min_score and not in exclude, at
   /// most max_results of them.
-  std::vector<std::pair<int, double>> Query(const BowVector& v, double min_score,
-                                            const std::set<int>& exclude = {},
+  std::vector<std::pair<int, double>> Query(const BowVector& v, double min_score, const std::set<int>& exclude = {},
                                             size_t max_results = 50) const;
 
  private:
@@ -146,4 +143,4 @@ class BowDatabase {
   std::unordered_map<int, BowVector> entries_;
 };
 
-}  // namespace unav_localization
+}  // namespace unav::localization

@@ -7,7 +7,7 @@
 
 #include "unav_localization/slam_map.hpp"
 
-namespace unav_localization {
+namespace unav::localization {
 
 /// An input file is unusable; what() names the file (and line or key) and the rule.
 class InputError : public std::runtime_error {
@@ -37,4 +37,4 @@ struct SequenceImage {
 /// empty folder, a malformed rgb.txt line (file:line) or non-increasing stamps.
 std::vector<SequenceImage> ListImages(const std::string& dir, double fps = 10.0);
 
-}  // namespace unav_localization
+}  // namespace unav::localization

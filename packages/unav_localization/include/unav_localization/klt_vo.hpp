@@ -31,35 +31,35 @@
 #include <Eigen/Geometry>
 #include <opencv2/core.hpp>
 
-namespace unav_localization {
+namespace unav::localization {
 
 struct KltVoOptions {
   enum class Mode { kRgbd, kMonocular };
-  Mode mode = Mode::kRgbd;         ///< kMonocular: gray images only, arbitrary scale
+  Mode mode = Mode::kRgbd;  ///< kMonocular: gray images only, arbitrary scale
 
   int max_features = 400;          ///< corners kept per frame
   double min_corner_distance = 8;  ///< px between corners
   int redetect_below = 150;        ///< RGB-D: re-detect corners when fewer are tracked
   double fb_max_error_px = 1.0;    ///< forward-backward tracking consistency
   double ransac_reprojection_px = 2.0;
-  int min_inliers = 12;            ///< fewer (or under 30% of the tracks): tracking lost for this frame
+  int min_inliers = 12;                          ///< fewer (or under 30% of the tracks): tracking lost for this frame
   double min_depth_m = 0.1, max_depth_m = 30.0;  ///< RGB-D: depths outside are not used
-  double max_step_rotation_rad = 0.35;  ///< larger frame-to-frame rotations are rejected as wrong
-  double max_step_translation_m = 1.0;  ///< RGB-D: larger frame-to-frame translations are rejected
+  double max_step_rotation_rad = 0.35;           ///< larger frame-to-frame rotations are rejected as wrong
+  double max_step_translation_m = 1.0;           ///< RGB-D: larger frame-to-frame translations are rejected
 
   // Monocular mode.
-  double min_init_parallax_px = 20.0;  ///< median track displacement from the reference frame before
-                                       ///< an initialisation is tried [px]
-  int min_init_tracks = 60;            ///< fewer tracks from the reference frame: new reference frame
-  int min_init_points = 50;            ///< well-triangulated points needed to accept an initialisation
-  double keyframe_parallax_px = 25.0;  ///< new keyframe when the median track displacement since the
-                                       ///< last keyframe exceeds this [px]
-  int keyframe_min_points = 100;       ///< new keyframe when fewer map points are tracked
-  double min_triangulation_angle_rad = 0.02;   ///< rays meeting at a smaller angle are not mapped
+  double min_init_parallax_px = 20.0;              ///< median track displacement from the reference frame before
+                                                   ///< an initialisation is tried [px]
+  int min_init_tracks = 60;                        ///< fewer tracks from the reference frame: new reference frame
+  int min_init_points = 50;                        ///< well-triangulated points needed to accept an initialisation
+  double keyframe_parallax_px = 25.0;              ///< new keyframe when the median track displacement since the
+                                                   ///< last keyframe exceeds this [px]
+  int keyframe_min_points = 100;                   ///< new keyframe when fewer map points are tracked
+  double min_triangulation_angle_rad = 0.02;       ///< rays meeting at a smaller angle are not mapped
   double max_triangulation_reprojection_px = 2.0;  ///< in both views, for a point to be mapped
-  double max_step_translation_depth = 0.5;  ///< frame-to-frame translation limit, in units of the
-                                            ///< median depth of the tracked points (scale-free)
-  int grid_cols = 8, grid_rows = 5;    ///< new corners are spread over this grid of image cells
+  double max_step_translation_depth = 0.5;         ///< frame-to-frame translation limit, in units of the
+                                                   ///< median depth of the tracked points (scale-free)
+  int grid_cols = 8, grid_rows = 5;                ///< new corners are spread over this grid of image cells
 
   bool IsValid(std::string* msg) const;
 };
@@ -102,9 +102,9 @@ class KltVo {
   // Monocular. A track is a corner followed from the frame it was detected in ("birth"); it gets a
   // map point when triangulated at a keyframe.
   struct Track {
-    cv::Point2f px;        ///< in the previous (after tracking: the current) frame
-    cv::Point2f kf_px;     ///< in the last keyframe
-    cv::Point2f birth_px;  ///< in the frame it was detected in
+    cv::Point2f px;                                           ///< in the previous (after tracking: the current) frame
+    cv::Point2f kf_px;                                        ///< in the last keyframe
+    cv::Point2f birth_px;                                     ///< in the frame it was detected in
     Eigen::Isometry3d T_C0B = Eigen::Isometry3d::Identity();  ///< pose of that frame
     bool has_point = false;
     Eigen::Vector3d p_C0 = Eigen::Vector3d::Zero();  ///< map point [map units]
@@ -121,8 +121,8 @@ class KltVo {
   cv::Matx33d K_;
   KltVoOptions options_;
   cv::Mat prev_gray_;
-  std::vector<cv::Point2f> prev_pts_;        ///< current image positions of the keyframe's tracks
-  std::vector<cv::Point3f> kf_points_;       ///< their 3D points in the keyframe camera frame
+  std::vector<cv::Point2f> prev_pts_;                        ///< current image positions of the keyframe's tracks
+  std::vector<cv::Point3f> kf_points_;                       ///< their 3D points in the keyframe camera frame
   Eigen::Isometry3d T_C0K_ = Eigen::Isometry3d::Identity();  ///< keyframe pose
   Eigen::Isometry3d T_C0C_ = Eigen::Isometry3d::Identity();
   Eigen::Isometry3d last_motion_ = Eigen::Isometry3d::Identity();  ///< T_{k-1,k}
@@ -135,4 +135,4 @@ class KltVo {
   bool ever_initialized_ = false;
 };
 
-}  // namespace unav_localization
+}  // namespace unav::localization

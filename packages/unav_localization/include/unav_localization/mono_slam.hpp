@@ -22,33 +22,33 @@
 #include "unav_localization/orb_extractor.hpp"
 #include "unav_localization/slam_map.hpp"
 
-namespace unav_localization {
+namespace unav::localization {
 
 struct MonoSlamOptions {
   OrbOptions orb;
-  int init_orb_features_factor = 2;      ///< more features while initialising
-  double init_min_parallax_deg = 1.0;    ///< triangulated points need this much parallax
-  int init_min_points = 60;              ///< triangulated points to accept an initial map
-  int init_max_frames = 30;              ///< a reference frame older than this is replaced
-  int min_tracked_inliers = 30;          ///< fewer after pose optimisation: tracking lost
-  int keyframe_max_gap = 10;             ///< frames between keyframes at most
-  int keyframe_min_gap = 2;              ///< frames between keyframes at least (unless weak)
-  double keyframe_tracked_ratio = 0.8;   ///< new keyframe when tracked < ratio x reference's
-  int local_ba_keyframes = 10;           ///< keyframes optimised by local BA
+  int init_orb_features_factor = 2;     ///< more features while initialising
+  double init_min_parallax_deg = 1.0;   ///< triangulated points need this much parallax
+  int init_min_points = 60;             ///< triangulated points to accept an initial map
+  int init_max_frames = 30;             ///< a reference frame older than this is replaced
+  int min_tracked_inliers = 30;         ///< fewer after pose optimisation: tracking lost
+  int keyframe_max_gap = 10;            ///< frames between keyframes at most
+  int keyframe_min_gap = 2;             ///< frames between keyframes at least (unless weak)
+  double keyframe_tracked_ratio = 0.8;  ///< new keyframe when tracked < ratio x reference's
+  int local_ba_keyframes = 10;          ///< keyframes optimised by local BA
   int local_ba_iterations = 10;
-  int mapping_neighbours = 10;           ///< keyframes searched for new points
+  int mapping_neighbours = 10;  ///< keyframes searched for new points
   bool loop_closing = true;
-  double loop_min_score_ratio = 1.0;     ///< candidate score >= ratio x weakest covisible score
-  int loop_consistency = 2;              ///< consecutive keyframes that must agree
-  int loop_min_inliers = 40;             ///< matches after Sim(3) optimisation and guided search
-  int loop_min_keyframe_gap = 20;        ///< keyframes between the loop ends at least
+  double loop_min_score_ratio = 1.0;  ///< candidate score >= ratio x weakest covisible score
+  int loop_consistency = 2;           ///< consecutive keyframes that must agree
+  int loop_min_inliers = 40;          ///< matches after Sim(3) optimisation and guided search
+  int loop_min_keyframe_gap = 20;     ///< keyframes between the loop ends at least
   /// A loop whose correction moves the current keyframe further than this share of the path
   /// flown since the loop keyframe is taken for perceptual aliasing (a repetitive seabed) and
   /// rejected: it would mean several times the drift this SLAM shows (< 0.5 % here).
   double loop_max_correction_ratio = 0.08;
   bool global_ba_after_loop = true;
   int global_ba_iterations = 15;
-  int relocalize_frames = 10;            ///< frames of relocalisation attempts before re-initialising
+  int relocalize_frames = 10;  ///< frames of relocalisation attempts before re-initialising
   bool IsValid(std::string* msg) const;
 };
 
@@ -58,7 +58,7 @@ const char* to_string(SlamState state);
 struct SlamFrameSummary {
   SlamState state = SlamState::kInvalidInput;
   int features = 0;
-  int inliers = 0;          ///< map points matched after pose optimisation
+  int inliers = 0;  ///< map points matched after pose optimisation
   bool keyframe = false;
   bool loop_closed = false;
   bool reinitialized = false;
@@ -103,4 +103,4 @@ class MonoSlam {
   std::unique_ptr<Impl> impl_;
 };
 
-}  // namespace unav_localization
+}  // namespace unav::localization

@@ -10,15 +10,15 @@
 #include <opencv2/core.hpp>
 #include <opencv2/features2d.hpp>
 
-namespace unav_localization {
+namespace unav::localization {
 
 struct OrbOptions {
-  int features = 1000;       ///< features kept per image
+  int features = 1000;        ///< features kept per image
   double scale_factor = 1.2;  ///< pyramid scale between levels
-  int levels = 8;            ///< pyramid levels
-  int fast_threshold = 12;   ///< FAST threshold (intensity units); low, the grid selects
-  int cell_px = 32;          ///< grid cell size at level 0 [px]
-  int edge_px = 19;          ///< border without features (ORB patch radius + margin) [px]
+  int levels = 8;             ///< pyramid levels
+  int fast_threshold = 12;    ///< FAST threshold (intensity units); low, the grid selects
+  int cell_px = 32;           ///< grid cell size at level 0 [px]
+  int edge_px = 19;           ///< border without features (ORB patch radius + margin) [px]
   bool IsValid(std::string* msg) const;
 };
 
@@ -44,6 +44,8 @@ class OrbExtractor {
 
 /// Hamming distance between two 32-byte ORB descriptors.
 int DescriptorDistance(const uint8_t* a, const uint8_t* b);
-inline int DescriptorDistance(const cv::Mat& a, const cv::Mat& b) { return DescriptorDistance(a.ptr<uint8_t>(), b.ptr<uint8_t>()); }
+inline int DescriptorDistance(const cv::Mat& a, const cv::Mat& b) {
+  return DescriptorDistance(a.ptr<uint8_t>(), b.ptr<uint8_t>());
+}
 
-}  // namespace unav_localization
+}  // namespace unav::localization

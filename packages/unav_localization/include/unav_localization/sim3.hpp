@@ -6,7 +6,7 @@
 
 #include "unav_common/sim3.hpp"
 
-namespace unav_localization {
+namespace unav::localization {
 
 /// The workspace's one Sim(3) (unav_common/sim3.hpp).
 using Sim3 = unav::common::Sim3;
@@ -15,4 +15,4 @@ using Sim3 = unav::common::Sim3;
 /// Returns false when the points are degenerate (collinear, coincident).
 bool EstimateSim3(const Eigen::Matrix3Xd& from, const Eigen::Matrix3Xd& to, bool fix_scale, Sim3* S);
 
-}  // namespace unav_localization
+}  // namespace unav::localization

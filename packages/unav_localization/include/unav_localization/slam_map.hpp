@@ -14,7 +14,7 @@
 
 #include "unav_localization/bow_vocabulary.hpp"
 
-namespace unav_localization {
+namespace unav::localization {
 
 /// Pinhole camera of rectified pixel coordinates (features are undistorted on extraction).
 struct PinholeCamera {
@@ -55,27 +55,27 @@ struct Features {
 struct MapPoint {
   int id = -1;
   Eigen::Vector3d X_w = Eigen::Vector3d::Zero();
-  cv::Mat descriptor;            ///< representative: least median distance to its observations
-  std::map<int, int> obs;        ///< keyframe id -> feature index
+  cv::Mat descriptor;                                 ///< representative: least median distance to its observations
+  std::map<int, int> obs;                             ///< keyframe id -> feature index
   Eigen::Vector3d normal = Eigen::Vector3d::UnitZ();  ///< mean viewing direction (world)
   double min_distance = 0, max_distance = 0;          ///< scale-invariance range [map units]
-  int first_kf = -1;             ///< keyframe that created it
-  int ref_kf = -1;               ///< keyframe whose correction moves it
-  int visible = 1, found = 1;    ///< times predicted in view / times matched (tracking)
-  int last_seen_frame = -1;      ///< tracking bookkeeping
+  int first_kf = -1;                                  ///< keyframe that created it
+  int ref_kf = -1;                                    ///< keyframe whose correction moves it
+  int visible = 1, found = 1;                         ///< times predicted in view / times matched (tracking)
+  int last_seen_frame = -1;                           ///< tracking bookkeeping
   bool bad = false;
   double FoundRatio() const { return static_cast<double>(found) / visible; }
 };
 
 struct KeyFrame {
   int id = -1;
-  int frame_index = -1;          ///< index of the tracked frame it was made from
+  int frame_index = -1;  ///< index of the tracked frame it was made from
   double stamp = 0.0;
   Eigen::Isometry3d T_cw = Eigen::Isometry3d::Identity();
   Features f;
-  std::vector<int> points;       ///< feature index -> map point id (-1: none)
+  std::vector<int> points;          ///< feature index -> map point id (-1: none)
   std::map<int, int> covisibility;  ///< keyframe id -> shared map points (>= threshold)
-  int parent = -1;               ///< spanning tree
+  int parent = -1;                  ///< spanning tree
   std::set<int> children, loop_edges;
   bool bad = false;
   Eigen::Vector3d Center() const { return T_cw.inverse().translation(); }
@@ -105,4 +105,4 @@ struct Map {
   double MedianDepth(int kf_id) const;
 };
 
-}  // namespace unav_localization
+}  // namespace unav::localization

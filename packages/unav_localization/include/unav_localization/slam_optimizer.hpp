@@ -10,7 +10,7 @@
 #include "unav_localization/sim3.hpp"
 #include "unav_localization/slam_map.hpp"
 
-namespace unav_localization {
+namespace unav::localization {
 
 struct PoseObservation {
   Eigen::Vector3d X_w;
@@ -31,12 +31,13 @@ struct BundleAdjustmentSummary {
 /// Local BA around keyframe `kf_id`: it and its covisible keyframes (up to max_local) are
 /// optimised with every point they see; other keyframes that see those points stay fixed, and so
 /// does keyframe 0 (gauge). Outlier observations are erased from the map afterwards.
-BundleAdjustmentSummary LocalBundleAdjustment(Map* map, const PinholeCamera& cam, const std::vector<double>& level_sigma2,
-                                              int kf_id, int max_local, int iterations);
+BundleAdjustmentSummary LocalBundleAdjustment(Map* map, const PinholeCamera& cam,
+                                              const std::vector<double>& level_sigma2, int kf_id, int max_local,
+                                              int iterations);
 
 /// All keyframes and points, keyframe 0 fixed.
-BundleAdjustmentSummary GlobalBundleAdjustment(Map* map, const PinholeCamera& cam, const std::vector<double>& level_sigma2,
-                                               int iterations);
+BundleAdjustmentSummary GlobalBundleAdjustment(Map* map, const PinholeCamera& cam,
+                                               const std::vector<double>& level_sigma2, int iterations);
 
 struct Sim3Match {
   Eigen::Vector3d X1_c1, X2_c2;  ///< the matched points in their keyframes' camera frames
@@ -56,7 +57,7 @@ struct PoseGraphEdge {
 /// Essential-graph optimisation over keyframe Sim(3) poses S_iw (world -> camera i): minimises
 /// the relative-pose errors of the edges, keeping `fixed` keyframes constant. S_iw is indexed by
 /// keyframe id; entries of bad keyframes are ignored.
-void OptimizePoseGraph(std::vector<Sim3>* S_iw, const std::vector<bool>& active, const std::vector<PoseGraphEdge>& edges,
-                       const std::vector<int>& fixed, int iterations);
+void OptimizePoseGraph(std::vector<Sim3>* S_iw, const std::vector<bool>& active,
+                       const std::vector<PoseGraphEdge>& edges, const std::vector<int>& fixed, int iterations);
 
-}  // namespace unav_localization
+}  // namespace unav::localization

@@ -10,7 +10,7 @@
 #include <Eigen/Core>
 #include <opencv2/core.hpp>
 
-namespace unav_localization {
+namespace unav::localization {
 
 struct TwoViewOptions {
   double essential_ransac_px = 1.0;  ///< epipolar RANSAC threshold
@@ -37,4 +37,4 @@ struct TwoViewCandidate {
 std::vector<TwoViewCandidate> TwoViewCandidates(const std::vector<cv::Point2f>& p1, const std::vector<cv::Point2f>& p2,
                                                 const cv::Matx33d& K, const TwoViewOptions& options = {});
 
-}  // namespace unav_localization
+}  // namespace unav::localization

@@ -7,7 +7,7 @@
 #include <memory>
 #include <string>
 
-namespace unav_renderer {
+namespace unav::renderer {
 
 struct EglOptions {
   enum class Platform { kAuto, kDevice, kSurfaceless };
@@ -28,7 +28,7 @@ class EglContext {
   EglContext& operator=(const EglContext&) = delete;
 
   void make_current();
-  const std::string& platform() const { return platform_; }   ///< "device[0]" or "surfaceless"
+  const std::string& platform() const { return platform_; }  ///< "device[0]" or "surfaceless"
   const std::string& gl_vendor() const { return vendor_; }
   const std::string& gl_renderer() const { return renderer_; }
   const std::string& gl_version() const { return version_; }
@@ -40,4 +40,4 @@ class EglContext {
   std::string platform_, vendor_, renderer_, version_;
 };
 
-}  // namespace unav_renderer
+}  // namespace unav::renderer

@@ -6,7 +6,7 @@
 
 #include "unav_scene/errors.hpp"
 
-namespace unav_renderer {
+namespace unav::renderer {
 
 /// Bad configuration: world/water/camera YAML, missing or unreadable mesh, bad value.
 using unav::scene::ConfigError;
@@ -23,4 +23,4 @@ class GlError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
-}  // namespace unav_renderer
+}  // namespace unav::renderer

@@ -24,7 +24,7 @@
 #include "unav_scene/water.hpp"
 #include "unav_scene/world.hpp"
 
-namespace unav_renderer {
+namespace unav::renderer {
 
 // The scene (world, water, cameras, frames) is described by unav_scene; the renderer draws it.
 using namespace unav::scene;  // NOLINT(google-build-using-namespace): World, CameraModel, Pose, ...
@@ -128,4 +128,4 @@ void write_png_rgb(const Frame& frame, const std::string& path);
 /// Read a PNG as rgb8 (width, height out). Throws ConfigError naming the file.
 std::vector<std::uint8_t> read_png_rgb(const std::string& path, int* width, int* height);
 
-}  // namespace unav_renderer
+}  // namespace unav::renderer

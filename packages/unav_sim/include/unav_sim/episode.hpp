@@ -30,8 +30,8 @@
 namespace unav::sim {
 
 using unav::physics::RigidBodyState;
+using unav::renderer::Frame;
 using unav::scene::World;
-using unav_renderer::Frame;
 
 /// What an episode is made of, as files (relative paths: under the resource roots' config/,
 /// see unav_common/resources.hpp) and switches. Config schema (config/learning/*.yaml `episode:`).
@@ -84,7 +84,7 @@ struct EpisodeSetup {
   control::MpcConfig mpc;
   control::AllocatorConfig allocator;
   std::vector<scene::CameraModel> cameras;
-  unav_renderer::RenderOptions render;
+  unav::renderer::RenderOptions render;
 };
 /// Loads every file of `params`; throws ConfigError naming the file/key on any problem.
 EpisodeSetup load_episode_setup(const EpisodeParams& params);
@@ -103,7 +103,7 @@ class Episode {
  public:
   /// Builds the simulator, controllers and renderer for `world`. `context`: an EGL context to
   /// share (vectorised environments); null = a new one. Throws ConfigError / EglError.
-  Episode(EpisodeSetup setup, World world, std::shared_ptr<unav_renderer::EglContext> context = nullptr);
+  Episode(EpisodeSetup setup, World world, std::shared_ptr<unav::renderer::EglContext> context = nullptr);
   ~Episode();
   Episode(const Episode&) = delete;
   Episode& operator=(const Episode&) = delete;
@@ -134,7 +134,7 @@ class Episode {
   const EpisodeSetup& setup() const { return setup_; }
   const EpisodeTimings& timings() const { return timings_; }
   physics::Simulator& simulator() { return *sim_; }
-  unav_renderer::Renderer& renderer() { return *renderer_; }
+  unav::renderer::Renderer& renderer() { return *renderer_; }
   /// MPC solver failures and allocator saturations since reset().
   int solver_failures() const { return solver_failures_; }
 
@@ -143,7 +143,7 @@ class Episode {
   std::unique_ptr<physics::Simulator> sim_;
   std::unique_ptr<control::Mpc> mpc_;
   std::unique_ptr<control::Allocator> allocator_;
-  std::unique_ptr<unav_renderer::Renderer> renderer_;
+  std::unique_ptr<unav::renderer::Renderer> renderer_;
   control::PoseSetpoint setpoint_;
   EpisodeTimings timings_;
   std::uint64_t seed_ = 0;

@@ -124,7 +124,7 @@ struct PipeFollowingStep {
 class PipeFollowingEnv {
  public:
   /// Throws ConfigError (bad config), EglError (no context). `context`: share an EGL context.
-  explicit PipeFollowingEnv(PipeFollowingConfig config, std::shared_ptr<unav_renderer::EglContext> context = nullptr);
+  explicit PipeFollowingEnv(PipeFollowingConfig config, std::shared_ptr<unav::renderer::EglContext> context = nullptr);
   ~PipeFollowingEnv();
 
   int obs_width() const;

@@ -82,8 +82,8 @@ struct UmeyamaResult {
 ///   D = diag(1, 1, det(U) det(V) < 0 ? -1 : 1), R = U D V^T,
 ///   s = with_scale ? trace(diag(sv) D) / var : 1, t = m_t - s R m_f.
 /// The status checks, in order: sizes, min_points, spread, collinearity, scale. These are
-/// exactly the operations of the former unav_localization::EstimateSim3 and
-/// unav_evaluation::umeyama (bit-identical results, tested); their different rejection rules
+/// exactly the operations of the former unav::localization::EstimateSim3 and
+/// unav::evaluation::umeyama (bit-identical results, tested); their different rejection rules
 /// are reproduced from the status and the diagnostics (see test/test_sim3.cpp).
 UmeyamaResult Umeyama(const Eigen::Matrix3Xd& from, const Eigen::Matrix3Xd& to, const UmeyamaOptions& options = {});
 

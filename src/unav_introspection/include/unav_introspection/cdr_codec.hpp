@@ -12,7 +12,7 @@
 
 #include "unav_introspection/type_description.hpp"
 
-namespace unav_introspection {
+namespace unav::introspection {
 
 /// A value does not fit its type (encode) or the bytes are not a valid sample (decode).
 /// what() names the field path, e.g. "header.stamp.sec: ...".
@@ -48,4 +48,4 @@ std::string to_echo_yaml(const StructType& type, const uint8_t* data, size_t siz
 /// A double formatted like PyYAML dumps a Python float: "1.0", "0.1", "1.0e-05", ".nan", "-.inf".
 std::string format_float_like_python(double value);
 
-}  // namespace unav_introspection
+}  // namespace unav::introspection

@@ -8,7 +8,7 @@
 
 #include <yaml-cpp/yaml.h>
 
-namespace unav_introspection {
+namespace unav::introspection {
 
 /// IDL primitive types, normalized (`long` is kInt32, `unsigned short` is kUint16, ...).
 enum class PrimitiveKind : uint8_t {
@@ -69,4 +69,4 @@ std::string field_type_string(const Field& field);
 /// Human-readable element type: "double", "string", "std_msgs/msg/Header".
 std::string element_type_string(const ElementType& type);
 
-}  // namespace unav_introspection
+}  // namespace unav::introspection

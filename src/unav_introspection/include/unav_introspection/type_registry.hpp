@@ -8,7 +8,7 @@
 
 #include "unav_introspection/type_description.hpp"
 
-namespace unav_introspection {
+namespace unav::introspection {
 
 /// An IDL file could not be read or parsed; what() is "file:line: message".
 class IdlError : public std::runtime_error {
@@ -87,4 +87,4 @@ class TypeRegistry {
   std::unique_ptr<Impl> impl_;
 };
 
-}  // namespace unav_introspection
+}  // namespace unav::introspection
