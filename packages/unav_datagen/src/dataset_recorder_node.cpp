@@ -1,7 +1,9 @@
 // dataset_recorder: writes one camera's rgb/depth/segmentation frames with ground-truth poses and
 // IMU in a dataset layout: `format` tum (TUM RGB-D, default), euroc (EuRoC/ASL) or kitti (KITTI
 // odometry); see unav_datagen/dataset_writer.hpp, euroc_writer.hpp, kitti_writer.hpp. Every line
-// is flushed as it is written, so Ctrl-C loses nothing.
+// is flushed as it is written, so Ctrl-C loses nothing. On shutdown (Ctrl-C included) it writes
+// manifest.json (unav_datagen/manifest.hpp): camera, mount, counts, labels, depth units, source,
+// software commit and the SHA-256 of every file.
 //
 // Ports (relative to the node namespace, default /rov):
 //   sub  camera/<camera>/image_raw, depth/image_raw, segmentation/image_raw   sensor_msgs/Image
@@ -23,12 +25,14 @@
 #include "unav_common/config.hpp"
 #include "unav_common/resources.hpp"
 #include "unav_datagen/dataset_writer.hpp"
+#include "unav_datagen/manifest.hpp"
 #include "unav_runtime/conversions.hpp"
 #include "unav_runtime/lockstep_ack.hpp"
 #include "unav_runtime/runtime.hpp"
 #include "unav_runtime/synchronizer.hpp"
 #include "unav_runtime/tf_static.hpp"
 #include "unav_scene/camera.hpp"
+#include "unav_scene/world.hpp"
 
 namespace unav::datagen {
 namespace {
@@ -47,6 +51,7 @@ struct DatasetRecorderParams {
   std::string body_frame = "base_link_frd";
   bool lockstep = false;
   std::string lockstep_name = "recorder";
+  std::string world;
 
   template <class Archive>
   void Serialize(Archive* a) {
@@ -59,6 +64,7 @@ struct DatasetRecorderParams {
     a->Visit(Field("body_frame", &body_frame).Doc("vehicle body frame (tf parent of the camera)"));
     a->Visit(Field("lockstep", &lockstep).Doc("ack every odometry on /lockstep/ack"));
     a->Visit(Field("lockstep_name", &lockstep_name).Doc("participant name in acks"));
+    a->Visit(Field("world", &world).Doc("world file of the run, recorded in manifest.json (not read)"));
   }
 };
 
@@ -69,6 +75,16 @@ class DatasetRecorder : public unav::Node {
     declare_params(&prm);
     const std::string& out = prm.output_dir;
     camera_ = prm.camera;
+    using unav::scene::SegClass;
+    manifest_.format = prm.format;
+    manifest_.camera = camera_;
+    manifest_.parent_frame = prm.body_frame;
+    if (!prm.world.empty()) manifest_.source["world"] = prm.world;
+    manifest_.labels = {{static_cast<int>(SegClass::kWater), "water"},
+                        {static_cast<int>(SegClass::kSeabed), "seabed"},
+                        {static_cast<int>(SegClass::kPipeline), "pipeline"},
+                        {static_cast<int>(SegClass::kRock), "rock"},
+                        {static_cast<int>(SegClass::kOther), "other"}};
     try {
       writer_ = make_sequence_writer(prm.format, out);
     } catch (const DatasetError& e) {
@@ -128,6 +144,7 @@ class DatasetRecorder : public unav::Node {
                                                                     k.cy = m.k()[5];
                                                                     k.distortion = m.d();
                                                                     writer_->write_camera(k);
+                                                                    manifest_.intrinsics = k;
                                                                     camera_written_ = true;
                                                                   });
     odom_sub_ = create_subscription<nav_msgs::msg::Odometry>(
@@ -154,6 +171,13 @@ class DatasetRecorder : public unav::Node {
           "poses not written (give cameras_config to record without the renderer's tf)",
           camera_, unmounted_.size());
     writer_->close();
+    manifest_.mount_known = have_mount_;
+    manifest_.X_BC = X_BC_;
+    try {
+      unav::datagen::write_manifest(*writer_, manifest_);
+    } catch (const std::exception& e) {
+      logger()->error("manifest.json not written: {}", e.what());
+    }
     for (const auto& w : writer_->warnings()) logger()->warn("{}", w);
     logger()->info("dataset closed: {} frames in {}", writer_->frames(), writer_->root());
   }
@@ -179,6 +203,7 @@ class DatasetRecorder : public unav::Node {
   Eigen::Isometry3d X_BC_ = Eigen::Isometry3d::Identity();
   std::unique_ptr<SequenceWriter> writer_;
   bool camera_written_ = false;
+  unav::datagen::ManifestInput manifest_;
   bool have_mount_ = false;
   std::unique_ptr<unav::StaticTransformListener> tf_static_;
   std::vector<std::pair<double, Eigen::Isometry3d>> unmounted_;  ///< image poses before the mount arrived

@@ -11,9 +11,9 @@
 namespace unav::datagen {
 namespace fs = std::filesystem;
 
-std::uint16_t encode_depth(float metres) {
+std::uint16_t encode_depth(float metres, double units_per_metre) {
   if (!std::isfinite(metres) || metres <= 0.0f) return 0;
-  const double v = std::round(static_cast<double>(metres) * kDepthScale);
+  const double v = std::round(static_cast<double>(metres) * units_per_metre);
   return v > 65535.0 ? 0 : static_cast<std::uint16_t>(v);
 }
 
@@ -87,7 +87,7 @@ void DatasetWriter::write_rgb(double stamp, int width, int height, const std::ui
   write_png(root_ + "/" + name, bgr);
   rgb_txt_ << stamp << ' ' << name << '\n';
   rgb_txt_.flush();
-  ++frames_;
+  ++counts_.images;
 }
 
 void DatasetWriter::write_depth(double stamp, int width, int height, const float* depth_m) {
@@ -98,6 +98,7 @@ void DatasetWriter::write_depth(double stamp, int width, int height, const float
   write_png(root_ + "/" + name, d);
   depth_txt_ << stamp << ' ' << name << '\n';
   depth_txt_.flush();
+  ++counts_.depth;
 }
 
 void DatasetWriter::write_segmentation(double stamp, int width, int height, const std::uint8_t* ids) {
@@ -105,17 +106,20 @@ void DatasetWriter::write_segmentation(double stamp, int width, int height, cons
   write_png(root_ + "/" + name, cv::Mat(height, width, CV_8UC1, const_cast<std::uint8_t*>(ids)));
   seg_txt_ << stamp << ' ' << name << '\n';
   seg_txt_.flush();
+  ++counts_.segmentation;
 }
 
 void DatasetWriter::write_pose(double stamp, const Eigen::Isometry3d& X_WC, const Eigen::Isometry3d& X_WB) {
   pose_line(gt_txt_, stamp, X_WC);
   pose_line(gt_body_txt_, stamp, X_WB);
+  ++counts_.poses;
 }
 
 void DatasetWriter::write_imu(double stamp, const Eigen::Vector3d& gyro, const Eigen::Vector3d& accel) {
   imu_txt_ << stamp << ' ' << gyro.x() << ' ' << gyro.y() << ' ' << gyro.z() << ' ' << accel.x() << ' ' << accel.y()
            << ' ' << accel.z() << '\n';
   imu_txt_.flush();
+  ++counts_.imu;
 }
 
 }  // namespace unav::datagen

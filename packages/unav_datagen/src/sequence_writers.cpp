@@ -4,6 +4,7 @@
 #include <cmath>
 #include <filesystem>
 #include <iomanip>
+#include <optional>
 #include <sstream>
 
 #include <opencv2/imgcodecs.hpp>
@@ -38,6 +39,16 @@ cv::Mat grey_of(int width, int height, const std::uint8_t* rgb) {
 
 void write_png(const std::string& path, const cv::Mat& m) {
   if (!cv::imwrite(path, m)) throw DatasetError(path + ": PNG write failed");
+}
+
+cv::Mat depth_png(int width, int height, const float* depth_m, double units_per_metre) {
+  cv::Mat d(height, width, CV_16UC1);
+  for (int r = 0; r < height; ++r)
+    for (int c = 0; c < width; ++c)
+      d.at<std::uint16_t>(r, c) = encode_depth(
+          depth_m[static_cast<std::size_t>(r) * static_cast<std::size_t>(width) + static_cast<std::size_t>(c)],
+          units_per_metre);
+  return d;
 }
 
 // Rate of a stream from its first and last stamp and its count (0 with fewer than 2 samples).
@@ -76,8 +87,14 @@ EurocWriter::EurocWriter(const std::string& root) : root_(root), mav_(root + "/m
   make_dirs(mav_ + "/cam0/data");
   make_dirs(mav_ + "/imu0");
   make_dirs(mav_ + "/state_groundtruth_estimate0");
+  make_dirs(mav_ + "/depth0/data");
+  make_dirs(mav_ + "/seg0/data");
   cam_csv_ = open_out(mav_ + "/cam0/data.csv");
   cam_csv_ << "#timestamp [ns],filename\n" << std::flush;
+  depth_csv_ = open_out(mav_ + "/depth0/data.csv");
+  depth_csv_ << "#timestamp [ns],filename\n" << std::flush;
+  seg_csv_ = open_out(mav_ + "/seg0/data.csv");
+  seg_csv_ << "#timestamp [ns],filename\n" << std::flush;
   imu_csv_ = open_out(mav_ + "/imu0/data.csv");
   imu_csv_ << "#timestamp [ns],w_RS_S_x [rad s^-1],w_RS_S_y [rad s^-1],w_RS_S_z [rad s^-1],"
               "a_RS_S_x [m s^-2],a_RS_S_y [m s^-2],a_RS_S_z [m s^-2]\n"
@@ -109,12 +126,39 @@ void EurocWriter::write_rgb(double stamp, int width, int height, const std::uint
   image_ns_.push_back(ns);
 }
 
+void EurocWriter::write_depth(double stamp, int width, int height, const float* depth_m) {
+  const long long ns = to_ns(stamp);
+  const std::string name = std::to_string(ns) + ".png";
+  write_png(mav_ + "/depth0/data/" + name, depth_png(width, height, depth_m, kDepthUnitsPerMetre));
+  depth_csv_ << ns << ',' << name << '\n' << std::flush;
+  ++depth_;
+}
+
+void EurocWriter::write_segmentation(double stamp, int width, int height, const std::uint8_t* ids) {
+  const long long ns = to_ns(stamp);
+  const std::string name = std::to_string(ns) + ".png";
+  write_png(mav_ + "/seg0/data/" + name, cv::Mat(height, width, CV_8UC1, const_cast<std::uint8_t*>(ids)));
+  seg_csv_ << ns << ',' << name << '\n' << std::flush;
+  ++seg_;
+}
+
+SequenceCounts EurocWriter::counts() const {
+  SequenceCounts n;
+  n.images = image_ns_.size();
+  n.depth = depth_;
+  n.segmentation = seg_;
+  n.poses = poses_;
+  n.imu = imu_samples_;
+  return n;
+}
+
 void EurocWriter::write_pose(double stamp, const Eigen::Isometry3d& /*X_WC*/, const Eigen::Isometry3d& X_WB) {
   const Eigen::Quaterniond q(X_WB.linear());
   const Eigen::Vector3d p = X_WB.translation();
   gt_csv_ << to_ns(stamp) << ',' << p.x() << ',' << p.y() << ',' << p.z() << ',' << q.w() << ',' << q.x() << ','
           << q.y() << ',' << q.z() << '\n'
           << std::flush;
+  ++poses_;
 }
 
 void EurocWriter::write_imu(double stamp, const Eigen::Vector3d& gyro, const Eigen::Vector3d& accel) {
@@ -153,7 +197,7 @@ void EurocWriter::write_sensor_yamls() {
 void EurocWriter::close() {
   if (closed_) return;
   closed_ = true;
-  for (auto* f : {&cam_csv_, &imu_csv_, &gt_csv_})
+  for (auto* f : {&cam_csv_, &imu_csv_, &gt_csv_, &depth_csv_, &seg_csv_})
     if (f->is_open()) f->close();
   try {
     write_sensor_yamls();  // with the measured rates
@@ -174,6 +218,8 @@ std::vector<std::string> EurocWriter::warnings() const {
 KittiWriter::KittiWriter(const std::string& root, const std::string& sequence)
     : root_(root), seq_dir_(root + "/sequences/" + sequence) {
   make_dirs(seq_dir_ + "/image_0");
+  make_dirs(seq_dir_ + "/depth_0");
+  make_dirs(seq_dir_ + "/seg_0");
   make_dirs(root + "/poses");
   times_ = open_out(seq_dir_ + "/times.txt");
   times_ << std::scientific << std::setprecision(6);
@@ -196,6 +242,65 @@ void KittiWriter::write_rgb(double stamp, int width, int height, const std::uint
   write_png(seq_dir_ + "/image_0/" + name.str(), grey_of(width, height, rgb));
   image_stamps_.push_back(stamp);
   times_ << stamp - image_stamps_.front() << '\n' << std::flush;
+  const auto [lo, hi] = pending_.equal_range(stamp);
+  for (auto it = lo; it != hi; ++it) write_per_pixel(image_stamps_.size() - 1, it->second);
+  pending_.erase(lo, hi);
+}
+
+namespace {
+
+// Index of the image with this stamp (the newest first: depth and labels follow their image).
+std::optional<std::size_t> index_of(const std::vector<double>& stamps, double stamp) {
+  for (std::size_t i = stamps.size(); i-- > 0;)
+    if (stamps[i] == stamp) return i;
+  return std::nullopt;
+}
+
+}  // namespace
+
+void KittiWriter::write_depth(double stamp, int width, int height, const float* depth_m) {
+  Pending p{true, width, height, {}};
+  const cv::Mat d = depth_png(width, height, depth_m, kDepthUnitsPerMetre);
+  p.pixels.assign(d.begin<std::uint16_t>(), d.end<std::uint16_t>());
+  if (const auto i = index_of(image_stamps_, stamp))
+    write_per_pixel(*i, p);
+  else
+    pending_.emplace(stamp, std::move(p));
+}
+
+void KittiWriter::write_segmentation(double stamp, int width, int height, const std::uint8_t* ids) {
+  Pending p{false, width, height, {}};
+  p.pixels.assign(ids, ids + static_cast<std::size_t>(width) * static_cast<std::size_t>(height));
+  if (const auto i = index_of(image_stamps_, stamp))
+    write_per_pixel(*i, p);
+  else
+    pending_.emplace(stamp, std::move(p));
+}
+
+void KittiWriter::write_per_pixel(std::size_t index, const Pending& p) {
+  std::ostringstream name;
+  name << seq_dir_ << (p.depth ? "/depth_0/" : "/seg_0/") << std::setw(6) << std::setfill('0') << index << ".png";
+  cv::Mat m;
+  if (p.depth) {
+    m = cv::Mat(p.height, p.width, CV_16UC1);
+    std::copy(p.pixels.begin(), p.pixels.end(), m.begin<std::uint16_t>());
+    ++depth_;
+  } else {
+    m = cv::Mat(p.height, p.width, CV_8UC1);
+    std::transform(p.pixels.begin(), p.pixels.end(), m.begin<std::uint8_t>(),
+                   [](std::uint16_t v) { return static_cast<std::uint8_t>(v); });
+    ++seg_;
+  }
+  write_png(name.str(), m);
+}
+
+SequenceCounts KittiWriter::counts() const {
+  SequenceCounts n;
+  n.images = image_stamps_.size();
+  n.depth = depth_;
+  n.segmentation = seg_;
+  n.poses = poses_written_;
+  return n;
 }
 
 void KittiWriter::write_pose(double stamp, const Eigen::Isometry3d& X_WC, const Eigen::Isometry3d& /*X_WB*/) {
@@ -232,6 +337,9 @@ std::vector<std::string> KittiWriter::warnings() const {
   if (unpaired_poses_ > 0)
     w.push_back(root_ + "/poses: " + std::to_string(unpaired_poses_) +
                 " poses were not the next image's and were not written");
+  if (!pending_.empty())
+    w.push_back(seq_dir_ + ": " + std::to_string(pending_.size()) +
+                " depth/segmentation images never got their colour image (no index) and were not written");
   if (distorted_)
     w.push_back(seq_dir_ +
                 "/calib.txt: the camera has lens distortion, which KITTI's rectified layout cannot store: record "

@@ -9,7 +9,10 @@
 
 #include <opencv2/imgcodecs.hpp>
 
+#include <nlohmann/json.hpp>
+
 #include "unav_datagen/dataset_writer.hpp"
+#include "unav_datagen/manifest.hpp"
 
 using namespace unav::datagen;
 
@@ -103,6 +106,8 @@ struct Flight {
   static constexpr int kW = 4, kH = 2;
   std::uint8_t rgb[kW * kH * 3] = {255, 0,  0,  0, 255, 0, 0, 0, 255, 255, 255, 255,
                                    10,  20, 30, 0, 0,   0, 1, 2, 3,   9,   9,   9};
+  float depth[kW * kH] = {1.0f, 2.5f, 0.0f, 70.0f, 1.0f, 1.0f, 1.0f, 13.0f};
+  std::uint8_t seg[kW * kH] = {0, 1, 2, 3, 4, 1, 1, 1};
   Eigen::Isometry3d X_BC = pose(0.0, Eigen::Vector3d(0.16, 0.0, 0.1));
   CameraIntrinsics k{kW, kH, 100.0, 101.0, 1.5, 0.5, {0, 0, 0, 0, 0}};
   Eigen::Isometry3d X_WB(int i) const { return pose(0.3 * i, Eigen::Vector3d(1.0 + i, -2.0 + 0.5 * i, 8.0)); }
@@ -113,7 +118,11 @@ struct Flight {
     for (int j = 0; j <= 40; ++j)
       w->write_imu(1.0 + 0.005 * j, Eigen::Vector3d(0, 0, 0.1), Eigen::Vector3d(0, 0, -9.81));
     for (int i = 0; i < 3; ++i) {
+      // Depth and labels arrive on their own topics: frame 1's before its colour image.
+      if (i == 1) w->write_depth(t(i), kW, kH, depth);
       w->write_rgb(t(i), kW, kH, rgb);
+      if (i != 1) w->write_depth(t(i), kW, kH, depth);
+      w->write_segmentation(t(i), kW, kH, seg);
       if (std::find(frames_with_pose.begin(), frames_with_pose.end(), i) != frames_with_pose.end())
         w->write_pose(t(i), X_WB(i) * X_BC, X_WB(i));
     }
@@ -215,4 +224,93 @@ TEST(SequenceWriter, UnknownFormatNamesTheValidOnes) {
   } catch (const DatasetError& e) {
     EXPECT_NE(std::string(e.what()).find("'rosbag' (valid: tum, euroc, kitti)"), std::string::npos) << e.what();
   }
+}
+
+// Depth in millimetres and class ids next to the images, named like them (EuRoC: by stamp;
+// KITTI: by image index, also when the depth image arrived before its colour image).
+TEST(SequenceWriter, DepthAndLabelsBesideTheImagesInEurocAndKitti) {
+  Flight f;
+  const std::string e = ::testing::TempDir() + "euroc_depth_test", k = ::testing::TempDir() + "kitti_depth_test";
+  std::filesystem::remove_all(e);
+  std::filesystem::remove_all(k);
+  auto we = make_sequence_writer("euroc", e);
+  f.record(we.get());
+  auto wk = make_sequence_writer("kitti", k);
+  f.record(wk.get());
+  for (const std::string& path : {e + "/mav0/depth0/data/1100000000.png", k + "/sequences/00/depth_0/000001.png"}) {
+    const cv::Mat d = cv::imread(path, cv::IMREAD_UNCHANGED);
+    ASSERT_EQ(d.type(), CV_16UC1) << path;
+    EXPECT_EQ(d.at<std::uint16_t>(0, 1), 2500) << path;   // 2.5 m in mm
+    EXPECT_EQ(d.at<std::uint16_t>(0, 3), 0) << path;      // 70 m: beyond 65.535 m
+    EXPECT_EQ(d.at<std::uint16_t>(1, 3), 13000) << path;  // 13 m: storable in mm (not in TUM units)
+  }
+  for (const std::string& path : {e + "/mav0/seg0/data/1200000000.png", k + "/sequences/00/seg_0/000002.png"}) {
+    const cv::Mat s = cv::imread(path, cv::IMREAD_UNCHANGED);
+    ASSERT_EQ(s.type(), CV_8UC1) << path;
+    EXPECT_EQ(s.at<std::uint8_t>(0, 3), 3) << path;
+  }
+  EXPECT_EQ(lines_of(e + "/mav0/depth0/data.csv").size(), 4u);
+  const SequenceCounts ck = wk->counts();
+  EXPECT_EQ(ck.images, 3u);
+  EXPECT_EQ(ck.depth, 3u);
+  EXPECT_EQ(ck.segmentation, 3u);
+  EXPECT_EQ(ck.poses, 3u);
+  EXPECT_EQ(we->counts().imu, 41u);
+  EXPECT_TRUE(wk->warnings().empty());
+}
+
+TEST(Manifest, Sha256KnownAnswers) {
+  // FIPS 180-2 test vectors.
+  EXPECT_EQ(sha256_bytes("abc"), "ba7816bf8f01cfea414140de5dae2223b00361a396177a9cb410ff61f20015ad");
+  EXPECT_EQ(sha256_bytes(""), "e3b0c44298fc1c149afbf4c8996fb92427ae41e4649b934ca495991b7852b855");
+  const std::string p = ::testing::TempDir() + "sha_test.bin";
+  std::string big(200000, 'a');  // longer than the 64 KiB read buffer
+  std::ofstream(p, std::ios::binary) << big;
+  EXPECT_EQ(sha256_file(p), sha256_bytes(big));
+  EXPECT_THROW(sha256_file(p + ".missing"), DatasetError);
+}
+
+TEST(Manifest, ListsEveryFileWithItsChecksumAndIsReproducible) {
+  Flight f;
+  ManifestInput in;
+  in.camera = "down";
+  in.intrinsics = f.k;
+  in.mount_known = true;
+  in.X_BC = f.X_BC;
+  in.source["world"] = "worlds/pipe_inspection/world.yaml";
+  in.labels = {{0, "water"}, {2, "pipeline"}};
+  std::vector<std::string> manifests;
+  for (const std::string name : {"manifest_a", "manifest_b"}) {
+    const std::string root = ::testing::TempDir() + name;
+    std::filesystem::remove_all(root);
+    auto w = make_sequence_writer("tum", root);
+    f.record(w.get());
+    write_manifest(*w, in);
+    std::ifstream mf(root + "/manifest.json");
+    std::stringstream ss;
+    ss << mf.rdbuf();
+    manifests.push_back(ss.str());
+    const nlohmann::json m = nlohmann::json::parse(manifests.back());
+    EXPECT_EQ(m["format"], "tum");
+    EXPECT_FALSE(m["software"]["commit"].get<std::string>().empty());
+    EXPECT_EQ(m["counts"]["images"], 3);
+    EXPECT_EQ(m["counts"]["poses"], 3);
+    EXPECT_EQ(m["counts"]["imu"], 41);
+    EXPECT_EQ(m["labels"]["2"], "pipeline");
+    EXPECT_EQ(m["depth"]["units_per_metre"], 5000.0);
+    EXPECT_NEAR(m["camera"]["mount_xyz_m"][0].get<double>(), 0.16, 1e-12);
+    // 3 rgb + 3 depth + 3 segmentation PNGs and the 7 text files, sorted, each checksummed.
+    const auto& files = m["files"];
+    ASSERT_EQ(files.size(), 16u);
+    std::vector<std::string> paths;
+    for (const auto& e : files) {
+      paths.push_back(e["path"]);
+      EXPECT_EQ(e["sha256"], sha256_file(root + "/" + e["path"].get<std::string>())) << e["path"];
+      EXPECT_EQ(e["bytes"], std::filesystem::file_size(root + "/" + e["path"].get<std::string>()));
+    }
+    EXPECT_TRUE(std::is_sorted(paths.begin(), paths.end()));
+    EXPECT_EQ(std::count(paths.begin(), paths.end(), "rgb/1.100000.png"), 1);
+    EXPECT_EQ(std::count(paths.begin(), paths.end(), "manifest.json"), 0);
+  }
+  EXPECT_EQ(manifests[0], manifests[1]) << "the same recording must give the same manifest, byte for byte";
 }

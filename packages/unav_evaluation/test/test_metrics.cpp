@@ -33,7 +33,7 @@ Eigen::Isometry3d transform(const Sim3& S, const Eigen::Isometry3d& P) {
 }
 
 std::string write_temp(const std::string& name, const std::string& text) {
-  const std::string p = ::testing::TempDir() + name;
+  std::string p = ::testing::TempDir() + name;
   std::ofstream(p) << text;
   return p;
 }

@@ -54,9 +54,7 @@ auto MonoSlam::Impl::CullRecentPoints(int kf_id) -> void {
   for (int pid : recent_points) {
     MapPoint& p = map->mp(pid);
     if (p.bad) continue;
-    if (p.FoundRatio() < 0.25) {
-      map->ErasePoint(pid);
-    } else if (kf_id - p.first_kf >= 2 && p.obs.size() <= 2) {
+    if (p.FoundRatio() < 0.25 || (kf_id - p.first_kf >= 2 && p.obs.size() <= 2)) {
       map->ErasePoint(pid);
     } else if (kf_id - p.first_kf < 3) {
       keep.push_back(pid);

@@ -113,6 +113,7 @@ auto MonoSlam::Impl::UpdateLocalMap() -> void {
     if (p >= 0 && !map->mp(p).bad)
       for (const auto& [k, i] : map->mp(p).obs) ++counts[k];
   std::vector<std::pair<int, int>> ranked;
+  ranked.reserve(counts.size());
   for (const auto& [k, c] : counts) ranked.emplace_back(c, k);
   std::sort(ranked.rbegin(), ranked.rend());
   std::set<int> kfs;

@@ -47,7 +47,7 @@ void OrbExtractor::Extract(const cv::Mat& gray, std::vector<cv::KeyPoint>* keypo
   for (const auto& k : all) {
     const int cx = std::min(cols - 1, static_cast<int>(k.pt.x) * cols / gray.cols);
     const int cy = std::min(rows - 1, static_cast<int>(k.pt.y) * rows / gray.rows);
-    cells[static_cast<size_t>(cy * cols + cx)].push_back(k);
+    cells[static_cast<size_t>(cy) * static_cast<size_t>(cols) + static_cast<size_t>(cx)].push_back(k);
   }
   for (auto& c : cells)
     std::sort(c.begin(), c.end(), [](const cv::KeyPoint& a, const cv::KeyPoint& b) { return a.response > b.response; });
@@ -71,8 +71,8 @@ int DescriptorDistance(const uint8_t* a, const uint8_t* b) {
   int d = 0;
   for (int i = 0; i < 4; ++i) {
     uint64_t x, y;
-    std::memcpy(&x, a + 8 * i, 8);
-    std::memcpy(&y, b + 8 * i, 8);
+    std::memcpy(&x, a + static_cast<std::ptrdiff_t>(8) * i, 8);
+    std::memcpy(&y, b + static_cast<std::ptrdiff_t>(8) * i, 8);
     d += __builtin_popcountll(x ^ y);
   }
   return d;

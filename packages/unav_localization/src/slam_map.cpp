@@ -12,12 +12,13 @@ void Features::BuildGrid(int width, int height, double cell) {
   cell_px = cell;
   grid_cols = std::max(1, static_cast<int>(std::ceil(width / cell)));
   grid_rows = std::max(1, static_cast<int>(std::ceil(height / cell)));
-  grid.assign(static_cast<size_t>(grid_cols * grid_rows), {});
+  grid.assign(static_cast<size_t>(grid_cols) * static_cast<size_t>(grid_rows), {});
   for (size_t i = 0; i < un.size(); ++i) {
     const int cx = static_cast<int>(std::floor(un[i].x() / cell_px)),
               cy = static_cast<int>(std::floor(un[i].y() / cell_px));
     if (cx < 0 || cy < 0 || cx >= grid_cols || cy >= grid_rows) continue;
-    grid[static_cast<size_t>(cy * grid_cols + cx)].push_back(static_cast<int>(i));
+    grid[static_cast<size_t>(cy) * static_cast<size_t>(grid_cols) + static_cast<size_t>(cx)].push_back(
+        static_cast<int>(i));
   }
 }
 
@@ -30,7 +31,7 @@ std::vector<int> Features::InArea(const Eigen::Vector2d& uv, double radius, int 
   const double r2 = radius * radius;
   for (int y = y0; y <= y1; ++y)
     for (int x = x0; x <= x1; ++x)
-      for (int i : grid[static_cast<size_t>(y * grid_cols + x)]) {
+      for (int i : grid[static_cast<size_t>(y) * static_cast<size_t>(grid_cols) + static_cast<size_t>(x)]) {
         const int lvl = keypoints[static_cast<size_t>(i)].octave;
         if (min_level >= 0 && lvl < min_level) continue;
         if (max_level >= 0 && lvl > max_level) continue;

@@ -158,7 +158,7 @@ TEST(KltVo, BadInputIsRejectedNotCrashing) {
   unav::localization::KltVoOptions bad;
   bad.min_inliers = 2;
   EXPECT_THROW(KltVo(K, bad), std::invalid_argument);
-  EXPECT_THROW(KltVo(Eigen::Matrix3d::Zero()), std::invalid_argument);
+  EXPECT_THROW(KltVo{Eigen::Matrix3d::Zero()}, std::invalid_argument);
   KltVo vo(K);
   Eigen::Isometry3d T;
   EXPECT_EQ(vo.ProcessFrame(cv::Mat(), cv::Mat(), &T).status, VoStatus::kInvalidInput);

@@ -105,6 +105,7 @@ int main(int argc, char** argv) {
     }
     auto med = [&](double RenderTimings::*m) {
       std::vector<double> v;
+      v.reserve(t.size());
       for (const auto& x : t) v.push_back(x.*m);
       std::sort(v.begin(), v.end());
       return v[v.size() / 2];

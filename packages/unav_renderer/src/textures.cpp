@@ -18,7 +18,11 @@ C3 mix(const C3& a, const C3& b, double t) {
   return {a.r + (b.r - a.r) * t, a.g + (b.g - a.g) * t, a.b + (b.b - a.b) * t};
 }
 C3 mul(const C3& a, double s) { return {a.r * s, a.g * s, a.b * s}; }
-std::uint8_t to8(double v) { return static_cast<std::uint8_t>(std::clamp(v, 0.0, 1.0) * 255.0 + 0.5); }
+// Non-negative here, so + 0.5 and truncation round to nearest; kept (not lround) so textures stay
+// byte-identical.
+std::uint8_t to8(double v) {
+  return static_cast<std::uint8_t>(std::clamp(v, 0.0, 1.0) * 255.0 + 0.5);  // NOLINT(bugprone-incorrect-roundings)
+}
 
 // u, v in [0, 1); all noise periodic over the tile.
 C3 sand(double u, double v) {

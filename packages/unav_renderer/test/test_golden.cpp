@@ -45,7 +45,8 @@ void check_golden(Renderer& r, const Case& c, const Pose& X_WB) {
     outliers += worst > 24;
   }
   const double mad = sum / ref.size();
-  const double frac = static_cast<double>(outliers) / (ref.size() / 3);
+  const std::size_t pixels = ref.size() / 3;  // 3 bytes a pixel
+  const double frac = static_cast<double>(outliers) / static_cast<double>(pixels);
   EXPECT_LE(mad, 3.0) << c.name;
   EXPECT_LE(frac, 0.02) << c.name;
   if (mad > 3.0 || frac > 0.02) write_png_rgb(f, std::string(::testing::TempDir()) + c.name + "_actual.png");

@@ -16,7 +16,7 @@ namespace {
 
 std::string small_cameras() {
   // One small downward camera keeps llvmpipe fast.
-  const std::string p = ::testing::TempDir() + "node_cams.yaml";
+  std::string p = ::testing::TempDir() + "node_cams.yaml";
   std::ofstream(p) << "cameras:\n  - name: down\n    mount: {xyz_m: [0, 0, 0], rpy_deg: [0, -90, 0]}\n"
                       "    width: 80\n    height: 48\n    hfov_deg: 90\n";
   return p;
@@ -91,7 +91,7 @@ TEST(UnderwaterRendererNode, PublishesImagesStampedWithThePoseTimeAndAcks) {
   // Depth at the image centre, looking straight down from 8 m over a 10 m seabed: the optical
   // axis meets sand (or the pipe top, radius <= 0.5 m) between 1.4 and 2.05 m away.
   float centre = 0.0f;
-  std::memcpy(&centre, depths[0].data().data() + (24 * 80 + 40) * 4, 4);
+  std::memcpy(&centre, depths[0].data().data() + std::ptrdiff_t{24 * 80 + 40} * 4, 4);
   EXPECT_GT(centre, 1.4f);
   EXPECT_LT(centre, 2.05f);
   EXPECT_EQ(depths[0].encoding(), "32FC1");

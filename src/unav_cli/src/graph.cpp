@@ -136,7 +136,7 @@ std::vector<std::string> Graph::nodes() {
       auto& names = by_participant[key];
       names.clear();
       for (const auto& n : info.node_entities_info_seq()) {
-        if (n.node_name().to_string().rfind("_", 0) == 0) continue;  // hidden nodes (ours, ROS' _ros2cli)
+        if (n.node_name().to_string().rfind('_', 0) == 0) continue;  // hidden nodes (ours, ROS' _ros2cli)
         const std::string ns = n.node_namespace().to_string();
         names.push_back((ns == "/" ? "" : ns) + "/" + n.node_name().to_string());
       }

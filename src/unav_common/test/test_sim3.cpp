@@ -49,7 +49,7 @@ bool EstimateSim3(const Eigen::Matrix3Xd& from, const Eigen::Matrix3Xd& to, bool
   if (!(var_from > 1e-12)) return false;
   const Eigen::Matrix3d cov = b * a.transpose() / static_cast<double>(from.cols());
   Eigen::JacobiSVD<Eigen::Matrix3d> svd(cov, Eigen::ComputeFullU | Eigen::ComputeFullV);
-  const Eigen::Vector3d sv = svd.singularValues();
+  const Eigen::Vector3d& sv = svd.singularValues();
   if (!(sv(1) > 1e-9 * std::max(1.0, sv(0)))) return false;  // collinear
   Eigen::Matrix3d D = Eigen::Matrix3d::Identity();
   if (svd.matrixU().determinant() * svd.matrixV().determinant() < 0) D(2, 2) = -1;

@@ -58,9 +58,8 @@ std::vector<Token> tokenize(const std::string& text, const std::string& file) {
       const bool hex = c == '0' && i + 1 < n && (text[i + 1] == 'x' || text[i + 1] == 'X');
       while (i < n) {
         const char d = text[i];
-        if (is_ident_char(d) || d == '.') {
-          ++i;
-        } else if (!hex && (d == '+' || d == '-') && (text[i - 1] == 'e' || text[i - 1] == 'E')) {
+        if (is_ident_char(d) || d == '.' ||
+            (!hex && (d == '+' || d == '-') && (text[i - 1] == 'e' || text[i - 1] == 'E'))) {
           ++i;
         } else {
           break;

@@ -76,7 +76,7 @@ std::string element_type_string(const ElementType& type) {
 }
 
 std::string field_type_string(const Field& field) {
-  const std::string element = element_type_string(field.type);
+  std::string element = element_type_string(field.type);
   switch (field.container) {
     case Field::Container::kSingle:
       return element;

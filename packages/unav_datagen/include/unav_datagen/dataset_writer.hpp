@@ -40,16 +40,29 @@ struct CameraIntrinsics {
 
 /// TUM's depth scale: 5000 units per metre (0.2 mm); 65535 is 13.1 m, the farthest storable.
 constexpr double kDepthScale = 5000.0;
-/// Metres to TUM 16-bit depth: 0 for non-finite, non-positive or too-far values.
-std::uint16_t encode_depth(float metres);
+/// Metres to 16-bit depth units (TUM's 5000 per metre by default): 0 for non-finite,
+/// non-positive or too-far values.
+std::uint16_t encode_depth(float metres, double units_per_metre = kDepthScale);
 
 /// One camera's sequence. Calls arrive in stamp order per stream; a layout ignores the streams
 /// it has no place for (e.g. KITTI has no IMU file). Every writer flushes each record as it
 /// writes it, so a run stopped with Ctrl-C keeps what it recorded; close() (also the destructor)
 /// writes what needs the whole sequence (rates, summaries).
+/// What a writer has written so far.
+struct SequenceCounts {
+  std::size_t images = 0, depth = 0, segmentation = 0, poses = 0, imu = 0;
+};
+
 class SequenceWriter {
  public:
   virtual ~SequenceWriter() = default;
+  /// The layout's name (tum, euroc, kitti).
+  virtual std::string format() const = 0;
+  virtual SequenceCounts counts() const = 0;
+  /// Depth PNG units per metre (uint16; 0 = no return or beyond 65535 units).
+  virtual double depth_units_per_metre() const = 0;
+  /// The files and folders (relative to root()) this layout writes: what manifest.json covers.
+  virtual std::vector<std::string> layout_entries() const = 0;
   virtual void write_camera(const CameraIntrinsics& k) = 0;
   /// The camera optical frame in the body frame (X_BC), once known; layouts that store extrinsics
   /// (EuRoC's T_BS) use it.
@@ -88,14 +101,29 @@ class DatasetWriter final : public SequenceWriter {
   void write_imu(double stamp, const Eigen::Vector3d& gyro, const Eigen::Vector3d& accel) override;
   /// Flushes and closes every file (also done by the destructor).
   void close() override;
-  std::size_t frames() const override { return frames_; }
+  std::size_t frames() const override { return counts_.images; }
   const std::string& root() const override { return root_; }
+  std::string format() const override { return "tum"; }
+  SequenceCounts counts() const override { return counts_; }
+  double depth_units_per_metre() const override { return kDepthScale; }
+  std::vector<std::string> layout_entries() const override {
+    return {"rgb",
+            "depth",
+            "segmentation",
+            "rgb.txt",
+            "depth.txt",
+            "segmentation.txt",
+            "groundtruth.txt",
+            "groundtruth_body.txt",
+            "imu.txt",
+            "camera.yaml"};
+  }
 
  private:
   static std::string stamp_name(double stamp);
   std::string root_;
   std::ofstream rgb_txt_, depth_txt_, seg_txt_, gt_txt_, gt_body_txt_, imu_txt_;
-  std::size_t frames_ = 0;
+  SequenceCounts counts_;
 };
 
 }  // namespace unav::datagen

@@ -8,6 +8,11 @@
 //   <root>/mav0/imu0/data.csv                            "#timestamp [ns],w_RS_S_x [rad s^-1],...,a_RS_S_z [m s^-2]"
 //   <root>/mav0/imu0/sensor.yaml                         T_BS = identity (the IMU is the body frame), rate_hz
 //   <root>/mav0/state_groundtruth_estimate0/data.csv     "#timestamp, p_RS_R_x [m], ..., q_RS_w [], q_RS_x [], ..."
+// and, as an extension in the same shape (cam0's stamps and mount):
+//   <root>/mav0/depth0/data/<t_ns>.png, data.csv         uint16 depth along the optical axis, 1000 per
+//                                                        metre (mm; 0 = no return or beyond 65.5 m)
+//   <root>/mav0/seg0/data/<t_ns>.png, data.csv           8-bit segmentation class ids (manifest.json
+//                                                        "labels")
 // Frames: R = world_ned, S = B = base_link_frd (the IMU and ground truth are the body's), camera =
 // the optical frame (x right, y down, z forward). Ground truth has the pose columns only (evo and
 // the EuRoC tools read columns 0-7); simulated velocity and bias columns are not invented.
@@ -32,11 +37,18 @@ class EurocWriter final : public SequenceWriter {
   void write_camera(const CameraIntrinsics& k) override;
   void set_camera_mount(const Eigen::Isometry3d& X_BC) override;
   void write_rgb(double stamp, int width, int height, const std::uint8_t* rgb) override;
+  void write_depth(double stamp, int width, int height, const float* depth_m) override;
+  void write_segmentation(double stamp, int width, int height, const std::uint8_t* ids) override;
   void write_pose(double stamp, const Eigen::Isometry3d& X_WC, const Eigen::Isometry3d& X_WB) override;
   void write_imu(double stamp, const Eigen::Vector3d& gyro, const Eigen::Vector3d& accel) override;
   void close() override;
   std::size_t frames() const override { return image_ns_.size(); }
   const std::string& root() const override { return root_; }
+  std::string format() const override { return "euroc"; }
+  SequenceCounts counts() const override;
+  double depth_units_per_metre() const override { return kDepthUnitsPerMetre; }
+  std::vector<std::string> layout_entries() const override { return {"mav0"}; }
+  static constexpr double kDepthUnitsPerMetre = 1000.0;
   std::vector<std::string> warnings() const override;
 
   /// Seconds to EuRoC's integer nanoseconds (rounded).
@@ -45,7 +57,8 @@ class EurocWriter final : public SequenceWriter {
  private:
   void write_sensor_yamls();
   std::string root_, mav_;
-  std::ofstream cam_csv_, imu_csv_, gt_csv_;
+  std::ofstream cam_csv_, imu_csv_, gt_csv_, depth_csv_, seg_csv_;
+  std::size_t depth_ = 0, seg_ = 0, poses_ = 0;
   CameraIntrinsics k_;
   bool have_k_ = false, have_mount_ = false, closed_ = false;
   Eigen::Isometry3d X_BC_ = Eigen::Isometry3d::Identity();

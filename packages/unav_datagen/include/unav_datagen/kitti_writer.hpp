@@ -5,13 +5,19 @@
 //   <root>/sequences/<seq>/calib.txt                 "P0: fx 0 cx 0 0 fy cy 0 0 0 1 0" (3x4, row-major)
 //   <root>/poses/<seq>.txt                           per image, the 12 numbers of the 3x4 [R | t] of
 //                                                    the camera in the FIRST camera's frame
+// and, as an extension named like image_0 (file i = image i):
+//   <root>/sequences/<seq>/depth_0/<index:06d>.png   uint16 depth along the optical axis, 1000 per metre
+//   <root>/sequences/<seq>/seg_0/<index:06d>.png     8-bit segmentation class ids
+// (a depth or segmentation image that arrives before its colour image waits for its index).
 // The camera frame is the optical frame (x right, y down, z forward), as KITTI's. KITTI images
 // are rectified: distortion coefficients are not stored, so record an undistorted camera (the
 // down camera) for this layout; a distorted camera is reported by warnings(). Line i of the poses
 // belongs to image i: the writer checks the pairing and reports images left without a pose.
 #pragma once
 
+#include <cstdint>
 #include <fstream>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -27,15 +33,31 @@ class KittiWriter final : public SequenceWriter {
 
   void write_camera(const CameraIntrinsics& k) override;
   void write_rgb(double stamp, int width, int height, const std::uint8_t* rgb) override;
+  void write_depth(double stamp, int width, int height, const float* depth_m) override;
+  void write_segmentation(double stamp, int width, int height, const std::uint8_t* ids) override;
   void write_pose(double stamp, const Eigen::Isometry3d& X_WC, const Eigen::Isometry3d& X_WB) override;
   void close() override;
   std::size_t frames() const override { return image_stamps_.size(); }
   const std::string& root() const override { return root_; }
+  std::string format() const override { return "kitti"; }
+  SequenceCounts counts() const override;
+  double depth_units_per_metre() const override { return kDepthUnitsPerMetre; }
+  std::vector<std::string> layout_entries() const override { return {"sequences", "poses"}; }
+  static constexpr double kDepthUnitsPerMetre = 1000.0;
   std::vector<std::string> warnings() const override;
 
  private:
   std::string root_, seq_dir_;
   std::ofstream times_, poses_;
+  /// A per-pixel image waiting for the colour image of its stamp (which gives its index).
+  struct Pending {
+    bool depth = false;  ///< 16-bit depth units, else 8-bit class ids
+    int width = 0, height = 0;
+    std::vector<std::uint16_t> pixels;
+  };
+  void write_per_pixel(std::size_t index, const Pending& p);
+  std::multimap<double, Pending> pending_;
+  std::size_t depth_ = 0, seg_ = 0;
   std::vector<double> image_stamps_;
   std::size_t poses_written_ = 0;
   std::size_t unpaired_poses_ = 0;

@@ -19,7 +19,7 @@ struct AlgorithmResult {
 
 /// Evaluates one estimate against ground truth: association (max_diff), alignment, APE and RPE
 /// (translation and rotation angle). Throws TrajectoryError (no overlap, too few poses).
-AlgorithmResult evaluate(const Trajectory& ground_truth, const Trajectory& estimate, const std::string& trajectory,
+AlgorithmResult evaluate(const Trajectory& gt, const Trajectory& est, const std::string& trajectory,
                          const std::string& algorithm, Alignment alignment = Alignment::kSim3,
                          const RpeOptions& rpe_options = {}, double max_diff_s = 0.02);
 
@@ -36,7 +36,7 @@ std::vector<AlgorithmResult> read_result_rows(const std::string& path);
 
 /// Top view: x = east (right), y = north (up), ground truth black, estimates (already aligned)
 /// in colours, with a legend and a metre scale bar. Throws TrajectoryError on I/O failure.
-void write_top_view_png(const std::string& path, const Trajectory& ground_truth,
+void write_top_view_png(const std::string& path, const Trajectory& gt,
                         const std::vector<std::pair<std::string, Trajectory>>& estimates, int size_px = 800);
 
 }  // namespace unav::evaluation

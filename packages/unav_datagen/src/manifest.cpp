@@ -1,0 +1,131 @@
+#include "unav_datagen/manifest.hpp"
+
+#include <openssl/evp.h>
+
+#include <algorithm>
+#include <array>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iomanip>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "unav_datagen_version.hpp"
+
+namespace unav::datagen {
+namespace fs = std::filesystem;
+
+namespace {
+
+class Sha256 {
+ public:
+  Sha256() : ctx_(EVP_MD_CTX_new(), EVP_MD_CTX_free) {
+    if (!ctx_ || EVP_DigestInit_ex(ctx_.get(), EVP_sha256(), nullptr) != 1)
+      throw DatasetError("SHA-256: OpenSSL digest initialisation failed");
+  }
+  void update(const char* data, std::size_t n) { EVP_DigestUpdate(ctx_.get(), data, n); }
+  std::string hex() {
+    std::array<unsigned char, EVP_MAX_MD_SIZE> md{};
+    unsigned int len = 0;
+    EVP_DigestFinal_ex(ctx_.get(), md.data(), &len);
+    std::ostringstream os;
+    for (unsigned int i = 0; i < len; ++i) os << std::hex << std::setw(2) << std::setfill('0') << static_cast<int>(md[i]);
+    return os.str();
+  }
+
+ private:
+  std::unique_ptr<EVP_MD_CTX, decltype(&EVP_MD_CTX_free)> ctx_;
+};
+
+}  // namespace
+
+std::string sha256_bytes(const std::string& bytes) {
+  Sha256 h;
+  h.update(bytes.data(), bytes.size());
+  return h.hex();
+}
+
+std::string sha256_file(const std::string& path) {
+  std::ifstream f(path, std::ios::binary);
+  if (!f) throw DatasetError(path + ": cannot be read for its checksum");
+  Sha256 h;
+  std::array<char, 1 << 16> buf{};
+  while (f) {
+    f.read(buf.data(), static_cast<std::streamsize>(buf.size()));
+    h.update(buf.data(), static_cast<std::size_t>(f.gcount()));
+  }
+  if (f.bad()) throw DatasetError(path + ": read error while computing its checksum");
+  return h.hex();
+}
+
+std::string software_commit() { return UNAV_GIT_COMMIT; }
+
+void write_manifest(const SequenceWriter& writer, const ManifestInput& in) {
+  using nlohmann::json;
+  const fs::path root(writer.root());
+  json m;
+  m["format"] = writer.format();
+  m["software"] = {{"name", "unav-sim"}, {"commit", software_commit()}};
+  const CameraIntrinsics& k = in.intrinsics;
+  const Eigen::Quaterniond q(in.X_BC.linear());
+  const Eigen::Vector3d t = in.X_BC.translation();
+  m["camera"] = {{"name", in.camera},
+                 {"frame", in.camera + "_optical"},
+                 {"parent_frame", in.parent_frame},
+                 {"width", k.width},
+                 {"height", k.height},
+                 {"fx", k.fx},
+                 {"fy", k.fy},
+                 {"cx", k.cx},
+                 {"cy", k.cy},
+                 {"distortion_model", "plumb_bob"},
+                 {"distortion", k.distortion},
+                 {"mount_known", in.mount_known},
+                 {"mount_xyz_m", {t.x(), t.y(), t.z()}},
+                 {"mount_quaternion_xyzw", {q.x(), q.y(), q.z(), q.w()}}};
+  m["source"] = in.source;
+  const SequenceCounts n = writer.counts();
+  m["counts"] = {{"images", n.images},
+                 {"depth", n.depth},
+                 {"segmentation", n.segmentation},
+                 {"poses", n.poses},
+                 {"imu", n.imu}};
+  json labels = json::object();
+  for (const auto& [id, name] : in.labels) labels[std::to_string(id)] = name;
+  m["labels"] = labels;
+  m["depth"] = {{"png", "uint16"},
+                {"units_per_metre", writer.depth_units_per_metre()},
+                {"zero", "no return, or beyond 65535 units"}};
+  // Every file of the layout, sorted by path (directory iteration order is unspecified).
+  std::vector<std::string> files;
+  std::error_code ec;
+  for (const std::string& entry : writer.layout_entries()) {
+    const fs::path p = root / entry;
+    if (fs::is_regular_file(p, ec)) {
+      files.push_back(entry);
+    } else if (fs::is_directory(p, ec)) {
+      for (const auto& e : fs::recursive_directory_iterator(p, ec))
+        if (e.is_regular_file()) files.push_back(fs::relative(e.path(), root).generic_string());
+    }
+  }
+  std::sort(files.begin(), files.end());
+  json list = json::array();
+  for (const std::string& f : files) {
+    const fs::path p = root / f;
+    list.push_back({{"path", f}, {"bytes", fs::file_size(p)}, {"sha256", sha256_file(p.string())}});
+  }
+  m["files"] = list;
+  const std::string out = (root / "manifest.json").string(), tmp = out + ".tmp";
+  {
+    std::ofstream f(tmp);
+    if (!f) throw DatasetError(tmp + ": cannot be written");
+    f << m.dump(2) << '\n';
+    if (!f) throw DatasetError(tmp + ": write failed");
+  }
+  fs::rename(tmp, out, ec);
+  if (ec) throw DatasetError(out + ": cannot be written: " + ec.message());
+}
+
+}  // namespace unav::datagen
