@@ -31,7 +31,8 @@ class Sha256 {
     unsigned int len = 0;
     EVP_DigestFinal_ex(ctx_.get(), md.data(), &len);
     std::ostringstream os;
-    for (unsigned int i = 0; i < len; ++i) os << std::hex << std::setw(2) << std::setfill('0') << static_cast<int>(md[i]);
+    for (unsigned int i = 0; i < len; ++i)
+      os << std::hex << std::setw(2) << std::setfill('0') << static_cast<int>(md[i]);
     return os.str();
   }
 
@@ -87,11 +88,8 @@ void write_manifest(const SequenceWriter& writer, const ManifestInput& in) {
                  {"mount_quaternion_xyzw", {q.x(), q.y(), q.z(), q.w()}}};
   m["source"] = in.source;
   const SequenceCounts n = writer.counts();
-  m["counts"] = {{"images", n.images},
-                 {"depth", n.depth},
-                 {"segmentation", n.segmentation},
-                 {"poses", n.poses},
-                 {"imu", n.imu}};
+  m["counts"] = {
+      {"images", n.images}, {"depth", n.depth}, {"segmentation", n.segmentation}, {"poses", n.poses}, {"imu", n.imu}};
   json labels = json::object();
   for (const auto& [id, name] : in.labels) labels[std::to_string(id)] = name;
   m["labels"] = labels;

@@ -35,8 +35,8 @@ struct ManifestInput {
   bool mount_known = false;
   Eigen::Isometry3d X_BC = Eigen::Isometry3d::Identity();  ///< optical frame in the parent frame
   std::string parent_frame = "base_link_frd";
-  std::map<std::string, std::string> source;               ///< e.g. {"world": path}
-  std::vector<std::pair<int, std::string>> labels;         ///< segmentation class id -> name
+  std::map<std::string, std::string> source;        ///< e.g. {"world": path}
+  std::vector<std::pair<int, std::string>> labels;  ///< segmentation class id -> name
 };
 
 /// Lowercase hex SHA-256 of a file's bytes. Throws DatasetError naming the file it cannot read.
