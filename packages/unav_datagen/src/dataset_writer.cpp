@@ -1,5 +1,7 @@
 #include "unav_datagen/dataset_writer.hpp"
 
+#include "png_io.hpp"
+
 #include <cmath>
 #include <filesystem>
 #include <iomanip>
@@ -10,6 +12,25 @@
 
 namespace unav::datagen {
 namespace fs = std::filesystem;
+using detail::write_png;
+
+namespace detail {
+
+void write_png(const std::string& path, const cv::Mat& m) {
+  if (!cv::imwrite(path, m)) throw DatasetError(path + ": PNG write failed");
+}
+
+cv::Mat depth_png(int width, int height, const float* depth_m, double units_per_metre) {
+  cv::Mat d(height, width, CV_16UC1);
+  for (int r = 0; r < height; ++r)
+    for (int c = 0; c < width; ++c)
+      d.at<std::uint16_t>(r, c) = encode_depth(
+          depth_m[static_cast<std::size_t>(r) * static_cast<std::size_t>(width) + static_cast<std::size_t>(c)],
+          units_per_metre);
+  return d;
+}
+
+}  // namespace detail
 
 std::uint16_t encode_depth(float metres, double units_per_metre) {
   if (!std::isfinite(metres) || metres <= 0.0f) return 0;
@@ -27,10 +48,6 @@ std::ofstream open_text(const std::string& path, const char* header) {
   return f;
 }
 
-void write_png(const std::string& path, const cv::Mat& m) {
-  if (!cv::imwrite(path, m)) throw DatasetError(path + ": PNG write failed");
-}
-
 void pose_line(std::ofstream& f, double stamp, const Eigen::Isometry3d& X) {
   const Eigen::Quaterniond q(X.linear());
   const Eigen::Vector3d p = X.translation();
@@ -41,7 +58,7 @@ void pose_line(std::ofstream& f, double stamp, const Eigen::Isometry3d& X) {
 
 }  // namespace
 
-DatasetWriter::DatasetWriter(const std::string& root) : root_(root) {
+DatasetWriter::DatasetWriter(const std::string& root) : SequenceWriter(root) {
   std::error_code ec;
   for (const char* sub : {"rgb", "depth", "segmentation"}) {
     fs::create_directories(fs::path(root) / sub, ec);
@@ -92,10 +109,7 @@ void DatasetWriter::write_rgb(double stamp, int width, int height, const std::ui
 
 void DatasetWriter::write_depth(double stamp, int width, int height, const float* depth_m) {
   const std::string name = "depth/" + stamp_name(stamp) + ".png";
-  cv::Mat d(height, width, CV_16UC1);
-  for (int r = 0; r < height; ++r)
-    for (int c = 0; c < width; ++c) d.at<std::uint16_t>(r, c) = encode_depth(depth_m[r * width + c]);
-  write_png(root_ + "/" + name, d);
+  write_png(root_ + "/" + name, detail::depth_png(width, height, depth_m, kDepthScale));
   depth_txt_ << stamp << ' ' << name << '\n';
   depth_txt_.flush();
   ++counts_.depth;

@@ -14,8 +14,12 @@
 #include "unav_datagen/euroc_writer.hpp"
 #include "unav_datagen/kitti_writer.hpp"
 
+#include "png_io.hpp"
+
 namespace unav::datagen {
 namespace fs = std::filesystem;
+using detail::depth_png;
+using detail::write_png;
 
 namespace {
 
@@ -35,20 +39,6 @@ cv::Mat grey_of(int width, int height, const std::uint8_t* rgb) {
   cv::Mat in(height, width, CV_8UC3, const_cast<std::uint8_t*>(rgb)), grey;
   cv::cvtColor(in, grey, cv::COLOR_RGB2GRAY);
   return grey;
-}
-
-void write_png(const std::string& path, const cv::Mat& m) {
-  if (!cv::imwrite(path, m)) throw DatasetError(path + ": PNG write failed");
-}
-
-cv::Mat depth_png(int width, int height, const float* depth_m, double units_per_metre) {
-  cv::Mat d(height, width, CV_16UC1);
-  for (int r = 0; r < height; ++r)
-    for (int c = 0; c < width; ++c)
-      d.at<std::uint16_t>(r, c) = encode_depth(
-          depth_m[static_cast<std::size_t>(r) * static_cast<std::size_t>(width) + static_cast<std::size_t>(c)],
-          units_per_metre);
-  return d;
 }
 
 // Rate of a stream from its first and last stamp and its count (0 with fewer than 2 samples).
@@ -83,7 +73,7 @@ std::unique_ptr<SequenceWriter> make_sequence_writer(const std::string& format, 
 
 long long EurocWriter::to_ns(double stamp) { return std::llround(stamp * 1e9); }
 
-EurocWriter::EurocWriter(const std::string& root) : root_(root), mav_(root + "/mav0") {
+EurocWriter::EurocWriter(const std::string& root) : SequenceWriter(root), mav_(root + "/mav0") {
   make_dirs(mav_ + "/cam0/data");
   make_dirs(mav_ + "/imu0");
   make_dirs(mav_ + "/state_groundtruth_estimate0");
@@ -123,7 +113,8 @@ void EurocWriter::write_rgb(double stamp, int width, int height, const std::uint
   const std::string name = std::to_string(ns) + ".png";
   write_png(mav_ + "/cam0/data/" + name, grey_of(width, height, rgb));
   cam_csv_ << ns << ',' << name << '\n' << std::flush;
-  image_ns_.push_back(ns);
+  images_.add(ns);
+  ++counts_.images;
 }
 
 void EurocWriter::write_depth(double stamp, int width, int height, const float* depth_m) {
@@ -131,7 +122,7 @@ void EurocWriter::write_depth(double stamp, int width, int height, const float* 
   const std::string name = std::to_string(ns) + ".png";
   write_png(mav_ + "/depth0/data/" + name, depth_png(width, height, depth_m, kDepthUnitsPerMetre));
   depth_csv_ << ns << ',' << name << '\n' << std::flush;
-  ++depth_;
+  ++counts_.depth;
 }
 
 void EurocWriter::write_segmentation(double stamp, int width, int height, const std::uint8_t* ids) {
@@ -139,17 +130,7 @@ void EurocWriter::write_segmentation(double stamp, int width, int height, const 
   const std::string name = std::to_string(ns) + ".png";
   write_png(mav_ + "/seg0/data/" + name, cv::Mat(height, width, CV_8UC1, const_cast<std::uint8_t*>(ids)));
   seg_csv_ << ns << ',' << name << '\n' << std::flush;
-  ++seg_;
-}
-
-SequenceCounts EurocWriter::counts() const {
-  SequenceCounts n;
-  n.images = image_ns_.size();
-  n.depth = depth_;
-  n.segmentation = seg_;
-  n.poses = poses_;
-  n.imu = imu_samples_;
-  return n;
+  ++counts_.segmentation;
 }
 
 void EurocWriter::write_pose(double stamp, const Eigen::Isometry3d& /*X_WC*/, const Eigen::Isometry3d& X_WB) {
@@ -158,7 +139,7 @@ void EurocWriter::write_pose(double stamp, const Eigen::Isometry3d& /*X_WC*/, co
   gt_csv_ << to_ns(stamp) << ',' << p.x() << ',' << p.y() << ',' << p.z() << ',' << q.w() << ',' << q.x() << ','
           << q.y() << ',' << q.z() << '\n'
           << std::flush;
-  ++poses_;
+  ++counts_.poses;
 }
 
 void EurocWriter::write_imu(double stamp, const Eigen::Vector3d& gyro, const Eigen::Vector3d& accel) {
@@ -166,9 +147,8 @@ void EurocWriter::write_imu(double stamp, const Eigen::Vector3d& gyro, const Eig
   imu_csv_ << ns << ',' << gyro.x() << ',' << gyro.y() << ',' << gyro.z() << ',' << accel.x() << ',' << accel.y() << ','
            << accel.z() << '\n'
            << std::flush;
-  if (imu_first_ns_ < 0) imu_first_ns_ = ns;
-  imu_last_ns_ = ns;
-  ++imu_samples_;
+  imu_.add(ns);
+  ++counts_.imu;
 }
 
 void EurocWriter::write_sensor_yamls() {
@@ -178,8 +158,7 @@ void EurocWriter::write_sensor_yamls() {
       << "# Sensor extrinsics wrt. the body-frame (base_link_frd)"
       << (have_mount_ ? "" : "; NOT KNOWN when written: identity")
       << ".\nT_BS:\n  cols: 4\n  rows: 4\n  data: " << matrix_rows(X_BC_.matrix())
-      << "\n# Camera specific definitions.\nrate_hz: "
-      << rate_hz(image_ns_.empty() ? 0 : image_ns_.front(), image_ns_.empty() ? 0 : image_ns_.back(), image_ns_.size())
+      << "\n# Camera specific definitions.\nrate_hz: " << rate_hz(images_.first_ns, images_.last_ns, counts_.images)
       << "\nresolution: [" << k_.width << ", " << k_.height << "]\ncamera_model: pinhole\nintrinsics: [" << k_.fx
       << ", " << k_.fy << ", " << k_.cx << ", " << k_.cy << "] #fu, fv, cu, cv\n"
       << "distortion_model: radial-tangential\ndistortion_coefficients: [";
@@ -191,7 +170,7 @@ void EurocWriter::write_sensor_yamls() {
   imu << std::setprecision(12) << "# General sensor definitions.\nsensor_type: imu\n"
       << "comment: \"UNav-Sim simulated IMU at the body origin (base_link_frd); noise in the vehicle YAML\"\n"
       << "T_BS:\n  cols: 4\n  rows: 4\n  data: " << matrix_rows(Eigen::Matrix4d::Identity())
-      << "\nrate_hz: " << rate_hz(imu_first_ns_, imu_last_ns_, imu_samples_) << "\n";
+      << "\nrate_hz: " << rate_hz(imu_.first_ns, imu_.last_ns, counts_.imu) << "\n";
 }
 
 void EurocWriter::close() {
@@ -216,7 +195,7 @@ std::vector<std::string> EurocWriter::warnings() const {
 // ---------------------------------------------------------------- KITTI
 
 KittiWriter::KittiWriter(const std::string& root, const std::string& sequence)
-    : root_(root), seq_dir_(root + "/sequences/" + sequence) {
+    : SequenceWriter(root), seq_dir_(root + "/sequences/" + sequence) {
   make_dirs(seq_dir_ + "/image_0");
   make_dirs(seq_dir_ + "/depth_0");
   make_dirs(seq_dir_ + "/seg_0");
@@ -241,6 +220,7 @@ void KittiWriter::write_rgb(double stamp, int width, int height, const std::uint
   name << std::setw(6) << std::setfill('0') << image_stamps_.size() << ".png";
   write_png(seq_dir_ + "/image_0/" + name.str(), grey_of(width, height, rgb));
   image_stamps_.push_back(stamp);
+  ++counts_.images;
   times_ << stamp - image_stamps_.front() << '\n' << std::flush;
   const auto [lo, hi] = pending_.equal_range(stamp);
   for (auto it = lo; it != hi; ++it) write_per_pixel(image_stamps_.size() - 1, it->second);
@@ -258,55 +238,41 @@ std::optional<std::size_t> index_of(const std::vector<double>& stamps, double st
 
 }  // namespace
 
+// Depth and labels are encoded when they arrive (the caller's buffers are not kept).
 void KittiWriter::write_depth(double stamp, int width, int height, const float* depth_m) {
-  Pending p{true, width, height, {}};
-  const cv::Mat d = depth_png(width, height, depth_m, kDepthUnitsPerMetre);
-  p.pixels.assign(d.begin<std::uint16_t>(), d.end<std::uint16_t>());
-  if (const auto i = index_of(image_stamps_, stamp))
-    write_per_pixel(*i, p);
-  else
-    pending_.emplace(stamp, std::move(p));
+  Png png{true, {}};
+  if (!cv::imencode(".png", depth_png(width, height, depth_m, kDepthUnitsPerMetre), png.second))
+    throw DatasetError(seq_dir_ + "/depth_0: PNG encoding failed");
+  put(stamp, std::move(png));
 }
 
 void KittiWriter::write_segmentation(double stamp, int width, int height, const std::uint8_t* ids) {
-  Pending p{false, width, height, {}};
-  p.pixels.assign(ids, ids + static_cast<std::size_t>(width) * static_cast<std::size_t>(height));
+  Png png{false, {}};
+  if (!cv::imencode(".png", cv::Mat(height, width, CV_8UC1, const_cast<std::uint8_t*>(ids)), png.second))
+    throw DatasetError(seq_dir_ + "/seg_0: PNG encoding failed");
+  put(stamp, std::move(png));
+}
+
+void KittiWriter::put(double stamp, Png png) {
   if (const auto i = index_of(image_stamps_, stamp))
-    write_per_pixel(*i, p);
+    write_per_pixel(*i, png);
   else
-    pending_.emplace(stamp, std::move(p));
+    pending_.emplace(stamp, std::move(png));
 }
 
-void KittiWriter::write_per_pixel(std::size_t index, const Pending& p) {
+void KittiWriter::write_per_pixel(std::size_t index, const Png& png) {
   std::ostringstream name;
-  name << seq_dir_ << (p.depth ? "/depth_0/" : "/seg_0/") << std::setw(6) << std::setfill('0') << index << ".png";
-  cv::Mat m;
-  if (p.depth) {
-    m = cv::Mat(p.height, p.width, CV_16UC1);
-    std::copy(p.pixels.begin(), p.pixels.end(), m.begin<std::uint16_t>());
-    ++depth_;
-  } else {
-    m = cv::Mat(p.height, p.width, CV_8UC1);
-    std::transform(p.pixels.begin(), p.pixels.end(), m.begin<std::uint8_t>(),
-                   [](std::uint16_t v) { return static_cast<std::uint8_t>(v); });
-    ++seg_;
-  }
-  write_png(name.str(), m);
-}
-
-SequenceCounts KittiWriter::counts() const {
-  SequenceCounts n;
-  n.images = image_stamps_.size();
-  n.depth = depth_;
-  n.segmentation = seg_;
-  n.poses = poses_written_;
-  return n;
+  name << seq_dir_ << (png.first ? "/depth_0/" : "/seg_0/") << std::setw(6) << std::setfill('0') << index << ".png";
+  std::ofstream f(name.str(), std::ios::binary);
+  f.write(reinterpret_cast<const char*>(png.second.data()), static_cast<std::streamsize>(png.second.size()));
+  if (!f) throw DatasetError(name.str() + ": PNG write failed");
+  ++(png.first ? counts_.depth : counts_.segmentation);
 }
 
 void KittiWriter::write_pose(double stamp, const Eigen::Isometry3d& X_WC, const Eigen::Isometry3d& /*X_WB*/) {
   // Line i belongs to image i: a pose is written only when it is the next image's, so the file
   // stays a valid prefix if an image never gets its ground truth.
-  if (poses_written_ >= image_stamps_.size() || stamp != image_stamps_[poses_written_]) {
+  if (counts_.poses >= image_stamps_.size() || stamp != image_stamps_[counts_.poses]) {
     ++unpaired_poses_;
     return;
   }
@@ -318,7 +284,7 @@ void KittiWriter::write_pose(double stamp, const Eigen::Isometry3d& X_WC, const 
   for (int r = 0; r < 3; ++r)
     for (int c = 0; c < 4; ++c) poses_ << T(r, c) << (r == 2 && c == 3 ? '\n' : ' ');
   poses_.flush();
-  ++poses_written_;
+  ++counts_.poses;
 }
 
 void KittiWriter::close() {
@@ -330,10 +296,10 @@ void KittiWriter::close() {
 
 std::vector<std::string> KittiWriter::warnings() const {
   std::vector<std::string> w;
-  if (poses_written_ < image_stamps_.size())
-    w.push_back(root_ + "/poses: " + std::to_string(image_stamps_.size() - poses_written_) + " of " +
+  if (counts_.poses < image_stamps_.size())
+    w.push_back(root_ + "/poses: " + std::to_string(image_stamps_.size() - counts_.poses) + " of " +
                 std::to_string(image_stamps_.size()) + " images have no ground-truth pose (the file ends at image " +
-                std::to_string(poses_written_) + ")");
+                std::to_string(counts_.poses) + ")");
   if (unpaired_poses_ > 0)
     w.push_back(root_ + "/poses: " + std::to_string(unpaired_poses_) +
                 " poses were not the next image's and were not written");

@@ -21,6 +21,7 @@
 #include <memory>
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Geometry>
@@ -55,10 +56,15 @@ struct SequenceCounts {
 
 class SequenceWriter {
  public:
+  explicit SequenceWriter(std::string root) : root_(std::move(root)) {}
   virtual ~SequenceWriter() = default;
   /// The layout's name (tum, euroc, kitti).
   virtual std::string format() const = 0;
-  virtual SequenceCounts counts() const = 0;
+  /// What was written so far.
+  const SequenceCounts& counts() const { return counts_; }
+  /// Images written so far.
+  std::size_t frames() const { return counts_.images; }
+  const std::string& root() const { return root_; }
   /// Depth PNG units per metre (uint16; 0 = no return or beyond 65535 units).
   virtual double depth_units_per_metre() const = 0;
   /// The files and folders (relative to root()) this layout writes: what manifest.json covers.
@@ -75,11 +81,12 @@ class SequenceWriter {
   virtual void write_pose(double stamp, const Eigen::Isometry3d& X_WC, const Eigen::Isometry3d& X_WB) = 0;
   virtual void write_imu(double /*stamp*/, const Eigen::Vector3d& /*gyro*/, const Eigen::Vector3d& /*accel*/) {}
   virtual void close() = 0;
-  /// Images written so far.
-  virtual std::size_t frames() const = 0;
-  virtual const std::string& root() const = 0;
   /// Problems found while writing (e.g. an image without ground truth), one line each.
   virtual std::vector<std::string> warnings() const { return {}; }
+
+ protected:
+  std::string root_;
+  SequenceCounts counts_;
 };
 
 /// The layouts make_sequence_writer() knows: "tum", "euroc", "kitti".
@@ -101,10 +108,7 @@ class DatasetWriter final : public SequenceWriter {
   void write_imu(double stamp, const Eigen::Vector3d& gyro, const Eigen::Vector3d& accel) override;
   /// Flushes and closes every file (also done by the destructor).
   void close() override;
-  std::size_t frames() const override { return counts_.images; }
-  const std::string& root() const override { return root_; }
   std::string format() const override { return "tum"; }
-  SequenceCounts counts() const override { return counts_; }
   double depth_units_per_metre() const override { return kDepthScale; }
   std::vector<std::string> layout_entries() const override {
     return {"rgb",
@@ -121,9 +125,7 @@ class DatasetWriter final : public SequenceWriter {
 
  private:
   static std::string stamp_name(double stamp);
-  std::string root_;
   std::ofstream rgb_txt_, depth_txt_, seg_txt_, gt_txt_, gt_body_txt_, imu_txt_;
-  SequenceCounts counts_;
 };
 
 }  // namespace unav::datagen

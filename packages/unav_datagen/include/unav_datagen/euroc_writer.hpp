@@ -42,10 +42,7 @@ class EurocWriter final : public SequenceWriter {
   void write_pose(double stamp, const Eigen::Isometry3d& X_WC, const Eigen::Isometry3d& X_WB) override;
   void write_imu(double stamp, const Eigen::Vector3d& gyro, const Eigen::Vector3d& accel) override;
   void close() override;
-  std::size_t frames() const override { return image_ns_.size(); }
-  const std::string& root() const override { return root_; }
   std::string format() const override { return "euroc"; }
-  SequenceCounts counts() const override;
   double depth_units_per_metre() const override { return kDepthUnitsPerMetre; }
   std::vector<std::string> layout_entries() const override { return {"mav0"}; }
   static constexpr double kDepthUnitsPerMetre = 1000.0;
@@ -55,16 +52,21 @@ class EurocWriter final : public SequenceWriter {
   static long long to_ns(double stamp);
 
  private:
+  /// First and last stamp of a stream: its rate in sensor.yaml, with the stream's count.
+  struct Span {
+    long long first_ns = -1, last_ns = -1;
+    void add(long long ns) {
+      if (first_ns < 0) first_ns = ns;
+      last_ns = ns;
+    }
+  };
   void write_sensor_yamls();
-  std::string root_, mav_;
+  std::string mav_;
   std::ofstream cam_csv_, imu_csv_, gt_csv_, depth_csv_, seg_csv_;
-  std::size_t depth_ = 0, seg_ = 0, poses_ = 0;
   CameraIntrinsics k_;
   bool have_k_ = false, have_mount_ = false, closed_ = false;
   Eigen::Isometry3d X_BC_ = Eigen::Isometry3d::Identity();
-  std::vector<long long> image_ns_;
-  long long imu_first_ns_ = -1, imu_last_ns_ = -1;
-  std::size_t imu_samples_ = 0;
+  Span images_, imu_;
 };
 
 }  // namespace unav::datagen

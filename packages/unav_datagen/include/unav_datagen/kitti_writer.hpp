@@ -15,10 +15,10 @@
 // belongs to image i: the writer checks the pairing and reports images left without a pose.
 #pragma once
 
-#include <cstdint>
 #include <fstream>
 #include <map>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "unav_datagen/dataset_writer.hpp"
@@ -37,29 +37,23 @@ class KittiWriter final : public SequenceWriter {
   void write_segmentation(double stamp, int width, int height, const std::uint8_t* ids) override;
   void write_pose(double stamp, const Eigen::Isometry3d& X_WC, const Eigen::Isometry3d& X_WB) override;
   void close() override;
-  std::size_t frames() const override { return image_stamps_.size(); }
-  const std::string& root() const override { return root_; }
   std::string format() const override { return "kitti"; }
-  SequenceCounts counts() const override;
   double depth_units_per_metre() const override { return kDepthUnitsPerMetre; }
   std::vector<std::string> layout_entries() const override { return {"sequences", "poses"}; }
   static constexpr double kDepthUnitsPerMetre = 1000.0;
   std::vector<std::string> warnings() const override;
 
  private:
-  std::string root_, seq_dir_;
+  /// A depth (true) or label PNG, encoded, for the image of a stamp.
+  using Png = std::pair<bool, std::vector<unsigned char>>;
+  /// Writes it as depth_0/seg_0 file `index`.
+  void write_per_pixel(std::size_t index, const Png& png);
+  /// Writes it now if its colour image has an index, else keeps it until write_rgb gives one.
+  void put(double stamp, Png png);
+  std::string seq_dir_;
   std::ofstream times_, poses_;
-  /// A per-pixel image waiting for the colour image of its stamp (which gives its index).
-  struct Pending {
-    bool depth = false;  ///< 16-bit depth units, else 8-bit class ids
-    int width = 0, height = 0;
-    std::vector<std::uint16_t> pixels;
-  };
-  void write_per_pixel(std::size_t index, const Pending& p);
-  std::multimap<double, Pending> pending_;
-  std::size_t depth_ = 0, seg_ = 0;
+  std::multimap<double, Png> pending_;
   std::vector<double> image_stamps_;
-  std::size_t poses_written_ = 0;
   std::size_t unpaired_poses_ = 0;
   bool have_first_ = false, distorted_ = false, closed_ = false;
   Eigen::Isometry3d X_C0W_ = Eigen::Isometry3d::Identity();  ///< inverse of the first camera pose
