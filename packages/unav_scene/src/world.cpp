@@ -48,19 +48,18 @@ double Seabed::depth_at(double n_m, double e_m) const {
 }
 
 SeabedGrid sample_seabed(const Seabed& seabed) {
-  const Seabed& sb = seabed;
   SeabedGrid g;
-  g.resolution_m = sb.resolution_m;
-  g.origin_n = sb.center_ne.x() - 0.5 * sb.size_m.x();
-  g.origin_e = sb.center_ne.y() - 0.5 * sb.size_m.y();
+  g.resolution_m = seabed.resolution_m;
+  g.origin_n = seabed.center_ne.x() - 0.5 * seabed.size_m.x();
+  g.origin_e = seabed.center_ne.y() - 0.5 * seabed.size_m.y();
   // Cover the whole patch (the last row/column may lie up to one cell beyond it).
-  const int rows = std::max(2, static_cast<int>(std::ceil(sb.size_m.x() / sb.resolution_m - 1e-9)) + 1);
-  const int cols = std::max(2, static_cast<int>(std::ceil(sb.size_m.y() / sb.resolution_m - 1e-9)) + 1);
+  const int rows = std::max(2, static_cast<int>(std::ceil(seabed.size_m.x() / seabed.resolution_m - 1e-9)) + 1);
+  const int cols = std::max(2, static_cast<int>(std::ceil(seabed.size_m.y() / seabed.resolution_m - 1e-9)) + 1);
   g.depths_m.assign(static_cast<std::size_t>(rows), std::vector<double>(static_cast<std::size_t>(cols)));
   for (int i = 0; i < rows; ++i)
     for (int j = 0; j < cols; ++j)
       g.depths_m[static_cast<std::size_t>(i)][static_cast<std::size_t>(j)] =
-          sb.depth_at(g.origin_n + i * g.resolution_m, g.origin_e + j * g.resolution_m);
+          seabed.depth_at(g.origin_n + i * g.resolution_m, g.origin_e + j * g.resolution_m);
   return g;
 }
 
