@@ -11,7 +11,7 @@ PKGS=(
   libeigen3-dev libopencv-dev libceres-dev libassimp-dev
   libegl-dev libgles-dev libgl-dev libegl-mesa0 libgbm-dev libepoxy-dev
   libyaml-cpp-dev libcli11-dev libspdlog-dev nlohmann-json3-dev
-  libgtest-dev libgmock-dev libbenchmark-dev libsqlite3-dev libssl-dev
+  libgtest-dev libgmock-dev libbenchmark-dev libsqlite3-dev libssl-dev libzstd-dev zlib1g-dev
   clang-format clang-tidy
   pybind11-dev python3-dev python3-venv python3-pytest python3-numpy python3-torch
   python3-pandas python3-matplotlib python3-tqdm python3-rich python3-typing-extensions
@@ -36,7 +36,12 @@ fi
 # GB from PyPI. So the PyPI packages are installed pinned and without dependencies; everything
 # else they import comes from the Debian packages above.
 VENV="${UNAV_VENV:-$(cd "$(dirname "$0")/.." && pwd)/.venv}"
-PY_PINS=(gymnasium==1.0.0 stable-baselines3==2.4.1 farama-notifications==0.0.4 cloudpickle==3.1.1)
+# The bag readers nobody here wrote, used by the tests to read our bags back: rosbags (both
+# storages), mcap + mcap-ros2-support (MCAP, as Foxglove decodes it), with their dependencies
+# pinned the same way (Debian's typing_extensions 4.4 is older than rosbags needs).
+PY_PINS=(gymnasium==1.0.0 stable-baselines3==2.4.1 farama-notifications==0.0.4 cloudpickle==3.1.1
+  rosbags==0.11.9 apsw==3.54.1.0 backports.zstd==1.8.0 ruamel.yaml==0.19.1 typing_extensions==4.16.0
+  mcap==1.6.0 mcap-ros2-support==0.6.0 zstandard==0.25.0)
 if [ ! -x "$VENV/bin/python" ]; then
   echo "install_deps: creating the Python venv $VENV (from /usr/bin/python3, with system site packages)"
   /usr/bin/python3 -m venv --system-site-packages "$VENV"
@@ -56,6 +61,6 @@ then
   echo "install_deps: pip install --no-deps ${PY_PINS[*]}"
   "$VENV/bin/pip" install -q --no-deps "${PY_PINS[@]}"
 fi
-"$VENV/bin/python" -c "import gymnasium, stable_baselines3, torch, pandas, tqdm, rich" \
+"$VENV/bin/python" -c "import gymnasium, stable_baselines3, torch, pandas, tqdm, rich, rosbags.rosbag2, mcap_ros2" \
   || { echo "install_deps: the venv $VENV cannot import the learning stack"; exit 1; }
 echo "install_deps: Python venv $VENV ready (gymnasium, stable-baselines3 over Debian's torch)"

@@ -22,6 +22,8 @@ FLOORS = {
     "ros2_msgs": 0, "unav_msgs": 0, "unav_common": 0,
     # floor 1: the node kit and message introspection (framework)
     "unav_runtime": 1, "unav_introspection": 1, "unav_launch": 1,
+    # floor 2 (framework): rosbag2 storage over the introspection types
+    "unav_bag": 2,
     # floor 2: physics model, scene description (no GL)
     "unav_physics": 2, "unav_scene": 2,
     # floor 3: capabilities (DDS-free cores + their thin nodes)
@@ -45,7 +47,7 @@ SAME_FLOOR_OK = {("unav_physics", "unav_scene")}
 PENDING = {}
 # Framework packages (src/) never depend on capabilities (packages/): `unav eval` dispatches to
 # the evaluation package's executable instead of linking it.
-FRAMEWORK = {"unav_runtime", "unav_introspection", "unav_launch", "unav_cli", "unav_examples", "unav_common",
+FRAMEWORK = {"unav_runtime", "unav_introspection", "unav_launch", "unav_bag", "unav_cli", "unav_examples", "unav_common",
              "unav_cmake", "unav_resources"}
 CAPABILITIES = {"unav_physics", "unav_scene", "unav_renderer", "unav_control", "unav_localization",
                 "unav_evaluation", "unav_datagen", "unav_sim", "unav_gym", "unav_planning"}

@@ -179,6 +179,21 @@ const Constant* TypeRegistry::find_constant(const std::string& scoped_name) cons
   return it == impl_->constants.end() ? nullptr : &it->second;
 }
 
+std::vector<const Constant*> TypeRegistry::constants_of(const std::string& type_name) const {
+  // "sensor_msgs::msg::dds_::Range_" -> "sensor_msgs::msg::Range_Constants::"
+  const std::string ros =
+      dds_to_ros_name(type_name.find("::") != std::string::npos ? type_name : ros_to_dds_name(type_name));
+  const size_t a = ros.find('/'), b = ros.rfind('/');
+  const std::string prefix =
+      ros.substr(0, a) + "::" + ros.substr(a + 1, b - a - 1) + "::" + ros.substr(b + 1) + "_Constants::";
+  std::vector<const Constant*> out;
+  for (auto it = impl_->constants.lower_bound(prefix); it != impl_->constants.end(); ++it) {
+    if (it->first.compare(0, prefix.size(), prefix) != 0) break;
+    if (it->first.find("::", prefix.size()) == std::string::npos) out.push_back(&it->second);
+  }
+  return out;
+}
+
 std::vector<std::string> TypeRegistry::list() const {
   std::set<std::string> names;
   for (const std::string& root : impl_->roots) {

@@ -78,6 +78,10 @@ class TypeRegistry {
   /// The already loaded constant with this fully scoped name, or nullptr.
   const Constant* find_constant(const std::string& scoped_name) const;
 
+  /// The loaded constants declared with a message type, e.g. for "sensor_msgs/msg/Range" those of
+  /// `sensor_msgs::msg::Range_Constants`, sorted by name. Empty when the type declares none.
+  std::vector<const Constant*> constants_of(const std::string& type_name) const;
+
   /// ROS names ("std_msgs/msg/Header") of all `<pkg>/<kind>/<Type>.idl` files under the roots,
   /// sorted, without duplicates. Does not parse them.
   std::vector<std::string> list() const;

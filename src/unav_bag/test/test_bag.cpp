@@ -1,0 +1,230 @@
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <random>
+#include <thread>
+
+#include "unav_bag/async_recorder.hpp"
+#include "unav_bag/bag.hpp"
+#include "unav_bag/msg_definition.hpp"
+
+namespace fs = std::filesystem;
+using namespace unav::bag;
+
+namespace {
+
+unav::introspection::TypeRegistry registry() {
+  unav::introspection::TypeRegistry reg;
+  reg.add_root(ROS2_MSGS_IDL);
+  reg.add_root(UNAV_MSGS_IDL);
+  return reg;
+}
+
+std::string temp_dir(const std::string& name) {
+  const fs::path p = fs::temp_directory_path() / ("unav_bag_test_" + std::to_string(::getpid())) / name;
+  fs::remove_all(p);
+  fs::create_directories(p.parent_path());
+  return p.string();
+}
+
+TopicMetadata topic(const std::string& name, const std::string& type, bool latched = false) {
+  TopicMetadata t;
+  t.name = name;
+  t.type = type;
+  t.offered_qos_profiles = offered_qos_yaml({{true, latched, latched ? 1 : 10}});
+  t.message_definition = "int32 x\n";
+  return t;
+}
+
+std::vector<uint8_t> payload(size_t n, int seed) {
+  std::vector<uint8_t> v(n);
+  std::mt19937 rng(static_cast<uint32_t>(seed));
+  for (auto& b : v) b = static_cast<uint8_t>(rng());
+  return v;
+}
+
+}  // namespace
+
+TEST(MsgDefinition, HeaderWithItsDependency) {
+  auto reg = registry();
+  EXPECT_EQ(ros2msg_definition(reg, "std_msgs/msg/Header"),
+            "builtin_interfaces/Time stamp\nstring frame_id\n" + std::string(80, '=') +
+                "\nMSG: builtin_interfaces/msg/Time\nint32 sec\nuint32 nanosec\n");
+}
+
+TEST(MsgDefinition, ArraysSequencesConstantsAndEachDependencyOnce) {
+  auto reg = registry();
+  const std::string imu = ros2msg_definition(reg, "sensor_msgs/msg/Imu");
+  EXPECT_NE(imu.find("float64[9] orientation_covariance\n"), std::string::npos) << imu;
+  EXPECT_NE(imu.find("geometry_msgs/Quaternion orientation\n"), std::string::npos) << imu;
+  // Vector3 is used twice (angular velocity, linear acceleration) but defined once.
+  size_t n = 0;
+  for (size_t p = imu.find("MSG: geometry_msgs/msg/Vector3\n"); p != std::string::npos;
+       p = imu.find("MSG: geometry_msgs/msg/Vector3\n", p + 1))
+    ++n;
+  EXPECT_EQ(n, 1u);
+  const std::string image = ros2msg_definition(reg, "sensor_msgs/msg/Image");
+  EXPECT_NE(image.find("uint8[] data\n"), std::string::npos) << image;
+  const std::string range = ros2msg_definition(reg, "sensor_msgs/msg/Range");
+  EXPECT_NE(range.find("uint8 ULTRASOUND=0\n"), std::string::npos) << range;
+  EXPECT_NE(range.find("uint8 INFRARED=1\n"), std::string::npos) << range;
+  EXPECT_THROW(ros2msg_definition(reg, "nope_msgs/msg/Missing"), std::exception);
+}
+
+TEST(OfferedQos, RoundTripsThroughTheRosbag2String) {
+  const std::vector<QosProfile> in = {{true, true, 1}, {false, false, 5}};
+  const std::string yaml = offered_qos_yaml(in);
+  EXPECT_NE(yaml.find("reliability: 1"), std::string::npos) << yaml;
+  EXPECT_NE(yaml.find("durability: 1"), std::string::npos) << yaml;
+  const auto out = parse_offered_qos_yaml(yaml);
+  ASSERT_EQ(out.size(), 2u);
+  EXPECT_TRUE(out[0].reliable && out[0].transient_local);
+  EXPECT_FALSE(out[1].reliable || out[1].transient_local);
+  EXPECT_EQ(out[1].depth, 5);
+  // Later distros write names instead of numbers.
+  const auto named = parse_offered_qos_yaml("- {reliability: best_effort, durability: transient_local, depth: 3}");
+  ASSERT_EQ(named.size(), 1u);
+  EXPECT_FALSE(named[0].reliable);
+  EXPECT_TRUE(named[0].transient_local);
+}
+
+class RoundTrip : public ::testing::TestWithParam<std::pair<std::string, std::string>> {};
+
+TEST_P(RoundTrip, EveryMessageBackWithItsTopicAndTimestamp) {
+  const auto [storage, compression] = GetParam();
+  const std::string dir = temp_dir("rt_" + storage + "_" + compression);
+  std::vector<std::tuple<size_t, int64_t, std::vector<uint8_t>>> written;
+  {
+    BagWriter::Options opt;
+    opt.storage_id = storage;
+    opt.compression = compression;
+    opt.chunk_size = 100000;  // several chunks, and images larger than a chunk
+    BagWriter w(dir, opt);
+    EXPECT_EQ(w.add_topic(topic("/a", "std_msgs/msg/Float64")), 0u);
+    EXPECT_EQ(w.add_topic(topic("/b/image", "sensor_msgs/msg/Image")), 1u);
+    EXPECT_EQ(w.add_topic(topic("/c", "std_msgs/msg/String", true)), 2u);  // no messages
+    EXPECT_THROW(w.add_topic(topic("/a", "std_msgs/msg/Float64")), BagError);
+    for (int i = 0; i < 50; ++i) {
+      const size_t t = i % 5 == 0 ? 1 : 0;
+      written.emplace_back(t, 1000000000LL + i * 1000, payload(t == 1 ? 640 * 480 * 3 : 12 + i, i));
+      const auto& [tt, ts, data] = written.back();
+      w.write(tt, ts, data.data(), data.size());
+    }
+    w.close();
+    // metadata.yaml appears only at close; the storage file is named after the folder.
+    EXPECT_EQ(w.storage_file(), "rt_" + storage + "_" + compression + "_0" + (storage == "mcap" ? ".mcap" : ".db3"));
+  }
+  ASSERT_TRUE(fs::exists(fs::path(dir) / "metadata.yaml"));
+  BagReader r(dir);
+  ASSERT_EQ(r.topics().size(), 3u);
+  EXPECT_EQ(r.topics()[1].name, "/b/image");
+  EXPECT_EQ(r.topics()[1].type, "sensor_msgs/msg/Image");
+  EXPECT_TRUE(parse_offered_qos_yaml(r.topics()[2].offered_qos_profiles).at(0).transient_local);
+  if (storage == "mcap") {
+    EXPECT_EQ(r.topics()[0].message_definition, "int32 x\n");
+  }
+  EXPECT_EQ(r.info().storage_identifier, storage);
+  EXPECT_EQ(r.info().message_count, 50u);
+  EXPECT_EQ(r.info().starting_time_ns, 1000000000LL);
+  EXPECT_EQ(r.info().duration_ns, 49000);
+  EXPECT_EQ(r.info().topics.at(1).message_count, 10u);
+  EXPECT_EQ(r.info().topics.at(2).message_count, 0u);
+  for (int pass = 0; pass < 2; ++pass) {  // and again after rewind()
+    Message m;
+    size_t i = 0;
+    while (r.next(m)) {
+      ASSERT_LT(i, written.size());
+      EXPECT_EQ(m.topic, std::get<0>(written[i]));
+      EXPECT_EQ(m.timestamp_ns, std::get<1>(written[i]));
+      EXPECT_TRUE(m.data == std::get<2>(written[i])) << "message " << i;
+      ++i;
+    }
+    EXPECT_EQ(i, written.size());
+    r.rewind();
+  }
+  // Without metadata.yaml the storage file alone gives the same statistics (scanned).
+  fs::remove(fs::path(dir) / "metadata.yaml");
+  BagReader scanned(dir);
+  EXPECT_EQ(scanned.info().message_count, 50u);
+  EXPECT_EQ(scanned.info().duration_ns, 49000);
+  EXPECT_EQ(scanned.info().topics.at(1).message_count, 10u);
+}
+
+INSTANTIATE_TEST_SUITE_P(Storages, RoundTrip,
+                         ::testing::Values(std::make_pair(std::string("mcap"), std::string("none")),
+                                           std::make_pair(std::string("mcap"), std::string("zstd")),
+                                           std::make_pair(std::string("sqlite3"), std::string("none"))));
+
+TEST(BagWriter, BadInputNamesTheValue) {
+  const std::string dir = temp_dir("bad");
+  BagWriter::Options opt;
+  opt.storage_id = "bag1";
+  try {
+    BagWriter w(dir, opt);
+    FAIL();
+  } catch (const BagError& e) {
+    EXPECT_NE(std::string(e.what()).find("'bag1'"), std::string::npos) << e.what();
+  }
+  opt.storage_id = "sqlite3";
+  opt.compression = "zstd";
+  EXPECT_THROW(BagWriter(dir, opt), BagError);  // chunk compression is an MCAP feature
+  opt.compression = "none";
+  { BagWriter w(dir, opt); }
+  try {
+    BagWriter again(dir, opt);
+    FAIL();
+  } catch (const BagError& e) {
+    EXPECT_NE(std::string(e.what()).find("exists"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(BagReader(temp_dir("nothing_here")), BagError);
+}
+
+TEST(BagReader, RejectsATruncatedMcap) {
+  const std::string dir = temp_dir("truncated");
+  {
+    BagWriter w(dir, {});
+    w.add_topic(topic("/a", "std_msgs/msg/Float64"));
+    const auto data = payload(5000, 1);
+    for (int i = 0; i < 10; ++i) w.write(0, i, data.data(), data.size());
+  }
+  const fs::path file = fs::path(dir) / "truncated_0.mcap";
+  fs::resize_file(file, fs::file_size(file) / 2);
+  fs::remove(fs::path(dir) / "metadata.yaml");
+  EXPECT_THROW(BagReader r(dir), BagError);
+}
+
+TEST(AsyncRecorder, DropsAreCountedNeverSilent) {
+  const std::string dir = temp_dir("async_drop");
+  // A queue of 1 byte: a message is accepted only when the previous one is on disk, so a burst
+  // of 200 x 1 MB (enqueued in microseconds, written in ~0.1 ms each at best) must drop some.
+  AsyncRecorder rec(std::make_unique<BagWriter>(dir, BagWriter::Options{}), 1);
+  const size_t t = rec.add_topic(topic("/img", "sensor_msgs/msg/Image"));
+  size_t accepted = 0;
+  for (int i = 0; i < 200; ++i) accepted += rec.enqueue(t, i, std::vector<uint8_t>(1 << 20, 7)) ? 1 : 0;
+  rec.close();
+  const auto c = rec.counts().at(0);
+  EXPECT_EQ(c.received, 200u);
+  EXPECT_EQ(c.written, accepted);
+  EXPECT_EQ(c.written + c.dropped, c.received);
+  EXPECT_GT(c.dropped, 0u);
+  EXPECT_EQ(BagReader(dir).info().message_count, c.written);
+}
+
+TEST(AsyncRecorder, AmpleQueueKeepsEverythingFromManyThreads) {
+  const std::string dir = temp_dir("async_all");
+  AsyncRecorder rec(std::make_unique<BagWriter>(dir, BagWriter::Options{}), 64u << 20);
+  std::vector<std::thread> threads;
+  for (int k = 0; k < 4; ++k) {
+    threads.emplace_back([&rec, k] {
+      const size_t t = rec.add_topic(topic("/t" + std::to_string(k), "std_msgs/msg/Float64"));
+      for (int i = 0; i < 500; ++i) rec.enqueue(t, k * 1000000 + i, payload(64, i));
+    });
+  }
+  for (auto& th : threads) th.join();
+  rec.close();
+  EXPECT_EQ(rec.dropped(), 0u);
+  BagReader r(dir);
+  EXPECT_EQ(r.info().message_count, 2000u);
+  for (const auto& ti : r.info().topics) EXPECT_EQ(ti.message_count, 500u);
+}
