@@ -33,7 +33,7 @@ int main(int argc, char** argv) {
       unav::bag::BagWriter w(dir, opt);
       w.add_topic({"/rov/camera/image", "sensor_msgs/msg/Image", "cdr", "", ""});
       w.add_topic({"/rov/imu", "sensor_msgs/msg/Imu", "cdr", "", ""});
-      for (int64_t k = 0; k < seconds * 600; ++k) {  // 600 ticks of 5/3 ms per second
+      for (int64_t k = 0; k < static_cast<int64_t>(seconds) * 600; ++k) {  // 600 ticks of 5/3 ms per second
         const int64_t t = k * 1666667;
         if (k % 20 == 0) {
           image[0] = static_cast<uint8_t>(k);

@@ -1,5 +1,8 @@
 #include "unav_bag/async_recorder.hpp"
 
+#include <pthread.h>
+#include <signal.h>
+
 #include <cstdio>
 
 namespace unav::bag {
@@ -58,6 +61,11 @@ bool AsyncRecorder::enqueue(size_t topic, int64_t timestamp_ns, std::vector<uint
 }
 
 void AsyncRecorder::run() {
+  // A library thread takes no process signals: Ctrl-C belongs to the thread that handles it (a
+  // node's signal thread), whatever order the threads were started in.
+  sigset_t all;
+  sigfillset(&all);
+  pthread_sigmask(SIG_BLOCK, &all, nullptr);
   for (;;) {
     Item item;
     {

@@ -93,7 +93,7 @@ class SqliteStorage final : public BagWriter::Storage {
   }
 
   void add_topic(size_t index, const TopicMetadata& t) override {
-    sqlite3_bind_int64(insert_topic_, 1, static_cast<sqlite3_int64>(index + 1));
+    sqlite3_bind_int64(insert_topic_, 1, static_cast<sqlite3_int64>(index) + 1);
     sqlite3_bind_text(insert_topic_, 2, t.name.c_str(), -1, SQLITE_TRANSIENT);
     sqlite3_bind_text(insert_topic_, 3, t.type.c_str(), -1, SQLITE_TRANSIENT);
     sqlite3_bind_text(insert_topic_, 4, t.serialization_format.c_str(), -1, SQLITE_TRANSIENT);
@@ -102,7 +102,7 @@ class SqliteStorage final : public BagWriter::Storage {
   }
 
   void write(size_t topic, int64_t timestamp_ns, const uint8_t* data, size_t size) override {
-    sqlite3_bind_int64(insert_message_, 1, static_cast<sqlite3_int64>(topic + 1));
+    sqlite3_bind_int64(insert_message_, 1, static_cast<sqlite3_int64>(topic) + 1);
     sqlite3_bind_int64(insert_message_, 2, timestamp_ns);
     sqlite3_bind_blob64(insert_message_, 3, data, size, SQLITE_STATIC);
     db_.step_done(insert_message_);

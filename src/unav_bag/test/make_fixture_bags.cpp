@@ -83,7 +83,7 @@ int main(int argc, char** argv) {
     unav::bag::BagWriter::Options opt;
     opt.storage_id = storage;
     opt.compression = compression;
-    opt.chunk_size = 256 * 1024;  // several chunks, some with many small messages
+    opt.chunk_size = size_t{256} * 1024;  // several chunks, some with many small messages
     unav::bag::BagWriter w(out + "/" + dir, opt);
     for (const auto& t : topics) {
       unav::bag::TopicMetadata m;

@@ -107,7 +107,7 @@ TEST_P(RoundTrip, EveryMessageBackWithItsTopicAndTimestamp) {
     EXPECT_THROW(w.add_topic(topic("/a", "std_msgs/msg/Float64")), BagError);
     for (int i = 0; i < 50; ++i) {
       const size_t t = i % 5 == 0 ? 1 : 0;
-      written.emplace_back(t, 1000000000LL + i * 1000, payload(t == 1 ? 640 * 480 * 3 : 12 + i, i));
+      written.emplace_back(t, 1000000000LL + i * 1000LL, payload(t == 1 ? 640 * 480 * 3 : 12 + i, i));
       const auto& [tt, ts, data] = written.back();
       w.write(tt, ts, data.data(), data.size());
     }
@@ -215,6 +215,7 @@ TEST(AsyncRecorder, AmpleQueueKeepsEverythingFromManyThreads) {
   const std::string dir = temp_dir("async_all");
   AsyncRecorder rec(std::make_unique<BagWriter>(dir, BagWriter::Options{}), 64u << 20);
   std::vector<std::thread> threads;
+  threads.reserve(4);
   for (int k = 0; k < 4; ++k) {
     threads.emplace_back([&rec, k] {
       const size_t t = rec.add_topic(topic("/t" + std::to_string(k), "std_msgs/msg/Float64"));

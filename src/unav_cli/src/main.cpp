@@ -11,6 +11,8 @@
 
 #include <fastdds/dds/publisher/DataWriter.hpp>
 
+#include "bag_command.hpp"
+#include "cli_common.hpp"
 #include "graph.hpp"
 #include "raw_type.hpp"
 #include "unav_introspection/cdr_codec.hpp"
@@ -23,37 +25,6 @@ using namespace std::chrono_literals;
 namespace intro = unav::introspection;
 
 namespace unav::cli {
-namespace {
-
-/// A user-facing error: printed as one line, exit code 2.
-struct UsageError : std::runtime_error {
-  using std::runtime_error::runtime_error;
-};
-
-class RawSubscription : public unav::SubscriptionBase {
- public:
-  RawSubscription(unav::Context& ctx, const std::string& dds_topic, const std::string& dds_type, const unav::QoS& qos,
-                  std::function<void(const RawSample&)> cb)
-      : SubscriptionBase(ctx, dds_topic, new RawType(dds_type), qos), cb_(std::move(cb)) {}
-  bool execute() override {
-    for (int i = 0; i < 64; ++i) {
-      if (!take(&sample_)) return false;
-      cb_(sample_);
-    }
-    return true;
-  }
-
- private:
-  std::function<void(const RawSample&)> cb_;
-  RawSample sample_;
-};
-
-class RawPublisher : public unav::PublisherBase {
- public:
-  RawPublisher(unav::Context& ctx, const std::string& dds_topic, const std::string& dds_type, const unav::QoS& qos)
-      : PublisherBase(ctx, dds_topic, new RawType(dds_type), qos) {}
-  bool publish(const RawSample& s) { return write(&s); }
-};
 
 // IDL roots: every <prefix>/share/<pkg>/idl of the workspace install, found from the environment
 // and from this executable's own install prefix (so it works before sourcing setup.bash).
@@ -82,6 +53,8 @@ intro::TypeRegistry make_registry() {
 
 std::string normalize_topic(const std::string& t) { return unav::resolve_topic_name(t, "/", "unav_cli"); }
 
+namespace {
+
 int topic_list(bool show_types) {
   Graph g;
   g.context().spin_until([] { return false; }, default_spin_time());
@@ -104,7 +77,7 @@ int topic_list(bool show_types) {
 // Subscribes to `topic` with the publishers' type and QoS; waits (with ros2's warning) until
 // one appears.
 std::shared_ptr<RawSubscription> subscribe_any(Graph& g, const std::string& topic, std::string& dds_type,
-                                               std::function<void(const RawSample&)> cb) {
+                                               std::function<void(RawSample&)> cb) {
   dds_type = g.wait_for_type(topic, default_spin_time());
   if (dds_type.empty()) {
     std::cerr << "WARNING: topic [" << topic << "] does not appear to be published yet" << std::endl;
@@ -368,6 +341,8 @@ int main(int argc, char** argv) {
 
   app.add_subcommand("eval", "trajectory metrics on TUM files, as evo computes them (unav eval --help)");
 
+  const auto run_bag = add_bag_command(app);
+
   CLI11_PARSE(app, argc, argv);
   if (full_length) echo_opts.truncate_length = intro::EchoOptions::kFullLength;
   try {
@@ -378,6 +353,7 @@ int main(int argc, char** argv) {
     if (pub->parsed()) return topic_pub(topic_name, type_name, values, rate, once, times, wait_matching);
     if (node_list_cmd->parsed()) return node_list();
     if (launch_cmd->parsed()) return launch(launch_file, launch_args);
+    if (app.got_subcommand("bag")) return run_bag();
   } catch (const UsageError& e) {
     std::cerr << "unav: error: " << e.what() << std::endl;
     return 2;

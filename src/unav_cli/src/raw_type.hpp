@@ -9,6 +9,8 @@
 #include <fastdds/rtps/common/SerializedPayload.h>
 #include <fastdds/dds/topic/TopicDataType.hpp>
 
+#include "unav_runtime/runtime.hpp"
+
 namespace unav::cli {
 
 struct RawSample {
@@ -40,6 +42,33 @@ class RawType : public eprosima::fastdds::dds::TopicDataType {
   void* createData() override { return new RawSample(); }
   void deleteData(void* data) override { delete static_cast<RawSample*>(data); }
   bool getKey(void*, eprosima::fastrtps::rtps::InstanceHandle_t*, bool) override { return false; }
+};
+
+/// Subscription to any type, delivering raw CDR samples.
+class RawSubscription : public unav::SubscriptionBase {
+ public:
+  RawSubscription(unav::Context& ctx, const std::string& dds_topic, const std::string& dds_type, const unav::QoS& qos,
+                  std::function<void(RawSample&)> cb)
+      : SubscriptionBase(ctx, dds_topic, new RawType(dds_type), qos), cb_(std::move(cb)) {}
+  bool execute() override {
+    for (int i = 0; i < 64; ++i) {
+      if (!take(&sample_)) return false;
+      cb_(sample_);  // may move the bytes out
+    }
+    return true;
+  }
+
+ private:
+  std::function<void(RawSample&)> cb_;
+  RawSample sample_;
+};
+
+/// Publisher of any type from raw CDR samples.
+class RawPublisher : public unav::PublisherBase {
+ public:
+  RawPublisher(unav::Context& ctx, const std::string& dds_topic, const std::string& dds_type, const unav::QoS& qos)
+      : PublisherBase(ctx, dds_topic, new RawType(dds_type), qos) {}
+  bool publish(const RawSample& s) { return write(&s); }
 };
 
 }  // namespace unav::cli

@@ -7,6 +7,8 @@
 #include <cstdlib>
 #include <cstring>
 
+#include <fastdds/rtps/transport/UDPv4TransportDescriptor.h>
+#include <fastdds/rtps/transport/shared_mem/SharedMemTransportDescriptor.h>
 #include <fastdds/dds/domain/DomainParticipant.hpp>
 #include <fastdds/dds/domain/DomainParticipantFactory.hpp>
 #include <fastdds/dds/publisher/DataWriter.hpp>
@@ -16,8 +18,6 @@
 #include <fastdds/dds/subscriber/Subscriber.hpp>
 #include <fastdds/dds/topic/Topic.hpp>
 #include <fastdds/dds/topic/TypeSupport.hpp>
-#include <fastdds/rtps/transport/UDPv4TransportDescriptor.h>
-#include <fastdds/rtps/transport/shared_mem/SharedMemTransportDescriptor.h>
 
 #include "rmw_dds_common/msg/gid.hpp"
 #include "rmw_dds_common/msg/participant_entities_info.hpp"
@@ -58,9 +58,10 @@ void fill_gid(const eprosima::fastrtps::rtps::GUID_t& guid, rmw_dds_common::msg:
   gid.data(data);
 }
 
-void apply_qos(const QoS& q, fdds::ReliabilityQosPolicy& rel, fdds::DurabilityQosPolicy& dur, fdds::HistoryQosPolicy& hist) {
-  rel.kind = q.reliability == QoS::Reliability::kReliable ? fdds::RELIABLE_RELIABILITY_QOS
-                                                          : fdds::BEST_EFFORT_RELIABILITY_QOS;
+void apply_qos(const QoS& q, fdds::ReliabilityQosPolicy& rel, fdds::DurabilityQosPolicy& dur,
+               fdds::HistoryQosPolicy& hist) {
+  rel.kind =
+      q.reliability == QoS::Reliability::kReliable ? fdds::RELIABLE_RELIABILITY_QOS : fdds::BEST_EFFORT_RELIABILITY_QOS;
   dur.kind = q.durability == QoS::Durability::kTransientLocal ? fdds::TRANSIENT_LOCAL_DURABILITY_QOS
                                                               : fdds::VOLATILE_DURABILITY_QOS;
   hist.kind = fdds::KEEP_LAST_HISTORY_QOS;
@@ -83,6 +84,11 @@ Context::Context(int argc, const char* const* argv, ContextOptions options) {
 
   handle_signals_ = options.handle_signals;
   if (handle_signals_) {
+    // A process started in the background by a non-interactive shell inherits SIGINT ignored,
+    // and an ignored signal is discarded even while blocked, so sigwait() would never see it:
+    // take the default disposition back (the mask below keeps it from killing us).
+    ::signal(SIGINT, SIG_DFL);
+    ::signal(SIGTERM, SIG_DFL);
     // Block before DDS starts its threads so they inherit the mask and only our thread sees them.
     sigset_t set = handled_signals();
     pthread_sigmask(SIG_BLOCK, &set, nullptr);
@@ -115,7 +121,8 @@ Context::Context(int argc, const char* const* argv, ContextOptions options) {
   participant_ = fdds::DomainParticipantFactory::get_instance()->create_participant(
       domain_id_, pqos, options.participant_listener,
       options.participant_listener ? fdds::StatusMask::none() : fdds::StatusMask::all());
-  if (!participant_) throw MiddlewareError("Fast DDS could not create a participant on domain " + std::to_string(domain_id_));
+  if (!participant_)
+    throw MiddlewareError("Fast DDS could not create a participant on domain " + std::to_string(domain_id_));
   publisher_ = participant_->create_publisher(fdds::PUBLISHER_QOS_DEFAULT);
   subscriber_ = participant_->create_subscriber(fdds::SUBSCRIBER_QOS_DEFAULT);
   if (!publisher_ || !subscriber_) throw MiddlewareError("Fast DDS could not create a publisher/subscriber");
@@ -209,7 +216,7 @@ fdds::DataReader* Context::create_reader(fdds::Topic* t, const QoS& q, void* lis
   rqos.endpoint().history_memory_policy = eprosima::fastrtps::rtps::PREALLOCATED_WITH_REALLOC_MEMORY_MODE;
   rqos.data_sharing().off();
   fdds::DataReader* r = subscriber_->create_datareader(t, rqos, static_cast<fdds::DataReaderListener*>(listener),
-                                                      fdds::StatusMask::data_available());
+                                                       fdds::StatusMask::data_available());
   if (!r) throw MiddlewareError("Fast DDS could not create a reader on '" + t->get_name() + "'");
   return r;
 }
