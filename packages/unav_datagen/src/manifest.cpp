@@ -10,6 +10,7 @@
 #include <iomanip>
 #include <memory>
 #include <nlohmann/json.hpp>
+#include <yaml-cpp/yaml.h>
 #include <sstream>
 
 #include "unav_datagen_version.hpp"
@@ -63,6 +64,33 @@ std::string sha256_file(const std::string& path) {
 
 std::string software_commit() { return UNAV_GIT_COMMIT; }
 
+namespace {
+// A resolved randomization sample (YAML) as JSON: numbers stay numbers, booleans booleans.
+nlohmann::json yaml_to_json(const YAML::Node& n) {
+  if (n.IsMap()) {
+    nlohmann::json o = nlohmann::json::object();
+    for (const auto& kv : n) o[kv.first.Scalar()] = yaml_to_json(kv.second);
+    return o;
+  }
+  if (n.IsSequence()) {
+    nlohmann::json a = nlohmann::json::array();
+    for (const auto& v : n) a.push_back(yaml_to_json(v));
+    return a;
+  }
+  if (!n.IsScalar()) return nullptr;
+  const std::string& t = n.Scalar();
+  if (n.Tag() != "!") {  // unquoted: a number or a boolean when it reads as one
+    int64_t i = 0;
+    double d = 0;
+    bool b = false;
+    if (YAML::convert<int64_t>::decode(n, i) && t.find_first_of(".eE") == std::string::npos) return i;
+    if (YAML::convert<double>::decode(n, d)) return d;
+    if (YAML::convert<bool>::decode(n, b)) return b;
+  }
+  return t;
+}
+}  // namespace
+
 void write_manifest(const SequenceWriter& writer, const ManifestInput& in) {
   using nlohmann::json;
   const fs::path root(writer.root());
@@ -87,6 +115,7 @@ void write_manifest(const SequenceWriter& writer, const ManifestInput& in) {
                  {"mount_xyz_m", {t.x(), t.y(), t.z()}},
                  {"mount_quaternion_xyzw", {q.x(), q.y(), q.z(), q.w()}}};
   m["source"] = in.source;
+  if (!in.randomization_yaml.empty()) m["randomization"] = yaml_to_json(YAML::Load(in.randomization_yaml));
   const SequenceCounts n = writer.counts();
   m["counts"] = {
       {"images", n.images}, {"depth", n.depth}, {"segmentation", n.segmentation}, {"poses", n.poses}, {"imu", n.imu}};

@@ -10,6 +10,7 @@
 //                "distortion", "parent_frame", "frame", "mount_known",
 //                "mount_xyz_m", "mount_quaternion_xyzw"},
 //     "source": {...},                      // free-form key -> string (world file, water, ...)
+//     "randomization": {...},               // unav datagen: the resolved sample (seed, every value)
 //     "counts": {"images", "depth", "segmentation", "poses", "imu"},
 //     "labels": {"0": "water", ...},        // segmentation class ids
 //     "depth": {"png": "uint16", "units_per_metre": 5000 | 1000, "zero": "no return or out of range"},
@@ -37,6 +38,8 @@ struct ManifestInput {
   std::string parent_frame = "base_link_frd";
   std::map<std::string, std::string> source;        ///< e.g. {"world": path}
   std::vector<std::pair<int, std::string>> labels;  ///< segmentation class id -> name
+  /// The resolved randomization sample (YAML text; "" = none), written as "randomization".
+  std::string randomization_yaml;
 };
 
 /// Lowercase hex SHA-256 of a file's bytes. Throws DatasetError naming the file it cannot read.
