@@ -1,5 +1,7 @@
 #include "unav_sim/episode.hpp"
 
+#include "unav_physics/current.hpp"
+
 #include <chrono>
 #include <cmath>
 #include <utility>
@@ -79,7 +81,9 @@ EpisodeSetup load_episode_setup(const EpisodeParams& params) {
 
 Episode::Episode(EpisodeSetup setup, World world, std::shared_ptr<unav::renderer::EglContext> context)
     : setup_(std::move(setup)) {
-  sim_ = std::make_unique<physics::Simulator>(setup_.plant, setup_.simulator);
+  // The world's water current (world.yaml `current: {file}`), as the physics server takes it.
+  sim_ = std::make_unique<physics::Simulator>(
+      setup_.plant, setup_.simulator, world.current_file.empty() ? nullptr : physics::load_current(world.current_file));
   control::MpcOptions mo = setup_.mpc.options;
   mpc_ = std::make_unique<control::Mpc>(setup_.mpc.model, mo, setup_.simulator.environment);
   allocator_ = std::make_unique<control::Allocator>(control::make_allocator(setup_.allocator));

@@ -286,6 +286,7 @@ int main(int argc, char** argv) {
   if (argc >= 2 && std::string(argv[1]) == "localize")
     return run_package_tool("unav_localization", "unav_localize", argc, argv);
   if (argc >= 2 && std::string(argv[1]) == "eval") return run_package_tool("unav_evaluation", "unav_eval", argc, argv);
+  if (argc >= 2 && std::string(argv[1]) == "datagen") return run_package_tool("unav_sim", "unav_datagen", argc, argv);
   CLI::App app{"unav: command-line tool of UNav-Sim (like ros2)", "unav"};
   app.require_subcommand(1);
 
@@ -340,6 +341,8 @@ int main(int argc, char** argv) {
   app.add_subcommand("localize", "run a visual localization estimator on an image folder (unav localize --help)");
 
   app.add_subcommand("eval", "trajectory metrics on TUM files, as evo computes them (unav eval --help)");
+
+  app.add_subcommand("datagen", "randomized synthetic datasets, locally or on Slurm (unav datagen --help)");
 
   const auto run_bag = add_bag_command(app);
 

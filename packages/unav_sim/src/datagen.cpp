@@ -1,0 +1,148 @@
+#include "unav_sim/datagen.hpp"
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+
+#include "unav_datagen/dataset_writer.hpp"
+#include "unav_datagen/manifest.hpp"
+#include "unav_sim/episode.hpp"
+
+namespace fs = std::filesystem;
+
+namespace unav::sim {
+
+std::string sample_name(std::uint64_t index) {
+  char buf[32];
+  std::snprintf(buf, sizeof(buf), "sample_%06llu", static_cast<unsigned long long>(index));
+  return buf;
+}
+
+bool sample_finished(const std::string& out, std::uint64_t index) {
+  std::error_code ec;
+  return fs::exists(fs::path(out) / sample_name(index) / "manifest.json", ec);
+}
+
+SampleResult generate_sample(const unav::datagen::RandomizationSpec& spec, std::uint64_t index, const std::string& out,
+                             const std::atomic<bool>* stop, const std::function<void(std::uint64_t)>& on_frame) {
+  const auto t0 = std::chrono::steady_clock::now();
+  const YAML::Node s = spec.sample(index);
+  const std::uint64_t seed = s["seed"].as<std::uint64_t>();
+  const fs::path final_dir = fs::path(out) / sample_name(index);
+  const fs::path partial = fs::path(out) / ("." + sample_name(index) + ".partial");
+  fs::remove_all(partial);
+  fs::create_directories(partial);
+
+  const auto files = unav::datagen::write_sample_world(spec, s, (partial / "world").string());
+  World world = unav::scene::load_world(files.world_file);
+
+  EpisodeParams p;
+  p.cameras_config = spec.cameras_config();
+  const std::string camera = s["output"]["camera"].as<std::string>();
+  p.cameras = {camera};
+  p.image_width = s["output"]["width"].as<int>();
+  p.image_height = s["output"]["height"].as<int>();
+  EpisodeSetup setup = load_episode_setup(p);
+  const double gain = s["camera"]["gain"].as<double>();
+  setup.cameras[0].noise_stddev = s["camera"]["noise_stddev"].as<double>() * gain;
+  setup.cameras[0].exposure = s["camera"]["exposure"].as<double>() * gain;
+  const unav::scene::CameraModel cam = setup.cameras[0];
+
+  const double rate = s["output"]["rate_hz"].as<double>();
+  const double speed = s["trajectory"]["speed_mps"].as<double>();
+  const double step = 0.05;  // path resolution [m]
+  const auto path = unav::datagen::plan_trajectory(s, world, step);
+
+  Episode ep(setup, world);
+  RigidBodyState x0;
+  x0.p_WB_W = path.front().p_W;
+  x0.q_WB = Eigen::AngleAxisd(path.front().yaw, Eigen::Vector3d::UnitZ());
+  ep.reset(seed, x0);
+
+  const std::string format = s["output"]["format"].as<std::string>();
+  auto writer = unav::datagen::make_sequence_writer(format, partial.string());
+  unav::datagen::CameraIntrinsics k;
+  k.width = cam.width;
+  k.height = cam.height;
+  k.fx = cam.fx;
+  k.fy = cam.fy;
+  k.cx = cam.cx;
+  k.cy = cam.cy;
+  k.distortion.assign(cam.distortion.data(), cam.distortion.data() + 5);
+  writer->write_camera(k);
+  Eigen::Isometry3d X_BC = Eigen::Isometry3d::Identity();
+  X_BC.linear() = cam.X_BC.linear();
+  X_BC.translation() = cam.X_BC.translation();
+  writer->set_camera_mount(X_BC);
+
+  const std::uint64_t frames = s["output"]["frames"].as<std::uint64_t>();
+  const double control_period = setup.params.control_period;
+  const Eigen::Vector3d g_W(0.0, 0.0, setup.simulator.environment.gravity);
+  SampleResult r;
+  double t = 0.0;
+  for (std::uint64_t f = 0; f < frames; ++f) {
+    if (stop && stop->load()) {
+      writer->close();
+      r.frames = f;
+      r.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+      return r;  // the .partial folder stays: incomplete, never counted as finished
+    }
+    const double t_frame = static_cast<double>(f) / rate;
+    // Fly to the frame time, a control period at a time, the setpoint moving along the path.
+    while (t + 0.5 * control_period < t_frame) {
+      const double arc = speed * (t + control_period);
+      const auto& target = path[std::min(path.size() - 1, static_cast<size_t>(arc / step))];
+      ep.set_setpoint(unav::control::PoseSetpoint::FromPositionYaw(target.p_W, target.yaw));
+      ep.advance(control_period);
+      t = ep.time();
+      const auto& x = ep.state();
+      const auto nu_dot = ep.simulator().acceleration();
+      // Specific force in body axes: d/dt v (inertial) minus gravity, FRD.
+      const Eigen::Vector3d f_B =
+          nu_dot.head<3>() + x.w_WB_B.cross(x.v_WB_B) - x.q_WB.conjugate() * g_W;
+      writer->write_imu(t, x.w_WB_B, f_B);
+    }
+    Frame fr = ep.render(camera);
+    const auto& x = ep.state();
+    Eigen::Isometry3d X_WB = Eigen::Isometry3d::Identity();
+    X_WB.linear() = x.q_WB.toRotationMatrix();
+    X_WB.translation() = x.p_WB_W;
+    Eigen::Isometry3d X_WC = Eigen::Isometry3d::Identity();
+    X_WC.linear() = fr.X_WC.linear();
+    X_WC.translation() = fr.X_WC.translation();
+    writer->write_rgb(t_frame, fr.width, fr.height, fr.rgb.data());
+    writer->write_depth(t_frame, fr.width, fr.height, fr.depth.data());
+    writer->write_segmentation(t_frame, fr.width, fr.height, fr.seg.data());
+    writer->write_pose(t_frame, X_WC, X_WB);
+    r.frames = f + 1;
+    if (on_frame) on_frame(r.frames);
+  }
+  writer->close();
+
+  unav::datagen::ManifestInput mi;
+  mi.format = format;
+  mi.camera = camera;
+  mi.intrinsics = k;
+  mi.mount_known = true;
+  mi.X_BC = X_BC;
+  mi.source = {{"spec", fs::path(spec.file()).filename().string()},
+               {"world", "world/world.yaml"},
+               {"base_world", fs::path(spec.base_world()).filename().string()},
+               {"generator", "unav datagen (in-process episode)"}};
+  mi.labels = {{0, "water"}, {1, "seabed"}, {2, "pipeline"}, {3, "rock"}, {4, "other"}};
+  YAML::Emitter e;
+  e.SetDoublePrecision(17);
+  e << s;
+  mi.randomization_yaml = e.c_str();
+  unav::datagen::write_manifest(*writer, mi);  // the last file: its presence marks completion
+  fs::remove_all(final_dir);
+  fs::rename(partial, final_dir);
+  r.finished = true;
+  r.dir = final_dir.string();
+  r.solver_failures = ep.solver_failures();
+  r.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return r;
+}
+
+}  // namespace unav::sim
