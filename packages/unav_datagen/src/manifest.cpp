@@ -128,7 +128,9 @@ void write_manifest(const SequenceWriter& writer, const ManifestInput& in) {
   // Every file of the layout, sorted by path (directory iteration order is unspecified).
   std::vector<std::string> files;
   std::error_code ec;
-  for (const std::string& entry : writer.layout_entries()) {
+  std::vector<std::string> entries = writer.layout_entries();
+  entries.insert(entries.end(), in.extra_entries.begin(), in.extra_entries.end());
+  for (const std::string& entry : entries) {
     const fs::path p = root / entry;
     if (fs::is_regular_file(p, ec)) {
       files.push_back(entry);

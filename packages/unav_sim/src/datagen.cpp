@@ -135,6 +135,7 @@ SampleResult generate_sample(const unav::datagen::RandomizationSpec& spec, std::
   e.SetDoublePrecision(17);
   e << s;
   mi.randomization_yaml = e.c_str();
+  mi.extra_entries = {"world"};
   unav::datagen::write_manifest(*writer, mi);  // the last file: its presence marks completion
   fs::remove_all(final_dir);
   fs::rename(partial, final_dir);

@@ -40,6 +40,8 @@ struct ManifestInput {
   std::vector<std::pair<int, std::string>> labels;  ///< segmentation class id -> name
   /// The resolved randomization sample (YAML text; "" = none), written as "randomization".
   std::string randomization_yaml;
+  /// More files or folders under the root (relative) to list with checksums, e.g. {"world"}.
+  std::vector<std::string> extra_entries;
 };
 
 /// Lowercase hex SHA-256 of a file's bytes. Throws DatasetError naming the file it cannot read.
