@@ -2,6 +2,7 @@
 
 #include <openssl/evp.h>
 
+#include <yaml-cpp/yaml.h>
 #include <algorithm>
 #include <array>
 #include <cstdio>
@@ -10,7 +11,6 @@
 #include <iomanip>
 #include <memory>
 #include <nlohmann/json.hpp>
-#include <yaml-cpp/yaml.h>
 #include <sstream>
 
 #include "unav_datagen_version.hpp"

@@ -57,11 +57,11 @@ TEST(RandomizationSpec, BadSpecsNameFileKeyValueAndRule) {
     std::string patch, must_contain;
   };
   const Case cases[] = {
-      {"{colour: red}", "colour"},                                               // unknown section
-      {"{water: {turbidty: 1.0}}", "water.turbidty"},                            // typo in a key
-      {"{water: {turbidity: {uniform: [2.0, 1.0]}}}", "empty range"},            // low > high
+      {"{colour: red}", "colour"},                                     // unknown section
+      {"{water: {turbidty: 1.0}}", "water.turbidty"},                  // typo in a key
+      {"{water: {turbidity: {uniform: [2.0, 1.0]}}}", "empty range"},  // low > high
       {"{water: {turbidity: {gaussian: [1, 2]}}}", "unknown distribution 'gaussian'"},
-      {"{water: {preset: jerlov_IX}}", "water.preset = jerlov_IX"},              // unknown preset
+      {"{water: {preset: jerlov_IX}}", "water.preset = jerlov_IX"},  // unknown preset
       {"{water: {preset: {choice: [jerlov_I, murky]}}}", "water.preset.choice[1] = murky"},
       {"{water: {turbidity: {uniform: [0.5, 20]}}}", "water.turbidity.uniform = 20"},  // support beyond the rule
       {"{water: {turbidity: .nan}}", "must be finite"},

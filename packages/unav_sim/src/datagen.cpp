@@ -99,8 +99,7 @@ SampleResult generate_sample(const unav::datagen::RandomizationSpec& spec, std::
       const auto& x = ep.state();
       const auto nu_dot = ep.simulator().acceleration();
       // Specific force in body axes: d/dt v (inertial) minus gravity, FRD.
-      const Eigen::Vector3d f_B =
-          nu_dot.head<3>() + x.w_WB_B.cross(x.v_WB_B) - x.q_WB.conjugate() * g_W;
+      const Eigen::Vector3d f_B = nu_dot.head<3>() + x.w_WB_B.cross(x.v_WB_B) - x.q_WB.conjugate() * g_W;
       writer->write_imu(t, x.w_WB_B, f_B);
     }
     Frame fr = ep.render(camera);

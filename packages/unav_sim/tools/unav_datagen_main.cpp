@@ -21,9 +21,9 @@
 #include <sstream>
 #include <vector>
 
+#include <yaml-cpp/yaml.h>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
-#include <yaml-cpp/yaml.h>
 
 #include "unav_common/errors.hpp"
 #include "unav_datagen/dataset_writer.hpp"
@@ -69,7 +69,10 @@ class Progress {
  public:
   Progress(std::uint64_t total_samples, std::uint64_t frames_per_sample)
       : total_(total_samples), fps_(frames_per_sample), tty_(isatty(STDOUT_FILENO)) {}
-  void frame() { ++frames_; draw(false); }
+  void frame() {
+    ++frames_;
+    draw(false);
+  }
   void sample_done() {
     ++done_;
     draw(true);
@@ -81,14 +84,17 @@ class Progress {
     last_ = now;
     const double el = std::chrono::duration<double>(now - start_).count();
     const double rate = el > 0 ? static_cast<double>(frames_) / el : 0.0;
-    const double left = static_cast<double>((total_ - done_) * fps_) - static_cast<double>(frames_ % std::max<std::uint64_t>(fps_, 1));
+    const double left =
+        static_cast<double>((total_ - done_) * fps_) - static_cast<double>(frames_ % std::max<std::uint64_t>(fps_, 1));
     const double eta = rate > 0 ? left / rate : NAN;
     const int width = 30;
-    const int fill = total_ ? static_cast<int>(width * static_cast<double>(done_) / static_cast<double>(total_)) : width;
+    const int fill =
+        total_ ? static_cast<int>(width * static_cast<double>(done_) / static_cast<double>(total_)) : width;
     char line[256];
-    std::snprintf(line, sizeof(line), "[%s%s] %llu/%llu samples | %.1f frames/s | ETA %s", std::string(fill, '#').c_str(),
-                  std::string(width - fill, '.').c_str(), static_cast<unsigned long long>(done_),
-                  static_cast<unsigned long long>(total_), rate, hms(eta).c_str());
+    std::snprintf(line, sizeof(line), "[%s%s] %llu/%llu samples | %.1f frames/s | ETA %s",
+                  std::string(fill, '#').c_str(), std::string(width - fill, '.').c_str(),
+                  static_cast<unsigned long long>(done_), static_cast<unsigned long long>(total_), rate,
+                  hms(eta).c_str());
     if (tty_) {
       std::printf("\r%s", line);
       std::fflush(stdout);
@@ -135,8 +141,8 @@ int run_inline(const RandomizationSpec& spec, const Options& o, const std::vecto
     });
     if (!r.finished) {
       if (!report) prog.finish();
-      std::cerr << "unav datagen: interrupted: " << unav::sim::sample_name(i) << " left incomplete ("
-                << r.frames << " frames, ." << unav::sim::sample_name(i) << ".partial)" << std::endl;
+      std::cerr << "unav datagen: interrupted: " << unav::sim::sample_name(i) << " left incomplete (" << r.frames
+                << " frames, ." << unav::sim::sample_name(i) << ".partial)" << std::endl;
       return 130;
     }
     if (!report) prog.sample_done();
@@ -182,6 +188,7 @@ int run_local_jobs(const RandomizationSpec& spec, const Options& o, const std::v
       ++next;
     }
     std::vector<pollfd> pfds;
+    pfds.reserve(running.size());
     for (const auto& c : running) pfds.push_back({c.fd, POLLIN, 0});
     poll(pfds.data(), pfds.size(), 200);
     for (size_t k = 0; k < running.size();) {
@@ -263,7 +270,8 @@ int run_slurm(const RandomizationSpec& spec, const Options& o, const std::vector
   fs::permissions(script, fs::perms::owner_all | fs::perms::group_read | fs::perms::others_read);
   std::printf("unav datagen: %zu of %llu samples to do; job array of %lld tasks: %s\n", todo.size(),
               static_cast<unsigned long long>(o.samples), tasks, script.c_str());
-  const std::string cmd = std::string("sbatch --parsable") + (o.wait ? " --wait" : "") + " " + shell_quote(script.string());
+  const std::string cmd =
+      std::string("sbatch --parsable") + (o.wait ? " --wait" : "") + " " + shell_quote(script.string());
   FILE* p = popen(cmd.c_str(), "r");
   if (!p) throw std::runtime_error("cannot run sbatch");
   char buf[256] = {};
@@ -279,8 +287,8 @@ int run_slurm(const RandomizationSpec& spec, const Options& o, const std::vector
   std::printf("unav datagen: submitted job %s%s\n", job.c_str(), o.wait ? " and waited for it" : "");
   if (o.wait) {
     const auto left = pending(o);
-    std::printf("unav datagen: %llu/%llu samples finished\n",
-                static_cast<unsigned long long>(o.samples - left.size()), static_cast<unsigned long long>(o.samples));
+    std::printf("unav datagen: %llu/%llu samples finished\n", static_cast<unsigned long long>(o.samples - left.size()),
+                static_cast<unsigned long long>(o.samples));
     return left.empty() ? 0 : 1;
   }
   return 0;
@@ -329,7 +337,8 @@ void contact_sheet(const RandomizationSpec& spec, const Options& o) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App app{"unav datagen: randomized synthetic datasets (in process), locally or on a Slurm cluster", "unav datagen"};
+  CLI::App app{"unav datagen: randomized synthetic datasets (in process), locally or on a Slurm cluster",
+               "unav datagen"};
   Options o;
   app.add_option("spec", o.spec, "randomization spec YAML (see --spec-help)");
   app.add_option("--out", o.out, "output folder (samples are sample_000000, ...)");
@@ -342,8 +351,7 @@ int main(int argc, char** argv) {
   app.add_option("--partition", o.slurm_partition, "slurm: partition (default: the spec's slurm.partition)");
   app.add_flag("--contact-sheet", o.contact_sheet, "write <out>/contact_sheet.png of the finished samples");
   app.add_flag("--spec-help", o.spec_help, "print every key of the spec language and exit");
-  app.add_option("--only-sample", o.only_sample, "internal: render one sample, report frames on stdout")
-      ->group("");
+  app.add_option("--only-sample", o.only_sample, "internal: render one sample, report frames on stdout")->group("");
   app.add_option("--array-task", o.array_task, "slurm task: this task's index")->group("");
   app.add_option("--array-size", o.array_size, "slurm task: number of tasks")->group("");
   CLI11_PARSE(app, argc, argv);

@@ -77,7 +77,7 @@ QoS QoS::from_name(const std::string& name) {
   throw ConfigError("QoS profile '" + name + "' is unknown (known: sensor_data, default, static)");
 }
 
-Context::Context(int argc, const char* const* argv, ContextOptions options) {
+Context::Context(int argc, const char* const* argv, const ContextOptions& options) {
   if (argc > 0) args_ = parse_ros_args(argc, argv);
   if (!args_.log_level.empty()) set_log_level(args_.log_level);
   domain_id_ = options.domain_id >= 0 ? options.domain_id : domain_from_env();

@@ -20,8 +20,8 @@
 #include <string>
 #include <vector>
 
-#include <Eigen/Core>
 #include <yaml-cpp/yaml.h>
+#include <Eigen/Core>
 
 #include "unav_scene/world.hpp"
 
@@ -29,9 +29,9 @@ namespace unav::datagen {
 
 /// One key of the spec language, for documentation (`unav datagen --spec-help`).
 struct SpecKey {
-  std::string path;   ///< e.g. "water.turbidity"
-  std::string type;   ///< "real", "int", "string", "path"
-  std::string rule;   ///< e.g. "in (0, 10]", "one of: tum, euroc, kitti"
+  std::string path;      ///< e.g. "water.turbidity"
+  std::string type;      ///< "real", "int", "string", "path"
+  std::string rule;      ///< e.g. "in (0, 10]", "one of: tum, euroc, kitti"
   std::string fallback;  ///< value when the spec leaves the key out
   std::string doc;
   bool randomizable = true;

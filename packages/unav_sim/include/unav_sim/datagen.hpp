@@ -24,8 +24,8 @@ namespace unav::sim {
 struct SampleResult {
   bool finished = false;  ///< false: stopped by `stop` (the partial folder is left, marked incomplete)
   std::uint64_t frames = 0;
-  std::string dir;        ///< the finished sample's folder
-  double wall_s = 0.0;    ///< time spent on this sample
+  std::string dir;      ///< the finished sample's folder
+  double wall_s = 0.0;  ///< time spent on this sample
   int solver_failures = 0;
 };
 

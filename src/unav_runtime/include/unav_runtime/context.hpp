@@ -51,8 +51,8 @@ struct ContextOptions {
 
 class Context {
  public:
-  Context(int argc, const char* const* argv, ContextOptions options = {});
-  explicit Context(ContextOptions options = {}) : Context(0, nullptr, std::move(options)) {}
+  Context(int argc, const char* const* argv, const ContextOptions& options = {});
+  explicit Context(const ContextOptions& options = {}) : Context(0, nullptr, options) {}
   ~Context();
   Context(const Context&) = delete;
   Context& operator=(const Context&) = delete;
@@ -78,7 +78,7 @@ class Context {
   eprosima::fastdds::dds::Topic* topic(const std::string& dds_topic, eprosima::fastdds::dds::TopicDataType* type);
   eprosima::fastdds::dds::DataWriter* create_writer(eprosima::fastdds::dds::Topic* topic, const QoS& qos);
   eprosima::fastdds::dds::DataReader* create_reader(eprosima::fastdds::dds::Topic* topic, const QoS& qos,
-                                                     void* listener);
+                                                    void* listener);
   void delete_writer(eprosima::fastdds::dds::DataWriter* w);
   void delete_reader(eprosima::fastdds::dds::DataReader* r);
   void add_node(Node* node);
