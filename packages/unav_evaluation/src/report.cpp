@@ -1,5 +1,7 @@
 #include "unav_evaluation/report.hpp"
 
+#include <algorithm>
+#include <cstdio>
 #include <fstream>
 #include <iomanip>
 #include <sstream>
@@ -121,6 +123,68 @@ void write_top_view_png(const std::string& path, const Trajectory& gt,
               cv::FONT_HERSHEY_SIMPLEX, 0.5, cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
   cv::putText(img, "north ^  east >  (top view, world_ned)", cv::Point(margin, size_px - 10), cv::FONT_HERSHEY_SIMPLEX,
               0.45, cv::Scalar(90, 90, 90), 1, cv::LINE_AA);
+  if (!cv::imwrite(path, img)) throw TrajectoryError(path + ": PNG write failed");
+}
+
+void write_error_map_png(const std::string& path, const Trajectory& ref, const Trajectory& est,
+                         const std::vector<double>& errors, const std::string& title, int size_px) {
+  if (errors.size() != est.size())
+    throw TrajectoryError(path + ": " + std::to_string(errors.size()) + " errors for " + std::to_string(est.size()) +
+                          " poses");
+  if (est.empty()) throw TrajectoryError(path + ": nothing to plot");
+  Eigen::Vector3d lo = est.poses[0].translation(), hi = lo;
+  for (const Trajectory* t : {&ref, &est})
+    for (const auto& P : t->poses) {
+      lo = lo.cwiseMin(P.translation());
+      hi = hi.cwiseMax(P.translation());
+    }
+  // The two axes with the largest extent: horizontal a, vertical b.
+  const Eigen::Vector3d ext = hi - lo;
+  int a = 0, b = 1;
+  if (ext.z() > std::min(ext.x(), ext.y())) (ext.x() >= ext.y() ? b : a) = 2;
+  if (a > b) std::swap(a, b);
+  const char* names = "xyz";
+  const double span = std::max({ext(a), ext(b), 1e-3});
+  const int margin = 60, bar_w = 18;
+  const double px_per_m = (size_px - 2 * margin - 3 * bar_w) / span;
+  cv::Mat img(size_px, size_px, CV_8UC3, cv::Scalar(255, 255, 255));
+  auto to_px = [&](const Eigen::Vector3d& p) {
+    return cv::Point(static_cast<int>(margin + (p(a) - lo(a)) * px_per_m),
+                     static_cast<int>(size_px - margin - (p(b) - lo(b)) * px_per_m));
+  };
+  for (size_t i = 1; i < ref.size(); ++i)
+    cv::line(img, to_px(ref.poses[i - 1].translation()), to_px(ref.poses[i].translation()), cv::Scalar(150, 150, 150),
+             1, cv::LINE_AA);
+  const auto [mn_it, mx_it] = std::minmax_element(errors.begin(), errors.end());
+  const double mn = *mn_it, mx = *mx_it, range = std::max(mx - mn, 1e-12);
+  cv::Mat lut(1, 256, CV_8UC1);
+  for (int i = 0; i < 256; ++i) lut.at<uint8_t>(0, i) = static_cast<uint8_t>(i);
+  cv::Mat colours;
+  cv::applyColorMap(lut, colours, cv::COLORMAP_JET);
+  auto colour = [&](double e) {
+    const int k = std::clamp(static_cast<int>(255.0 * (e - mn) / range), 0, 255);
+    const cv::Vec3b c = colours.at<cv::Vec3b>(0, k);
+    return cv::Scalar(c[0], c[1], c[2]);
+  };
+  for (size_t i = 1; i < est.size(); ++i)
+    cv::line(img, to_px(est.poses[i - 1].translation()), to_px(est.poses[i].translation()),
+             colour(0.5 * (errors[i - 1] + errors[i])), 2, cv::LINE_AA);
+  // Colour bar with min and max.
+  const int x0 = size_px - margin - bar_w, y0 = margin, y1 = size_px - margin;
+  for (int y = y0; y < y1; ++y)
+    cv::line(img, cv::Point(x0, y), cv::Point(x0 + bar_w, y),
+             colour(mx - (mx - mn) * static_cast<double>(y - y0) / std::max(1, y1 - y0)), 1);
+  char buf[64];
+  std::snprintf(buf, sizeof(buf), "%.4g", mx);
+  cv::putText(img, buf, cv::Point(x0 - 20, y0 - 8), cv::FONT_HERSHEY_SIMPLEX, 0.45, cv::Scalar(0, 0, 0), 1,
+              cv::LINE_AA);
+  std::snprintf(buf, sizeof(buf), "%.4g", mn);
+  cv::putText(img, buf, cv::Point(x0 - 20, y1 + 18), cv::FONT_HERSHEY_SIMPLEX, 0.45, cv::Scalar(0, 0, 0), 1,
+              cv::LINE_AA);
+  cv::putText(img, title, cv::Point(margin, 30), cv::FONT_HERSHEY_SIMPLEX, 0.6, cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
+  const std::string axes = std::string(1, names[a]) + " [m] >   " + names[b] + " [m] ^   reference grey";
+  cv::putText(img, axes, cv::Point(margin, size_px - 15), cv::FONT_HERSHEY_SIMPLEX, 0.45, cv::Scalar(90, 90, 90), 1,
+              cv::LINE_AA);
   if (!cv::imwrite(path, img)) throw TrajectoryError(path + ": PNG write failed");
 }
 

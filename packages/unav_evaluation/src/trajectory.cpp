@@ -14,47 +14,175 @@ double Trajectory::path_length() const {
   return length;
 }
 
+namespace {
+
+// Numbers of one line of a text trajectory file, split at blanks and commas. Errors name the
+// file, line and column (1-based, with its name when `names` has one).
+std::vector<double> parse_numbers(const std::string& path, int line_no, std::string line,
+                                  const std::vector<std::string>& names) {
+  for (char& c : line)
+    if (c == ',') c = ' ';
+  std::istringstream ss(line);
+  std::vector<double> v;
+  std::string tok;
+  while (ss >> tok) {
+    const size_t col = v.size() + 1;
+    const std::string where = path + ":" + std::to_string(line_no) + ": column " + std::to_string(col) +
+                              (col <= names.size() ? " (" + names[col - 1] + ")" : "");
+    char* end = nullptr;
+    const double x = std::strtod(tok.c_str(), &end);
+    if (*end != '\0') throw TrajectoryError(where + ": '" + tok + "' is not a number");
+    if (!std::isfinite(x)) throw TrajectoryError(where + ": value '" + tok + "' is not finite");
+    v.push_back(x);
+  }
+  return v;
+}
+
+bool skip_line(const std::string& line) {
+  const size_t first = line.find_first_not_of(" \t\r");
+  return first == std::string::npos || line[first] == '#';
+}
+
+std::string fmt(double x) {
+  std::ostringstream o;
+  o << std::setprecision(17) << x;
+  return o.str();
+}
+
+Eigen::Isometry3d pose_from(const std::string& where, const Eigen::Vector3d& p, const Eigen::Quaterniond& q) {
+  if (std::abs(q.norm() - 1.0) > 1e-3)
+    throw TrajectoryError(where + ": quaternion norm " + std::to_string(q.norm()) + " is not 1 (within 1e-3)");
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.linear() = q.normalized().toRotationMatrix();
+  T.translation() = p;
+  return T;
+}
+
+void check_order(const std::string& where, const Trajectory& traj, double stamp) {
+  if (!traj.empty() && stamp < traj.stamps.back())
+    throw TrajectoryError(where + ": column 1 (timestamp): " + fmt(stamp) + " is before the previous stamp " +
+                          fmt(traj.stamps.back()) + ": timestamps must not decrease");
+}
+
+}  // namespace
+
 Trajectory read_tum(const std::string& path) {
   std::ifstream in(path);
   if (!in) throw TrajectoryError(path + ": cannot be opened (missing or unreadable)");
+  static const std::vector<std::string> names = {"timestamp", "tx", "ty", "tz", "qx", "qy", "qz", "qw"};
   Trajectory traj;
   std::string line;
   int line_no = 0;
   while (std::getline(in, line)) {
     ++line_no;
-    const size_t first = line.find_first_not_of(" \t\r");
-    if (first == std::string::npos || line[first] == '#') continue;
-    for (char& c : line)
-      if (c == ',') c = ' ';  // evo also accepts comma-separated TUM files
-    std::istringstream ss(line);
-    std::vector<double> v;
-    std::string tok;
-    while (ss >> tok) {
-      char* end = nullptr;
-      const double x = std::strtod(tok.c_str(), &end);
-      if (*end != '\0') throw TrajectoryError(path + ":" + std::to_string(line_no) + ": '" + tok + "' is not a number");
-      if (!std::isfinite(x))
-        throw TrajectoryError(path + ":" + std::to_string(line_no) + ": value '" + tok + "' is not finite");
-      v.push_back(x);
-    }
+    if (skip_line(line)) continue;
+    const std::vector<double> v = parse_numbers(path, line_no, line, names);
+    const std::string where = path + ":" + std::to_string(line_no);
     if (v.size() != 8)
-      throw TrajectoryError(path + ":" + std::to_string(line_no) +
-                            ": expected 8 columns (timestamp tx ty tz qx qy qz qw), got " + std::to_string(v.size()));
-    if (!traj.empty() && v[0] <= traj.stamps.back())
-      throw TrajectoryError(path + ":" + std::to_string(line_no) + ": timestamp " + tok +
-                            " is not after the previous one (" + std::to_string(traj.stamps.back()) +
-                            "): times must increase");
-    Eigen::Quaterniond q(v[7], v[4], v[5], v[6]);
-    if (std::abs(q.norm() - 1.0) > 1e-3)
-      throw TrajectoryError(path + ":" + std::to_string(line_no) + ": quaternion norm " + std::to_string(q.norm()) +
-                            " is not 1 (within 1e-3)");
-    Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
-    T.linear() = q.normalized().toRotationMatrix();
-    T.translation() = Eigen::Vector3d(v[1], v[2], v[3]);
-    traj.push_back(v[0], T);
+      throw TrajectoryError(where + ": expected 8 columns (timestamp tx ty tz qx qy qz qw), got " +
+                            std::to_string(v.size()));
+    check_order(where, traj, v[0]);
+    traj.push_back(v[0], pose_from(where + ": columns 5-8 (qx qy qz qw)", Eigen::Vector3d(v[1], v[2], v[3]),
+                                   Eigen::Quaterniond(v[7], v[4], v[5], v[6])));
   }
   if (traj.empty()) throw TrajectoryError(path + ": contains no poses");
   return traj;
+}
+
+Trajectory read_kitti(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw TrajectoryError(path + ": cannot be opened (missing or unreadable)");
+  static const std::vector<std::string> names = {"r11", "r12", "r13", "tx",  "r21", "r22",
+                                                 "r23", "ty",  "r31", "r32", "r33", "tz"};
+  Trajectory traj;
+  std::string line;
+  int line_no = 0;
+  while (std::getline(in, line)) {
+    ++line_no;
+    if (skip_line(line)) continue;
+    const std::vector<double> v = parse_numbers(path, line_no, line, names);
+    const std::string where = path + ":" + std::to_string(line_no);
+    if (v.size() != 12)
+      throw TrajectoryError(where + ": expected 12 columns (a row-major 3x4 pose [R | t]), got " +
+                            std::to_string(v.size()));
+    Eigen::Matrix3d R;
+    R << v[0], v[1], v[2], v[4], v[5], v[6], v[8], v[9], v[10];
+    const double orth = (R.transpose() * R - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff();
+    if (orth > 1e-3 || std::abs(R.determinant() - 1.0) > 1e-3)
+      throw TrajectoryError(where + ": columns 1-3, 5-7, 9-11 (R): not a rotation (|R^T R - I| = " +
+                            std::to_string(orth) + ", det " + std::to_string(R.determinant()) + ")");
+    Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+    T.linear() = Eigen::Quaterniond(R).normalized().toRotationMatrix();
+    T.translation() = Eigen::Vector3d(v[3], v[7], v[11]);
+    traj.push_back(static_cast<double>(traj.size()), T);
+  }
+  if (traj.empty()) throw TrajectoryError(path + ": contains no poses");
+  return traj;
+}
+
+Trajectory read_euroc_csv(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw TrajectoryError(path + ": cannot be opened (missing or unreadable)");
+  static const std::vector<std::string> names = {"timestamp [ns]", "p_x", "p_y", "p_z", "q_w", "q_x", "q_y", "q_z"};
+  Trajectory traj;
+  std::string line;
+  int line_no = 0;
+  while (std::getline(in, line)) {
+    ++line_no;
+    if (skip_line(line)) continue;
+    const std::vector<double> v = parse_numbers(path, line_no, line, names);
+    const std::string where = path + ":" + std::to_string(line_no);
+    if (v.size() < 8)
+      throw TrajectoryError(where +
+                            ": expected at least 8 columns (timestamp[ns], p_x, p_y, p_z, q_w, q_x, q_y, q_z), got " +
+                            std::to_string(v.size()));
+    const double stamp = v[0] * 1e-9;
+    check_order(where, traj, stamp);
+    traj.push_back(stamp, pose_from(where + ": columns 5-8 (q_w q_x q_y q_z)", Eigen::Vector3d(v[1], v[2], v[3]),
+                                    Eigen::Quaterniond(v[4], v[5], v[6], v[7])));
+  }
+  if (traj.empty()) throw TrajectoryError(path + ": contains no poses");
+  return traj;
+}
+
+TrajectoryFormat trajectory_format_from_string(const std::string& name) {
+  if (name == "tum") return TrajectoryFormat::kTum;
+  if (name == "kitti") return TrajectoryFormat::kKitti;
+  if (name == "euroc") return TrajectoryFormat::kEuroc;
+  throw TrajectoryError("trajectory format '" + name + "' is unknown (tum, kitti, euroc)");
+}
+
+Trajectory read_trajectory(const std::string& path, TrajectoryFormat format) {
+  switch (format) {
+    case TrajectoryFormat::kKitti:
+      return read_kitti(path);
+    case TrajectoryFormat::kEuroc:
+      return read_euroc_csv(path);
+    case TrajectoryFormat::kTum:
+      break;
+  }
+  return read_tum(path);
+}
+
+void write_kitti(const std::string& path, const Trajectory& traj) {
+  std::ofstream out(path);
+  if (!out) throw TrajectoryError(path + ": cannot be written");
+  out << std::setprecision(9) << std::scientific;
+  for (const auto& T : traj.poses) {
+    const Eigen::Matrix3d R = T.linear();
+    const Eigen::Vector3d t = T.translation();
+    for (int r = 0; r < 3; ++r)
+      out << R(r, 0) << ' ' << R(r, 1) << ' ' << R(r, 2) << ' ' << t(r) << (r < 2 ? ' ' : '\n');
+  }
+  out.flush();
+  if (!out) throw TrajectoryError(path + ": write failed");
+}
+
+std::pair<Trajectory, Trajectory> pair_by_index(const Trajectory& first, const Trajectory& second) {
+  if (first.size() != second.size())
+    throw TrajectoryError("trajectories must have same number of poses (" + std::to_string(first.size()) + " and " +
+                          std::to_string(second.size()) + "): KITTI files are compared pose by pose");
+  return {first, second};
 }
 
 void write_tum(const std::string& path, const Trajectory& traj) {
@@ -93,6 +221,8 @@ std::pair<Trajectory, Trajectory> associate(const Trajectory& first, const Traje
     size_t best = lo < longer.size() ? lo : longer.size() - 1;
     if (lo > 0 && std::abs(longer.stamps[lo - 1] + offset_long - t) <= std::abs(longer.stamps[best] + offset_long - t))
       best = lo - 1;
+    // numpy's argmin: the first of equal stamps.
+    while (best > 0 && longer.stamps[best - 1] == longer.stamps[best]) --best;
     if (std::abs(longer.stamps[best] + offset_long - t) <= max_diff_s) {
       out_short.push_back(shorter.stamps[i], shorter.poses[i]);
       out_long.push_back(longer.stamps[best], longer.poses[best]);

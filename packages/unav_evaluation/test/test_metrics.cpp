@@ -174,3 +174,88 @@ TEST(Tum, BadFilesGiveLineNumberedErrors) {
   b.push_back(50, Eigen::Isometry3d::Identity());
   EXPECT_NE(error_of([&] { associate(a, b); }).find("do not overlap"), std::string::npos);
 }
+
+TEST(Tum, RepeatedStampsAreKeptAndAssociatedAsEvoDoes) {
+  // The TUM RGB-D benchmark's ground truth repeats stamps; evo keeps every line, and its
+  // association (numpy argmin) takes the first of equally near stamps.
+  const Trajectory gt = read_tum(write_temp("rep.tum",
+                                            "1.0 0 0 0 0 0 0 1\n"
+                                            "1.0 5 0 0 0 0 0 1\n"  // same stamp, another pose
+                                            "1.1 1 0 0 0 0 0 1\n"
+                                            "1.2 2 0 0 0 0 0 1\n"));
+  ASSERT_EQ(gt.size(), 4u);
+  Trajectory est;
+  est.push_back(1.0, Eigen::Isometry3d::Identity());
+  est.push_back(1.15, Eigen::Isometry3d::Identity());  // midway: the earlier stamp wins
+  est.push_back(1.2, Eigen::Isometry3d::Identity());
+  const auto [ref_a, est_a] = associate(gt, est, 0.06);
+  ASSERT_EQ(ref_a.size(), 3u);
+  EXPECT_DOUBLE_EQ(ref_a.poses[0].translation().x(), 0.0);  // the first of the two 1.0 lines
+  EXPECT_DOUBLE_EQ(ref_a.poses[1].translation().x(), 1.0);  // 1.1, not 1.2
+  EXPECT_DOUBLE_EQ(ref_a.poses[2].translation().x(), 2.0);
+  // A stamp that goes back is an error naming the timestamp column and its value (not qw's).
+  const std::string e = error_of([&] { read_tum(write_temp("back.tum", "2.5 0 0 0 0 0 0 1\n1.25 0 0 0 0 0 0 1\n")); });
+  EXPECT_NE(e.find("back.tum:2: column 1 (timestamp): 1.25 is before the previous stamp 2.5"), std::string::npos) << e;
+  const std::string c = error_of([&] { read_tum(write_temp("col.tum", "1 0 0 x 0 0 0 1\n")); });
+  EXPECT_NE(c.find("col.tum:1: column 4 (tz): 'x' is not a number"), std::string::npos) << c;
+}
+
+TEST(Kitti, ReadsPosesPairsByIndexAndChecksRotations) {
+  // Pose 1: rotation 90 deg about z, translation (1, 2, 3).
+  const Trajectory k = read_kitti(write_temp("p.kitti",
+                                             "1 0 0 0 0 1 0 0 0 0 1 0\n"
+                                             "0 -1 0 1 1 0 0 2 0 0 1 3\n"));
+  ASSERT_EQ(k.size(), 2u);
+  EXPECT_DOUBLE_EQ(k.stamps[1], 1.0);  // the index
+  EXPECT_NEAR((k.poses[1].translation() - Eigen::Vector3d(1, 2, 3)).norm(), 0.0, 1e-12);
+  EXPECT_NEAR((k.poses[1].linear() * Eigen::Vector3d::UnitX() - Eigen::Vector3d::UnitY()).norm(), 0.0, 1e-12);
+  const std::string path = ::testing::TempDir() + "rt.kitti";
+  write_kitti(path, k);
+  const Trajectory back = read_kitti(path);
+  EXPECT_NEAR((back.poses[1].matrix() - k.poses[1].matrix()).norm(), 0.0, 1e-8);
+  // Hand-computed APE: the estimate is the reference shifted by 0.3 m in x at pose 1 only.
+  Trajectory est = k;
+  est.poses[1].translation().x() += 0.3;
+  const auto [r, e] = pair_by_index(k, est);
+  const auto err = ape(r, e, PoseRelation::kTranslation);
+  EXPECT_DOUBLE_EQ(err[0], 0.0);
+  EXPECT_NEAR(err[1], 0.3, 1e-12);
+  Trajectory shorter = k;
+  shorter.stamps.pop_back();
+  shorter.poses.pop_back();
+  EXPECT_NE(error_of([&] { pair_by_index(k, shorter); }).find("same number of poses"), std::string::npos);
+  EXPECT_NE(error_of([&] { read_kitti(write_temp("r.kitti", "2 0 0 0 0 1 0 0 0 0 1 0\n")); }).find("not a rotation"),
+            std::string::npos);
+  EXPECT_NE(error_of([&] { read_kitti(write_temp("n.kitti", "1 0 0 0 0 1 0 0 0 0 1\n")); }).find("expected 12 columns"),
+            std::string::npos);
+}
+
+TEST(Euroc, ReadsNanosecondsAndWxyzQuaternionsIgnoringExtraColumns) {
+  const Trajectory t = read_trajectory(
+      write_temp("gt.csv",
+                 "#timestamp, p_RS_R_x [m], p_RS_R_y [m], p_RS_R_z [m], q_RS_w [], q_RS_x [], q_RS_y [], q_RS_z [], "
+                 "v_RS_R_x [m s^-1]\n"
+                 "1403636579758555392,4.688319,-1.786938,0.783338,0.534108,-0.153029,-0.827383,-0.082152,0.1\n"
+                 "1403636579763555584,4.688177,-1.786770,0.787350,0.534640,-0.152990,-0.826976,-0.082863,0.1\n"),
+      trajectory_format_from_string("euroc"));
+  ASSERT_EQ(t.size(), 2u);
+  EXPECT_NEAR(t.stamps[0], 1403636579.758555392, 1e-6);
+  EXPECT_NEAR(t.stamps[1] - t.stamps[0], 0.005, 1e-6);
+  const Eigen::Quaterniond q(t.poses[0].linear());
+  EXPECT_NEAR(std::abs(q.w()), 0.534108 / Eigen::Vector4d(0.534108, -0.153029, -0.827383, -0.082152).norm(), 1e-6);
+  EXPECT_NEAR(t.poses[0].translation().x(), 4.688319, 1e-12);
+  EXPECT_NE(error_of([&] { read_euroc_csv(write_temp("e.csv", "1,2,3\n")); }).find("at least 8 columns"),
+            std::string::npos);
+  EXPECT_THROW(trajectory_format_from_string("bag2"), TrajectoryError);
+}
+
+TEST(Timing, AssociationOfTwentyThousandPosesIsFast) {
+  // Not a timing assertion: the pairing must be O(n log n); 20k x 20k pairs must all match.
+  Trajectory a, b;
+  for (int i = 0; i < 20000; ++i) {
+    a.push_back(0.01 * i, Eigen::Isometry3d::Identity());
+    b.push_back(0.01 * i + 0.001, Eigen::Isometry3d::Identity());
+  }
+  const auto [ra, rb] = associate(a, b, 0.005);
+  EXPECT_EQ(ra.size(), 20000u);
+}

@@ -39,4 +39,11 @@ std::vector<AlgorithmResult> read_result_rows(const std::string& path);
 void write_top_view_png(const std::string& path, const Trajectory& gt,
                         const std::vector<std::pair<std::string, Trajectory>>& estimates, int size_px = 800);
 
+/// evo's `--plot` for APE: the reference (grey) and the aligned estimate coloured by each pose's
+/// error (blue = min, red = max, colour bar in the error's unit), on the plane of the two axes
+/// with the largest extent (x-y for NED, x-z for a KITTI camera path). errors.size() ==
+/// est.size(). Throws TrajectoryError on I/O failure or a size mismatch.
+void write_error_map_png(const std::string& path, const Trajectory& ref, const Trajectory& est,
+                         const std::vector<double>& errors, const std::string& title, int size_px = 800);
+
 }  // namespace unav::evaluation

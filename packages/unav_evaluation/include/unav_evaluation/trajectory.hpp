@@ -15,7 +15,8 @@ class TrajectoryError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
-/// Stamped poses T_WB (body in world). Stamps in seconds, strictly increasing.
+/// Stamped poses T_WB (body in world). Stamps in seconds, non-decreasing (TUM files may repeat a
+/// stamp, as evo accepts); KITTI files have none and get their index (0, 1, 2, ...).
 struct Trajectory {
   std::vector<double> stamps;
   std::vector<Eigen::Isometry3d> poses;
@@ -30,18 +31,39 @@ struct Trajectory {
   double path_length() const;
 };
 
-/// Reads `timestamp tx ty tz qx qy qz qw` lines ('#' comments and blank lines skipped). Throws
-/// TrajectoryError "<file>:<line>: ..." for a wrong column count, a non-number, NaN/Inf, a
-/// quaternion far from unit norm, or a timestamp not greater than the previous one.
+/// Reads `timestamp tx ty tz qx qy qz qw` lines ('#' comments and blank lines skipped; commas
+/// accepted as separators). Throws TrajectoryError "<file>:<line>: column N (name): ..." for a
+/// wrong column count, a non-number, NaN/Inf, a quaternion far from unit norm, or a timestamp
+/// before the previous one (equal stamps are kept, as evo keeps them).
 Trajectory read_tum(const std::string& path);
+/// Reads a KITTI odometry poses file: 12 numbers per line, the row-major 3x4 [R | t] of the pose;
+/// no stamps (the pose index is used). Throws for a wrong count, a non-number, NaN/Inf or a
+/// rotation that is not orthonormal (within 1e-3).
+Trajectory read_kitti(const std::string& path);
+/// Reads an EuRoC/ASL CSV (state_groundtruth_estimate0/data.csv or any csv of the kind):
+/// `timestamp[ns], p_x, p_y, p_z, q_w, q_x, q_y, q_z[, ...]` ('#' header skipped, extra columns
+/// ignored, as evo reads it). Stamps become seconds.
+Trajectory read_euroc_csv(const std::string& path);
+
+/// The trajectory file formats: "tum", "kitti", "euroc". Throws TrajectoryError otherwise.
+enum class TrajectoryFormat { kTum, kKitti, kEuroc };
+TrajectoryFormat trajectory_format_from_string(const std::string& name);
+Trajectory read_trajectory(const std::string& path, TrajectoryFormat format);
+/// Writes the 12-number KITTI lines (stamps dropped).
+void write_kitti(const std::string& path, const Trajectory& traj);
 /// Writes TUM lines with full precision (stamps with 9 decimals). Throws on I/O failure.
 void write_tum(const std::string& path, const Trajectory& traj);
 
 /// Pairs poses by nearest timestamp like evo's associate_trajectories: each stamp of the shorter
 /// trajectory takes the nearest stamp of the longer one (after adding `offset_s` to the second
-/// trajectory's stamps) when it is within `max_diff_s`. Returns the two reduced trajectories in
-/// the argument order. Throws TrajectoryError when no pair is found (no overlap in time).
+/// trajectory's stamps) when it is within `max_diff_s`; among equally near stamps the first one
+/// (numpy's argmin), also when a stamp repeats. Returns the two reduced trajectories in the
+/// argument order. Throws TrajectoryError when no pair is found (no overlap in time).
 std::pair<Trajectory, Trajectory> associate(const Trajectory& first, const Trajectory& second, double max_diff_s = 0.01,
                                             double offset_s = 0.0);
+
+/// Pairs by index, as evo compares KITTI files (no association): both must have the same number
+/// of poses ("trajectories must have same number of poses" otherwise).
+std::pair<Trajectory, Trajectory> pair_by_index(const Trajectory& first, const Trajectory& second);
 
 }  // namespace unav::evaluation
