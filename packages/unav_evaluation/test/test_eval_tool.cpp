@@ -2,12 +2,13 @@
 // /tf frame pair), the plot and the saved results, with hand-computed errors.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 
-#include <nlohmann/json.hpp>
 #include <yaml-cpp/yaml.h>
+#include <nlohmann/json.hpp>
 
 #include "unav_bag/bag.hpp"
 #include "unav_introspection/cdr_codec.hpp"
@@ -29,7 +30,7 @@ std::string run(const std::string& args, int* rc) {
 YAML::Node header(double t, const std::string& frame) {
   YAML::Node h;
   h["stamp"]["sec"] = static_cast<int32_t>(t);
-  h["stamp"]["nanosec"] = static_cast<uint32_t>((t - static_cast<int32_t>(t)) * 1e9 + 0.5);
+  h["stamp"]["nanosec"] = static_cast<uint32_t>(std::lround((t - static_cast<int32_t>(t)) * 1e9));
   h["frame_id"] = frame;
   return h;
 }
@@ -39,7 +40,7 @@ YAML::Node header(double t, const std::string& frame) {
 std::string make_bag(const std::string& storage) {
   unav::introspection::TypeRegistry reg;
   reg.add_root(ROS2_MSGS_IDL);
-  const std::string dir = (fs::temp_directory_path() / ("unav_eval_bag_" + storage + std::to_string(::getpid()))).string();
+  std::string dir = (fs::temp_directory_path() / ("unav_eval_bag_" + storage + std::to_string(::getpid()))).string();
   fs::remove_all(dir);
   unav::bag::BagWriter::Options opt;
   opt.storage_id = storage;
@@ -88,7 +89,8 @@ TEST(EvalTool, ApeFromBagTopicsAndTfPairWithPlotAndResults) {
     const std::string plot = bag + "_ape.png", results = bag + "_ape.json";
     int rc = 0;
     // Unaligned: every error is the 0.1 m offset.
-    std::string out = run("ape --format bag " + bag + " /gt /est -a none --plot " + plot + " --save_results " + results, &rc);
+    std::string out =
+        run("ape --format bag " + bag + " /gt /est -a none --plot " + plot + " --save_results " + results, &rc);
     ASSERT_EQ(rc, 0) << out;
     EXPECT_NE(out.find("      rmse\t0.100000"), std::string::npos) << out;
     EXPECT_NE(out.find("(50 pose pairs of 50 reference and 50 estimated poses)"), std::string::npos) << out;

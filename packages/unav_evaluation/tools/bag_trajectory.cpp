@@ -66,7 +66,8 @@ std::string strip_slash(std::string f) {
 
 }  // namespace
 
-Trajectory read_bag_trajectory(const std::string& bag, const std::string& what) {
+Trajectory read_bag_trajectory(const std::string& bag, const std::string& topic_or_tf) {
+  const std::string& what = topic_or_tf;
   std::unique_ptr<unav::bag::BagReader> reader;
   try {
     reader = std::make_unique<unav::bag::BagReader>(bag);
@@ -79,7 +80,8 @@ Trajectory read_bag_trajectory(const std::string& bag, const std::string& what) 
     const std::string pair = what.substr(4);
     const size_t dot = pair.find('.');
     if (dot == std::string::npos || dot == 0 || dot + 1 == pair.size())
-      throw TrajectoryError("'" + what + "': a frame pair is written /tf:PARENT.CHILD (e.g. /tf:world_ned.base_link_frd)");
+      throw TrajectoryError("'" + what +
+                            "': a frame pair is written /tf:PARENT.CHILD (e.g. /tf:world_ned.base_link_frd)");
     parent = strip_slash(pair.substr(0, dot));
     child = strip_slash(pair.substr(dot + 1));
   }
@@ -91,11 +93,11 @@ Trajectory read_bag_trajectory(const std::string& bag, const std::string& what) 
     if (tf ? (t.name == "/tf" || t.name == "/tf_static") : t.name == what) wanted[i] = t.type;
   }
   if (wanted.empty())
-    throw TrajectoryError(bag + ": no topic " + (tf ? "/tf or /tf_static" : "'" + what + "'") + " (topics:" + available +
-                          ")");
+    throw TrajectoryError(bag + ": no topic " + (tf ? "/tf or /tf_static" : "'" + what + "'") +
+                          " (topics:" + available + ")");
   static const std::set<std::string> supported = {"nav_msgs/msg/Odometry", "geometry_msgs/msg/PoseStamped",
-                                                   "geometry_msgs/msg/PoseWithCovarianceStamped",
-                                                   "geometry_msgs/msg/TransformStamped", "tf2_msgs/msg/TFMessage"};
+                                                  "geometry_msgs/msg/PoseWithCovarianceStamped",
+                                                  "geometry_msgs/msg/TransformStamped", "tf2_msgs/msg/TFMessage"};
   intro::TypeRegistry reg = make_registry();
   std::map<size_t, const intro::StructType*> types;
   for (const auto& [i, type] : wanted) {
@@ -119,11 +121,13 @@ Trajectory read_bag_trajectory(const std::string& bag, const std::string& what) 
     try {
       msg = intro::decode(*it->second, m.data.data(), m.data.size());
     } catch (const intro::CodecError& e) {
-      throw TrajectoryError(bag + ": a message of '" + reader->topics()[m.topic].name + "' does not decode: " + e.what());
+      throw TrajectoryError(bag + ": a message of '" + reader->topics()[m.topic].name +
+                            "' does not decode: " + e.what());
     }
     const std::string& type = wanted[m.topic];
     if (type == "nav_msgs/msg/Odometry" || type == "geometry_msgs/msg/PoseWithCovarianceStamped") {
-      poses.emplace_back(stamp_of(msg["header"]), pose_of(msg["pose"]["pose"]["position"], msg["pose"]["pose"]["orientation"]));
+      poses.emplace_back(stamp_of(msg["header"]),
+                         pose_of(msg["pose"]["pose"]["position"], msg["pose"]["pose"]["orientation"]));
     } else if (type == "geometry_msgs/msg/PoseStamped") {
       poses.emplace_back(stamp_of(msg["header"]), pose_of(msg["pose"]["position"], msg["pose"]["orientation"]));
     } else {
@@ -137,8 +141,7 @@ Trajectory read_bag_trajectory(const std::string& bag, const std::string& what) 
         const std::string c = strip_slash(t["child_frame_id"].as<std::string>());
         pairs_seen.insert(p + "." + c);
         if (tf ? (p == parent && c == child) : true)
-          poses.emplace_back(stamp_of(t["header"]),
-                             pose_of(t["transform"]["translation"], t["transform"]["rotation"]));
+          poses.emplace_back(stamp_of(t["header"]), pose_of(t["transform"]["translation"], t["transform"]["rotation"]));
       }
     }
   }

@@ -182,6 +182,7 @@ int traj(const std::vector<std::string>& files, const std::string& format, const
     ev::Trajectory ref;
     if (!ref_file.empty()) ref = ev::read_trajectory(ref_file, fmt);
     std::vector<std::pair<std::string, ev::Trajectory>> all;
+    all.reserve(files.size());
     for (const auto& f : files) all.emplace_back(fs::path(f).stem().string(), ev::read_trajectory(f, fmt));
     auto info = [](const std::string& name, const ev::Trajectory& t) {
       const Eigen::Vector3d a = t.poses.front().translation(), b = t.poses.back().translation();
