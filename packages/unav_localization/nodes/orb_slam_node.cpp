@@ -37,6 +37,7 @@ struct OrbSlamNodeParams {
   std::string vocabulary;  ///< default: the installed config/vocabulary/orb_vocabulary.bin
   int features = 1000;
   bool loop_closing = true;
+  double clahe_clip = 3.0;
   bool lockstep = false;
   std::string lockstep_name = "orb_slam";
   double image_period = 0.1;
@@ -50,6 +51,8 @@ struct OrbSlamNodeParams {
                  .Doc("bag-of-words vocabulary (unav_train_vocabulary); empty: no loop closing or relocalisation"));
     a->Visit(Field("features", &features).Range(100, 10000).Doc("ORB features per image"));
     a->Visit(Field("loop_closing", &loop_closing).Doc("detect and close loops"));
+    a->Visit(
+        Field("clahe_clip", &clahe_clip).Range(0.0, 40.0).Doc("CLAHE clip limit before feature extraction, 0 = off"));
     a->Visit(Field("lockstep", &lockstep).Doc("ack every processed image on /lockstep/ack"));
     a->Visit(Field("lockstep_name", &lockstep_name).Doc("participant name in acks"));
     a->Visit(
@@ -69,6 +72,7 @@ class OrbSlamNode : public unav::Node {
     const std::string& voc_path = prm.vocabulary;
     options_.orb.features = prm.features;
     options_.loop_closing = prm.loop_closing;
+    options_.clahe_clip = prm.clahe_clip;
     lockstep_ = prm.lockstep;
     ack_name_ = prm.lockstep_name;
     image_period_ = prm.image_period;

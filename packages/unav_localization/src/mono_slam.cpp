@@ -18,6 +18,8 @@ bool MonoSlamOptions::IsValid(std::string* msg) const {
     return fail("init_min_parallax_deg must be in (0, 30), got " + std::to_string(init_min_parallax_deg));
   if (init_min_points < 20) return fail("init_min_points must be >= 20, got " + std::to_string(init_min_points));
   if (init_max_frames < 2) return fail("init_max_frames must be >= 2, got " + std::to_string(init_max_frames));
+  if (!(clahe_clip >= 0.0 && clahe_clip <= 40.0))
+    return fail("clahe_clip must be in [0, 40], got " + std::to_string(clahe_clip));
   if (min_tracked_inliers < 10)
     return fail("min_tracked_inliers must be >= 10, got " + std::to_string(min_tracked_inliers));
   if (keyframe_min_gap < 0 || keyframe_max_gap < 1 || keyframe_min_gap > keyframe_max_gap)
@@ -113,7 +115,14 @@ auto MonoSlam::Impl::Track(const cv::Mat& gray, double stamp) -> SlamFrameSummar
   cur = Frame();
   cur.index = frame_index++;
   cur.stamp = stamp;
-  ExtractFeatures(gray, initialized ? *orb : *orb_init, &cur);
+  if (opt.clahe_clip > 0.0) {
+    if (!clahe)
+      clahe = cv::createCLAHE(opt.clahe_clip, cv::Size(std::max(2, cam.width / 40), std::max(2, cam.height / 40)));
+    clahe->apply(gray, equalized);
+    ExtractFeatures(equalized, initialized ? *orb : *orb_init, &cur);
+  } else {
+    ExtractFeatures(gray, initialized ? *orb : *orb_init, &cur);
+  }
   s.features = static_cast<int>(cur.f.size());
   if (!initialized) {
     s = TryInitialize(s);
@@ -138,7 +147,7 @@ auto MonoSlam::Impl::Track(const cv::Mat& gray, double stamp) -> SlamFrameSummar
     if (ok) {
       s.inliers = TrackLocalMap();
       const bool recent_reloc = cur.index - last_reloc_frame < 10;
-      ok = s.inliers >= (recent_reloc ? 50 : opt.min_tracked_inliers);
+      ok = s.inliers >= (recent_reloc ? scaled(50) : scaled(opt.min_tracked_inliers));
     }
     s.state = ok ? SlamState::kTracking : SlamState::kLost;
   } else {

@@ -74,6 +74,14 @@ struct MonoSlam::Impl {
   BowDatabase db;
   bool initialized = false;
   std::unique_ptr<Frame> init_ref;
+  cv::Ptr<cv::CLAHE> clahe;  ///< when options.clahe_clip > 0
+  cv::Mat equalized;
+  /// Feature-count thresholds scale with the image: 1 at 640x480 and above, sqrt(area ratio)
+  /// below (a 320x180 camera holds ~0.43 of the features of a 640x480 one), at least 0.35.
+  double resolution_scale() const {
+    return std::clamp(std::sqrt(static_cast<double>(cam.width) * cam.height / (640.0 * 480.0)), 0.35, 1.0);
+  }
+  int scaled(int n) const { return std::max(12, static_cast<int>(std::lround(n * resolution_scale()))); }
   Frame cur, last;
   bool last_tracked = false;
   bool has_velocity = false;

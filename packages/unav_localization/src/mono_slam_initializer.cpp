@@ -54,8 +54,10 @@ auto MonoSlam::Impl::CheckMotion(const Eigen::Matrix3d& R, const Eigen::Vector3d
 
 auto MonoSlam::Impl::TryInitialize(SlamFrameSummary s) -> SlamFrameSummary {
   s.state = SlamState::kInitializing;
-  if (!init_ref || static_cast<int>(cur.f.size()) < 100 || cur.index - init_ref->index > opt.init_max_frames) {
-    if (static_cast<int>(cur.f.size()) >= 100)
+  const int min_ref_features = scaled(100), min_points = scaled(opt.init_min_points);
+  if (!init_ref || static_cast<int>(cur.f.size()) < min_ref_features ||
+      cur.index - init_ref->index > opt.init_max_frames) {
+    if (static_cast<int>(cur.f.size()) >= min_ref_features)
       init_ref = std::make_unique<Frame>(cur);
     else
       init_ref.reset();
@@ -80,8 +82,8 @@ auto MonoSlam::Impl::TryInitialize(SlamFrameSummary s) -> SlamFrameSummary {
   for (size_t j = 0; j < taken.size(); ++j)
     if (taken[j] >= 0) matches.emplace_back(taken[j], static_cast<int>(j));
   s.inliers = static_cast<int>(matches.size());
-  if (static_cast<int>(matches.size()) < opt.init_min_points) {
-    if (matches.size() < 40) init_ref = std::make_unique<Frame>(cur);  // lost the reference view
+  if (static_cast<int>(matches.size()) < min_points) {
+    if (static_cast<int>(matches.size()) < scaled(40)) init_ref = std::make_unique<Frame>(cur);  // lost the reference
     s.message = "initialisation: " + std::to_string(matches.size()) + " matches";
     return s;
   }
@@ -114,7 +116,7 @@ auto MonoSlam::Impl::TryInitialize(SlamFrameSummary s) -> SlamFrameSummary {
     candidates.push_back(CheckMotion(c.R, c.t.normalized(), init_ref->f, cur.f, matches, c.inliers));
   std::sort(candidates.begin(), candidates.end(),
             [](const auto& a, const auto& b) { return a.points.size() > b.points.size(); });
-  if (candidates.empty() || static_cast<int>(candidates[0].points.size()) < opt.init_min_points ||
+  if (candidates.empty() || static_cast<int>(candidates[0].points.size()) < min_points ||
       candidates[0].parallax_deg < opt.init_min_parallax_deg) {
     s.message = "initialisation: not enough parallax or points";
     return s;

@@ -62,6 +62,7 @@ int main(int argc, char** argv) {
   int max_frames = 0;
   double fps = 10.0;
   bool quiet = false, no_loops = false;
+  double clahe = 3.0;
   int features = 1000;
   app.add_option("--images", images, "image folder (TUM RGB-D dataset folder or .png/.jpg files)")->required();
   app.add_option("--camera", camera_path, "camera YAML (dataset camera.yaml or ROS camera_info YAML)")->required();
@@ -77,6 +78,8 @@ int main(int argc, char** argv) {
   app.add_flag("--quiet", quiet, "no per-frame lines");
   app.add_flag("--no-loop-closing", no_loops, "orb_slam: do not detect loops");
   app.add_option("--features", features, "orb_slam: ORB features per image")->check(CLI::Range(100, 10000));
+  app.add_option("--clahe", clahe, "orb_slam: CLAHE clip limit before feature extraction (default 3; 0 = off)")
+      ->check(CLI::Range(0.0, 40.0));
   CLI11_PARSE(app, argc, argv);
   if (output.empty()) output = method + "_trajectory.txt";
 
@@ -104,6 +107,7 @@ int main(int argc, char** argv) {
       ul::MonoSlamOptions o;
       o.loop_closing = !no_loops;
       o.orb.features = features;
+      o.clahe_clip = clahe;
       slam = std::make_unique<ul::MonoSlam>(cam.camera, cam.distortion, o, voc);
     } else {
       ul::KltVoOptions o;

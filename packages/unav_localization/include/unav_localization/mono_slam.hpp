@@ -49,6 +49,9 @@ struct MonoSlamOptions {
   bool global_ba_after_loop = true;
   int global_ba_iterations = 15;
   int relocalize_frames = 10;  ///< frames of relocalisation attempts before re-initialising
+  /// Contrast-limited adaptive histogram equalisation before feature extraction (underwater
+  /// footage: uneven artificial light, low contrast); clip limit, 0 = off. Tiles of ~40 px.
+  double clahe_clip = 0.0;
   bool IsValid(std::string* msg) const;
 };
 
