@@ -637,7 +637,9 @@ SampleWorld write_sample_world(const RandomizationSpec& spec, const YAML::Node& 
   SampleWorld out;
   fs::create_directories(dir);
   w["name"] = w["name"].as<std::string>("world") + "_sample_" + std::to_string(seed);
-  w["description"] = "Randomized from " + spec.base_world() + " by " + spec.file() + ", seed " + std::to_string(seed);
+  // File names only: the same seed gives the same bytes wherever the workspace or spec lives.
+  w["description"] = "Randomized from " + fs::path(spec.base_world()).filename().string() + " by " +
+                     fs::path(spec.file()).filename().string() + ", seed " + std::to_string(seed);
 
   // Water: the preset's coefficients scaled by the turbidity.
   const auto preset = unav::scene::jerlov_preset(s["water"]["preset"].as<std::string>());

@@ -12,6 +12,7 @@
 #include <cerrno>
 #include <cstring>
 #include <filesystem>
+#include <optional>
 
 #include "unav_runtime/conversions.hpp"
 #include "unav_scene/camera.hpp"
@@ -19,16 +20,23 @@
 namespace unav::evaluation {
 namespace {
 
-void append(Trajectory& t, const nav_msgs::msg::Odometry& m) {
-  const double stamp = unav::Time::from_msg(m.header().stamp().sec(), m.header().stamp().nanosec()).seconds();
+template <class Header, class Pose>
+void append_pose(Trajectory& t, const Header& h, const Pose& p) {
+  const double stamp = unav::Time::from_msg(h.stamp().sec(), h.stamp().nanosec()).seconds();
   if (!t.empty() && stamp <= t.stamps.back()) return;  // duplicates (re-published states) and reordering
-  const auto& p = m.pose().pose();
   Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
   X.translation() = Eigen::Vector3d(p.position().x(), p.position().y(), p.position().z());
   const Eigen::Quaterniond q(p.orientation().w(), p.orientation().x(), p.orientation().y(), p.orientation().z());
   if (!X.translation().allFinite() || !q.coeffs().allFinite() || q.norm() < 1e-6) return;
   X.linear() = q.normalized().toRotationMatrix();
   t.push_back(stamp, X);
+}
+
+void append(Trajectory& t, const nav_msgs::msg::Odometry& m) { append_pose(t, m.header(), m.pose().pose()); }
+
+std::string strip_slash(std::string f) {
+  while (!f.empty() && f.front() == '/') f.erase(0, 1);
+  return f;
 }
 
 Trajectory from_path(const nav_msgs::msg::Path& m) {
@@ -120,7 +128,65 @@ TrajectoryEvaluator::TrajectoryEvaluator(const unav::NodeOptions& options)
         "localization/" + n + "/path", unav::QoS::reliable(2),
         [this, n](const nav_msgs::msg::Path& m) { paths_[n] = from_path(m); }));
   }
-  logger()->info("evaluating {} estimator(s) against ground truth; results in {}", names.size(), output_dir_);
+  for (std::string in : prm.inputs) {
+    // NAME=KIND:SOURCE[@FRAME]
+    std::string frame;
+    if (const size_t at = in.rfind('@'); at != std::string::npos) {
+      frame = strip_slash(in.substr(at + 1));
+      in = in.substr(0, at);
+      if (frame.empty())
+        throw unav::ParameterError("node '" + name() + "': parameter 'inputs': '" + in + "@': empty frame after @");
+    }
+    const size_t eq = in.find('='), colon = in.find(':', eq == std::string::npos ? 0 : eq);
+    const std::string rule = "expected NAME=odom:TOPIC, NAME=pose:TOPIC, NAME=pose_cov:TOPIC or NAME=tf:PARENT.CHILD";
+    if (eq == std::string::npos || eq == 0 || colon == std::string::npos || colon + 1 == in.size())
+      throw unav::ParameterError("node '" + name() + "': parameter 'inputs': '" + in + "': " + rule);
+    const std::string n = in.substr(0, eq), kind = in.substr(eq + 1, colon - eq - 1), src = in.substr(colon + 1);
+    if (estimates_.count(n))
+      throw unav::ParameterError("node '" + name() + "': parameter 'inputs': estimator name '" + n + "' used twice");
+    estimates_[n];
+    if (!frame.empty()) {
+      input_frames_[n] = frame;
+      if (!tf_static_) tf_static_ = std::make_unique<unav::StaticTransformListener>(*this);
+    }
+    if (kind == "odom") {
+      subs_.push_back(create_subscription<nav_msgs::msg::Odometry>(
+          src, unav::QoS::reliable(100), [this, n](const nav_msgs::msg::Odometry& m) { append(estimates_[n], m); }));
+    } else if (kind == "pose") {
+      pose_subs_.push_back(create_subscription<geometry_msgs::msg::PoseStamped>(
+          src, unav::QoS::reliable(100),
+          [this, n](const geometry_msgs::msg::PoseStamped& m) { append_pose(estimates_[n], m.header(), m.pose()); }));
+    } else if (kind == "pose_cov") {
+      pose_cov_subs_.push_back(create_subscription<geometry_msgs::msg::PoseWithCovarianceStamped>(
+          src, unav::QoS::reliable(100), [this, n](const geometry_msgs::msg::PoseWithCovarianceStamped& m) {
+            append_pose(estimates_[n], m.header(), m.pose().pose());
+          }));
+    } else if (kind == "tf") {
+      const size_t dot = src.find('.');
+      if (dot == std::string::npos || dot == 0 || dot + 1 == src.size())
+        throw unav::ParameterError("node '" + name() + "': parameter 'inputs': '" + in + "': " + rule);
+      tf_inputs_[{strip_slash(src.substr(0, dot)), strip_slash(src.substr(dot + 1))}] = n;
+    } else {
+      throw unav::ParameterError("node '" + name() + "': parameter 'inputs': '" + in + "': kind '" + kind +
+                                 "' is unknown; " + rule);
+    }
+  }
+  if (!tf_inputs_.empty()) {
+    tf_sub_ = create_subscription<tf2_msgs::msg::TFMessage>(
+        "/tf", unav::QoS::reliable(100), [this](const tf2_msgs::msg::TFMessage& m) {
+          for (const auto& tr : m.transforms()) {
+            const auto it = tf_inputs_.find({strip_slash(tr.header().frame_id()), strip_slash(tr.child_frame_id())});
+            if (it == tf_inputs_.end()) continue;
+            geometry_msgs::msg::Pose p;
+            p.position().x(tr.transform().translation().x());
+            p.position().y(tr.transform().translation().y());
+            p.position().z(tr.transform().translation().z());
+            p.orientation(tr.transform().rotation());
+            append_pose(estimates_[it->second], tr.header(), p);
+          }
+        });
+  }
+  logger()->info("evaluating {} estimator(s) against ground truth; results in {}", estimates_.size(), output_dir_);
 }
 
 TrajectoryEvaluator::~TrajectoryEvaluator() {
@@ -166,9 +232,24 @@ std::vector<AlgorithmResult> TrajectoryEvaluator::write_outputs() {
       continue;
     }
     write_tum(prefix + name + ".tum", traj);
+    // The frame mapping of an input (@FRAME): ground truth of that frame instead.
+    Trajectory mapped;
+    if (const auto f = input_frames_.find(name); f != input_frames_.end()) {
+      std::optional<Eigen::Isometry3d> X_BF;
+      if (f->second == body_frame_) X_BF = Eigen::Isometry3d::Identity();
+      if (!X_BF && tf_static_) X_BF = tf_static_->lookup(body_frame_, f->second);
+      if (!X_BF) {
+        logger()->warn("estimator '{}' reports frame '{}', which /tf_static does not connect to {}: not evaluated",
+                       name, f->second, body_frame_);
+        continue;
+      }
+      mapped = ground_truth_;
+      for (auto& X : mapped.poses) X = X * *X_BF;
+    }
+    const Trajectory& ref_truth = input_frames_.count(name) ? mapped : truth;
     try {
-      results.push_back(evaluate(truth, traj, trajectory_name_, name, alignment_, rpe_, max_diff_));
-      auto [ref, est] = associate(truth, traj, max_diff_);
+      results.push_back(evaluate(ref_truth, traj, trajectory_name_, name, alignment_, rpe_, max_diff_));
+      auto [ref, est] = associate(ref_truth, traj, max_diff_);
       align(est, ref, alignment_);
       aligned.emplace_back(name, est);
       logger()->info("{}: APE {:.4f} m, RPE {:.4f} m, APE {:.4f} rad, RPE {:.4f} rad ({} poses)", name,

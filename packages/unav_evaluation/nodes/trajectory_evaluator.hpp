@@ -9,6 +9,15 @@
 //   sub  localization/<algo>/path          nav_msgs/Path: when an estimator publishes its whole
 //                                          (corrected) trajectory, the latest path is evaluated,
 //                                          followed by the odometry stamped after its end
+//   sub  any estimator's output, one per entry of `inputs` ("NAME=KIND:SOURCE"):
+//          NAME=odom:TOPIC                 nav_msgs/Odometry (e.g. an ORB-SLAM3 wrapper's odometry)
+//          NAME=pose:TOPIC                 geometry_msgs/PoseStamped
+//          NAME=pose_cov:TOPIC             geometry_msgs/PoseWithCovarianceStamped
+//          NAME=tf:PARENT.CHILD            the transform PARENT -> CHILD on /tf
+//        so a ROS 2 estimator the user runs joins the same table; relative topics resolve in the
+//        node's namespace. An estimate reports `camera`'s optical frame (or body_frame) unless the
+//        entry ends with @FRAME (the frame mapping): then FRAME, a frame on the vehicle (body_frame
+//        itself, or any frame the vehicle's /tf_static reaches from body_frame).
 // Params: estimates (names), output_dir, trajectory_name (table row label), alignment
 //         (none|se3|sim3|scale), rpe_delta (frames), max_time_diff (s, association),
 //         camera (estimators report that camera's optical frame, as monocular ones do: ground
@@ -27,6 +36,8 @@
 #include <string>
 #include <vector>
 
+#include "geometry_msgs/msg/pose_stamped.hpp"
+#include "geometry_msgs/msg/pose_with_covariance_stamped.hpp"
 #include "nav_msgs/msg/odometry.hpp"
 #include "nav_msgs/msg/path.hpp"
 #include "tf2_msgs/msg/tf_message.hpp"
@@ -41,6 +52,7 @@ namespace unav::evaluation {
 /// The trajectory_evaluator's parameters (params file or `-p name:=value`; `--help` lists them).
 struct TrajectoryEvaluatorParams {
   std::vector<std::string> estimates;
+  std::vector<std::string> inputs;
   std::string output_dir = "out/evaluation";
   std::string trajectory_name = "run";
   std::string alignment = "sim3";
@@ -57,6 +69,9 @@ struct TrajectoryEvaluatorParams {
   void Serialize(Archive* a) {
     using unav::common::Field;
     a->Visit(Field("estimates", &estimates).Doc("estimator names (localization/<name>/odom)"));
+    a->Visit(
+        Field("inputs", &inputs)
+            .Doc("more estimators, NAME=odom:TOPIC | NAME=pose:TOPIC | NAME=pose_cov:TOPIC | NAME=tf:PARENT.CHILD"));
     a->Visit(Field("output_dir", &output_dir).Doc("results folder"));
     a->Visit(Field("trajectory_name", &trajectory_name).Doc("row label, e.g. linear"));
     a->Visit(Field("alignment", &alignment).OneOf({"none", "se3", "sim3", "scale"}).Doc("trajectory alignment"));
@@ -101,6 +116,11 @@ class TrajectoryEvaluator : public unav::Node {
   std::map<std::string, Trajectory> estimates_, paths_;
   std::vector<std::shared_ptr<unav::Subscription<nav_msgs::msg::Odometry>>> subs_;
   std::vector<std::shared_ptr<unav::Subscription<nav_msgs::msg::Path>>> path_subs_;
+  std::vector<std::shared_ptr<unav::Subscription<geometry_msgs::msg::PoseStamped>>> pose_subs_;
+  std::vector<std::shared_ptr<unav::Subscription<geometry_msgs::msg::PoseWithCovarianceStamped>>> pose_cov_subs_;
+  std::shared_ptr<unav::Subscription<tf2_msgs::msg::TFMessage>> tf_sub_;
+  std::map<std::pair<std::string, std::string>, std::string> tf_inputs_;  ///< (parent, child) -> name
+  std::map<std::string, std::string> input_frames_;                       ///< estimate -> the frame it reports (@FRAME)
 };
 
 }  // namespace unav::evaluation

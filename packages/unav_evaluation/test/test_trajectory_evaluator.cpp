@@ -202,3 +202,140 @@ TEST(TrajectoryEvaluator, CombinesRunsPrefersPathsAndComparesInTheCameraFrame) {
     EXPECT_NEAR(row["scale"].get<double>(), 2.0, 1e-6);
   }
 }
+
+// Any estimator, same table: a PoseStamped topic and a /tf frame pair given as `inputs` (as a
+// user adds a ROS 2 VSLAM they run themselves) are evaluated like our odometry: here Sim(3)
+// copies of the ground truth, so zero error after alignment, one row each.
+TEST(TrajectoryEvaluator, TakesPoseStampedAndTfInputs) {
+  const unav::ContextOptions o = unav::testing::test_context_options();
+  const std::string out = ::testing::TempDir() + "eval_node_inputs";
+  std::filesystem::remove_all(out);
+  const std::string p_out = "output_dir:=" + out;
+  const char* argv[] = {"trajectory_evaluator",
+                        "--ros-args",
+                        "-p",
+                        p_out.c_str(),
+                        "-p",
+                        "inputs:=[ext_pose=pose:/ext/camera_pose, ext_tf=tf:ext_map.ext_camera, "
+                        "ext_sensor=pose:/ext/sensor_pose@sensor]"};
+  unav::Context node_ctx(6, argv, o);
+  auto node = std::make_unique<unav::evaluation::TrajectoryEvaluator>(unav::NodeOptions{&node_ctx});
+  unav::Context test_ctx(o);
+  unav::Node probe("probe", {&test_ctx});
+  auto gt_pub = probe.create_publisher<nav_msgs::msg::Odometry>("/rov/ground_truth/odom", unav::QoS::reliable(100));
+  auto pose_pub = probe.create_publisher<geometry_msgs::msg::PoseStamped>("/ext/camera_pose", unav::QoS::reliable(100));
+  auto tf_pub = probe.create_publisher<tf2_msgs::msg::TFMessage>("/tf", unav::QoS::reliable(100));
+  auto sensor_pub =
+      probe.create_publisher<geometry_msgs::msg::PoseStamped>("/ext/sensor_pose", unav::QoS::reliable(100));
+  auto static_pub = probe.create_publisher<tf2_msgs::msg::TFMessage>("/tf_static", unav::QoS::static_latched());
+  // The frame mapping: the third estimator reports `sensor`, 0.5 m ahead of the body and turned
+  // 90 deg about its x axis, as /tf_static says.
+  Eigen::Isometry3d X_BS = Eigen::Isometry3d::Identity();
+  X_BS.translation() = Eigen::Vector3d(0.5, 0.0, 0.1);
+  X_BS.linear() = Eigen::AngleAxisd(M_PI / 2, Eigen::Vector3d::UnitX()).toRotationMatrix();
+  {
+    tf2_msgs::msg::TFMessage mounts;
+    geometry_msgs::msg::TransformStamped m;
+    m.header().frame_id("base_link_frd");
+    m.child_frame_id("sensor");
+    m.transform().translation().x(0.5);
+    m.transform().translation().z(0.1);
+    const Eigen::Quaterniond qs(X_BS.linear());
+    m.transform().rotation().x(qs.x());
+    m.transform().rotation().w(qs.w());
+    mounts.transforms({m});
+    static_pub->publish(mounts);
+  }
+  const std::vector<unav::testing::Link> links = {make_link(*gt_pub, *node), make_link(*pose_pub, *node),
+                                                  make_link(*tf_pub, *node), make_link(*sensor_pub, *node),
+                                                  make_link(*static_pub, *node)};
+  ASSERT_TRUE(unav::testing::wait_for_match({&node_ctx, &test_ctx}, links)) << unav::testing::describe(links);
+  const Eigen::AngleAxisd R(-0.7, Eigen::Vector3d::UnitZ());
+  for (int i = 0; i < 80; ++i) {
+    const double t = 0.1 * i, a = 0.05 * i;
+    const Eigen::Vector3d p(4 * std::sin(a), 3 * std::cos(a), 9.0 + 0.2 * std::sin(2 * a));
+    const Eigen::Quaterniond q(Eigen::AngleAxisd(a, Eigen::Vector3d::UnitZ()));
+    const unav::Time s{std::llround(t * 1e9)};
+    nav_msgs::msg::Odometry gt;
+    gt.header().stamp().sec(s.sec());
+    gt.header().stamp().nanosec(s.nanosec());
+    gt.pose().pose().position().x(p.x());
+    gt.pose().pose().position().y(p.y());
+    gt.pose().pose().position().z(p.z());
+    gt.pose().pose().orientation().w(q.w());
+    gt.pose().pose().orientation().z(q.z());
+    const Eigen::Vector3d pe = 2.0 * (R * p) + Eigen::Vector3d(-1, 0.5, 2);
+    const Eigen::Quaterniond qe = Eigen::Quaterniond(R) * q;
+    geometry_msgs::msg::PoseStamped ps;
+    ps.header() = gt.header();
+    ps.header().frame_id("ext_map");
+    ps.pose().position().x(pe.x());
+    ps.pose().position().y(pe.y());
+    ps.pose().position().z(pe.z());
+    ps.pose().orientation().x(qe.x());
+    ps.pose().orientation().y(qe.y());
+    ps.pose().orientation().z(qe.z());
+    ps.pose().orientation().w(qe.w());
+    tf2_msgs::msg::TFMessage tf;
+    geometry_msgs::msg::TransformStamped tr;
+    tr.header() = ps.header();
+    tr.child_frame_id("ext_camera");
+    tr.transform().translation().x(pe.x());
+    tr.transform().translation().y(pe.y());
+    tr.transform().translation().z(pe.z());
+    tr.transform().rotation(ps.pose().orientation());
+    geometry_msgs::msg::TransformStamped other = tr;  // another frame pair: ignored
+    other.child_frame_id("something_else");
+    other.transform().translation().x(100.0);
+    tf.transforms({other, tr});
+    gt_pub->publish(gt);
+    pose_pub->publish(ps);
+    tf_pub->publish(tf);
+    Eigen::Isometry3d X_WB = Eigen::Isometry3d::Identity();
+    X_WB.translation() = p;
+    X_WB.linear() = q.toRotationMatrix();
+    const Eigen::Isometry3d X_WS = X_WB * X_BS;
+    const Eigen::Vector3d ps_s = 2.0 * (R * X_WS.translation()) + Eigen::Vector3d(-1, 0.5, 2);
+    const Eigen::Quaterniond qs_s = Eigen::Quaterniond(R) * Eigen::Quaterniond(X_WS.linear());
+    geometry_msgs::msg::PoseStamped sp;
+    sp.header() = ps.header();
+    sp.pose().position().x(ps_s.x());
+    sp.pose().position().y(ps_s.y());
+    sp.pose().position().z(ps_s.z());
+    sp.pose().orientation().x(qs_s.x());
+    sp.pose().orientation().y(qs_s.y());
+    sp.pose().orientation().z(qs_s.z());
+    sp.pose().orientation().w(qs_s.w());
+    sensor_pub->publish(sp);
+    unav::testing::spin_until(
+        {&node_ctx, &test_ctx}, [] { return false; }, 2ms);
+  }
+  ASSERT_TRUE(unav::testing::wait_for_delivery({&node_ctx, &test_ctx}, links));
+  node.reset();
+  nlohmann::json j;
+  std::ifstream(out + "/results.json") >> j;
+  ASSERT_EQ(j.size(), 3u);
+  for (const auto& row : j) {
+    EXPECT_EQ(row["poses"], 80) << row["algorithm"];
+    EXPECT_LT(row["ape_m"]["rmse"].get<double>(), 1e-6) << row["algorithm"];
+    EXPECT_LT(row["ape_rad"]["rmse"].get<double>(), 1e-6) << row["algorithm"];  // the mapped frame's attitude
+    EXPECT_NEAR(row["scale"].get<double>(), 0.5, 1e-6) << row["algorithm"];
+  }
+  EXPECT_TRUE(std::filesystem::exists(out + "/ext_pose.tum"));
+  EXPECT_TRUE(std::filesystem::exists(out + "/ext_tf.tum"));
+}
+
+TEST(TrajectoryEvaluator, RejectsMalformedInputs) {
+  const unav::ContextOptions o = unav::testing::test_context_options();
+  for (const char* bad :
+       {"inputs:=[nokind]", "inputs:=[a=radar:/x]", "inputs:=[a=tf:onlyparent]", "inputs:=[a=pose:/x@]"}) {
+    const char* argv[] = {"trajectory_evaluator", "--ros-args", "-p", bad};
+    unav::Context ctx(4, argv, o);
+    try {
+      unav::evaluation::TrajectoryEvaluator node(unav::NodeOptions{&ctx});
+      ADD_FAILURE() << bad << " accepted";
+    } catch (const unav::ParameterError& e) {
+      EXPECT_NE(std::string(e.what()).find("parameter 'inputs'"), std::string::npos) << e.what();
+    }
+  }
+}
