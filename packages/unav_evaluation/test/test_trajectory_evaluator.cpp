@@ -207,17 +207,13 @@ TEST(TrajectoryEvaluator, CombinesRunsPrefersPathsAndComparesInTheCameraFrame) {
 // user adds a ROS 2 VSLAM they run themselves) are evaluated like our odometry: here Sim(3)
 // copies of the ground truth, so zero error after alignment, one row each.
 TEST(TrajectoryEvaluator, TakesPoseStampedAndTfInputs) {
+  const std::string kInputs =
+      "inputs:=[ext_pose=pose:/ext/camera_pose, ext_tf=tf:ext_map.ext_camera, ext_sensor=pose:/ext/sensor_pose@sensor]";
   const unav::ContextOptions o = unav::testing::test_context_options();
   const std::string out = ::testing::TempDir() + "eval_node_inputs";
   std::filesystem::remove_all(out);
   const std::string p_out = "output_dir:=" + out;
-  const char* argv[] = {"trajectory_evaluator",
-                        "--ros-args",
-                        "-p",
-                        p_out.c_str(),
-                        "-p",
-                        "inputs:=[ext_pose=pose:/ext/camera_pose, ext_tf=tf:ext_map.ext_camera, "
-                        "ext_sensor=pose:/ext/sensor_pose@sensor]"};
+  const char* argv[] = {"trajectory_evaluator", "--ros-args", "-p", p_out.c_str(), "-p", kInputs.c_str()};
   unav::Context node_ctx(6, argv, o);
   auto node = std::make_unique<unav::evaluation::TrajectoryEvaluator>(unav::NodeOptions{&node_ctx});
   unav::Context test_ctx(o);
