@@ -161,3 +161,31 @@ TEST(RandomizationSpec, DocumentationListsEveryKey) {
   const std::string doc = RandomizationSpec::documentation();
   for (const auto& k : RandomizationSpec::keys()) EXPECT_NE(doc.find("`" + k.path + "`"), std::string::npos) << k.path;
 }
+
+TEST(SampleWorld, PlacesMeshesFromTheObjectsFolder) {
+  YAML::Node root = YAML::LoadFile(kSpec);
+  root["objects"]["folder"] = std::string(UNAV_REPO_ROOT) + "/worlds/pipe_inspection/meshes";
+  root["objects"]["count"] = 3;
+  root["objects"]["scale"] = YAML::Load("{uniform: [0.5, 2.0]}");
+  const auto spec = RandomizationSpec::parse(root, kSpec);
+  ASSERT_FALSE(spec.object_meshes().empty());
+  const YAML::Node s = spec.sample(1);
+  const std::string dir = (fs::temp_directory_path() / ("unav_rand_obj_" + std::to_string(::getpid()))).string();
+  fs::remove_all(dir);
+  const auto files = unav::datagen::write_sample_world(spec, s, dir);
+  const unav::scene::World w = unav::scene::load_world(files.world_file);  // meshes load through assimp
+  ASSERT_EQ(w.objects.size(), 3u);
+  for (const auto& o : w.objects) {
+    EXPECT_NEAR(o.scale.x(), s["objects"]["scale"].as<double>(), 1e-12);
+    EXPECT_NE(o.mesh_file.find("meshes/"), std::string::npos);
+  }
+  fs::remove_all(dir);
+  // A folder without meshes is refused with the rule.
+  root["objects"]["folder"] = std::string(UNAV_REPO_ROOT) + "/config";
+  try {
+    RandomizationSpec::parse(root, kSpec);
+    FAIL();
+  } catch (const unav::ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("holds no mesh file"), std::string::npos) << e.what();
+  }
+}
