@@ -12,7 +12,7 @@ PKGS=(
   libegl-dev libgles-dev libgl-dev libegl-mesa0 libgbm-dev libepoxy-dev
   libyaml-cpp-dev libcli11-dev libspdlog-dev nlohmann-json3-dev
   libgtest-dev libgmock-dev libbenchmark-dev libsqlite3-dev libssl-dev libzstd-dev zlib1g-dev
-  clang-format clang-tidy
+  clang-format clang-tidy clang-14 libclang-rt-14-dev
   munge slurmctld slurmd slurm-client
   pybind11-dev python3-dev python3-venv python3-pytest python3-numpy python3-torch
   python3-pandas python3-matplotlib python3-tqdm python3-rich python3-typing-extensions

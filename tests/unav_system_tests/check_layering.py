@@ -36,7 +36,7 @@ FLOORS = {
     "unav_gym": 5, "unav_planning": 5,
     # floor 6: tools, launch, resources, examples, system tests
     "unav_cli": 6, "unav_examples": 6, "unav_resources": 6,
-    "unav_system_tests": 6,
+    "unav_system_tests": 6, "unav_fuzz": 6,
 }
 # Allowed arrows within one floor (a capability reusing another's DDS-free core).
 # The physics server node reads the world file (seabed, current) through unav_scene; the physics

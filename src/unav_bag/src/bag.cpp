@@ -73,16 +73,21 @@ std::vector<QosProfile> parse_offered_qos_yaml(const std::string& yaml) {
   }
   if (!root.IsSequence()) return out;
   for (const auto& item : root) {
+    if (!item.IsMap()) {  // found by fuzz_mcap: a list of scalars threw YAML::BadSubscript
+      throw BagError("offered_qos_profiles: each profile must be a map of policies, got '" +
+                     (item.IsScalar() ? item.Scalar() : std::string("a list")) + "'");
+    }
     QosProfile p;
     // Integers (Humble) or names (later distros: "reliable", "transient_local").
     auto is = [&](const char* key, int number, const char* name) {
       if (!item[key]) return false;
-      const std::string v = item[key].as<std::string>();
+      if (!item[key].IsScalar()) return false;
+      const std::string v = item[key].Scalar();
       return v == std::to_string(number) || v == name;
     };
     p.reliable = !is("reliability", 2, "best_effort");
     p.transient_local = is("durability", 1, "transient_local");
-    if (item["depth"]) p.depth = std::max(1, item["depth"].as<int32_t>(10));
+    if (item["depth"] && item["depth"].IsScalar()) p.depth = std::max(1, item["depth"].as<int32_t>(10));
     out.push_back(p);
   }
   return out;
@@ -194,7 +199,10 @@ void scan_messages(BagReader::Source& source, BagInfo& info) {
   }
   source.rewind();
   info.starting_time_ns = first;
-  info.duration_ns = last - first;
+  // Found by fuzz_mcap: forged stamps far apart overflowed the subtraction.
+  if (__builtin_sub_overflow(last, first, &info.duration_ns))
+    throw BagError("message timestamps " + std::to_string(first) + " .. " + std::to_string(last) +
+                   " ns span more than 292 years: corrupt bag");
 }
 
 // ---------------------------------------------------------------------------------------------

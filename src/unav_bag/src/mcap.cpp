@@ -14,6 +14,7 @@
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
+#include <limits>
 #include <map>
 
 #include "storage.hpp"
@@ -440,8 +441,17 @@ class McapSource final : public BagReader::Source {
     const auto n = c.get<uint64_t>();
     c.need(n);
     if (compression.empty()) {
+      if (uncompressed_size != n)
+        throw BagError(path_ + ": corrupt chunk at byte " + std::to_string(pos_) + ": uncompressed size " +
+                       std::to_string(uncompressed_size) + " != its " + std::to_string(n) + " bytes");
       chunk_.assign(c.p, c.p + n);
     } else if (compression == "zstd") {
+      // The declared size drives an allocation: it must agree with the zstd frame and stay within
+      // a ratio no real bag reaches (found by fuzz_mcap: a forged size exhausted memory).
+      const unsigned long long frame = ZSTD_getFrameContentSize(c.p, n);
+      if (frame != uncompressed_size || uncompressed_size > 1000ull * n + (1u << 16))
+        throw BagError(path_ + ": corrupt zstd chunk at byte " + std::to_string(pos_) + ": declared size " +
+                       std::to_string(uncompressed_size) + " for " + std::to_string(n) + " compressed bytes");
       chunk_.resize(uncompressed_size);
       const size_t got = ZSTD_decompress(chunk_.data(), chunk_.size(), c.p, n);
       if (ZSTD_isError(got) || got != uncompressed_size)
@@ -490,6 +500,8 @@ class McapSource final : public BagReader::Source {
         throw BagError(path_ + ": message on unknown channel " + std::to_string(channel));
       }
       if (collecting_) return false;
+      if (log_time > static_cast<uint64_t>(std::numeric_limits<int64_t>::max()))
+        throw BagError(path_ + ": message log time " + std::to_string(log_time) + " ns is beyond 2262: corrupt");
       out.topic = it->second;
       out.timestamp_ns = static_cast<int64_t>(log_time);
       out.data.assign(c.p, p + len);

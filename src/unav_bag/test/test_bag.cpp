@@ -229,3 +229,13 @@ TEST(AsyncRecorder, AmpleQueueKeepsEverythingFromManyThreads) {
   EXPECT_EQ(r.info().message_count, 2000u);
   for (const auto& ti : r.info().topics) EXPECT_EQ(ti.message_count, 500u);
 }
+
+TEST(OfferedQos, MalformedProfilesAreABagErrorNotACrash) {
+  // Found by fuzz_mcap: a list of scalars threw YAML::BadSubscript out of play/info.
+  EXPECT_THROW(parse_offered_qos_yaml("- reliable\n- 3\n"), BagError);
+  EXPECT_THROW(parse_offered_qos_yaml("{unclosed"), BagError);
+  // Odd values inside a map are ignored, not fatal.
+  const auto q = parse_offered_qos_yaml("- {reliability: [1], depth: {x: 1}}");
+  ASSERT_EQ(q.size(), 1u);
+  EXPECT_TRUE(q[0].reliable);
+}
