@@ -123,14 +123,19 @@ int record(const RecordOptions& o) {
     for (const auto& [topic, types] : g.topics()) {
       if (recording.count(topic) || types.empty()) continue;
       if (!o.all && !wanted.count(topic)) continue;
-      const std::string dds_type = *types.begin();
+      // Only once a publisher is known: a topic seen through another subscriber alone would get
+      // a reliable reader that a best-effort publisher (IMU, cameras) never matches.
+      std::vector<unav::bag::QosProfile> offered;
+      std::string dds_type;
+      for (const auto& e : g.endpoints())
+        if (e.is_writer && e.dds_topic == unav::to_dds_topic(topic)) {
+          offered.push_back({e.reliable, e.transient_local, 0});
+          dds_type = e.dds_type;
+        }
+      if (offered.empty()) continue;
       unav::bag::TopicMetadata meta;
       meta.name = topic;
       meta.type = unav::ros_type_from_dds(dds_type);
-      std::vector<unav::bag::QosProfile> offered;
-      for (const auto& e : g.endpoints())
-        if (e.is_writer && e.dds_topic == unav::to_dds_topic(topic))
-          offered.push_back({e.reliable, e.transient_local, 0});
       meta.offered_qos_profiles = unav::bag::offered_qos_yaml(offered);
       try {
         meta.message_definition = unav::bag::ros2msg_definition(reg, dds_type);
