@@ -13,10 +13,18 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   const std::string path = unav::fuzz::write_input(data + 1, size - 1, ".yaml");
   try {
     switch (data[0] % 4) {
-      case 0: (void)unav::physics::load_vehicle(path); break;
-      case 1: (void)unav::scene::load_water_file(path); break;
-      case 2: (void)unav::scene::load_cameras(path); break;
-      default: (void)unav::scene::load_world(path); break;
+      case 0:
+        (void)unav::physics::load_vehicle(path);
+        break;
+      case 1:
+        (void)unav::scene::load_water_file(path);
+        break;
+      case 2:
+        (void)unav::scene::load_cameras(path);
+        break;
+      default:
+        (void)unav::scene::load_world(path);
+        break;
     }
   } catch (const std::runtime_error&) {  // ConfigError, and yaml-cpp's parse errors
   } catch (const std::logic_error&) {    // yaml-cpp's InvalidNode / BadConversion
