@@ -3,6 +3,7 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <functional>
 #include <iomanip>
 #include <sstream>
 
@@ -64,44 +65,43 @@ void check_order(const std::string& where, const Trajectory& traj, double stamp)
                           fmt(traj.stamps.back()) + ": timestamps must not decrease");
 }
 
-}  // namespace
-
-Trajectory read_tum(const std::string& path) {
+// Reads a text trajectory file: each data line ('#' comments and blanks skipped) is split into
+// numbers (errors name file, line and column) and handed to `add` with "file:line" for its own
+// errors. Throws when the file cannot be opened or holds no pose.
+Trajectory read_lines(const std::string& path, const std::vector<std::string>& names,
+                      const std::function<void(const std::string&, const std::vector<double>&, Trajectory&)>& add) {
   std::ifstream in(path);
   if (!in) throw TrajectoryError(path + ": cannot be opened (missing or unreadable)");
-  static const std::vector<std::string> names = {"timestamp", "tx", "ty", "tz", "qx", "qy", "qz", "qw"};
   Trajectory traj;
   std::string line;
   int line_no = 0;
   while (std::getline(in, line)) {
     ++line_no;
     if (skip_line(line)) continue;
-    const std::vector<double> v = parse_numbers(path, line_no, line, names);
-    const std::string where = path + ":" + std::to_string(line_no);
+    add(path + ":" + std::to_string(line_no), parse_numbers(path, line_no, line, names), traj);
+  }
+  if (traj.empty()) throw TrajectoryError(path + ": contains no poses");
+  return traj;
+}
+
+}  // namespace
+
+Trajectory read_tum(const std::string& path) {
+  static const std::vector<std::string> names = {"timestamp", "tx", "ty", "tz", "qx", "qy", "qz", "qw"};
+  return read_lines(path, names, [](const std::string& where, const std::vector<double>& v, Trajectory& traj) {
     if (v.size() != 8)
       throw TrajectoryError(where + ": expected 8 columns (timestamp tx ty tz qx qy qz qw), got " +
                             std::to_string(v.size()));
     check_order(where, traj, v[0]);
     traj.push_back(v[0], pose_from(where + ": columns 5-8 (qx qy qz qw)", Eigen::Vector3d(v[1], v[2], v[3]),
                                    Eigen::Quaterniond(v[7], v[4], v[5], v[6])));
-  }
-  if (traj.empty()) throw TrajectoryError(path + ": contains no poses");
-  return traj;
+  });
 }
 
 Trajectory read_kitti(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw TrajectoryError(path + ": cannot be opened (missing or unreadable)");
   static const std::vector<std::string> names = {"r11", "r12", "r13", "tx",  "r21", "r22",
                                                  "r23", "ty",  "r31", "r32", "r33", "tz"};
-  Trajectory traj;
-  std::string line;
-  int line_no = 0;
-  while (std::getline(in, line)) {
-    ++line_no;
-    if (skip_line(line)) continue;
-    const std::vector<double> v = parse_numbers(path, line_no, line, names);
-    const std::string where = path + ":" + std::to_string(line_no);
+  return read_lines(path, names, [](const std::string& where, const std::vector<double>& v, Trajectory& traj) {
     if (v.size() != 12)
       throw TrajectoryError(where + ": expected 12 columns (a row-major 3x4 pose [R | t]), got " +
                             std::to_string(v.size()));
@@ -115,23 +115,12 @@ Trajectory read_kitti(const std::string& path) {
     T.linear() = Eigen::Quaterniond(R).normalized().toRotationMatrix();
     T.translation() = Eigen::Vector3d(v[3], v[7], v[11]);
     traj.push_back(static_cast<double>(traj.size()), T);
-  }
-  if (traj.empty()) throw TrajectoryError(path + ": contains no poses");
-  return traj;
+  });
 }
 
 Trajectory read_euroc_csv(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw TrajectoryError(path + ": cannot be opened (missing or unreadable)");
   static const std::vector<std::string> names = {"timestamp [ns]", "p_x", "p_y", "p_z", "q_w", "q_x", "q_y", "q_z"};
-  Trajectory traj;
-  std::string line;
-  int line_no = 0;
-  while (std::getline(in, line)) {
-    ++line_no;
-    if (skip_line(line)) continue;
-    const std::vector<double> v = parse_numbers(path, line_no, line, names);
-    const std::string where = path + ":" + std::to_string(line_no);
+  return read_lines(path, names, [](const std::string& where, const std::vector<double>& v, Trajectory& traj) {
     if (v.size() < 8)
       throw TrajectoryError(where +
                             ": expected at least 8 columns (timestamp[ns], p_x, p_y, p_z, q_w, q_x, q_y, q_z), got " +
@@ -140,9 +129,7 @@ Trajectory read_euroc_csv(const std::string& path) {
     check_order(where, traj, stamp);
     traj.push_back(stamp, pose_from(where + ": columns 5-8 (q_w q_x q_y q_z)", Eigen::Vector3d(v[1], v[2], v[3]),
                                     Eigen::Quaterniond(v[4], v[5], v[6], v[7])));
-  }
-  if (traj.empty()) throw TrajectoryError(path + ": contains no poses");
-  return traj;
+  });
 }
 
 TrajectoryFormat trajectory_format_from_string(const std::string& name) {

@@ -1,13 +1,9 @@
 #include "bag_trajectory.hpp"
 
-#include <unistd.h>
-
 #include <algorithm>
-#include <cstdlib>
 #include <map>
 #include <numeric>
 #include <set>
-#include <sstream>
 
 #include "unav_bag/bag.hpp"
 #include "unav_introspection/cdr_codec.hpp"
@@ -18,30 +14,11 @@ namespace {
 
 namespace intro = unav::introspection;
 
-// IDL roots of the installed interface packages: from the environment and from this executable's
-// install prefix (<install>/unav_evaluation/lib/unav_evaluation/unav_eval).
+// IDL types of the workspace: environment and this executable's install
+// (<install>/unav_evaluation/lib/unav_evaluation/unav_eval).
 intro::TypeRegistry make_registry() {
   intro::TypeRegistry reg;
-  std::set<std::string> prefixes;
-  for (const char* var : {"UNAV_IDL_PREFIXES", "AMENT_PREFIX_PATH", "CMAKE_PREFIX_PATH", "COLCON_PREFIX_PATH"}) {
-    const char* v = std::getenv(var);
-    if (!v) continue;
-    std::stringstream ss(v);
-    std::string p;
-    while (std::getline(ss, p, ':'))
-      if (!p.empty()) prefixes.insert(p);
-  }
-  char exe[4096] = {};
-  if (readlink("/proc/self/exe", exe, sizeof(exe) - 1) > 0) {
-    std::string root(exe);
-    for (int i = 0; i < 4; ++i) root = root.substr(0, root.find_last_of('/'));
-    prefixes.insert(root + "/ros2_msgs");
-    prefixes.insert(root + "/unav_msgs");
-  }
-  for (const auto& p : prefixes) {
-    reg.add_install_prefix(p);
-    reg.add_install_prefix(p + "/ros2_msgs");  // a colcon install root holds one prefix per package
-  }
+  reg.add_workspace(intro::executable_install_root(4));
   return reg;
 }
 

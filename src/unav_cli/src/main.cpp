@@ -26,28 +26,11 @@ namespace intro = unav::introspection;
 
 namespace unav::cli {
 
-// IDL roots: every <prefix>/share/<pkg>/idl of the workspace install, found from the environment
-// and from this executable's own install prefix (so it works before sourcing setup.bash).
+// IDL types of the workspace, found from the environment and from this executable's own install
+// (<install>/unav_cli/bin/unav), so it works before sourcing setup.bash.
 intro::TypeRegistry make_registry() {
   intro::TypeRegistry reg;
-  std::set<std::string> prefixes;
-  for (const char* var : {"UNAV_IDL_PREFIXES", "AMENT_PREFIX_PATH", "CMAKE_PREFIX_PATH"}) {
-    const char* v = std::getenv(var);
-    if (!v) continue;
-    std::stringstream ss(v);
-    std::string p;
-    while (std::getline(ss, p, ':'))
-      if (!p.empty()) prefixes.insert(p);
-  }
-  char exe[4096] = {};
-  if (readlink("/proc/self/exe", exe, sizeof(exe) - 1) > 0) {
-    std::string root(exe);  // <install>/unav_cli/bin/unav
-    for (int i = 0; i < 3; ++i) root = root.substr(0, root.find_last_of('/'));
-    prefixes.insert(root + "/ros2_msgs");
-    prefixes.insert(root + "/unav_msgs");
-    prefixes.insert(root);
-  }
-  for (const auto& p : prefixes) reg.add_install_prefix(p);
+  reg.add_workspace(intro::executable_install_root(3));
   return reg;
 }
 

@@ -2,6 +2,11 @@
 // (idl_parser.cpp) read; ROS <-> DDS type names.
 #include "idl_internal.hpp"
 
+#include <unistd.h>
+#include <cstdlib>
+#include <set>
+#include <sstream>
+
 namespace unav::introspection {
 
 IdlError::IdlError(const std::string& file, int line, const std::string& message)
@@ -138,6 +143,31 @@ size_t TypeRegistry::add_install_prefix(const std::string& prefix) {
   std::sort(found.begin(), found.end());
   for (const std::string& root : found) add_root(root);
   return found.size();
+}
+
+size_t TypeRegistry::add_workspace(const std::string& install_root) {
+  std::set<std::string> prefixes;
+  for (const char* var : {"UNAV_IDL_PREFIXES", "AMENT_PREFIX_PATH", "CMAKE_PREFIX_PATH", "COLCON_PREFIX_PATH"}) {
+    const char* v = std::getenv(var);
+    if (!v) continue;
+    std::stringstream ss(v);
+    std::string p;
+    while (std::getline(ss, p, ':'))
+      if (!p.empty()) prefixes.insert(p);
+  }
+  if (!install_root.empty()) prefixes.insert(install_root);
+  size_t added = 0;
+  for (const auto& p : prefixes)
+    for (const std::string& q : {p, p + "/ros2_msgs", p + "/unav_msgs"}) added += add_install_prefix(q);
+  return added;
+}
+
+std::string executable_install_root(int levels) {
+  char exe[4096] = {};
+  if (readlink("/proc/self/exe", exe, sizeof(exe) - 1) <= 0) return "";
+  std::string root(exe);
+  for (int i = 0; i < levels; ++i) root = root.substr(0, root.find_last_of('/'));
+  return root;
 }
 
 const std::vector<std::string>& TypeRegistry::roots() const { return impl_->roots; }

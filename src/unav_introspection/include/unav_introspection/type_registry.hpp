@@ -43,6 +43,10 @@ std::string dds_to_ros_name(const std::string& dds_name);
 /// Throws UnknownTypeError on a malformed name.
 std::string ros_to_dds_name(const std::string& ros_name);
 
+/// The install root of the running executable: /proc/self/exe with `levels` trailing path parts
+/// removed (3 for <install>/<pkg>/bin/tool, 4 for <install>/<pkg>/lib/<pkg>/tool); "" if unknown.
+std::string executable_install_root(int levels);
+
 /// Parsed IDL types, loaded lazily from IDL roots laid out as `<root>/<pkg>/msg/<Type>.idl`.
 /// Type names may be given as DDS names ("std_msgs::msg::dds_::Header_"), ROS names
 /// ("std_msgs/msg/Header") or short ROS names ("std_msgs/Header").
@@ -61,6 +65,13 @@ class TypeRegistry {
 
   /// Adds every `<prefix>/share/<package>/idl` folder of an install prefix; returns how many.
   size_t add_install_prefix(const std::string& prefix);
+
+  /// The workspace's interface types as the tools find them: for every prefix in the environment
+  /// (UNAV_IDL_PREFIXES, AMENT_PREFIX_PATH, CMAKE_PREFIX_PATH, COLCON_PREFIX_PATH) and for
+  /// `install_root` (a tool's own install, so it works before sourcing setup.bash; "" = none),
+  /// the prefix itself and its ros2_msgs and unav_msgs sub-prefixes (a colcon install root holds
+  /// one prefix per package). Returns how many IDL roots were added.
+  size_t add_workspace(const std::string& install_root);
 
   const std::vector<std::string>& roots() const;
 
