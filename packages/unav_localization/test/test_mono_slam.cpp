@@ -75,6 +75,17 @@ RenderedRun Render(const std::vector<Eigen::Isometry3d>& X_WB, int width = 640, 
   return run;
 }
 
+// Feeds every frame; returns the first frame tracked (-1: never) and how many frames were lost.
+std::pair<int, int> TrackAll(ul::MonoSlam& slam, const RenderedRun& run) {
+  int first_tracked = -1, lost = 0;
+  for (size_t k = 0; k < run.gray.size(); ++k) {
+    const auto s = slam.Track(run.gray[k], run.stamps[k]);
+    if (s.state == ul::SlamState::kTracking && first_tracked < 0) first_tracked = static_cast<int>(k);
+    if (s.state == ul::SlamState::kLost) ++lost;
+  }
+  return {first_tracked, lost};
+}
+
 ul::PinholeCamera Pinhole(const Eigen::Matrix3d& K, int width = 640, int height = 480) {
   return ul::PinholeCamera::FromK(K, width, height);
 }
@@ -267,12 +278,7 @@ std::shared_ptr<const ul::BowVocabulary> Vocabulary() {
 TEST(MonoSlam, StraightRunOverTheSeabedWithKnownMotion) {
   const RenderedRun& run = StraightRun();
   ul::MonoSlam slam(Pinhole(run.K), {}, {}, nullptr);
-  int first_tracked = -1, lost = 0;
-  for (size_t k = 0; k < run.gray.size(); ++k) {
-    const auto s = slam.Track(run.gray[k], run.stamps[k]);
-    if (s.state == ul::SlamState::kTracking && first_tracked < 0) first_tracked = static_cast<int>(k);
-    if (s.state == ul::SlamState::kLost) ++lost;
-  }
+  const auto [first_tracked, lost] = TrackAll(slam, run);
   size_t n = 0;
   double path = 0;
   const double ape = Ape(slam, run, &n, &path);
@@ -396,12 +402,7 @@ TEST(MonoSlam, InitialisesAndTracksOnThe320x180DemoCamera) {
   ul::MonoSlamOptions o;
   o.clahe_clip = 3.0;
   ul::MonoSlam slam(Pinhole(run.K, 320, 180), {}, o, nullptr);
-  int first_tracked = -1, lost = 0;
-  for (size_t k = 0; k < run.gray.size(); ++k) {
-    const auto s = slam.Track(run.gray[k], run.stamps[k]);
-    if (s.state == ul::SlamState::kTracking && first_tracked < 0) first_tracked = static_cast<int>(k);
-    if (s.state == ul::SlamState::kLost) ++lost;
-  }
+  const auto [first_tracked, lost] = TrackAll(slam, run);
   size_t n = 0;
   double path = 0;
   const double ape = Ape(slam, run, &n, &path);
