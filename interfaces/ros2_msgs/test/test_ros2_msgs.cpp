@@ -20,22 +20,22 @@ TEST(Ros2Msgs, EveryTypeHasRos2NameAndRoundTrips) { interface_checks::check_all_
 TEST(Ros2Msgs, ExpectedTypeSetIsComplete) {
   // DESIGN.md section 2 lists the standard types we mirror; each must be generated.
   const char* required[] = {
-      "builtin_interfaces::msg::dds_::Time_", "std_msgs::msg::dds_::Header_",
-      "rosgraph_msgs::msg::dds_::Clock_", "geometry_msgs::msg::dds_::Vector3_",
-      "geometry_msgs::msg::dds_::Point_", "geometry_msgs::msg::dds_::Quaternion_",
+      "builtin_interfaces::msg::dds_::Time_", "std_msgs::msg::dds_::Header_", "rosgraph_msgs::msg::dds_::Clock_",
+      "geometry_msgs::msg::dds_::Vector3_", "geometry_msgs::msg::dds_::Point_", "geometry_msgs::msg::dds_::Quaternion_",
       "geometry_msgs::msg::dds_::Pose_", "geometry_msgs::msg::dds_::PoseStamped_",
       "geometry_msgs::msg::dds_::PoseWithCovariance_", "geometry_msgs::msg::dds_::Twist_",
-      "geometry_msgs::msg::dds_::TwistWithCovariance_",
-      "geometry_msgs::msg::dds_::TwistWithCovarianceStamped_", "geometry_msgs::msg::dds_::Wrench_",
-      "geometry_msgs::msg::dds_::WrenchStamped_", "geometry_msgs::msg::dds_::Transform_",
-      "geometry_msgs::msg::dds_::TransformStamped_", "nav_msgs::msg::dds_::Odometry_",
-      "nav_msgs::msg::dds_::Path_", "sensor_msgs::msg::dds_::Image_",
+      "geometry_msgs::msg::dds_::TwistWithCovariance_", "geometry_msgs::msg::dds_::TwistWithCovarianceStamped_",
+      "geometry_msgs::msg::dds_::Wrench_", "geometry_msgs::msg::dds_::WrenchStamped_",
+      "geometry_msgs::msg::dds_::Transform_", "geometry_msgs::msg::dds_::TransformStamped_",
+      "nav_msgs::msg::dds_::Odometry_", "nav_msgs::msg::dds_::Path_", "sensor_msgs::msg::dds_::Image_",
       "sensor_msgs::msg::dds_::CameraInfo_", "sensor_msgs::msg::dds_::RegionOfInterest_",
-      "sensor_msgs::msg::dds_::Imu_", "sensor_msgs::msg::dds_::FluidPressure_",
-      "sensor_msgs::msg::dds_::NavSatFix_", "sensor_msgs::msg::dds_::NavSatStatus_",
-      "sensor_msgs::msg::dds_::Range_", "sensor_msgs::msg::dds_::MagneticField_",
-      "sensor_msgs::msg::dds_::PointCloud2_", "sensor_msgs::msg::dds_::PointField_",
-      "tf2_msgs::msg::dds_::TFMessage_"};
+      "sensor_msgs::msg::dds_::Imu_", "sensor_msgs::msg::dds_::FluidPressure_", "sensor_msgs::msg::dds_::NavSatFix_",
+      "sensor_msgs::msg::dds_::NavSatStatus_", "sensor_msgs::msg::dds_::Range_",
+      "sensor_msgs::msg::dds_::MagneticField_", "sensor_msgs::msg::dds_::PointCloud2_",
+      "sensor_msgs::msg::dds_::PointField_", "tf2_msgs::msg::dds_::TFMessage_",
+      // marine_acoustic_msgs (marine_msgs 2.x): what ROS 2 sonar drivers and viewers speak.
+      "marine_acoustic_msgs::msg::dds_::PingInfo_", "marine_acoustic_msgs::msg::dds_::SonarImageData_",
+      "marine_acoustic_msgs::msg::dds_::ProjectedSonarImage_", "marine_acoustic_msgs::msg::dds_::RawSonarImage_"};
   for (const char* name : required) {
     bool found = false;
     for (const auto& t : generated_types()) found = found || t.dds_name == name;

@@ -11,10 +11,10 @@ namespace {
 
 struct PresetRow {
   const char* name;
-  double beta[3];      // REFERENCE.md section 3 (UWCNN, -ln N), 1/m
-  double b_inf[3];     // veiling light at the surface for E0 = 1: ESTIMATE (see config/water)
-  double scatter_frac; // b / beta: ESTIMATE (clear ocean ~0.3, coastal ~0.6)
-  double fwd_per_m;    // forward-scatter fraction per metre: ESTIMATE
+  double beta[3];       // REFERENCE.md section 3 (UWCNN, -ln N), 1/m
+  double b_inf[3];      // veiling light at the surface for E0 = 1: ESTIMATE (see config/water)
+  double scatter_frac;  // b / beta: ESTIMATE (clear ocean ~0.3, coastal ~0.6)
+  double fwd_per_m;     // forward-scatter fraction per metre: ESTIMATE
   double blur_rad_per_m;
 };
 
@@ -50,16 +50,14 @@ void WaterModel::validate(const std::string& where) const {
   auto check = [&](const Eigen::Vector3d& v, const char* field) {
     for (int i = 0; i < 3; ++i)
       if (!std::isfinite(v[i]) || v[i] < 0.0)
-        throw ConfigError(where + ": water." + field + " must be finite and >= 0 (got " +
-                          std::to_string(v[i]) + ")");
+        throw ConfigError(where + ": water." + field + " must be finite and >= 0 (got " + std::to_string(v[i]) + ")");
   };
   check(beta_D, "beta_D");
   check(beta_B, "beta_B");
   check(K_d, "K_d");
   check(B_inf, "B_inf");
   check(b_scatter, "b_scatter");
-  if (!(phase_g > -1.0 && phase_g < 1.0))
-    throw ConfigError(where + ": water.phase_g must be in (-1, 1)");
+  if (!(phase_g > -1.0 && phase_g < 1.0)) throw ConfigError(where + ": water.phase_g must be in (-1, 1)");
   if (!(phase_backscatter_fraction >= 0.0 && phase_backscatter_fraction <= 1.0))
     throw ConfigError(where + ": water.phase_backscatter_fraction must be in [0, 1]");
   if (!(veiling_light_gradient >= 0.0 && veiling_light_gradient < 1.0))
@@ -96,19 +94,17 @@ WaterModel jerlov_preset(const std::string& name) {
 
 namespace detail {
 // Shared by load_water_file and the world loader: `node` is a water mapping.
-WaterModel parse_water(const YamlCtx& c, const YAML::Node& node, const std::string& path,
-                       bool in_world) {
+WaterModel parse_water(const YamlCtx& c, const YAML::Node& node, const std::string& path, bool in_world) {
   if (in_world)
     check_keys(c, node, path,
                {"preset", "name", "beta_D", "beta_B", "K_d", "B_inf", "b_scatter", "phase_g",
                 "phase_backscatter_fraction", "forward_scatter_per_m", "forward_blur_rad_per_m",
-                "veiling_light_gradient", "file", "marine_snow",
-                "description"});
+                "veiling_light_gradient", "temperature_c", "salinity_psu", "ph", "file", "marine_snow", "description"});
   else
     check_keys(c, node, path,
                {"preset", "name", "beta_D", "beta_B", "K_d", "B_inf", "b_scatter", "phase_g",
                 "phase_backscatter_fraction", "forward_scatter_per_m", "forward_blur_rad_per_m",
-                "veiling_light_gradient", "description"});
+                "veiling_light_gradient", "temperature_c", "salinity_psu", "ph", "description"});
   WaterModel w;
   if (node["preset"]) {
     try {
@@ -126,15 +122,20 @@ WaterModel parse_water(const YamlCtx& c, const YAML::Node& node, const std::stri
   w.beta_B = get_vec<3>(c, node, path, "beta_B", explicit_only ? w.beta_D : w.beta_B, true);
   w.K_d = get_vec<3>(c, node, path, "K_d", explicit_only ? w.beta_D : w.K_d, true);
   w.B_inf = get_vec<3>(c, node, path, "B_inf", w.B_inf, true);
-  w.b_scatter = get_vec<3>(c, node, path, "b_scatter",
-                           explicit_only ? Eigen::Vector3d(0.4 * w.beta_D) : w.b_scatter, true);
+  w.b_scatter =
+      get_vec<3>(c, node, path, "b_scatter", explicit_only ? Eigen::Vector3d(0.4 * w.beta_D) : w.b_scatter, true);
   w.phase_g = get_double(c, node, path, "phase_g", w.phase_g);
-  w.phase_backscatter_fraction =
-      get_double(c, node, path, "phase_backscatter_fraction", w.phase_backscatter_fraction);
+  w.phase_backscatter_fraction = get_double(c, node, path, "phase_backscatter_fraction", w.phase_backscatter_fraction);
   w.veiling_light_gradient = get_double(c, node, path, "veiling_light_gradient", w.veiling_light_gradient);
   w.forward_scatter_per_m = get_double(c, node, path, "forward_scatter_per_m", w.forward_scatter_per_m);
-  w.forward_blur_rad_per_m =
-      get_double(c, node, path, "forward_blur_rad_per_m", w.forward_blur_rad_per_m);
+  w.forward_blur_rad_per_m = get_double(c, node, path, "forward_blur_rad_per_m", w.forward_blur_rad_per_m);
+  w.temperature_c = get_double(c, node, path, "temperature_c", w.temperature_c);
+  w.salinity_psu = get_double(c, node, path, "salinity_psu", w.salinity_psu);
+  w.ph = get_double(c, node, path, "ph", w.ph);
+  if (!(w.temperature_c >= -2.0 && w.temperature_c <= 40.0))
+    c.fail(join_key(path, "temperature_c"), "must be in [-2, 40] deg C");
+  if (!(w.salinity_psu >= 0.0 && w.salinity_psu <= 45.0)) c.fail(join_key(path, "salinity_psu"), "must be in [0, 45]");
+  if (!(w.ph >= 7.0 && w.ph <= 9.0)) c.fail(join_key(path, "ph"), "must be in [7, 9]");
   w.validate(c.file);
   return w;
 }

@@ -26,6 +26,22 @@ using detail::get_vec;
 using detail::join_key;
 using detail::YamlCtx;
 
+double acoustic_reflectivity_db(SegClass seg_class) {
+  switch (seg_class) {
+    case SegClass::kSeabed:
+      return -27.0;
+    case SegClass::kPipeline:
+      return -12.0;
+    case SegClass::kRock:
+      return -17.0;
+    case SegClass::kWater:
+      return -80.0;
+    case SegClass::kOther:
+      break;
+  }
+  return -20.0;
+}
+
 double Seabed::depth_at(double n_m, double e_m) const {
   double d = depth_m;
   if (relief_amplitude_m > 0.0 && relief_wavelength_m > 0.0) {
@@ -105,7 +121,7 @@ namespace {
 
 Material parse_material(const YamlCtx& c, const YAML::Node& n, const std::string& path, Material def) {
   if (!n) return def;
-  check_keys(c, n, path, {"texture", "albedo", "uv_scale_m"});
+  check_keys(c, n, path, {"texture", "albedo", "uv_scale_m", "acoustic_reflectivity_db"});
   def.texture = get_string(c, n, path, "texture", def.texture);
   static const char* kTextures[] = {"none", "sand", "rock", "pipe_coating", "checker"};
   bool ok = false;
@@ -118,6 +134,11 @@ Material parse_material(const YamlCtx& c, const YAML::Node& n, const std::string
     if (!(def.albedo[i] >= 0.0 && def.albedo[i] <= 1.0)) c.fail(join_key(path, "albedo"), "values must be in [0, 1]");
   def.uv_scale_m = get_double(c, n, path, "uv_scale_m", def.uv_scale_m);
   if (!(def.uv_scale_m > 0.0)) c.fail(join_key(path, "uv_scale_m"), "must be > 0");
+  if (n["acoustic_reflectivity_db"]) {
+    def.acoustic_reflectivity_db = get_double(c, n, path, "acoustic_reflectivity_db", 0.0);
+    if (!(def.acoustic_reflectivity_db >= -80.0 && def.acoustic_reflectivity_db <= 0.0))
+      c.fail(join_key(path, "acoustic_reflectivity_db"), "must be in [-80, 0] dB (Lambert mu)");
+  }
   return def;
 }
 

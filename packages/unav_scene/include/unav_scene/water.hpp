@@ -13,9 +13,9 @@ namespace unav::scene {
 /// Per-channel (R, G, B) optical properties of the water. All coefficients in 1/m.
 struct WaterModel {
   std::string name = "jerlov_I";
-  Eigen::Vector3d beta_D{0.217, 0.040, 0.018};   ///< direct-signal attenuation [1/m]
-  Eigen::Vector3d beta_B{0.217, 0.040, 0.018};   ///< backscatter coefficient [1/m]
-  Eigen::Vector3d K_d{0.217, 0.040, 0.018};      ///< diffuse downwelling attenuation [1/m]
+  Eigen::Vector3d beta_D{0.217, 0.040, 0.018};  ///< direct-signal attenuation [1/m]
+  Eigen::Vector3d beta_B{0.217, 0.040, 0.018};  ///< backscatter coefficient [1/m]
+  Eigen::Vector3d K_d{0.217, 0.040, 0.018};     ///< diffuse downwelling attenuation [1/m]
   /// Veiling light B_inf for unit surface irradiance just below the surface (linear RGB,
   /// 0..1 display units). The effective value at camera depth d is veiling_light_at(d).
   Eigen::Vector3d B_inf{0.02, 0.16, 0.24};
@@ -24,7 +24,7 @@ struct WaterModel {
   double veiling_light_gradient = 0.35;
   /// Scattering coefficient b used for in-scattering of lamp light [1/m].
   Eigen::Vector3d b_scatter{0.02, 0.02, 0.01};
-  double phase_g = 0.92;          ///< Henyey-Greenstein asymmetry; Schlick k = 1.55g - 0.55g^3
+  double phase_g = 0.92;  ///< Henyey-Greenstein asymmetry; Schlick k = 1.55g - 0.55g^3
   /// Share of scattered light sent backwards (b_b / b; Petzold's ocean data ~0.019). The
   /// phase function is (1 - f) Schlick(k) + f / (2 pi) over the backward hemisphere: a single
   /// forward lobe with g = 0.92 alone would make lamp backscatter vanish.
@@ -33,11 +33,15 @@ struct WaterModel {
   /// blur radius growth [rad per metre of range]; the kernel widens with range.
   double forward_scatter_per_m = 0.02;
   double forward_blur_rad_per_m = 0.0015;
+  /// Acoustics (sonar): sound speed (Mackenzie 1981) and absorption (Francois-Garrison 1982)
+  /// follow from temperature, salinity and pH (and the sonar's depth).
+  double temperature_c = 10.0;  ///< [deg C], -2..40
+  double salinity_psu = 35.0;   ///< practical salinity, 0..45
+  double ph = 8.0;              ///< 7..9
 
   /// Effective veiling light for a camera at depth `depth_m` with surface irradiance E0:
   /// B_inf * E0 * exp(-K_d depth) (the ambient light that backscatters also decays).
-  Eigen::Vector3d veiling_light_at(double depth_m,
-                                   const Eigen::Vector3d& E0 = Eigen::Vector3d::Ones()) const;
+  Eigen::Vector3d veiling_light_at(double depth_m, const Eigen::Vector3d& E0 = Eigen::Vector3d::Ones()) const;
   /// Schlick phase parameter k = 1.55 g - 0.55 g^3.
   double schlick_k() const { return 1.55 * phase_g - 0.55 * phase_g * phase_g * phase_g; }
   /// Throws ConfigError naming the field on negative/NaN values.

@@ -5,6 +5,7 @@
 
 #include <Eigen/Core>
 #include <cstdint>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -22,7 +23,15 @@ struct Material {
   std::string texture = "none";
   Eigen::Vector3d albedo{0.5, 0.5, 0.5};
   double uv_scale_m = 1.0;  ///< metres per texture repeat
+  /// Acoustic backscatter: Lambert's parameter mu [dB] (the surface returns mu cos^2(incidence)
+  /// per unit area and solid angle). NaN = the class default (acoustic_reflectivity_db()).
+  double acoustic_reflectivity_db = std::numeric_limits<double>::quiet_NaN();
 };
+
+/// Lambert mu [dB] of a class when its material gives none: seabed (sand) -27, pipeline (coated
+/// steel) -12, rock -17, other -20 (APL-UW high-frequency handbook ranges: sand -25..-30 dB,
+/// rock -15..-20 dB; hard man-made targets return well above the seabed).
+double acoustic_reflectivity_db(SegClass seg_class);
 
 struct Seabed {
   bool enabled = true;

@@ -1,0 +1,3 @@
+#include "sonar_node.hpp"
+
+int main(int argc, char** argv) { return unav::run_node<unav::renderer::SonarNode>(argc, argv); }

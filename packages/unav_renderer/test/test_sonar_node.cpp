@@ -1,0 +1,163 @@
+// sonar node over DDS: odometry in, marine_acoustic_msgs pings + viewing images out, lockstep
+// acks, mounts on /tf_static.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <fstream>
+
+#include "sonar_node.hpp"
+#include "unav_runtime/conversions.hpp"
+#include "unav_runtime/testing.hpp"
+#include "unav_scene/sonar.hpp"
+
+using unav::testing::make_link;
+
+namespace {
+
+std::string small_sonars() {
+  // Small sonars keep llvmpipe fast: a 32-beam FLS at 10 Hz and a side-scan at 20 Hz.
+  std::string p = ::testing::TempDir() + "node_sonars.yaml";
+  std::ofstream(p) << "sonars:\n"
+                      "  - name: fls\n    preset: oculus_m750d_lf\n    beams: 32\n    bins: 64\n"
+                      "    max_range_m: 10\n    ping_rate_hz: 10\n"
+                      "    mount: {xyz_m: [0.2, 0, 0], rpy_deg: [0, -30, 0]}\n"
+                      "  - name: ss\n    preset: sidescan_900k\n    bins: 128\n    max_range_m: 10\n"
+                      "    ping_rate_hz: 20\n";
+  return p;
+}
+
+double stamp_s(const std_msgs::msg::Header& h) {
+  return unav::Time::from_msg(h.stamp().sec(), h.stamp().nanosec()).seconds();
+}
+
+}  // namespace
+
+TEST(SonarNode, PublishesStandardSonarMessagesAtTheirRatesAndAcks) {
+  const std::string world = std::string("world:=") + UNAV_REPO_ROOT + "/worlds/pipe_inspection/world.yaml";
+  const std::string cfg = "sonars_config:=" + small_sonars();
+  const char* argv[] = {"sonar", "--ros-args",     "-p", world.c_str(),    "-p", cfg.c_str(),
+                        "-p",    "lockstep:=true", "-p", "fan_width:=128", "-p", "waterfall_lines:=20"};
+  unav::Context node_ctx(12, argv, unav::testing::test_context_options());
+  unav::renderer::SonarNode node({&node_ctx});
+  unav::Context test_ctx(unav::testing::test_context_options());
+  unav::Node probe("probe", {&test_ctx});
+  auto odom_pub = probe.create_publisher<nav_msgs::msg::Odometry>("/rov/ground_truth/odom", unav::QoS::reliable());
+  std::vector<marine_acoustic_msgs::msg::ProjectedSonarImage> fls;
+  std::vector<marine_acoustic_msgs::msg::RawSonarImage> raw;
+  std::vector<sensor_msgs::msg::Image> fans, falls;
+  std::vector<double> acks;
+  auto fls_sub = probe.create_subscription<marine_acoustic_msgs::msg::ProjectedSonarImage>(
+      "/rov/sonar/fls/image", unav::QoS::reliable(),
+      [&](const marine_acoustic_msgs::msg::ProjectedSonarImage& m) { fls.push_back(m); });
+  auto raw_sub = probe.create_subscription<marine_acoustic_msgs::msg::RawSonarImage>(
+      "/rov/sonar/ss/raw", unav::QoS::reliable(),
+      [&](const marine_acoustic_msgs::msg::RawSonarImage& m) { raw.push_back(m); });
+  auto fan_sub = probe.create_subscription<sensor_msgs::msg::Image>(
+      "/rov/sonar/fls/image_fan", unav::QoS::reliable(), [&](const sensor_msgs::msg::Image& m) { fans.push_back(m); });
+  auto fall_sub = probe.create_subscription<sensor_msgs::msg::Image>(
+      "/rov/sonar/ss/waterfall", unav::QoS::reliable(), [&](const sensor_msgs::msg::Image& m) { falls.push_back(m); });
+  auto ack_sub = probe.create_subscription<unav_msgs::msg::LockstepAck>(
+      "/lockstep/ack", unav::QoS::reliable(100),
+      [&](const unav_msgs::msg::LockstepAck& a) { acks.push_back(stamp_s(a.header())); });
+  // Every link matched on both sides before the first odometry (a volatile writer drops what it
+  // writes before it knows a reader).
+  const std::vector<unav::testing::Link> links = {make_link(*odom_pub, node), make_link(node, *fls_sub),
+                                                  make_link(node, *raw_sub),  make_link(node, *fan_sub),
+                                                  make_link(node, *fall_sub), make_link(node, *ack_sub)};
+  ASSERT_TRUE(unav::testing::wait_for_match({&node_ctx, &test_ctx}, links)) << unav::testing::describe(links);
+  auto send = [&](double t) {
+    nav_msgs::msg::Odometry o;
+    const unav::Time s{std::llround(t * 1e9)};
+    o.header().stamp().sec(s.sec());
+    o.header().stamp().nanosec(s.nanosec());
+    o.pose().pose().position().z(7.0);  // 3 m above the 10 m seabed, over the pipe's start
+    odom_pub->publish(o);
+  };
+  // FLS at 10 Hz: pings at 1.0 and 1.1; side-scan at 20 Hz: 1.0, 1.05, 1.1.
+  for (double t : {1.0, 1.05, 1.1}) send(t);
+  ASSERT_TRUE(unav::testing::spin_until(
+      {&node_ctx, &test_ctx},
+      [&] { return acks.size() == 3 && fls.size() == 2 && raw.size() == 3 && fans.size() == 2 && falls.size() == 3; }))
+      << acks.size() << " acks, " << fls.size() << " FLS, " << raw.size() << " side-scan";
+  EXPECT_EQ(acks, (std::vector<double>{1.0, 1.05, 1.1}));
+  const unav::scene::SonarModel m = unav::scene::load_sonar(small_sonars(), "fls");
+  // ProjectedSonarImage: geometry field for field from the config.
+  const auto& f = fls[0];
+  EXPECT_DOUBLE_EQ(stamp_s(f.header()), 1.0);
+  EXPECT_NEAR(stamp_s(fls[1].header()), 1.1, 1e-9);
+  EXPECT_EQ(f.header().frame_id(), "fls_link");
+  EXPECT_FLOAT_EQ(f.ping_info().frequency(), 750e3f);
+  EXPECT_GT(f.ping_info().sound_speed(), 1450.0f);
+  EXPECT_LT(f.ping_info().sound_speed(), 1560.0f);
+  ASSERT_EQ(f.beam_directions().size(), 32u);
+  ASSERT_EQ(f.ranges().size(), 64u);
+  EXPECT_NEAR(f.ranges()[0], m.bin_center_m(0), 1e-6);
+  EXPECT_NEAR(f.ranges()[63], m.bin_center_m(63), 1e-5);
+  for (int k = 0; k < 32; ++k) {
+    const auto& d = f.beam_directions()[static_cast<std::size_t>(k)];
+    EXPECT_NEAR(std::atan2(d.y(), d.z()), m.beam_azimuth_rad(k), 1e-6);
+    EXPECT_NEAR(d.x(), 0.0, 1e-12);
+    EXPECT_NEAR(std::hypot(d.y(), d.z()), 1.0, 1e-9);
+  }
+  EXPECT_EQ(f.image().beam_count(), 32u);
+  EXPECT_EQ(f.image().dtype(), marine_acoustic_msgs::msg::SonarImageData_Constants::DTYPE_UINT8);
+  EXPECT_EQ(f.image().data().size(), 32u * 64u);
+  int lit = 0;
+  for (auto v : f.image().data()) lit += v > 0 ? 1 : 0;
+  EXPECT_GT(lit, 32 * 64 / 4) << "the seabed fills the fan looking 30 deg down from 3 m";
+  // RawSonarImage for the side-scan: 2 beams (port, starboard), samples at c / (2 dr).
+  const auto& r = raw[0];
+  EXPECT_EQ(r.header().frame_id(), "ss_link");
+  EXPECT_EQ(r.samples_per_beam(), 128u);
+  EXPECT_EQ(r.image().beam_count(), 2u);
+  EXPECT_EQ(r.image().data().size(), 256u);
+  ASSERT_EQ(r.rx_angles().size(), 2u);
+  EXPECT_NEAR(r.rx_angles()[0], -M_PI / 2, 1e-6);
+  EXPECT_NEAR(r.sample_rate(), r.ping_info().sound_speed() / (2.0 * (10.0 - 0.5) / 128), 1.0);
+  // Viewing images.
+  EXPECT_EQ(fans[0].encoding(), "mono8");
+  EXPECT_EQ(fans[0].width(), 128u);
+  EXPECT_EQ(falls.back().width(), 256u);
+  EXPECT_EQ(falls.back().height(), 20u);
+  EXPECT_EQ(node.pings_published(), 5u);
+}
+
+TEST(SonarNode, PublishesMountsOnTfStaticAndRejectsBadConfig) {
+  const std::string world = std::string("world:=") + UNAV_REPO_ROOT + "/worlds/pipe_inspection/world.yaml";
+  const std::string path = small_sonars();
+  const std::string cfg = "sonars_config:=" + path;
+  const char* argv[] = {"sonar", "--ros-args", "-p", world.c_str(), "-p", cfg.c_str()};
+  unav::Context node_ctx(6, argv, unav::testing::test_context_options());
+  unav::renderer::SonarNode node({&node_ctx});
+  unav::Context test_ctx(unav::testing::test_context_options());
+  unav::Node probe("probe", {&test_ctx});
+  std::vector<tf2_msgs::msg::TFMessage> got;
+  auto sub = probe.create_subscription<tf2_msgs::msg::TFMessage>(
+      "/tf_static", unav::QoS::static_latched(), [&](const tf2_msgs::msg::TFMessage& m) { got.push_back(m); });
+  ASSERT_TRUE(unav::testing::spin_until({&node_ctx, &test_ctx}, [&] { return !got.empty(); }));
+  ASSERT_EQ(got[0].transforms().size(), 2u);
+  const auto& t = got[0].transforms()[0];
+  EXPECT_EQ(t.header().frame_id(), "base_link_frd");
+  EXPECT_EQ(t.child_frame_id(), "fls_link");
+  const Eigen::Isometry3d X = unav::from_msg(t.transform());
+  // z along the boresight: forward and 30 deg down; x up-ish.
+  const Eigen::Vector3d z = X.linear().col(2);
+  EXPECT_NEAR(z.x(), std::cos(M_PI / 6), 1e-9);
+  EXPECT_NEAR(z.z(), std::sin(M_PI / 6), 1e-9);
+  EXPECT_NEAR(X.translation().x(), 0.2, 1e-12);
+
+  // A bad file is a clear configuration error naming the file and the key.
+  const std::string bad = ::testing::TempDir() + "bad_sonars.yaml";
+  std::ofstream(bad) << "sonars:\n  - name: fls\n    beams: 0\n";
+  const std::string bad_cfg = "sonars_config:=" + bad;
+  const char* argv2[] = {"sonar", "--ros-args", "-p", world.c_str(), "-p", bad_cfg.c_str()};
+  unav::Context ctx2(6, argv2, unav::testing::test_context_options());
+  try {
+    unav::renderer::SonarNode n2({&ctx2});
+    FAIL() << "beams: 0 accepted";
+  } catch (const std::exception& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("bad_sonars.yaml"), std::string::npos) << what;
+    EXPECT_NE(what.find("beams"), std::string::npos) << what;
+  }
+}
