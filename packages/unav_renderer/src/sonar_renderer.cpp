@@ -146,7 +146,7 @@ void plan_sonar(SonarState* st) {
       sl.cam.cy = 0.5 * rows - 0.5;
       sl.cam.near_m = near;
       sl.cam.far_m = far;
-      for (int c = 0; c < cols_per_slice; ++c) st->column_slice[static_cast<std::size_t>(x0 + c)] = slice_id;
+      for (int c = 0; c < cols_per_slice; ++c) st->column_slice[static_cast<std::size_t>(x0) + static_cast<std::size_t>(c)] = slice_id;
       head.slices.push_back(sl);
       x0 += cols_per_slice;
     }
@@ -330,7 +330,7 @@ void SonarRenderer::Impl::accumulate(const SonarState& st, const Pose& X_WB, Son
       const float left =
           col > 0 && st.column_slice[static_cast<std::size_t>(col - 1)] == slice ? range_at(row, col - 1) : -1.0f;
       const float right =
-          col + 1 < W && st.column_slice[static_cast<std::size_t>(col + 1)] == slice ? range_at(row, col + 1) : -1.0f;
+          col + 1 < W && st.column_slice[static_cast<std::size_t>(col) + 1] == slice ? range_at(row, col + 1) : -1.0f;
       const float up = row > 0 ? range_at(row - 1, col) : -1.0f;
       const float down = row + 1 < R ? range_at(row + 1, col) : -1.0f;
       const double footprint = std::min(one_sided(left, right) + one_sided(up, down), max_footprint);
@@ -520,7 +520,7 @@ void Waterfall::add(const SonarPing& ping) {
   for (int k = 0; k < bins_; ++k) {
     const std::size_t src = static_cast<std::size_t>(k) * 2;
     pixels_[static_cast<std::size_t>(bins_ - 1 - k)] = ping.image[src];  // port, mirrored
-    pixels_[static_cast<std::size_t>(bins_ + k)] = ping.image[src + 1];  // starboard
+    pixels_[static_cast<std::size_t>(bins_) + static_cast<std::size_t>(k)] = ping.image[src + 1];  // starboard
   }
   ++pings_;
 }

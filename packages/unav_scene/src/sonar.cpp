@@ -247,7 +247,6 @@ SonarModel sonar_preset(const std::string& name) {
     m.tilt_rad = 20 * kDeg;
     m.min_range_m = 0.5, m.max_range_m = 30.0;
     m.ping_rate_hz = 20.0;
-    m.gain_db = 0.0;
   } else {
     std::string list;
     for (const auto& n : sonar_preset_names()) list += (list.empty() ? "" : ", ") + n;
