@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # `unav datagen` locally: a bad spec fails before any work naming file/key/value; a sweep of 3
 # samples over 2 processes finishes with manifests and a contact sheet; a sample regenerated alone
-# is byte-identical (same manifest = same SHA-256 of every file); a rerun after deleting a sample
+# (its sonar pings too) is byte-identical (same manifest = same SHA-256 of every file); a rerun after deleting a sample
 # regenerates only that one, identically; Ctrl-C leaves finished samples valid and the
 # interrupted one as .partial, which the next run replaces.
 set -euo pipefail
@@ -41,6 +41,12 @@ assert m["randomization"]["seed"] == 1000 + int(sys.argv[2])
 assert m["camera"]["width"] == 160 and m["camera"]["height"] == 120
 assert any(f["path"] == "world/world.yaml" for f in m["files"])
 assert m["source"]["world"] == "world/world.yaml"
+# The spec pings the forward-looking sonar at 10 Hz: t = 0.0 .. 0.5 s for 6 frames at 10 Hz.
+s = m["sonar"]
+assert s["name"] == "fls" and s["pings"] == 6 and s["channels"] == 256 and s["bins"] == 512, s
+assert len(s["channel_azimuth_rad"]) == 256 and 1400 < s["sound_speed_mps"] < 1600
+pngs = [f["path"] for f in m["files"] if f["path"].startswith("sonar/fls/") and f["path"].endswith(".png")]
+assert len(pngs) == 6 and "sonar/fls/pings.txt" in [f["path"] for f in m["files"]], pngs
 PY
 done
 [ -f "$out/a/contact_sheet.png" ] || fail "no contact sheet"

@@ -122,6 +122,7 @@ void write_manifest(const SequenceWriter& writer, const ManifestInput& in) {
   json labels = json::object();
   for (const auto& [id, name] : in.labels) labels[std::to_string(id)] = name;
   m["labels"] = labels;
+  for (const auto& [key, text] : in.extra_json) m[key] = json::parse(text);
   m["depth"] = {{"png", "uint16"},
                 {"units_per_metre", writer.depth_units_per_metre()},
                 {"zero", "no return, or beyond 65535 units"}};

@@ -62,12 +62,35 @@ const std::vector<KeyRule>& rules() {
          "camera set (mounts, intrinsics)",
          false,
          ""},
+        {"sonars_config",
+         "path",
+         0,
+         0,
+         false,
+         false,
+         {},
+         "config/sensors/bluerov2_sonars.yaml",
+         "sonar set (mounts, presets) for output.sonar",
+         false,
+         ""},
         {"output.format", "string", 0, 0, false, false, {"tum", "euroc", "kitti"}, "tum", "dataset layout", false, ""},
         {"output.camera", "string", 0, 0, false, false, {}, "down", "camera of cameras_config to render", false, ""},
         {"output.width", "int", 16, 4096, false, false, {}, "640", "image width [px] (intrinsics scaled)", false, ""},
         {"output.height", "int", 16, 4096, false, false, {}, "480", "image height [px]", false, ""},
         {"output.frames", "int", 1, 1000000, false, false, {}, "100", "frames per sample", false, ""},
         {"output.rate_hz", "real", 0, 100, true, false, {}, "10", "camera frame rate [Hz]", false, ""},
+        {"output.sonar",
+         "string",
+         0,
+         0,
+         false,
+         false,
+         {},
+         "",
+         "sonar of sonars_config to ping at its rate along the flight (\"\" = none): sonar/<name>/ pings + geometry "
+         "in the manifest",
+         false,
+         ""},
         {"water.preset", "string", 0, 0, false, false, presets, "jerlov_IB", "Jerlov water type", true, ""},
         {"water.turbidity",
          "real",
@@ -539,8 +562,8 @@ RandomizationSpec RandomizationSpec::parse(const YAML::Node& root, const std::st
   s.base_world_ = s.leaves_[1].Scalar();
   s.cameras_config_ = s.leaves_[2].Scalar();
   for (size_t i = 0; i < rules().size(); ++i) {
-    if (std::string(rules()[i].path) != "objects.folder") continue;
-    s.objects_folder_ = s.leaves_[i].Scalar();
+    if (std::string(rules()[i].path) == "objects.folder") s.objects_folder_ = s.leaves_[i].Scalar();
+    if (std::string(rules()[i].path) == "sonars_config") s.sonars_config_ = s.leaves_[i].Scalar();
   }
   if (!s.objects_folder_.empty()) {
     if (!fs::is_directory(s.objects_folder_))

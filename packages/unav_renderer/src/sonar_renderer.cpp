@@ -146,7 +146,8 @@ void plan_sonar(SonarState* st) {
       sl.cam.cy = 0.5 * rows - 0.5;
       sl.cam.near_m = near;
       sl.cam.far_m = far;
-      for (int c = 0; c < cols_per_slice; ++c) st->column_slice[static_cast<std::size_t>(x0) + static_cast<std::size_t>(c)] = slice_id;
+      for (int c = 0; c < cols_per_slice; ++c)
+        st->column_slice[static_cast<std::size_t>(x0) + static_cast<std::size_t>(c)] = slice_id;
       head.slices.push_back(sl);
       x0 += cols_per_slice;
     }
@@ -519,7 +520,7 @@ void Waterfall::add(const SonarPing& ping) {
   std::move_backward(pixels_.begin(), pixels_.end() - static_cast<std::ptrdiff_t>(w), pixels_.end());
   for (int k = 0; k < bins_; ++k) {
     const std::size_t src = static_cast<std::size_t>(k) * 2;
-    pixels_[static_cast<std::size_t>(bins_ - 1 - k)] = ping.image[src];  // port, mirrored
+    pixels_[static_cast<std::size_t>(bins_ - 1 - k)] = ping.image[src];                            // port, mirrored
     pixels_[static_cast<std::size_t>(bins_) + static_cast<std::size_t>(k)] = ping.image[src + 1];  // starboard
   }
   ++pings_;

@@ -5,13 +5,103 @@
 #include <cstdio>
 #include <filesystem>
 
+#include <nlohmann/json.hpp>
+
+#include <fstream>
+#include <iomanip>
+#include <sstream>
+
 #include "unav_datagen/dataset_writer.hpp"
 #include "unav_datagen/manifest.hpp"
+#include "unav_renderer/sonar_renderer.hpp"
+#include "unav_scene/sonar.hpp"
 #include "unav_sim/episode.hpp"
 
 namespace fs = std::filesystem;
 
 namespace unav::sim {
+namespace {
+
+// The sonar output of a sample: pings as 8-bit polar PNGs (row = range bin, nearest first;
+// column = beam, port to starboard; side-scan: port, starboard) under sonar/<name>/, an index
+// with the acoustic frame's pose per ping, and the geometry for the manifest.
+class SonarOutput {
+ public:
+  SonarOutput(const std::string& root, const std::string& config, const std::string& name, const World& world,
+              std::uint64_t seed, std::shared_ptr<unav::renderer::EglContext> context)
+      : model_(unav::scene::load_sonar(config, name)), dir_(fs::path(root) / "sonar" / name) {
+    unav::renderer::SonarOptions o;
+    o.seed = seed;
+    sonar_ = std::make_unique<unav::renderer::SonarRenderer>(world, std::vector<unav::scene::SonarModel>{model_}, o,
+                                                             std::move(context));
+    fs::create_directories(dir_);
+    index_.open(dir_ / "pings.txt");
+    if (!index_) throw unav::ConfigError((dir_ / "pings.txt").string() + ": cannot write");
+    index_ << "# t_s file x y z qx qy qz qw  (frame " << name << "_link in world_ned: z forward, x up)\n";
+    index_ << std::fixed << std::setprecision(9);
+  }
+  double period() const { return 1.0 / model_.ping_rate_hz; }
+  void ping(const Eigen::Isometry3d& X_WB, double t) {
+    const auto p = sonar_->ping(X_WB, model_.name, t);
+    std::ostringstream f;
+    f << std::fixed << std::setprecision(6) << t << ".png";
+    unav::renderer::write_png_mono(p.image, p.channels, p.bins, (dir_ / f.str()).string());
+    const Eigen::Quaterniond q(p.X_WS.linear());
+    const Eigen::Vector3d x = p.X_WS.translation();
+    index_ << t << ' ' << f.str() << ' ' << x.x() << ' ' << x.y() << ' ' << x.z() << ' ' << q.x() << ' ' << q.y() << ' '
+           << q.z() << ' ' << q.w() << '\n';
+    if (pings_++ == 0) {
+      sound_speed_ = p.sound_speed_mps;
+      absorption_ = p.absorption_db_per_m;
+      azimuths_ = p.azimuth_rad;
+    }
+  }
+  std::string manifest_json() {
+    index_.close();
+    const Eigen::Isometry3d X = model_.frame_acoustic();
+    const Eigen::Quaterniond q(X.linear());
+    nlohmann::json j = {{"name", model_.name},
+                        {"type", model_.side_scan() ? "side_scan" : "forward_looking"},
+                        {"frame", model_.name + "_link"},
+                        {"parent_frame", "base_link_frd"},
+                        {"frame_axes", "z forward (boresight), x up (marine_acoustic_msgs)"},
+                        {"mount_xyz_m", {X.translation().x(), X.translation().y(), X.translation().z()}},
+                        {"mount_quaternion_xyzw", {q.x(), q.y(), q.z(), q.w()}},
+                        {"channels", model_.channels()},
+                        {"bins", model_.bins},
+                        {"min_range_m", model_.min_range_m},
+                        {"max_range_m", model_.max_range_m},
+                        {"bin_width_m", model_.bin_width_m()},
+                        {"channel_azimuth_rad", azimuths_},
+                        {"horizontal_aperture_rad", model_.horizontal_aperture_rad},
+                        {"vertical_aperture_rad", model_.vertical_aperture_rad},
+                        {"tilt_rad", model_.tilt_rad},
+                        {"frequency_hz", model_.frequency_hz},
+                        {"sound_speed_mps", sound_speed_},
+                        {"absorption_db_per_m", absorption_},
+                        {"tvg_db_per_decade", model_.tvg ? model_.tvg_db_per_decade : 0.0},
+                        {"gain_db", model_.gain_db},
+                        {"dynamic_range_db", model_.dynamic_range_db},
+                        {"ping_rate_hz", model_.ping_rate_hz},
+                        {"pings", pings_},
+                        {"index", "sonar/" + model_.name + "/pings.txt"},
+                        {"png",
+                         "mono8, row = range bin (centre min_range_m + (k + 0.5) bin_width_m), column = channel; value "
+                         "255 (1 + (10 log10 I + gain_db) / dynamic_range_db), clamped"}};
+    return j.dump();
+  }
+
+ private:
+  unav::scene::SonarModel model_;
+  fs::path dir_;
+  std::unique_ptr<unav::renderer::SonarRenderer> sonar_;
+  std::ofstream index_;
+  std::uint64_t pings_ = 0;
+  double sound_speed_ = 0.0, absorption_ = 0.0;
+  std::vector<float> azimuths_;
+};
+
+}  // namespace
 
 std::string sample_name(std::uint64_t index) {
   char buf[32];
@@ -76,6 +166,22 @@ SampleResult generate_sample(const unav::datagen::RandomizationSpec& spec, std::
   X_BC.translation() = cam.X_BC.translation();
   writer->set_camera_mount(X_BC);
 
+  const std::string sonar_name = s["output"]["sonar"].as<std::string>();
+  std::unique_ptr<SonarOutput> sonar;
+  if (!sonar_name.empty())
+    sonar = std::make_unique<SonarOutput>(partial.string(), spec.sonars_config(), sonar_name, world, seed,
+                                          ep.renderer().shared_context());
+  double next_ping_t = 0.0;
+  auto body_pose = [&ep] {
+    Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
+    X.linear() = ep.state().q_WB.toRotationMatrix();
+    X.translation() = ep.state().p_WB_W;
+    return X;
+  };
+  if (sonar) {
+    sonar->ping(body_pose(), 0.0);  // pings at multiples of the sonar's period, like the frames
+    next_ping_t = sonar->period();
+  }
   const std::uint64_t frames = s["output"]["frames"].as<std::uint64_t>();
   const double control_period = setup.params.control_period;
   const Eigen::Vector3d g_W(0.0, 0.0, setup.simulator.environment.gravity);
@@ -101,6 +207,10 @@ SampleResult generate_sample(const unav::datagen::RandomizationSpec& spec, std::
       // Specific force in body axes: d/dt v (inertial) minus gravity, FRD.
       const Eigen::Vector3d f_B = nu_dot.head<3>() + x.w_WB_B.cross(x.v_WB_B) - x.q_WB.conjugate() * g_W;
       writer->write_imu(t, x.w_WB_B, f_B);
+      if (sonar && t + 0.5 * control_period >= next_ping_t) {
+        sonar->ping(body_pose(), t);
+        next_ping_t += sonar->period();
+      }
     }
     Frame fr = ep.render(camera);
     const auto& x = ep.state();
@@ -135,6 +245,10 @@ SampleResult generate_sample(const unav::datagen::RandomizationSpec& spec, std::
   e << s;
   mi.randomization_yaml = e.c_str();
   mi.extra_entries = {"world"};
+  if (sonar) {
+    mi.extra_entries.emplace_back("sonar");
+    mi.extra_json["sonar"] = sonar->manifest_json();
+  }
   unav::datagen::write_manifest(*writer, mi);  // the last file: its presence marks completion
   fs::remove_all(final_dir);
   fs::rename(partial, final_dir);

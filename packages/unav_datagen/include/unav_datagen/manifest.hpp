@@ -14,6 +14,7 @@
 //     "counts": {"images", "depth", "segmentation", "poses", "imu"},
 //     "labels": {"0": "water", ...},        // segmentation class ids
 //     "depth": {"png": "uint16", "units_per_metre": 5000 | 1000, "zero": "no return or out of range"},
+//     "sonar": {...},                       // unav datagen with output.sonar: geometry, pings (extra_json)
 //     "files": [{"path": "rgb/0.000000.png", "bytes": 1234, "sha256": "..."}, ...]   // sorted by path
 //   }
 #pragma once
@@ -42,6 +43,8 @@ struct ManifestInput {
   std::string randomization_yaml;
   /// More files or folders under the root (relative) to list with checksums, e.g. {"world"}.
   std::vector<std::string> extra_entries;
+  /// More top-level entries: key -> JSON text (e.g. "sonar": its geometry and files).
+  std::map<std::string, std::string> extra_json;
 };
 
 /// Lowercase hex SHA-256 of a file's bytes. Throws DatasetError naming the file it cannot read.

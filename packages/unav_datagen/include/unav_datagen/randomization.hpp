@@ -59,6 +59,7 @@ class RandomizationSpec {
   /// base_world and cameras_config as absolute paths; objects.folder too ("" = none).
   const std::string& base_world() const { return base_world_; }
   const std::string& cameras_config() const { return cameras_config_; }
+  const std::string& sonars_config() const { return sonars_config_; }
   const std::string& objects_folder() const { return objects_folder_; }
   /// Meshes in objects.folder (sorted), chosen from by samples.
   const std::vector<std::string>& object_meshes() const { return object_meshes_; }
@@ -67,7 +68,7 @@ class RandomizationSpec {
 
  private:
   struct Leaf;
-  std::string file_, base_world_, cameras_config_, objects_folder_;
+  std::string file_, base_world_, cameras_config_, sonars_config_, objects_folder_;
   std::vector<std::string> object_meshes_;
   std::uint64_t base_seed_ = 0;
   YAML::Node root_;
