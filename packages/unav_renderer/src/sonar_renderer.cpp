@@ -313,6 +313,8 @@ void SonarRenderer::Impl::accumulate(const SonarState& st, const Pose& X_WB, Son
     return px[i + 3] > 0.5f ? px[i] : -1.0f;
   };
   const double max_footprint = 64.0 * dr_bin;
+  const double range_exponent = 2.0 - 2.0 * n + (m.tvg ? 0.1 * m.tvg_db_per_decade : 0.0);
+  const double absorption_per_m = m.tvg ? 0.0 : alpha * std::log(10.0) / 5.0;  // 10^(-alpha r / 5)
   for (int row = 0; row < R; ++row)
     for (int col = 0; col < W; ++col) {
       const std::size_t i = static_cast<std::size_t>(row) * static_cast<std::size_t>(W) + static_cast<std::size_t>(col);
@@ -338,9 +340,8 @@ void SonarRenderer::Impl::accumulate(const SonarState& st, const Pose& X_WB, Son
       const double lo = r - 0.5 * footprint, hi = r + 0.5 * footprint;
       if (hi < r0 || lo >= m.max_range_m) continue;
       // Two-way spreading and absorption, then the time-varied gain (its 2 alpha r cancels the
-      // absorption exactly).
-      double e = st.weight[i] * mu * cos_i * std::pow(r, 2.0 - 2.0 * n);
-      e *= m.tvg ? std::pow(r, 0.1 * m.tvg_db_per_decade) : std::pow(10.0, -alpha * r / 5.0);
+      // absorption exactly): one power of r and one exponential per sample.
+      const double e = st.weight[i] * mu * cos_i * std::exp(range_exponent * std::log(r) - absorption_per_m * r);
       double* beam = acc.data() + ch;
       const double x0 = (lo - r0) / dr_bin, x1 = (hi - r0) / dr_bin;
       if (x1 - x0 < 1e-9) {

@@ -324,7 +324,7 @@ TEST(Sonar, WaterfallAndFanImages) {
   EXPECT_EQ(wf.width(), 400);
   // Rows below the 5 pings are still empty; the newest row has echoes on both halves.
   const auto& px = wf.pixels();
-  EXPECT_EQ(*std::max_element(px.begin() + std::ptrdiff_t{400 * 6}, px.end()), 0);
+  EXPECT_EQ(*std::max_element(px.begin() + std::ptrdiff_t{400} * 6, px.end()), 0);
   EXPECT_GT(std::accumulate(px.begin(), px.begin() + 200, 0), 0);
   EXPECT_GT(std::accumulate(px.begin() + 200, px.begin() + 400, 0), 0);
   EXPECT_THROW(wf.add(sr.ping(Pose::Identity(), "fls")), std::invalid_argument);
