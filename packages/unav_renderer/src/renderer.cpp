@@ -51,6 +51,7 @@ struct Targets {
   int margin_x = 0, margin_y = 0;
   int width = 0, height = 0;  // internal size
   int out_width = 0, out_height = 0;
+  double out_K[4] = {1, 1, 0, 0};  // the output camera's fx, fy, cx, cy (in air)
   int is_width = 0, is_height = 0, is_scale = 1;
   GLuint is_fbo = 0, is_tex = 0;
   GLuint scene_fbo = 0, scene_color = 0, scene_zc = 0, scene_depth = 0;
@@ -224,8 +225,17 @@ Targets& Renderer::Impl::targets_for(const CameraModel& c) {
   Targets t;
   t.out_width = c.width;
   t.out_height = c.height;
+  t.out_K[0] = c.fx;
+  t.out_K[1] = c.fy;
+  t.out_K[2] = c.cx;
+  t.out_K[3] = c.cy;
   std::vector<cv::Point2f> dst;
-  if (c.has_distortion()) {
+  // Behind a refracting port the scene is rendered with the water-side paraxial focal length
+  // (1:1 sampling at the image centre); each output pixel's ray is undistorted in air, then
+  // refracted by the port, then projected into that pinhole.
+  double magnification = 1.0;
+  if (c.port.refracts()) magnification = c.water_equivalent().fx / c.fx;
+  if (c.has_distortion() || c.port.refracts()) {
     // For every output (distorted) pixel, the undistorted pixel it sees.
     std::vector<cv::Point2f> src(static_cast<std::size_t>(c.width) * c.height);
     for (int v = 0; v < c.height; ++v)
@@ -234,8 +244,14 @@ Targets& Renderer::Impl::targets_for(const CameraModel& c) {
     for (int r = 0; r < 3; ++r)
       for (int q = 0; q < 3; ++q) K.at<double>(r, q) = c.K()(r, q);
     for (int k = 0; k < 5; ++k) D.at<double>(0, k) = c.distortion[k];
-    cv::undistortPoints(src, dst, K, D, cv::noArray(), K,
+    cv::undistortPoints(src, dst, K, D, cv::noArray(), c.port.refracts() ? cv::Mat::eye(3, 3, CV_64F) : K,
                         cv::TermCriteria(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, 30, 1e-6));
+    if (c.port.refracts())
+      for (auto& p : dst) {  // normalized air ray -> water ray -> pixel of the water pinhole
+        const Eigen::Vector3d w = c.port.to_water({p.x, p.y, 1.0});
+        p = cv::Point2f(static_cast<float>(c.fx * magnification * w.x() / w.z() + c.cx),
+                        static_cast<float>(c.fy * magnification * w.y() / w.z() + c.cy));
+      }
     float minx = 0, maxx = 0, miny = 0, maxy = 0;
     for (const auto& p : dst) {
       if (!std::isfinite(p.x) || !std::isfinite(p.y)) continue;
@@ -244,11 +260,13 @@ Targets& Renderer::Impl::targets_for(const CameraModel& c) {
       miny = std::min(miny, p.y);
       maxy = std::max(maxy, p.y - (c.height - 1));
     }
-    t.margin_x = std::min(c.width / 2, static_cast<int>(std::ceil(std::max(-minx, maxx))) + 2);
-    t.margin_y = std::min(c.height / 2, static_cast<int>(std::ceil(std::max(-miny, maxy))) + 2);
+    t.margin_x = std::clamp(static_cast<int>(std::ceil(std::max(-minx, maxx))) + 2, 0, c.width / 2);
+    t.margin_y = std::clamp(static_cast<int>(std::ceil(std::max(-miny, maxy))) + 2, 0, c.height / 2);
     for (auto& p : dst) p += cv::Point2f(static_cast<float>(t.margin_x), static_cast<float>(t.margin_y));
   }
   t.internal = c;
+  t.internal.fx *= magnification;
+  t.internal.fy *= magnification;
   t.internal.width = c.width + 2 * t.margin_x;
   t.internal.height = c.height + 2 * t.margin_y;
   t.internal.cx += t.margin_x;
@@ -509,6 +527,11 @@ void Renderer::Impl::post_pass(const Targets& t, const FrameSetup& f, const Came
   }
   glUniform1f(post["u_gain"], static_cast<float>(gain));
   glUniform1f(post["u_noise_std"], options.noise ? static_cast<float>(c.noise_stddev) : 0.0f);
+  glUniform1f(post["u_shot"], options.noise ? static_cast<float>(c.shot_noise) : 0.0f);
+  glUniform1f(post["u_vignetting"], static_cast<float>(c.vignetting));
+  // The output (in-air) camera's pinhole for the field angle of the vignetting.
+  glUniform4f(post["u_Kout"], static_cast<float>(t.out_K[0]), static_cast<float>(t.out_K[1]),
+              static_cast<float>(t.out_K[2]), static_cast<float>(t.out_K[3]));
   glUniform1ui(post["u_seed"], static_cast<GLuint>(noise::hash32(static_cast<std::uint32_t>(options.seed) ^
                                                                  static_cast<std::uint32_t>(seq * 2654435761ULL))));
   glUniform1i(post["u_srgb"], options.srgb_output ? 1 : 0);
@@ -708,8 +731,9 @@ void Renderer::submit(const Pose& X_WB, const std::string& camera, double stamp_
   s.meta.sequence = seq;
   s.meta.width = c.width;
   s.meta.height = c.height;
-  s.meta.K = c.K();
-  s.meta.D = c.distortion;
+  const CameraModel seen = c.water_equivalent();  // behind a port: the model fitted in water
+  s.meta.K = seen.K();
+  s.meta.D = seen.distortion;
   s.meta.X_WC = X_WB * c.X_BC;
   I.start_readback(s, I.targets.at(c.name));
   I.in_flight.push_back(idx);

@@ -203,6 +203,9 @@ uniform int u_nlamps_scatter;
 uniform float u_march_max_m;
 uniform float u_gain;
 uniform float u_noise_std;
+uniform float u_shot;          // shot noise: variance u_shot * I (linear signal)
+uniform float u_vignetting;    // share of the cos^4 falloff
+uniform vec4 u_Kout;           // output (in-air) camera fx, fy, cx, cy: field angle of a pixel
 uniform uint u_seed;
 uniform bool u_srgb;
 layout(location = 0) out vec4 o_rgba;   // rgb8 + seg id in alpha
@@ -285,9 +288,24 @@ void main() {
   }
 
   vec3 I = (D + B + Ls) * u_gain;
+  if (u_vignetting > 0.0) {
+    // Natural vignetting: cos^4 of the in-air field angle (1 / (1 + |x|^2)^2 for the normalized x).
+    vec2 xn = (vec2(pix) - u_Kout.zw) / u_Kout.xy;
+    float c4 = 1.0 / ((1.0 + dot(xn, xn)) * (1.0 + dot(xn, xn)));
+    I *= 1.0 - u_vignetting * (1.0 - c4);
+  }
+  uint h = pcg(uint(pix.x) + 8192u * uint(pix.y) + pcg(u_seed));
+  if (u_shot > 0.0) {
+    // Shot noise on the linear signal (Poisson, Gaussian approximation): std sqrt(u_shot I).
+    for (int c = 0; c < 3; ++c) {
+      uint h1 = pcg(h + uint(c) * 0x85EBCA6Bu + 0x27D4EB2Fu);
+      uint h2 = pcg(h1);
+      float g = sqrt(-2.0 * log(u01(h1))) * cos(2.0 * PI * u01(h2));
+      I[c] = max(I[c] + sqrt(u_shot * max(I[c], 0.0)) * g, 0.0);
+    }
+  }
   vec3 col = encode(I);
   if (u_noise_std > 0.0) {
-    uint h = pcg(uint(pix.x) + 8192u * uint(pix.y) + pcg(u_seed));
     for (int c = 0; c < 3; ++c) {
       uint h1 = pcg(h + uint(c) * 0x9E3779B9u);
       uint h2 = pcg(h1);

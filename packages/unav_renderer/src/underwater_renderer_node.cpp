@@ -75,7 +75,8 @@ UnderwaterRendererNode::UnderwaterRendererNode(const unav::NodeOptions& options)
                                                            [this](const nav_msgs::msg::Odometry& m) { on_odom(m); });
   if (lockstep_) acker_ = std::make_unique<unav::lockstep::Acker>(*this, ack_name_);  // answers every state
   const unav::QoS qos = unav::QoS::reliable(5);
-  for (const auto& c : cams) {
+  for (const auto& cam : cams) {
+    const CameraModel c = cam.water_equivalent();  // behind a port: what the water sees
     CameraPorts p;
     p.name = c.name;
     const std::string base = "camera/" + c.name;

@@ -1,5 +1,6 @@
 #include "unav_scene/camera.hpp"
 
+#include <Eigen/Dense>
 #include <cmath>
 
 #include "unav_common/config.hpp"
@@ -12,6 +13,85 @@ Eigen::Matrix3d CameraModel::K() const {
   Eigen::Matrix3d K;
   K << fx, 0, cx, 0, fy, cy, 0, 0, 1;
   return K;
+}
+
+Eigen::Vector3d CameraPort::to_water(const Eigen::Vector3d& d_air) const {
+  const Eigen::Vector3d d = d_air.normalized();
+  const double eta = air_index / water_index;
+  if (type == Type::kFlat) {
+    // Snell at interfaces normal to the optical axis: the transverse components scale by
+    // n_air / n_water (parallel glass faces cancel out).
+    const double tx = eta * d.x(), ty = eta * d.y();
+    return {tx, ty, std::sqrt(std::max(0.0, 1.0 - tx * tx - ty * ty))};
+  }
+  if (type == Type::kDome) {
+    // From the pupil at (0, 0, offset) of the dome centre to the sphere, refract with the
+    // outward normal there (thin glass).
+    const Eigen::Vector3d P(0.0, 0.0, dome_offset_m);
+    const double b = P.dot(d), c = P.squaredNorm() - dome_radius_m * dome_radius_m;
+    const double t = -b + std::sqrt(std::max(0.0, b * b - c));
+    const Eigen::Vector3d n = (P + t * d) / dome_radius_m;
+    const double cos_i = d.dot(n);
+    const double k = 1.0 - eta * eta * (1.0 - cos_i * cos_i);
+    return (eta * d + (std::sqrt(std::max(0.0, k)) - eta * cos_i) * n).normalized();
+  }
+  return d;
+}
+
+namespace {
+// Normalized undistorted coordinates of normalized distorted ones (plumb_bob, fixed point).
+Eigen::Vector2d undistort(const Eigen::Matrix<double, 5, 1>& D, const Eigen::Vector2d& xd) {
+  Eigen::Vector2d x = xd;
+  for (int i = 0; i < 50; ++i) {
+    const double r2 = x.squaredNorm();
+    const double radial = 1.0 + D[0] * r2 + D[1] * r2 * r2 + D[4] * r2 * r2 * r2;
+    const Eigen::Vector2d tang(2.0 * D[2] * x.x() * x.y() + D[3] * (r2 + 2.0 * x.x() * x.x()),
+                               D[2] * (r2 + 2.0 * x.y() * x.y()) + 2.0 * D[3] * x.x() * x.y());
+    x = (xd - tang) / radial;
+  }
+  return x;
+}
+}  // namespace
+
+CameraModel CameraModel::water_equivalent() const {
+  if (!port.refracts()) return *this;
+  // Paraxial magnification: a ray 1e-4 rad off the axis in air, and in water.
+  const double eps = 1e-4;
+  const Eigen::Vector3d w0 = port.to_water({eps, 0.0, 1.0});
+  const double m = eps / (w0.x() / w0.z());
+  CameraModel out = *this;
+  out.port = CameraPort{};
+  out.fx = fx * m;
+  out.fy = fy * m;
+  const double p1 = m * distortion[2], p2 = m * distortion[3];
+  // Radial terms by least squares over a grid of the image's pixels.
+  std::vector<Eigen::Vector3d> rows;
+  std::vector<double> rhs;
+  for (int j = 0; j <= 30; ++j)
+    for (int i = 0; i <= 40; ++i) {
+      const double u = (width - 1) * i / 40.0, v = (height - 1) * j / 30.0;
+      const Eigen::Vector2d xd((u - cx) / fx, (v - cy) / fy);
+      const Eigen::Vector2d xa = undistort(distortion, xd);
+      const Eigen::Vector3d dw = port.to_water({xa.x(), xa.y(), 1.0});
+      const Eigen::Vector2d xw(dw.x() / dw.z(), dw.y() / dw.z());
+      const double r2 = xw.squaredNorm();
+      const Eigen::Vector2d target = xd / m;  // the pixel in water-normalized coordinates
+      const Eigen::Vector2d tang(2.0 * p1 * xw.x() * xw.y() + p2 * (r2 + 2.0 * xw.x() * xw.x()),
+                                 p1 * (r2 + 2.0 * xw.y() * xw.y()) + 2.0 * p2 * xw.x() * xw.y());
+      for (int c = 0; c < 2; ++c) {
+        rows.emplace_back(xw[c] * r2, xw[c] * r2 * r2, xw[c] * r2 * r2 * r2);
+        rhs.push_back(target[c] - tang[c] - xw[c]);
+      }
+    }
+  Eigen::MatrixXd A(static_cast<Eigen::Index>(rows.size()), 3);
+  Eigen::VectorXd b(static_cast<Eigen::Index>(rows.size()));
+  for (std::size_t k = 0; k < rows.size(); ++k) {
+    A.row(static_cast<Eigen::Index>(k)) = rows[k].transpose();
+    b[static_cast<Eigen::Index>(k)] = rhs[k];
+  }
+  const Eigen::Vector3d kr = A.colPivHouseholderQr().solve(b);
+  out.distortion << kr[0], kr[1], p1, p2, kr[2];
+  return out;
 }
 
 CameraModel CameraModel::from_hfov(const std::string& name, int width, int height, double hfov_rad) {
@@ -40,6 +120,16 @@ void CameraModel::validate(const std::string& where) const {
   if (!(near_m > 0.0 && far_m > near_m)) throw ConfigError(pre + "need 0 < near_m < far_m");
   if (!(noise_stddev >= 0.0)) throw ConfigError(pre + "noise_stddev must be >= 0");
   if (!(exposure > 0.0)) throw ConfigError(pre + "exposure must be > 0");
+  if (!(shot_noise >= 0.0 && shot_noise <= 1.0)) throw ConfigError(pre + "shot_noise must be in [0, 1]");
+  if (!(vignetting >= 0.0 && vignetting <= 1.0)) throw ConfigError(pre + "vignetting must be in [0, 1]");
+  if (!(port.water_index >= 1.0 && port.water_index <= 2.0))
+    throw ConfigError(pre + "port.water_index must be in [1, 2]");
+  if (!(port.air_index >= 1.0 && port.air_index <= 2.0)) throw ConfigError(pre + "port.air_index must be in [1, 2]");
+  if (!(port.glass_thickness_m >= 0.0)) throw ConfigError(pre + "port.glass_thickness_m must be >= 0");
+  if (!(port.air_gap_m >= 0.0)) throw ConfigError(pre + "port.air_gap_m must be >= 0");
+  if (!(port.dome_radius_m > 0.0)) throw ConfigError(pre + "port.dome_radius_m must be > 0");
+  if (!(std::abs(port.dome_offset_m) < port.dome_radius_m))
+    throw ConfigError(pre + "port.dome_offset_m must be inside the dome (|offset| < dome_radius_m)");
 }
 
 namespace {
@@ -89,6 +179,24 @@ struct DistortionSpec {
   }
 };
 
+struct PortSpec {
+  std::string type = "none";
+  double water_index = 1.34, air_index = 1.0;
+  double glass_thickness_m = 0.0, air_gap_m = 0.0;
+  double dome_radius_m = 0.05, dome_offset_m = 0.0;
+  template <class Archive>
+  void Serialize(Archive* a) {
+    using common::Field;
+    a->Visit(Field("type", &type).OneOf({"none", "flat", "dome"}).Doc("housing port the camera looks through"));
+    a->Visit(Field("water_index", &water_index).Range(1.0, 2.0).Doc("refractive index of the water"));
+    a->Visit(Field("air_index", &air_index).Range(1.0, 2.0).Doc("refractive index inside the housing"));
+    a->Visit(Field("glass_thickness_m", &glass_thickness_m).Min(0.0).Unit("m").Doc("flat port glass"));
+    a->Visit(Field("air_gap_m", &air_gap_m).Min(0.0).Unit("m").Doc("flat port: pupil to glass"));
+    a->Visit(Field("dome_radius_m", &dome_radius_m).Above(0.0).Unit("m").Doc("dome port radius"));
+    a->Visit(Field("dome_offset_m", &dome_offset_m).Unit("m").Doc("pupil offset from the dome centre (+ = outwards)"));
+  }
+};
+
 struct CameraSpec {
   std::string name;
   MountSpec mount;
@@ -97,7 +205,10 @@ struct CameraSpec {
   IntrinsicsSpec intrinsics;
   DistortionSpec distortion;
   double noise_stddev = 0.0;
+  double shot_noise = 0.0;
   double exposure = 1.0;
+  double vignetting = 0.0;
+  PortSpec port;
   double near_m = 0.05, far_m = 200.0;
   template <class Archive>
   void Serialize(Archive* a) {
@@ -111,7 +222,11 @@ struct CameraSpec {
     a->Visit(Field("intrinsics", &intrinsics).Doc("pinhole intrinsics instead of hfov_deg"));
     a->Visit(Field("distortion", &distortion).Doc("lens distortion; all zero = none"));
     a->Visit(Field("noise_stddev", &noise_stddev).Min(0.0).Doc("additive Gaussian noise, fraction of full scale"));
+    a->Visit(
+        Field("shot_noise", &shot_noise).Range(0.0, 1.0).Doc("shot noise variance per unit signal (1 / full well)"));
     a->Visit(Field("exposure", &exposure).Above(0.0).Doc("linear gain before sRGB encoding"));
+    a->Visit(Field("vignetting", &vignetting).Range(0.0, 1.0).Doc("share of the cos^4 falloff"));
+    a->Visit(Field("port", &port).Doc("housing port (flat / dome); K and distortion are in air"));
     a->Visit(Field("near_m", &near_m).Above(0.0).Unit("m").Doc("near clip plane"));
     a->Visit(Field("far_m", &far_m).Above(0.0).Unit("m").Doc("far clip plane"));
   }
@@ -153,7 +268,21 @@ CameraModel make_camera(const CameraSpec& s, const std::string& file, const std:
   const DistortionSpec& d = s.distortion;
   cam.distortion << d.k1, d.k2, d.p1, d.p2, d.k3;
   cam.noise_stddev = s.noise_stddev;
+  cam.shot_noise = s.shot_noise;
   cam.exposure = s.exposure;
+  cam.vignetting = s.vignetting;
+  cam.port.type = s.port.type == "flat"   ? CameraPort::Type::kFlat
+                  : s.port.type == "dome" ? CameraPort::Type::kDome
+                                          : CameraPort::Type::kNone;
+  cam.port.water_index = s.port.water_index;
+  cam.port.air_index = s.port.air_index;
+  cam.port.glass_thickness_m = s.port.glass_thickness_m;
+  cam.port.air_gap_m = s.port.air_gap_m;
+  cam.port.dome_radius_m = s.port.dome_radius_m;
+  cam.port.dome_offset_m = s.port.dome_offset_m;
+  if (cam.port.type == CameraPort::Type::kDome && !(std::abs(cam.port.dome_offset_m) < cam.port.dome_radius_m))
+    throw ConfigError(file, key + ".port.dome_offset_m", std::to_string(cam.port.dome_offset_m),
+                      "must be inside the dome (|offset| < dome_radius_m)");
   cam.near_m = s.near_m;
   cam.far_m = s.far_m;
   cam.validate(file);

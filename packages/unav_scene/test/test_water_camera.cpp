@@ -100,3 +100,61 @@ TEST(Camera, BadFieldOfViewNamesFileAndKey) {
   EXPECT_THROW(load_cameras(f), ConfigError);
   EXPECT_THROW(CameraModel::from_hfov("x", 64, 48, -0.1), ConfigError);
 }
+
+TEST(CameraPort, FlatPortSnellAndTheFittedWaterModel) {
+  CameraModel c = CameraModel::from_hfov("front", 640, 480, 80.0 * M_PI / 180.0);
+  c.port.type = CameraPort::Type::kFlat;
+  // Snell: sin(theta_water) = sin(theta_air) / 1.34 for every ray.
+  for (double a : {0.1, 0.4, 0.7}) {
+    const Eigen::Vector3d w = c.port.to_water({std::sin(a), 0.0, std::cos(a)});
+    EXPECT_NEAR(std::hypot(w.x(), w.y()), std::sin(a) / 1.34, 1e-12);
+    EXPECT_NEAR(w.norm(), 1.0, 1e-12);
+  }
+  // The fitted plumb_bob model reproduces the exact refraction over the whole image: project
+  // water rays of a grid of pixels with it and compare (max error < 0.3 px).
+  const CameraModel e = c.water_equivalent();
+  EXPECT_NEAR(e.fx, 1.34 * c.fx, 1e-6 * c.fx);
+  EXPECT_EQ(e.port.type, CameraPort::Type::kNone);
+  double worst = 0.0;
+  for (int v = 0; v < 480; v += 20)
+    for (int u = 0; u < 640; u += 20) {
+      const Eigen::Vector3d w = c.port.to_water({(u - c.cx) / c.fx, (v - c.cy) / c.fy, 1.0});
+      const double x = w.x() / w.z(), y = w.y() / w.z(), r2 = x * x + y * y;
+      const double radial = 1.0 + e.distortion[0] * r2 + e.distortion[1] * r2 * r2 + e.distortion[4] * r2 * r2 * r2;
+      worst = std::max(worst, std::hypot(e.fx * x * radial + e.cx - u, e.fy * y * radial + e.cy - v));
+    }
+  EXPECT_LT(worst, 0.3);
+  // A dome centred on the pupil changes nothing; a pupil behind the centre magnifies less.
+  CameraPort dome;
+  dome.type = CameraPort::Type::kDome;
+  EXPECT_TRUE(dome.to_water({0.3, 0.2, 1.0}).isApprox(Eigen::Vector3d(0.3, 0.2, 1.0).normalized(), 1e-12));
+  c.port = dome;
+  c.port.dome_offset_m = 0.02;  // pupil 2 cm ahead of the centre: rays leave the dome obliquely
+  EXPECT_GT(std::abs(c.water_equivalent().fx / c.fx - 1.0), 0.01);
+}
+
+TEST(CameraPort, YamlKeysAndBadValues) {
+  const fs::path p = fs::temp_directory_path() / "unav_port_cams.yaml";
+  std::ofstream(p) << "cameras:\n  - name: front\n    width: 64\n    height: 48\n    hfov_deg: 60\n"
+                      "    vignetting: 0.5\n    shot_noise: 0.002\n"
+                      "    port: {type: flat, water_index: 1.33, glass_thickness_m: 0.012, air_gap_m: 0.005}\n";
+  const CameraModel c = load_cameras(p.string())[0];
+  EXPECT_EQ(c.port.type, CameraPort::Type::kFlat);
+  EXPECT_DOUBLE_EQ(c.port.water_index, 1.33);
+  EXPECT_DOUBLE_EQ(c.vignetting, 0.5);
+  EXPECT_DOUBLE_EQ(c.shot_noise, 0.002);
+  std::ofstream(p) << "cameras:\n  - name: front\n    width: 64\n    height: 48\n    hfov_deg: 60\n"
+                      "    port: {type: flat, glass_thickness_m: -0.01}\n";
+  try {
+    load_cameras(p.string());
+    FAIL() << "negative glass thickness accepted";
+  } catch (const ConfigError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("unav_port_cams.yaml"), std::string::npos) << what;
+    EXPECT_NE(what.find("port.glass_thickness_m"), std::string::npos) << what;
+    EXPECT_NE(what.find("-0.01"), std::string::npos) << what;
+  }
+  std::ofstream(p) << "cameras:\n  - name: front\n    width: 64\n    height: 48\n    hfov_deg: 60\n"
+                      "    port: {type: porthole}\n";
+  EXPECT_THROW(load_cameras(p.string()), ConfigError);
+}

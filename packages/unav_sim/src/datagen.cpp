@@ -137,7 +137,8 @@ SampleResult generate_sample(const unav::datagen::RandomizationSpec& spec, std::
   const double gain = s["camera"]["gain"].as<double>();
   setup.cameras[0].noise_stddev = s["camera"]["noise_stddev"].as<double>() * gain;
   setup.cameras[0].exposure = s["camera"]["exposure"].as<double>() * gain;
-  const unav::scene::CameraModel cam = setup.cameras[0];
+  // Behind a port, the intrinsics a dataset user needs are the water-side model.
+  const unav::scene::CameraModel cam = setup.cameras[0].water_equivalent();
 
   const double rate = s["output"]["rate_hz"].as<double>();
   const double speed = s["trajectory"]["speed_mps"].as<double>();

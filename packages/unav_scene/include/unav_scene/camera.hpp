@@ -9,6 +9,29 @@
 
 namespace unav::scene {
 
+/// The housing port a camera looks through (REFERENCE: flat ports magnify by n_water / n_air
+/// and add pincushion distortion; a dome centred on the entrance pupil changes nothing).
+/// Only ray directions are modelled: the ray's lateral offset in the glass and air gap (a few
+/// millimetres) is neglected, so the port acts as a fixed, depth-independent warp.
+struct CameraPort {
+  enum class Type { kNone, kFlat, kDome };
+  Type type = Type::kNone;
+  double water_index = 1.34;  ///< refractive index of sea water (1.33 fresh .. 1.345)
+  double air_index = 1.0;     ///< inside the housing
+  /// Flat port: glass and air gap between the entrance pupil and the glass [m] (parallel faces:
+  /// they shift rays sideways but do not turn them; validated, reported, not imaged).
+  double glass_thickness_m = 0.0;
+  double air_gap_m = 0.0;
+  /// Dome port (thin glass): radius and the entrance pupil's offset from the dome centre
+  /// along the optical axis (+ = towards the dome); 0 = centred, no refraction.
+  double dome_radius_m = 0.05;
+  double dome_offset_m = 0.0;
+  bool refracts() const { return type != Type::kNone; }
+  /// The water-side direction of a ray that leaves the camera along `d_air` (optical frame,
+  /// z forward; any length). Unit vector.
+  Eigen::Vector3d to_water(const Eigen::Vector3d& d_air) const;
+};
+
 /// Pinhole camera with plumb_bob distortion, mounted on the vehicle body.
 /// Pixel convention as OpenCV / ROS CameraInfo: the centre of the top-left pixel is (0, 0),
 /// u = fx x/z + cx, v = fy y/z + cy in the optical frame.
@@ -20,12 +43,25 @@ struct CameraModel {
   double fx = 0, fy = 0, cx = 0, cy = 0;  ///< [px]
   /// plumb_bob coefficients k1, k2, p1, p2, k3 (OpenCV order); all zero = none.
   Eigen::Matrix<double, 5, 1> distortion = Eigen::Matrix<double, 5, 1>::Zero();
-  double noise_stddev = 0.0;  ///< additive Gaussian noise, fraction of full scale (0..1)
-  double exposure = 1.0;      ///< linear gain before sRGB encoding
+  double noise_stddev = 0.0;  ///< read noise: additive Gaussian, fraction of full scale (0..1)
+  /// Shot noise: variance shot_noise * I of the linear signal I (0..1 of full scale), i.e.
+  /// 1 / shot_noise photo-electrons at full scale (full-well capacity); 0 = none.
+  double shot_noise = 0.0;
+  double exposure = 1.0;  ///< linear gain before sRGB encoding
+  /// Natural vignetting: the image falls off as 1 - s (1 - cos^4 t), t the in-air field angle
+  /// of the pixel; s in [0, 1] (1 = the full cos^4 law).
+  double vignetting = 0.0;
+  CameraPort port;  ///< K and distortion are the in-air camera's; the port refracts its rays
   double near_m = 0.05, far_m = 200.0;
 
   Eigen::Matrix3d K() const;
   bool has_distortion() const { return distortion.cwiseAbs().maxCoeff() > 0.0; }
+  /// The pinhole + plumb_bob model that best describes this camera behind its port as seen
+  /// from the water (what CameraInfo publishes and estimators use): focal lengths scaled by the
+  /// port's paraxial magnification (n_water / n_air for a flat port) and radial k1, k2, k3
+  /// fitted by least squares over the image (the in-air tangential terms kept). Without a
+  /// refracting port: *this.
+  CameraModel water_equivalent() const;
   /// Build from a horizontal field of view [rad]; fy = fx, principal point at the centre.
   static CameraModel from_hfov(const std::string& name, int width, int height, double hfov_rad);
   /// Throws ConfigError naming the camera and field (non-positive FOV/size, ...).

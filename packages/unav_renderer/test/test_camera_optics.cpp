@@ -1,0 +1,199 @@
+// The camera behind its housing: flat and dome ports, vignetting, shot noise (llvmpipe).
+#include <gtest/gtest.h>
+
+#include <opencv2/calib3d.hpp>
+
+#include <cmath>
+#include <cstdio>
+
+#include "unav_renderer/errors.hpp"
+#include "unav_renderer/renderer.hpp"
+
+using namespace unav::renderer;
+
+namespace {
+
+RenderOptions linear_exact() {
+  RenderOptions o;
+  o.forward_scatter = false;
+  o.marine_snow = false;
+  o.noise = false;
+  o.lamps = false;
+  o.auto_exposure = false;
+  o.srgb_output = false;
+  o.texture_size = 64;
+  return o;
+}
+
+World empty_world() {
+  World w;
+  w.name = "optics";
+  w.file = "<test world>";
+  w.seabed.enabled = false;
+  return w;
+}
+
+Pose body_at(const Eigen::Vector3d& p_W) { return pose_from_xyz_rpy(p_W, Eigen::Vector3d::Zero()); }
+
+// A forward camera (optical axis = body x) with a centred principal point.
+CameraModel forward_camera(int w, int h, double f) {
+  CameraModel c;
+  c.name = "cam";
+  c.width = w;
+  c.height = h;
+  c.fx = c.fy = f;
+  c.cx = 0.5 * (w - 1);
+  c.cy = 0.5 * (h - 1);
+  c.X_BC.linear() = R_camera_body_to_optical();
+  return c;
+}
+
+// A small square marker (plane facing the camera) at body-frame position p (x forward).
+Object marker(const Eigen::Vector3d& p, double size) {
+  Object o;
+  o.name = "marker";
+  o.shape = "plane";
+  o.size_m = {size, size, 1.0};
+  o.X_WO = pose_from_xyz_rpy(p, {0.0, M_PI / 2, 0.0});  // normal -z turned to -x: faces the camera
+  o.seg_class = SegClass::kOther;
+  return o;
+}
+
+// Centroid of the marker's segmentation pixels.
+Eigen::Vector2d centroid(const Frame& f) {
+  Eigen::Vector2d s = Eigen::Vector2d::Zero();
+  int n = 0;
+  for (int v = 0; v < f.height; ++v)
+    for (int u = 0; u < f.width; ++u)
+      if (f.seg[static_cast<std::size_t>(v) * static_cast<std::size_t>(f.width) + static_cast<std::size_t>(u)] ==
+          static_cast<std::uint8_t>(SegClass::kOther)) {
+        s += Eigen::Vector2d(u, v);
+        ++n;
+      }
+  EXPECT_GT(n, 0);
+  return s / std::max(n, 1);
+}
+
+}  // namespace
+
+TEST(CameraOptics, FlatPortMagnifiesByTheRefractiveIndexRatio) {
+  // A marker 0.25 m beside the axis at 5 m: 2.86 deg off axis in water. A flat port turns
+  // that into asin(1.34 sin 2.86 deg) in air; at such a small angle the image offset grows by
+  // n_water / n_air = 1.34 within 0.1% (third-order terms). A long lens (f = 1000 px) makes the
+  // offset 50 px and the marker 40 px wide, so its centroid is good to ~0.1 px: tolerance 0.01.
+  const Eigen::Vector3d p(5.0, 0.25, 0.0);
+  World w = empty_world();
+  w.objects.push_back(marker(p, 0.2));
+  CameraModel air = forward_camera(400, 240, 1000.0);
+  CameraModel flat = air;
+  flat.port.type = CameraPort::Type::kFlat;
+  flat.port.glass_thickness_m = 0.01;
+  Renderer r(w, {air}, linear_exact());
+  const double du_air = centroid(r.render(Pose::Identity(), "cam")).x() - air.cx;
+  Renderer rp(w, {flat}, linear_exact());
+  const Frame fp = rp.render(Pose::Identity(), "cam");
+  const double du_port = centroid(fp).x() - flat.cx;
+  std::printf("image offset in air %.3f px, behind a flat port %.3f px: ratio %.4f (n_water / n_air = 1.34)\n", du_air,
+              du_port, du_port / du_air);
+  EXPECT_NEAR(du_air, 1000.0 * 0.25 / 5.0, 0.2);
+  EXPECT_NEAR(du_port / du_air, 1.34, 0.01);
+  // The frame reports the water-side model: focal length x 1.34, pincushion (k1 > 0).
+  EXPECT_NEAR(fp.K(0, 0), 1.34 * 1000.0, 1e-6 * 1000.0);
+  EXPECT_GT(fp.D[0], 0.0);
+}
+
+TEST(CameraOptics, WaterEquivalentModelPredictsFarOffAxisPixels) {
+  // Markers up to ~25 deg off axis (in water) behind a flat port: where the reported K and
+  // plumb_bob D (water_equivalent, fitted) put them, within 1 px (centroids of 0.1 m squares).
+  CameraModel cam = forward_camera(320, 240, 200.0);
+  cam.port.type = CameraPort::Type::kFlat;
+  for (const Eigen::Vector3d p :
+       {Eigen::Vector3d(4.0, 1.5, 0.0), Eigen::Vector3d(4.0, -1.2, 0.9), Eigen::Vector3d(4.0, 0.6, -0.7)}) {
+    World w = empty_world();
+    w.objects.push_back(marker(p, 0.1));
+    Renderer r(w, {cam}, linear_exact());
+    const Frame f = r.render(Pose::Identity(), "cam");
+    const Eigen::Vector3d pc = cam.X_BC.inverse() * p;
+    std::vector<cv::Point3d> obj = {{pc.x(), pc.y(), pc.z()}};
+    std::vector<cv::Point2d> img;
+    cv::Mat K(3, 3, CV_64F), D(1, 5, CV_64F);
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j) K.at<double>(i, j) = f.K(i, j);
+    for (int k = 0; k < 5; ++k) D.at<double>(0, k) = f.D[k];
+    cv::projectPoints(obj, cv::Vec3d(0, 0, 0), cv::Vec3d(0, 0, 0), K, D, img);
+    const Eigen::Vector2d c = centroid(f);
+    EXPECT_NEAR(c.x(), img[0].x, 1.0) << p.transpose();
+    EXPECT_NEAR(c.y(), img[0].y, 1.0) << p.transpose();
+  }
+}
+
+TEST(CameraOptics, VignettingFollowsCosFourOfTheFieldAngle) {
+  // Water only (veiling light everywhere, no noise, linear 8-bit): the image with full
+  // vignetting over the one without is cos^4 of each pixel's field angle. 8-bit quantisation
+  // of levels ~0.5: +-0.01 on the ratio.
+  CameraModel cam = forward_camera(160, 120, 80.0);  // 90 x 73 deg
+  cam.exposure = 2.0;
+  CameraModel vig = cam;
+  vig.vignetting = 1.0;
+  Renderer r(empty_world(), {cam}, linear_exact());
+  Renderer rv(empty_world(), {vig}, linear_exact());
+  const Frame a = r.render(body_at({0, 0, 5.0}), "cam");
+  const Frame b = rv.render(body_at({0, 0, 5.0}), "cam");
+  double worst = 0.0;
+  for (int v = 0; v < cam.height; v += 7)
+    for (int u = 0; u < cam.width; u += 7) {
+      const std::size_t i = 3 * (static_cast<std::size_t>(v) * 160 + static_cast<std::size_t>(u)) + 1;  // green
+      ASSERT_GT(a.rgb[i], 40) << "too dark to measure";
+      const double x = (u - cam.cx) / cam.fx, y = (v - cam.cy) / cam.fy;
+      const double cos4 = 1.0 / ((1.0 + x * x + y * y) * (1.0 + x * x + y * y));
+      const double ratio = static_cast<double>(b.rgb[i]) / a.rgb[i];
+      worst = std::max(worst, std::abs(ratio - cos4));
+      EXPECT_NEAR(ratio, cos4, 0.012) << u << "," << v;
+    }
+  std::printf("vignetting: worst |ratio - cos^4| %.4f (corner cos^4 = %.3f)\n", worst,
+              1.0 / std::pow(1.0 + std::pow(79.5 / 80, 2) + std::pow(59.5 / 80, 2), 2));
+}
+
+TEST(CameraOptics, ShotNoiseStdGrowsAsTheSquareRootOfTheSignal) {
+  // Shot noise only (read noise 0): the noisy minus the clean image has standard deviation
+  // sqrt(shot I) at linear level I. Two exposures: the std ratio is sqrt of the level ratio.
+  // ~19000 samples each: the std is known to ~1%; quantisation adds 1/255/sqrt(12): 5% bound.
+  for (const double exposure : {0.8, 2.4}) {
+    CameraModel cam = forward_camera(160, 120, 120.0);
+    cam.exposure = exposure;
+    cam.shot_noise = 0.004;
+    RenderOptions noisy = linear_exact();
+    noisy.noise = true;
+    Renderer clean_r(empty_world(), {cam}, linear_exact());
+    Renderer noisy_r(empty_world(), {cam}, noisy);
+    const Frame c = clean_r.render(body_at({0, 0, 5.0}), "cam");
+    const Frame n = noisy_r.render(body_at({0, 0, 5.0}), "cam");
+    double s2 = 0.0, level = 0.0;
+    std::size_t count = 0;
+    for (std::size_t i = 1; i < c.rgb.size(); i += 3) {  // green
+      const double d = (static_cast<double>(n.rgb[i]) - c.rgb[i]) / 255.0;
+      s2 += d * d;
+      level += c.rgb[i] / 255.0;
+      ++count;
+    }
+    const double std_meas = std::sqrt(s2 / count), mean_level = level / count;
+    const double expected = std::sqrt(0.004 * mean_level);
+    std::printf("shot noise at level %.3f: std %.4f, sqrt(shot I) %.4f\n", mean_level, std_meas, expected);
+    ASSERT_LT(mean_level + 3 * expected, 0.8);  // below the encoder's shoulder: linear
+    EXPECT_NEAR(std_meas / expected, 1.0, 0.05);
+  }
+}
+
+TEST(CameraOptics, CentredDomeChangesNothingAndBadPortsAreErrors) {
+  CameraModel cam = forward_camera(160, 120, 120.0);
+  CameraModel dome = cam;
+  dome.port.type = CameraPort::Type::kDome;
+  dome.port.dome_radius_m = 0.05;
+  const CameraModel eq = dome.water_equivalent();
+  EXPECT_NEAR(eq.fx, cam.fx, 1e-6);
+  EXPECT_LT(eq.distortion.cwiseAbs().maxCoeff(), 1e-6);
+  CameraModel bad = cam;
+  bad.port.type = CameraPort::Type::kFlat;
+  bad.port.glass_thickness_m = -0.01;
+  EXPECT_THROW(Renderer(empty_world(), {bad}, linear_exact()), ConfigError);
+}
