@@ -76,6 +76,9 @@ int main(int argc, char** argv) {
   std::vector<Config> configs;
   configs.push_back({"full (default options)", opt});
   RenderOptions o = opt;
+  o.shadows = false;
+  configs.push_back({"no lamp shadows", o});
+  o = opt;
   o.lamp_scatter_samples = 0;
   configs.push_back({"no lamp in-scatter", o});
   o.forward_scatter = false;
@@ -96,7 +99,8 @@ int main(int argc, char** argv) {
   prof.profile_passes = true;
   r.set_options(prof);
   std::printf("\nper-pass time, median of %d frames [ms] (glFinish after each pass):\n", frames);
-  std::printf("%-20s %8s %8s %10s %8s %10s\n", "camera", "scene", "snow", "inscatter", "post", "readback");
+  std::printf("%-20s %8s %8s %8s %10s %8s %10s\n", "camera", "shadows", "scene", "snow", "inscatter", "post",
+              "readback");
   for (const char* cam : {"w320x180", "w640x480"}) {
     std::vector<RenderTimings> t;
     for (int i = 0; i < frames; ++i) {
@@ -110,9 +114,10 @@ int main(int argc, char** argv) {
       std::sort(v.begin(), v.end());
       return v[v.size() / 2];
     };
-    std::printf("%-20s %8.2f %8.2f %10.2f %8.2f %10.2f\n", cam, med(&RenderTimings::scene_pass_ms),
-                med(&RenderTimings::snow_pass_ms), med(&RenderTimings::inscatter_pass_ms),
-                med(&RenderTimings::post_pass_ms), med(&RenderTimings::readback_ms));
+    std::printf("%-20s %8.2f %8.2f %8.2f %10.2f %8.2f %10.2f\n", cam, med(&RenderTimings::shadow_pass_ms),
+                med(&RenderTimings::scene_pass_ms), med(&RenderTimings::snow_pass_ms),
+                med(&RenderTimings::inscatter_pass_ms), med(&RenderTimings::post_pass_ms),
+                med(&RenderTimings::readback_ms));
   }
   return 0;
 }

@@ -66,6 +66,13 @@ struct Slot {
   Frame meta;  // everything but the pixels
 };
 
+void validate_options(const RenderOptions& o, const std::string& where) {
+  if (o.shadow_map_size < 16 || o.shadow_map_size > 8192)
+    throw ConfigError(where, "shadow_map_size", std::to_string(o.shadow_map_size), "must be in [16, 8192] px");
+  if (o.lamp_scatter_downsample < 1)
+    throw ConfigError(where, "lamp_scatter_downsample", std::to_string(o.lamp_scatter_downsample), "must be >= 1");
+}
+
 double luminance(const Eigen::Vector3d& c) { return 0.2126 * c.x() + 0.7152 * c.y() + 0.0722 * c.z(); }
 
 }  // namespace
@@ -78,7 +85,9 @@ struct Renderer::Impl {
   WaterModel water;
   std::vector<GpuMesh> meshes;
   std::map<std::string, GLuint> textures;
-  Program scene, snow, post, inscatter;
+  Program scene, snow, post, inscatter, shadow;
+  GLuint shadow_tex = 0, shadow_fbo = 0;  // depth array, one layer per lamp
+  int shadow_size = 0;
   GLuint snow_vao = 0, snow_vbo = 0;
   GLsizei snow_count = 0;
   GLuint empty_vao = 0;
@@ -107,6 +116,7 @@ struct Renderer::Impl {
   Targets& targets_for(const CameraModel& c);
   struct FrameSetup;
   FrameSetup setup_frame(const Pose& X_WB, const CameraModel& c) const;
+  void shadow_pass(const FrameSetup& f);
   void scene_pass(const Targets& t, const FrameSetup& f);
   void snow_pass(const FrameSetup& f, const CameraModel& c, double stamp_s);
   bool inscatter_pass(const Targets& t, const FrameSetup& f, const CameraModel& c, float* march_max_out);
@@ -323,6 +333,8 @@ struct Renderer::Impl::FrameSetup {
   Eigen::Vector3d cam_W;
   int nl = 0;  ///< lamps used (at most 4)
   float lamp_pos_W[12], lamp_dir_W[12], lamp_pos_C[12], lamp_dir_C[12], lamp_I[12], lamp_cos[8];
+  bool shadows = false;
+  float shadow_vp_W[64], shadow_vp_C[64];  // per lamp: world -> lamp clip, optical -> lamp clip
 };
 
 Renderer::Impl::FrameSetup Renderer::Impl::setup_frame(const Pose& X_WB, const CameraModel& c) const {
@@ -349,9 +361,70 @@ Renderer::Impl::FrameSetup Renderer::Impl::setup_frame(const Pose& X_WB, const C
     }
     f.lamp_cos[static_cast<std::size_t>(2 * i)] = static_cast<float>(std::cos(L.cone_half_angle_rad));
     f.lamp_cos[static_cast<std::size_t>(2 * i) + 1] = static_cast<float>(std::cos(0.55 * L.cone_half_angle_rad));
+    // The lamp's shadow frustum: its cone (plus a margin) as a square perspective view.
+    CameraModel lc;
+    lc.width = lc.height = std::max(16, options.shadow_map_size);
+    const double half = std::min(1.05 * L.cone_half_angle_rad + 0.02, 1.45);
+    lc.fx = lc.fy = 0.5 * lc.width / std::tan(half);
+    lc.cx = lc.cy = 0.5 * lc.width - 0.5;
+    lc.near_m = 0.05;
+    lc.far_m = 60.0;
+    Pose X_WLo = X_WL;
+    X_WLo.linear() = X_WL.linear() * R_camera_body_to_optical();
+    const Eigen::Matrix4f vp_W = projection_from_K(lc) * X_WLo.inverse().matrix().cast<float>();
+    const Eigen::Matrix4f vp_C = vp_W * f.X_WC.matrix().cast<float>();
+    std::copy(vp_W.data(), vp_W.data() + 16, f.shadow_vp_W + 16 * i);
+    std::copy(vp_C.data(), vp_C.data() + 16, f.shadow_vp_C + 16 * i);
   }
+  f.shadows = options.shadows && f.nl > 0;
 
   return f;
+}
+
+// Depth of the scene seen from each lamp (its shadow map), with a slope-scaled offset against
+// self-shadowing.
+void Renderer::Impl::shadow_pass(const FrameSetup& f) {
+  if (!f.shadows) return;
+  const int size = options.shadow_map_size;
+  if (shadow_size != size) {
+    if (shadow_tex) glDeleteTextures(1, &shadow_tex);
+    glGenTextures(1, &shadow_tex);
+    glBindTexture(GL_TEXTURE_2D_ARRAY, shadow_tex);
+    glTexImage3D(GL_TEXTURE_2D_ARRAY, 0, GL_DEPTH_COMPONENT32F, size, size, 4, 0, GL_DEPTH_COMPONENT, GL_FLOAT,
+                 nullptr);
+    glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
+    glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+    glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+    glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+    glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_COMPARE_MODE, GL_COMPARE_REF_TO_TEXTURE);
+    glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_COMPARE_FUNC, GL_LEQUAL);
+    if (!shadow_fbo) glGenFramebuffers(1, &shadow_fbo);
+    shadow_size = size;
+  }
+  glBindFramebuffer(GL_FRAMEBUFFER, shadow_fbo);
+  glDrawBuffer(GL_NONE);
+  glReadBuffer(GL_NONE);
+  glViewport(0, 0, size, size);
+  glEnable(GL_DEPTH_TEST);
+  glDepthFunc(GL_LESS);
+  glDepthMask(GL_TRUE);
+  glDisable(GL_CULL_FACE);
+  glDisable(GL_BLEND);
+  glEnable(GL_POLYGON_OFFSET_FILL);
+  glPolygonOffset(2.0f, 4.0f);
+  shadow.use();
+  const float one = 1.0f;
+  for (int i = 0; i < f.nl; ++i) {
+    glFramebufferTextureLayer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, shadow_tex, 0, i);
+    if (i == 0) check_fbo("lamp shadow");
+    glClearBufferfv(GL_DEPTH, 0, &one);
+    glUniformMatrix4fv(shadow["u_vp"], 1, GL_FALSE, f.shadow_vp_W + 16 * i);
+    for (const GpuMesh& m : meshes) {
+      glBindVertexArray(m.vao);
+      glDrawElements(GL_TRIANGLES, m.index_count, GL_UNSIGNED_INT, nullptr);
+    }
+  }
+  glDisable(GL_POLYGON_OFFSET_FILL);
 }
 
 // Scene geometry into colour (direct signal), camera-space depth and segmentation.
@@ -387,6 +460,14 @@ void Renderer::Impl::scene_pass(const Targets& t, const FrameSetup& f) {
     glUniform3fv(scene["u_lamp_dir_W[0]"], f.nl, f.lamp_dir_W);
     glUniform3fv(scene["u_lamp_I[0]"], f.nl, f.lamp_I);
     glUniform2fv(scene["u_lamp_cos[0]"], f.nl, f.lamp_cos);
+  }
+  glUniform1i(scene["u_shadows"], f.shadows ? 1 : 0);
+  glUniform1i(scene["u_shadow"], 5);
+  glActiveTexture(GL_TEXTURE5);
+  glBindTexture(GL_TEXTURE_2D_ARRAY, f.shadows ? shadow_tex : 0);
+  if (f.shadows) {
+    glUniformMatrix4fv(scene["u_shadow_vp[0]"], f.nl, GL_FALSE, f.shadow_vp_W);
+    glUniform1f(scene["u_shadow_texel"], 1.0f / static_cast<float>(options.shadow_map_size));
   }
   glUniform1i(scene["u_tex"], 0);
   glActiveTexture(GL_TEXTURE0);
@@ -468,6 +549,12 @@ bool Renderer::Impl::inscatter_pass(const Targets& t, const FrameSetup& f, const
     glUniform3fv(inscatter["u_lamp_dir_C[0]"], f.nl, f.lamp_dir_C);
     glUniform3fv(inscatter["u_lamp_I[0]"], f.nl, f.lamp_I);
     glUniform2fv(inscatter["u_lamp_cos[0]"], f.nl, f.lamp_cos);
+    glUniform1i(inscatter["u_shadows"], f.shadows ? 1 : 0);
+    glUniform1i(inscatter["u_shadow"], 5);
+    glActiveTexture(GL_TEXTURE5);
+    glBindTexture(GL_TEXTURE_2D_ARRAY, f.shadows ? shadow_tex : 0);
+    glActiveTexture(GL_TEXTURE0);
+    if (f.shadows) glUniformMatrix4fv(inscatter["u_shadow_vp_C[0]"], f.nl, GL_FALSE, f.shadow_vp_C);
     set3(inscatter["u_b_scatter"], water.b_scatter);
     glUniform1f(inscatter["u_schlick_k"], static_cast<float>(water.schlick_k()));
     glUniform1f(inscatter["u_back_frac"], static_cast<float>(water.phase_backscatter_fraction));
@@ -550,6 +637,8 @@ void Renderer::Impl::draw(const Pose& X_WB, const CameraModel& out_cam, double s
     *out = ms_since(tp);
     tp = Clock::now();
   };
+  shadow_pass(f);
+  lap(&timings.shadow_pass_ms);
   scene_pass(t, f);
   lap(&timings.scene_pass_ms);
   snow_pass(f, c, stamp_s);  // when marine snow is on
@@ -638,6 +727,7 @@ Renderer::Renderer(World world, std::vector<CameraModel> cameras, RenderOptions 
   impl_->cameras = std::move(cameras);
   impl_->options = options;
   impl_->water = impl_->world.water;
+  validate_options(options, "RenderOptions");
   for (const auto& c : impl_->cameras) c.validate("Renderer");
   for (std::size_t i = 0; i < impl_->cameras.size(); ++i)
     for (std::size_t j = i + 1; j < impl_->cameras.size(); ++j)
@@ -653,6 +743,7 @@ Renderer::Renderer(World world, std::vector<CameraModel> cameras, RenderOptions 
   impl_->snow = Program(detail::kSnowVS, detail::kSnowFS, "marine_snow");
   impl_->post = Program(detail::kPostVS, detail::kPostFS, "post");
   impl_->inscatter = Program(detail::kPostVS, detail::kInscatterFS, "lamp_inscatter");
+  impl_->shadow = Program(detail::kShadowVS, detail::kShadowFS, "lamp_shadow");
   impl_->upload_scene(geo);
   impl_->upload_snow();
   impl_->slots.resize(static_cast<std::size_t>(std::max(1, options.readback_slots)));
@@ -709,6 +800,9 @@ Renderer::~Renderer() {
   for (auto& [name, t] : impl_->textures) glDeleteTextures(1, &t);
   glDeleteVertexArrays(1, &impl_->empty_vao);
   glDeleteProgram(impl_->scene.id());
+  glDeleteProgram(impl_->shadow.id());
+  if (impl_->shadow_tex) glDeleteTextures(1, &impl_->shadow_tex);
+  if (impl_->shadow_fbo) glDeleteFramebuffers(1, &impl_->shadow_fbo);
   glDeleteProgram(impl_->snow.id());
   glDeleteProgram(impl_->post.id());
   glDeleteProgram(impl_->inscatter.id());
@@ -772,6 +866,7 @@ void Renderer::set_water(const WaterModel& water) {
 const WaterModel& Renderer::water() const { return impl_->water; }
 void Renderer::set_next_sequence(std::uint64_t sequence) { impl_->sequence = sequence; }
 void Renderer::set_options(const RenderOptions& options) {
+  validate_options(options, "Renderer::set_options");
   const EglOptions egl = impl_->options.egl;
   const int tex = impl_->options.texture_size, slots = impl_->options.readback_slots;
   impl_->options = options;

@@ -50,10 +50,25 @@ uniform vec3 u_lamp_pos_W[4];
 uniform vec3 u_lamp_dir_W[4];
 uniform vec3 u_lamp_I[4];
 uniform vec2 u_lamp_cos[4];  // cos(outer), cos(inner)
+uniform bool u_shadows;
+uniform sampler2DArrayShadow u_shadow;  // one depth layer per lamp
+uniform mat4 u_shadow_vp[4];            // world -> lamp clip
+uniform float u_shadow_texel;           // 1 / shadow map size
 layout(location = 0) out vec4 o_color;   // rgb: direct signal D = J exp(-beta_D z); a: seg id
 layout(location = 1) out float o_depth;  // z along the optical axis [m]
 
 vec3 tex_at(vec2 uv) { return texture(u_tex, uv / u_uv_scale).rgb; }
+
+// Share of lamp i's light reaching world point p (percentage-closer filtered); 1 outside the map.
+float lamp_visibility(int i, vec3 p) {
+  if (!u_shadows) return 1.0;
+  vec4 c = u_shadow_vp[i] * vec4(p, 1.0);
+  if (c.w <= 1e-4) return 1.0;
+  vec3 q = c.xyz / c.w * 0.5 + 0.5;
+  if (any(lessThan(q.xy, vec2(0.0))) || any(greaterThan(q.xy, vec2(1.0))) || q.z > 1.0) return 1.0;
+  // One bilinear comparison: the hardware filters 2x2 depth tests (soft edges over one texel).
+  return texture(u_shadow, vec4(q.xy, float(i), q.z));
+}
 
 // Smooth value noise (hash lattice, cell 1 unit): not periodic, unlike the texture tile.
 float hash12(vec2 p) {
@@ -106,7 +121,8 @@ void main() {
     float dl = max(length(L), 0.05);
     vec3 l = L / dl;
     float cone = smoothstep(u_lamp_cos[i].x, u_lamp_cos[i].y, dot(-l, u_lamp_dir_W[i]));
-    E += u_lamp_I[i] * cone * max(dot(n, l), 0.0) / (dl * dl) * exp(-u_betaD * dl);
+    if (cone <= 0.0) continue;
+    E += u_lamp_I[i] * cone * lamp_visibility(i, v_pos_W) * max(dot(n, l), 0.0) / (dl * dl) * exp(-u_betaD * dl);
   }
   vec3 J = albedo * E;
   o_color = vec4(J * exp(-u_betaD * range), u_seg);
@@ -335,6 +351,9 @@ uniform vec3 u_lamp_pos_C[4];
 uniform vec3 u_lamp_dir_C[4];
 uniform vec3 u_lamp_I[4];
 uniform vec2 u_lamp_cos[4];
+uniform bool u_shadows;
+uniform sampler2DArrayShadow u_shadow;
+uniform mat4 u_shadow_vp_C[4];   // camera optical -> lamp clip
 uniform vec3 u_b_scatter;
 uniform float u_schlick_k;
 uniform float u_back_frac;
@@ -365,6 +384,13 @@ void main() {
       float dl = max(length(L), 0.05);
       vec3 l = L / dl;   // propagation direction of the lamp light
       float cone = smoothstep(u_lamp_cos[i].x, u_lamp_cos[i].y, dot(l, u_lamp_dir_C[i]));
+      if (cone <= 0.0) continue;
+      if (u_shadows) {   // water behind an object, seen from the lamp, is not lit: shafts
+        vec4 c = u_shadow_vp_C[i] * vec4(x, 1.0);
+        vec3 q = c.xyz / c.w * 0.5 + 0.5;
+        if (c.w > 1e-4 && all(greaterThanEqual(q.xy, vec2(0.0))) && all(lessThanEqual(q.xy, vec2(1.0))) && q.z <= 1.0)
+          cone *= texture(u_shadow, vec4(q.xy, float(i), q.z));
+      }
       float cth = dot(l, -d);   // cosine of the scattering angle
       float den = 1.0 - k * cth;
       float ph = (1.0 - u_back_frac) * (1.0 - k * k) / (4.0 * PI * den * den) +
@@ -374,6 +400,19 @@ void main() {
   }
   o_Ls = vec4(Ls, tmax);   // alpha: marched length, for depth-aware upsampling
 }
+)GLSL";
+
+// ---------------------------------------------------------------- lamp shadow maps (depth only)
+inline constexpr const char* kShadowVS = R"GLSL(
+#version 330 core
+layout(location = 0) in vec3 a_pos_W;
+uniform mat4 u_vp;   // world -> lamp clip
+void main() { gl_Position = u_vp * vec4(a_pos_W, 1.0); }
+)GLSL";
+
+inline constexpr const char* kShadowFS = R"GLSL(
+#version 330 core
+void main() {}
 )GLSL";
 
 // ---------------------------------------------------------------- context self-test

@@ -107,7 +107,7 @@ TEST(CameraOptics, WaterEquivalentModelPredictsFarOffAxisPixels) {
   // plumb_bob D (water_equivalent, fitted) put them, within 1 px (centroids of 0.1 m squares).
   CameraModel cam = forward_camera(320, 240, 200.0);
   cam.port.type = CameraPort::Type::kFlat;
-  for (const Eigen::Vector3d p :
+  for (const Eigen::Vector3d& p :
        {Eigen::Vector3d(4.0, 1.5, 0.0), Eigen::Vector3d(4.0, -1.2, 0.9), Eigen::Vector3d(4.0, 0.6, -0.7)}) {
     World w = empty_world();
     w.objects.push_back(marker(p, 0.1));

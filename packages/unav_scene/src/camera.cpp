@@ -16,7 +16,7 @@ Eigen::Matrix3d CameraModel::K() const {
 }
 
 Eigen::Vector3d CameraPort::to_water(const Eigen::Vector3d& d_air) const {
-  const Eigen::Vector3d d = d_air.normalized();
+  Eigen::Vector3d d = d_air.normalized();
   const double eta = air_index / water_index;
   if (type == Type::kFlat) {
     // Snell at interfaces normal to the optical axis: the transverse components scale by

@@ -36,7 +36,11 @@ struct RenderOptions {
   bool lamps = true;
   int lamp_scatter_samples = 8;     ///< ray-march steps for lamp in-scattering; 0 disables
   int lamp_scatter_downsample = 4;  ///< in-scattering is computed at 1/N resolution (smooth)
-  bool srgb_output = true;          ///< encode rgb8 as sRGB (false: linear 0..1 -> 0..255)
+  /// Lamp shadows: a depth map per lamp (its cone as a perspective frustum), looked up with
+  /// 4-tap PCF (soft edges) by the surfaces and by the lamp in-scattering (shafts cut by objects).
+  bool shadows = true;
+  int shadow_map_size = 256;  ///< edge [px] of each lamp's shadow map, 16..8192
+  bool srgb_output = true;    ///< encode rgb8 as sRGB (false: linear 0..1 -> 0..255)
   /// Deterministic metering of the ambient light at the camera depth: gain =
   /// clamp(0.45 / luminance(E0 exp(-K_d d)), 0.25, 5), times CameraModel::exposure.
   bool auto_exposure = true;
@@ -66,7 +70,7 @@ struct RenderTimings {
   double render_ms = 0;    ///< submit(): issuing the passes and the readback
   double readback_ms = 0;  ///< collect(): waiting for the fence, PBO map, copy, split rgb/seg
   // Only with RenderOptions::profile_passes:
-  double scene_pass_ms = 0, snow_pass_ms = 0, inscatter_pass_ms = 0, post_pass_ms = 0;
+  double shadow_pass_ms = 0, scene_pass_ms = 0, snow_pass_ms = 0, inscatter_pass_ms = 0, post_pass_ms = 0;
 };
 
 class Renderer {

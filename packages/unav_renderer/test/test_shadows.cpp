@@ -1,0 +1,151 @@
+// Lamp shadows (shadow maps with PCF) on surfaces and in the lamp in-scattering (llvmpipe).
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+
+#include "unav_renderer/errors.hpp"
+#include "unav_renderer/renderer.hpp"
+
+using namespace unav::renderer;
+
+namespace {
+
+RenderOptions exact(bool lamps, bool shadows, int scatter_samples) {
+  RenderOptions o;
+  o.forward_scatter = false;
+  o.marine_snow = false;
+  o.noise = false;
+  o.lamps = lamps;
+  o.shadows = shadows;
+  o.lamp_scatter_samples = scatter_samples;
+  o.auto_exposure = false;
+  o.srgb_output = false;
+  o.texture_size = 64;
+  return o;
+}
+
+// Floor 4 m below the vehicle, a lamp 1.5 m to starboard pointing down, and a 0.4 m tile 2 m
+// under the lamp: its shadow is a 0.8 m square on the floor centred under the lamp. The
+// down-looking camera at the body origin sees the floor there (and the tile elsewhere).
+World scene(bool floor, bool tile, double tile_size = 0.4, double tile_depth = 8.0) {
+  World w;
+  w.name = "shadows";
+  w.file = "<test world>";
+  w.seabed.enabled = false;
+  if (floor) {
+    Object f;
+    f.name = "floor";
+    f.shape = "plane";
+    f.size_m = {30.0, 30.0, 1.0};
+    f.X_WO = pose_from_xyz_rpy({0.0, 0.0, 10.0}, {0.0, 0.0, 0.0});
+    f.seg_class = SegClass::kSeabed;
+    w.objects.push_back(f);
+  }
+  if (tile) {
+    Object t;
+    t.name = "tile";
+    t.shape = "box";
+    t.size_m = {tile_size, tile_size, 0.05};
+    t.X_WO = pose_from_xyz_rpy({0.0, 1.5, tile_depth}, {0.0, 0.0, 0.0});
+    t.seg_class = SegClass::kOther;
+    w.objects.push_back(t);
+  }
+  Lamp l;
+  l.name = "lamp";
+  l.X_BL = pose_from_xyz_rpy({0.0, 1.5, 0.0}, {0.0, -M_PI / 2, 0.0});  // beam axis (x) down
+  l.cone_half_angle_rad = 0.6;
+  l.intensity = {6.0, 6.0, 6.0};
+  w.lamps.push_back(l);
+  return w;
+}
+
+CameraModel down_camera() {
+  CameraModel c = CameraModel::from_hfov("down", 160, 160, 100.0 * M_PI / 180.0);
+  c.X_BC.linear() = rotation_from_rpy(0, -M_PI / 2, 0) * R_camera_body_to_optical();
+  return c;
+}
+
+const Pose kBody = pose_from_xyz_rpy({0.0, 0.0, 6.0}, {0.0, 0.0, 0.0});
+
+// Green level (0..255) at the pixel where world point p_W is imaged.
+int green_at(const Frame& f, const Eigen::Vector3d& p_W) {
+  const Eigen::Vector3d p = f.X_WC.inverse() * p_W;
+  const int u = static_cast<int>(std::lround(f.K(0, 0) * p.x() / p.z() + f.K(0, 2)));
+  const int v = static_cast<int>(std::lround(f.K(1, 1) * p.y() / p.z() + f.K(1, 2)));
+  return f.rgb[3 * (static_cast<std::size_t>(v) * static_cast<std::size_t>(f.width) + static_cast<std::size_t>(u)) + 1];
+}
+
+double image_sum(const Frame& f) {
+  double s = 0.0;
+  for (auto v : f.rgb) s += v;
+  return s;
+}
+
+}  // namespace
+
+TEST(Shadows, ShadowedPatchReceivesOnlyTheAmbientLight) {
+  // In-scattering off (0 samples): the floor under the tile gets exactly what it gets with the
+  // lamps off (sun/ambient only), within one level; a floor point in the beam but outside the
+  // shadow gets the full lamp light (the same as without shadows).
+  const World w = scene(true, true);
+  Renderer with(w, {down_camera()}, exact(true, true, 0));
+  Renderer without(w, {down_camera()}, exact(true, false, 0));
+  Renderer dark(w, {down_camera()}, exact(false, false, 0));
+  const Frame a = with.render(kBody, "down"), c = without.render(kBody, "down"), b = dark.render(kBody, "down");
+  const Eigen::Vector3d shadowed(0.0, 1.5, 10.0), lit(1.2, 1.5, 10.0);
+  std::printf("floor under the tile: %d (lamps off %d, no shadows %d); lit floor: %d (no shadows %d, lamps off %d)\n",
+              green_at(a, shadowed), green_at(b, shadowed), green_at(c, shadowed), green_at(a, lit), green_at(c, lit),
+              green_at(b, lit));
+  EXPECT_NEAR(green_at(a, shadowed), green_at(b, shadowed), 1);
+  EXPECT_GT(green_at(c, shadowed), green_at(b, shadowed) + 20);  // the lamp does light it without the tile's shadow
+  EXPECT_NEAR(green_at(a, lit), green_at(c, lit), 1);
+  EXPECT_GT(green_at(a, lit), green_at(b, lit) + 20);
+}
+
+TEST(Shadows, LampShaftsAreCutByObjectsAndNothingElseChanges) {
+  // Seen from the side in turbid water (Jerlov 5C): a bright lamp (300, so the in-scattered light
+  // is well above 8-bit rounding) 3 m ahead of a forward camera shines
+  // down; a 1.6 m tile 1 m under it covers its whole cone (radius tan 0.6 = 0.68 m there). With
+  // shadows, the water under the tile scatters no lamp light: pixels looking past the tile into
+  // that water get darker, none gets brighter (beyond rounding), and the surfaces are unchanged.
+  // With no occluder the images with and without shadows are identical.
+  auto side_scene = [](bool tile) {
+    World w = scene(false, tile, 1.6, 7.0);
+    w.water = jerlov_preset("5C");
+    w.lamps[0].X_BL = pose_from_xyz_rpy({3.0, 0.0, 0.0}, {0.0, -M_PI / 2, 0.0});
+    w.lamps[0].intensity = {300.0, 300.0, 300.0};
+    if (tile) w.objects[0].X_WO = pose_from_xyz_rpy({3.0, 0.0, 7.0}, {0.0, 0.0, 0.0});
+    return w;
+  };
+  CameraModel fwd = CameraModel::from_hfov("fwd", 160, 120, 90.0 * M_PI / 180.0);
+  fwd.X_BC.linear() = R_camera_body_to_optical();
+  const World w = side_scene(true);
+  const Frame with = Renderer(w, {fwd}, exact(true, true, 16)).render(kBody, "fwd");
+  const Frame without = Renderer(w, {fwd}, exact(true, false, 16)).render(kBody, "fwd");
+  int darker = 0, brighter = 0, worst = 0;
+  for (std::size_t i = 1; i < with.rgb.size(); i += 3) {
+    const int d = static_cast<int>(without.rgb[i]) - static_cast<int>(with.rgb[i]);
+    darker += d >= 3 ? 1 : 0;
+    brighter += d < -1 ? 1 : 0;
+    worst = std::max(worst, d);
+  }
+  std::printf("shaft under the tile: %d pixels darker by >= 3 levels (most %d), %d brighter\n", darker, worst,
+              brighter);
+  EXPECT_GT(darker, 100);
+  EXPECT_EQ(brighter, 0);
+  const World open = side_scene(false);
+  EXPECT_EQ(Renderer(open, {fwd}, exact(true, true, 16)).render(kBody, "fwd").rgb,
+            Renderer(open, {fwd}, exact(true, false, 16)).render(kBody, "fwd").rgb);
+}
+
+TEST(Shadows, ShadowMapSizeIsValidated) {
+  RenderOptions o = exact(true, true, 0);
+  o.shadow_map_size = 0;
+  try {
+    Renderer r(scene(true, true), {down_camera()}, o);
+    FAIL() << "shadow_map_size 0 accepted";
+  } catch (const ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("shadow_map_size"), std::string::npos) << e.what();
+  }
+}
