@@ -73,6 +73,10 @@ void validate_options(const RenderOptions& o, const std::string& where) {
     throw ConfigError(where, "lamp_scatter_downsample", std::to_string(o.lamp_scatter_downsample), "must be >= 1");
 }
 
+constexpr int kShadowLayers = 4;          // one per lamp
+constexpr double kSunShadowHalfM = 10.0;  // the sun's shadow map covers 20 m x 20 m around the camera
+constexpr int kSunMapScale = 4;           // its edge: 4 x shadow_map_size (1024 px: 2 cm texels)
+
 double luminance(const Eigen::Vector3d& c) { return 0.2126 * c.x() + 0.7152 * c.y() + 0.0722 * c.z(); }
 
 }  // namespace
@@ -87,6 +91,7 @@ struct Renderer::Impl {
   std::map<std::string, GLuint> textures;
   Program scene, snow, post, inscatter, shadow;
   GLuint shadow_tex = 0, shadow_fbo = 0;  // depth array, one layer per lamp
+  GLuint sun_tex = 0;                     // the sun's depth map
   int shadow_size = 0;
   GLuint snow_vao = 0, snow_vbo = 0;
   GLsizei snow_count = 0;
@@ -335,6 +340,8 @@ struct Renderer::Impl::FrameSetup {
   float lamp_pos_W[12], lamp_dir_W[12], lamp_pos_C[12], lamp_dir_C[12], lamp_I[12], lamp_cos[8];
   bool shadows = false;
   float shadow_vp_W[64], shadow_vp_C[64];  // per lamp: world -> lamp clip, optical -> lamp clip
+  bool sun_shadow = false;
+  float sun_vp[16];  // world -> sun clip (orthographic)
 };
 
 Renderer::Impl::FrameSetup Renderer::Impl::setup_frame(const Pose& X_WB, const CameraModel& c) const {
@@ -376,6 +383,32 @@ Renderer::Impl::FrameSetup Renderer::Impl::setup_frame(const Pose& X_WB, const C
     std::copy(vp_W.data(), vp_W.data() + 16, f.shadow_vp_W + 16 * i);
     std::copy(vp_C.data(), vp_C.data() + 16, f.shadow_vp_C + 16 * i);
   }
+  // The sun's shadow map: an orthographic view along the sunlight over a square of
+  // 2 kSunShadowHalfM around the camera, its centre snapped to whole texels (no shimmering
+  // as the camera moves).
+  const Eigen::Vector3d sdir = world.sun.direction_W.normalized();
+  f.sun_shadow = options.shadows && sdir.z() > 0.05 && world.sun.ambient_fraction < 1.0;
+  if (f.sun_shadow) {
+    const Eigen::Vector3d a = std::abs(sdir.x()) < 0.9 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitY();
+    const Eigen::Vector3d xl = (a - sdir * a.dot(sdir)).normalized(), yl = sdir.cross(xl);
+    const double texel = 2.0 * kSunShadowHalfM / (kSunMapScale * options.shadow_map_size);
+    const double cx = std::round(xl.dot(f.cam_W) / texel) * texel, cy = std::round(yl.dot(f.cam_W) / texel) * texel;
+    const Eigen::Vector3d centre = xl * cx + yl * cy + sdir * sdir.dot(f.cam_W);
+    const Eigen::Vector3d eye = centre - sdir * 60.0;  // a tight depth range: a small bias in metres
+    Eigen::Matrix4d view = Eigen::Matrix4d::Identity();
+    view.block<1, 3>(0, 0) = xl.transpose();
+    view.block<1, 3>(1, 0) = yl.transpose();
+    view.block<1, 3>(2, 0) = sdir.transpose();
+    view.block<3, 1>(0, 3) = -view.block<3, 3>(0, 0) * eye;
+    const double n = 1.0, far = 140.0;
+    Eigen::Matrix4d proj = Eigen::Matrix4d::Zero();
+    proj(0, 0) = proj(1, 1) = 1.0 / kSunShadowHalfM;
+    proj(2, 2) = 2.0 / (far - n);
+    proj(2, 3) = -(far + n) / (far - n);
+    proj(3, 3) = 1.0;
+    const Eigen::Matrix4f vp = (proj * view).cast<float>();
+    std::copy(vp.data(), vp.data() + 16, f.sun_vp);
+  }
   f.shadows = options.shadows && f.nl > 0;
 
   return f;
@@ -384,20 +417,31 @@ Renderer::Impl::FrameSetup Renderer::Impl::setup_frame(const Pose& X_WB, const C
 // Depth of the scene seen from each lamp (its shadow map), with a slope-scaled offset against
 // self-shadowing.
 void Renderer::Impl::shadow_pass(const FrameSetup& f) {
-  if (!f.shadows) return;
+  if (!f.shadows && !f.sun_shadow) return;
   const int size = options.shadow_map_size;
   if (shadow_size != size) {
     if (shadow_tex) glDeleteTextures(1, &shadow_tex);
     glGenTextures(1, &shadow_tex);
     glBindTexture(GL_TEXTURE_2D_ARRAY, shadow_tex);
-    glTexImage3D(GL_TEXTURE_2D_ARRAY, 0, GL_DEPTH_COMPONENT32F, size, size, 4, 0, GL_DEPTH_COMPONENT, GL_FLOAT,
-                 nullptr);
+    glTexImage3D(GL_TEXTURE_2D_ARRAY, 0, GL_DEPTH_COMPONENT32F, size, size, kShadowLayers, 0, GL_DEPTH_COMPONENT,
+                 GL_FLOAT, nullptr);
     glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
     glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
     glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
     glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
     glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_COMPARE_MODE, GL_COMPARE_REF_TO_TEXTURE);
     glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_COMPARE_FUNC, GL_LEQUAL);
+    if (sun_tex) glDeleteTextures(1, &sun_tex);
+    glGenTextures(1, &sun_tex);
+    glBindTexture(GL_TEXTURE_2D, sun_tex);
+    const int sun_size = std::min(4096, kSunMapScale * size);
+    glTexImage2D(GL_TEXTURE_2D, 0, GL_DEPTH_COMPONENT32F, sun_size, sun_size, 0, GL_DEPTH_COMPONENT, GL_FLOAT, nullptr);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_COMPARE_MODE, GL_COMPARE_REF_TO_TEXTURE);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_COMPARE_FUNC, GL_LEQUAL);
     if (!shadow_fbo) glGenFramebuffers(1, &shadow_fbo);
     shadow_size = size;
   }
@@ -414,11 +458,19 @@ void Renderer::Impl::shadow_pass(const FrameSetup& f) {
   glPolygonOffset(2.0f, 4.0f);
   shadow.use();
   const float one = 1.0f;
-  for (int i = 0; i < f.nl; ++i) {
-    glFramebufferTextureLayer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, shadow_tex, 0, i);
-    if (i == 0) check_fbo("lamp shadow");
+  for (int i = 0; i < (f.shadows ? f.nl : 0) + (f.sun_shadow ? 1 : 0); ++i) {
+    const bool sun = f.sun_shadow && i == (f.shadows ? f.nl : 0);
+    if (sun) {
+      const int sun_size = std::min(4096, kSunMapScale * size);
+      glFramebufferTexture2D(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_TEXTURE_2D, sun_tex, 0);
+      glViewport(0, 0, sun_size, sun_size);
+      glPolygonOffset(1.5f, 2.0f);
+    } else {
+      glFramebufferTextureLayer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, shadow_tex, 0, i);
+    }
+    check_fbo("shadow map");
     glClearBufferfv(GL_DEPTH, 0, &one);
-    glUniformMatrix4fv(shadow["u_vp"], 1, GL_FALSE, f.shadow_vp_W + 16 * i);
+    glUniformMatrix4fv(shadow["u_vp"], 1, GL_FALSE, sun ? f.sun_vp : f.shadow_vp_W + 16 * i);
     for (const GpuMesh& m : meshes) {
       glBindVertexArray(m.vao);
       glDrawElements(GL_TRIANGLES, m.index_count, GL_UNSIGNED_INT, nullptr);
@@ -462,7 +514,12 @@ void Renderer::Impl::scene_pass(const Targets& t, const FrameSetup& f) {
     glUniform2fv(scene["u_lamp_cos[0]"], f.nl, f.lamp_cos);
   }
   glUniform1i(scene["u_shadows"], f.shadows ? 1 : 0);
+  glUniform1i(scene["u_sun_shadow"], f.sun_shadow ? 1 : 0);
+  if (f.sun_shadow) glUniformMatrix4fv(scene["u_sun_vp"], 1, GL_FALSE, f.sun_vp);
   glUniform1i(scene["u_shadow"], 5);
+  glUniform1i(scene["u_sun_map"], 6);
+  glActiveTexture(GL_TEXTURE6);
+  glBindTexture(GL_TEXTURE_2D, f.sun_shadow ? sun_tex : 0);
   glActiveTexture(GL_TEXTURE5);
   glBindTexture(GL_TEXTURE_2D_ARRAY, f.shadows ? shadow_tex : 0);
   if (f.shadows) {
@@ -802,6 +859,7 @@ Renderer::~Renderer() {
   glDeleteProgram(impl_->scene.id());
   glDeleteProgram(impl_->shadow.id());
   if (impl_->shadow_tex) glDeleteTextures(1, &impl_->shadow_tex);
+  if (impl_->sun_tex) glDeleteTextures(1, &impl_->sun_tex);
   if (impl_->shadow_fbo) glDeleteFramebuffers(1, &impl_->shadow_fbo);
   glDeleteProgram(impl_->snow.id());
   glDeleteProgram(impl_->post.id());

@@ -54,6 +54,9 @@ uniform bool u_shadows;
 uniform sampler2DArrayShadow u_shadow;  // one depth layer per lamp
 uniform mat4 u_shadow_vp[4];            // world -> lamp clip
 uniform float u_shadow_texel;           // 1 / shadow map size
+uniform bool u_sun_shadow;
+uniform mat4 u_sun_vp;                  // world -> sun clip (orthographic)
+uniform sampler2DShadow u_sun_map;
 layout(location = 0) out vec4 o_color;   // rgb: direct signal D = J exp(-beta_D z); a: seg id
 layout(location = 1) out float o_depth;  // z along the optical axis [m]
 
@@ -113,6 +116,11 @@ void main() {
   vec3 Ed = u_E0 * exp(-u_Kd * depth);
   float up = -n.z;
   float ndl = max(dot(n, -u_sun_dir_W), 0.0);
+  if (u_sun_shadow && ndl > 0.0) {   // the direct part is blocked by what lies up-sun
+    vec3 q = (u_sun_vp * vec4(v_pos_W, 1.0)).xyz * 0.5 + 0.5;
+    if (all(greaterThanEqual(q, vec3(0.0))) && all(lessThanEqual(q, vec3(1.0))))
+      ndl *= texture(u_sun_map, q);
+  }
   vec3 E = Ed * (u_ambient * (0.5 + 0.5 * up) + (1.0 - u_ambient) * ndl);
 
   // Lamps: inverse square, cone, attenuated lamp -> surface (surface -> camera below).

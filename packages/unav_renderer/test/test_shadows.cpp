@@ -86,12 +86,12 @@ double image_sum(const Frame& f) {
 
 TEST(Shadows, ShadowedPatchReceivesOnlyTheAmbientLight) {
   // In-scattering off (0 samples): the floor under the tile gets exactly what it gets with the
-  // lamps off (sun/ambient only), within one level; a floor point in the beam but outside the
-  // shadow gets the full lamp light (the same as without shadows).
+  // lamps off (the sun's light, itself shadowed by the tile: ambient only), within one level; a floor point in the beam
+  // but outside the shadow gets the full lamp light (the same as without shadows).
   const World w = scene(true, true);
   Renderer with(w, {down_camera()}, exact(true, true, 0));
   Renderer without(w, {down_camera()}, exact(true, false, 0));
-  Renderer dark(w, {down_camera()}, exact(false, false, 0));
+  Renderer dark(w, {down_camera()}, exact(false, true, 0));  // the sun's shadow as in `with`
   const Frame a = with.render(kBody, "down"), c = without.render(kBody, "down"), b = dark.render(kBody, "down");
   const Eigen::Vector3d shadowed(0.0, 1.5, 10.0), lit(1.2, 1.5, 10.0);
   std::printf("floor under the tile: %d (lamps off %d, no shadows %d); lit floor: %d (no shadows %d, lamps off %d)\n",
@@ -137,6 +137,32 @@ TEST(Shadows, LampShaftsAreCutByObjectsAndNothingElseChanges) {
   const World open = side_scene(false);
   EXPECT_EQ(Renderer(open, {fwd}, exact(true, true, 16)).render(kBody, "fwd").rgb,
             Renderer(open, {fwd}, exact(true, false, 16)).render(kBody, "fwd").rgb);
+}
+
+TEST(Shadows, SunShadowLeavesTheAmbientShareOnly) {
+  // Water with no attenuation or backscatter, the sun straight down (E0 = 1, ambient share
+  // 0.35): a floor patch facing up receives E0 (0.35 + 0.65) in the open and E0 0.35 under a
+  // tile. Camera straight above, the two points symmetric about it (same range): the ratio
+  // of their levels is 0.35 (8-bit rounding of ~128: +-0.01). Lamps off.
+  World w = scene(true, true);
+  w.lamps.clear();
+  w.water.beta_D.setZero();
+  w.water.beta_B.setZero();
+  w.water.K_d.setZero();
+  w.water.B_inf.setZero();
+  w.water.b_scatter.setZero();
+  w.sun.direction_W = {0.0, 0.0, 1.0};
+  w.sun.ambient_fraction = 0.35;
+  Renderer r(w, {down_camera()}, exact(false, true, 0));
+  const Frame f = r.render(kBody, "down");
+  const int shadowed = green_at(f, {0.0, 1.5, 10.0}), lit = green_at(f, {0.0, -1.5, 10.0});
+  std::printf("sun: floor under the tile %d, in the open %d: ratio %.3f (ambient share 0.35)\n", shadowed, lit,
+              static_cast<double>(shadowed) / lit);
+  EXPECT_NEAR(static_cast<double>(shadowed) / lit, 0.35, 0.01);
+  // Without shadows both get the full light.
+  Renderer r0(w, {down_camera()}, exact(false, false, 0));
+  const Frame f0 = r0.render(kBody, "down");
+  EXPECT_NEAR(green_at(f0, {0.0, 1.5, 10.0}), lit, 1);
 }
 
 TEST(Shadows, ShadowMapSizeIsValidated) {

@@ -36,8 +36,10 @@ struct RenderOptions {
   bool lamps = true;
   int lamp_scatter_samples = 8;     ///< ray-march steps for lamp in-scattering; 0 disables
   int lamp_scatter_downsample = 4;  ///< in-scattering is computed at 1/N resolution (smooth)
-  /// Lamp shadows: a depth map per lamp (its cone as a perspective frustum), looked up with
-  /// 4-tap PCF (soft edges) by the surfaces and by the lamp in-scattering (shafts cut by objects).
+  /// Shadows: a depth map per lamp (its cone as a perspective frustum) and one for the sun
+  /// (orthographic along the sunlight, 20 m x 20 m around the camera, 4x the edge), looked up with bilinear
+  /// PCF (soft edges) by the surfaces; the lamp maps also by the lamp in-scattering (shafts cut
+  /// by objects). The sun's shadow removes its direct share (1 - ambient_fraction) only.
   bool shadows = true;
   int shadow_map_size = 256;  ///< edge [px] of each lamp's shadow map, 16..8192
   bool srgb_output = true;    ///< encode rgb8 as sRGB (false: linear 0..1 -> 0..255)
