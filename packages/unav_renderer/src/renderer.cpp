@@ -33,9 +33,17 @@ using gl::set3;
 using Clock = std::chrono::steady_clock;
 double ms_since(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
 
+// A spatially compact run of a mesh's triangles with its bounding box: passes skip the chunks
+// outside their view frustum (the seabed patch is ~29k triangles; a lamp sees a few metres).
+struct Chunk {
+  GLsizei first = 0, count = 0;  // in indices
+  Eigen::Vector3f lo, hi;
+};
+
 struct GpuMesh {
   GLuint vao = 0, vbo[3] = {0, 0, 0}, ebo = 0;
   GLsizei index_count = 0;
+  std::vector<Chunk> chunks;
   SegClass seg_class = SegClass::kOther;
   Material material;
   bool triplanar = false;
@@ -74,8 +82,109 @@ void validate_options(const RenderOptions& o, const std::string& where) {
 }
 
 constexpr int kShadowLayers = 4;          // one per lamp
-constexpr double kSunShadowHalfM = 10.0;  // the sun's shadow map covers 20 m x 20 m around the camera
+constexpr double kSunShadowHalfM = 12.0;  // the sun's shadow map covers 24 m x 24 m around the camera
+constexpr double kSunSnapM = 2.0;         // its centre moves in 2 m steps: the map is reused in between
 constexpr int kSunMapScale = 4;           // its edge: 4 x shadow_map_size (1024 px: 2 cm texels)
+
+// Triangles of a mesh reordered into chunks of about kChunkM x kChunkM (x, y) each.
+constexpr double kChunkM = 4.0;
+std::vector<std::uint32_t> chunked_indices(const MeshData& mesh, std::vector<Chunk>* chunks) {
+  const std::size_t nt = mesh.triangle_count();
+  const auto& P = mesh.positions;
+  auto centroid = [&](std::size_t t, int axis) {
+    double c = 0.0;
+    for (int k = 0; k < 3; ++k)
+      c += P[3 * mesh.indices[3 * t + static_cast<std::size_t>(k)] + static_cast<std::size_t>(axis)];
+    return c / 3.0;
+  };
+  double lo[2] = {1e30, 1e30}, hi[2] = {-1e30, -1e30};
+  for (std::size_t t = 0; t < nt; ++t)
+    for (int a = 0; a < 2; ++a) {
+      lo[a] = std::min(lo[a], centroid(t, a));
+      hi[a] = std::max(hi[a], centroid(t, a));
+    }
+  int n[2] = {1, 1};
+  if (nt > 2000)
+    for (int a = 0; a < 2; ++a) n[a] = std::clamp(static_cast<int>(std::ceil((hi[a] - lo[a]) / kChunkM)), 1, 32);
+  std::vector<std::vector<std::size_t>> cells(static_cast<std::size_t>(n[0] * n[1]));
+  for (std::size_t t = 0; t < nt; ++t) {
+    int c[2];
+    for (int a = 0; a < 2; ++a)
+      c[a] =
+          n[a] == 1 ? 0 : std::clamp(static_cast<int>((centroid(t, a) - lo[a]) / (hi[a] - lo[a]) * n[a]), 0, n[a] - 1);
+    cells[static_cast<std::size_t>(c[0] * n[1] + c[1])].push_back(t);
+  }
+  std::vector<std::uint32_t> out;
+  out.reserve(mesh.indices.size());
+  for (const auto& cell : cells) {
+    if (cell.empty()) continue;
+    Chunk ch;
+    ch.first = static_cast<GLsizei>(out.size());
+    ch.lo.setConstant(std::numeric_limits<float>::infinity());
+    ch.hi.setConstant(-std::numeric_limits<float>::infinity());
+    for (std::size_t t : cell)
+      for (int k = 0; k < 3; ++k) {
+        const std::uint32_t v = mesh.indices[3 * t + static_cast<std::size_t>(k)];
+        out.push_back(v);
+        const Eigen::Vector3f p(P[3 * v], P[3 * v + 1], P[3 * v + 2]);
+        ch.lo = ch.lo.cwiseMin(p);
+        ch.hi = ch.hi.cwiseMax(p);
+      }
+    ch.count = static_cast<GLsizei>(out.size()) - ch.first;
+    chunks->push_back(ch);
+  }
+  return out;
+}
+
+// False when the box lies entirely outside one plane of the clip volume of vp (conservative).
+bool in_frustum(const Eigen::Matrix4f& vp, const Chunk& ch) {
+  int outside[6] = {0, 0, 0, 0, 0, 0};
+  for (int i = 0; i < 8; ++i) {
+    const Eigen::Vector4f p(i & 1 ? ch.hi.x() : ch.lo.x(), i & 2 ? ch.hi.y() : ch.lo.y(), i & 4 ? ch.hi.z() : ch.lo.z(),
+                            1.0f);
+    const Eigen::Vector4f c = vp * p;
+    outside[0] += c.x() < -c.w();
+    outside[1] += c.x() > c.w();
+    outside[2] += c.y() < -c.w();
+    outside[3] += c.y() > c.w();
+    outside[4] += c.z() < -c.w();
+    outside[5] += c.z() > c.w();
+  }
+  for (int k : outside)
+    if (k == 8) return false;
+  return true;
+}
+
+// Draws the chunks of m inside vp's frustum (neighbouring visible chunks in one call).
+void draw_visible(const GpuMesh& m, const Eigen::Matrix4f& vp) {
+  GLsizei first = 0, count = 0;
+  auto flush = [&] {
+    if (count > 0)
+      glDrawElements(GL_TRIANGLES, count, GL_UNSIGNED_INT,
+                     reinterpret_cast<const void*>(static_cast<std::uintptr_t>(first) * sizeof(std::uint32_t)));
+    count = 0;
+  };
+  for (const Chunk& ch : m.chunks) {
+    if (!in_frustum(vp, ch)) {
+      flush();
+      continue;
+    }
+    if (count > 0 && first + count == ch.first) {
+      count += ch.count;
+    } else {
+      flush();
+      first = ch.first;
+      count = ch.count;
+    }
+  }
+  flush();
+}
+
+bool any_visible(const GpuMesh& m, const Eigen::Matrix4f& vp) {
+  for (const Chunk& ch : m.chunks)
+    if (in_frustum(vp, ch)) return true;
+  return false;
+}
 
 double luminance(const Eigen::Vector3d& c) { return 0.2126 * c.x() + 0.7152 * c.y() + 0.0722 * c.z(); }
 
@@ -92,6 +201,7 @@ struct Renderer::Impl {
   Program scene, snow, post, inscatter, shadow;
   GLuint shadow_tex = 0, shadow_fbo = 0;  // depth array, one layer per lamp
   GLuint sun_tex = 0;                     // the sun's depth map
+  std::vector<float> sun_vp_cached;       // the matrix sun_tex was rendered with (empty: none)
   int shadow_size = 0;
   GLuint snow_vao = 0, snow_vbo = 0;
   GLsizei snow_count = 0;
@@ -205,11 +315,12 @@ void Renderer::Impl::upload_scene(const SceneGeometry& geo) {
       glEnableVertexAttribArray(static_cast<GLuint>(a));
       glVertexAttribPointer(static_cast<GLuint>(a), comps[a], GL_FLOAT, GL_FALSE, 0, nullptr);
     }
+    const std::vector<std::uint32_t> indices = chunked_indices(sm.mesh, &g.chunks);
     glGenBuffers(1, &g.ebo);
     glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, g.ebo);
-    glBufferData(GL_ELEMENT_ARRAY_BUFFER, static_cast<GLsizeiptr>(sm.mesh.indices.size() * sizeof(std::uint32_t)),
-                 sm.mesh.indices.data(), GL_STATIC_DRAW);
-    g.index_count = static_cast<GLsizei>(sm.mesh.indices.size());
+    glBufferData(GL_ELEMENT_ARRAY_BUFFER, static_cast<GLsizeiptr>(indices.size() * sizeof(std::uint32_t)),
+                 indices.data(), GL_STATIC_DRAW);
+    g.index_count = static_cast<GLsizei>(indices.size());
     glBindVertexArray(0);
     meshes.push_back(g);
   }
@@ -375,7 +486,7 @@ Renderer::Impl::FrameSetup Renderer::Impl::setup_frame(const Pose& X_WB, const C
     lc.fx = lc.fy = 0.5 * lc.width / std::tan(half);
     lc.cx = lc.cy = 0.5 * lc.width - 0.5;
     lc.near_m = 0.05;
-    lc.far_m = 60.0;
+    lc.far_m = 30.0;  // lamp light is spent by then (the in-scattering marches <= 30 m too)
     Pose X_WLo = X_WL;
     X_WLo.linear() = X_WL.linear() * R_camera_body_to_optical();
     const Eigen::Matrix4f vp_W = projection_from_K(lc) * X_WLo.inverse().matrix().cast<float>();
@@ -391,9 +502,11 @@ Renderer::Impl::FrameSetup Renderer::Impl::setup_frame(const Pose& X_WB, const C
   if (f.sun_shadow) {
     const Eigen::Vector3d a = std::abs(sdir.x()) < 0.9 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitY();
     const Eigen::Vector3d xl = (a - sdir * a.dot(sdir)).normalized(), yl = sdir.cross(xl);
-    const double texel = 2.0 * kSunShadowHalfM / (kSunMapScale * options.shadow_map_size);
-    const double cx = std::round(xl.dot(f.cam_W) / texel) * texel, cy = std::round(yl.dot(f.cam_W) / texel) * texel;
-    const Eigen::Vector3d centre = xl * cx + yl * cy + sdir * sdir.dot(f.cam_W);
+    const double cx = std::round(xl.dot(f.cam_W) / kSunSnapM) * kSunSnapM;
+    const double cy = std::round(yl.dot(f.cam_W) / kSunSnapM) * kSunSnapM;
+    // Along the light too, in steps: the matrix changes only when the camera has moved.
+    const double cz = std::round(sdir.dot(f.cam_W) / kSunSnapM) * kSunSnapM;
+    const Eigen::Vector3d centre = xl * cx + yl * cy + sdir * cz;
     const Eigen::Vector3d eye = centre - sdir * 60.0;  // a tight depth range: a small bias in metres
     Eigen::Matrix4d view = Eigen::Matrix4d::Identity();
     view.block<1, 3>(0, 0) = xl.transpose();
@@ -432,6 +545,7 @@ void Renderer::Impl::shadow_pass(const FrameSetup& f) {
     glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_COMPARE_MODE, GL_COMPARE_REF_TO_TEXTURE);
     glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_COMPARE_FUNC, GL_LEQUAL);
     if (sun_tex) glDeleteTextures(1, &sun_tex);
+    sun_vp_cached.clear();
     glGenTextures(1, &sun_tex);
     glBindTexture(GL_TEXTURE_2D, sun_tex);
     const int sun_size = std::min(4096, kSunMapScale * size);
@@ -458,8 +572,12 @@ void Renderer::Impl::shadow_pass(const FrameSetup& f) {
   glPolygonOffset(2.0f, 4.0f);
   shadow.use();
   const float one = 1.0f;
-  for (int i = 0; i < (f.shadows ? f.nl : 0) + (f.sun_shadow ? 1 : 0); ++i) {
+  // The sun's map depends on the static scene and its matrix only: reused until either changes.
+  const bool sun_fresh =
+      f.sun_shadow && sun_vp_cached.size() == 16 && std::equal(sun_vp_cached.begin(), sun_vp_cached.end(), f.sun_vp);
+  for (int i = 0; i < (f.shadows ? f.nl : 0) + (f.sun_shadow && !sun_fresh ? 1 : 0); ++i) {
     const bool sun = f.sun_shadow && i == (f.shadows ? f.nl : 0);
+    if (sun) sun_vp_cached.assign(f.sun_vp, f.sun_vp + 16);
     if (sun) {
       const int sun_size = std::min(4096, kSunMapScale * size);
       glFramebufferTexture2D(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_TEXTURE_2D, sun_tex, 0);
@@ -470,10 +588,12 @@ void Renderer::Impl::shadow_pass(const FrameSetup& f) {
     }
     check_fbo("shadow map");
     glClearBufferfv(GL_DEPTH, 0, &one);
-    glUniformMatrix4fv(shadow["u_vp"], 1, GL_FALSE, sun ? f.sun_vp : f.shadow_vp_W + 16 * i);
+    const float* vp_data = sun ? f.sun_vp : f.shadow_vp_W + 16 * i;
+    glUniformMatrix4fv(shadow["u_vp"], 1, GL_FALSE, vp_data);
+    const Eigen::Matrix4f vp = Eigen::Map<const Eigen::Matrix4f>(vp_data);
     for (const GpuMesh& m : meshes) {
       glBindVertexArray(m.vao);
-      glDrawElements(GL_TRIANGLES, m.index_count, GL_UNSIGNED_INT, nullptr);
+      draw_visible(m, vp);
     }
   }
   glDisable(GL_POLYGON_OFFSET_FILL);
@@ -528,7 +648,9 @@ void Renderer::Impl::scene_pass(const Targets& t, const FrameSetup& f) {
   }
   glUniform1i(scene["u_tex"], 0);
   glActiveTexture(GL_TEXTURE0);
+  const Eigen::Matrix4f vp = f.proj * f.view;
   for (const GpuMesh& m : meshes) {
+    if (!any_visible(m, vp)) continue;
     set3(scene["u_albedo"], m.material.albedo);
     glUniform1f(scene["u_uv_scale"], static_cast<float>(m.material.uv_scale_m));
     glUniform1i(scene["u_triplanar"], m.triplanar ? 1 : 0);
@@ -537,7 +659,7 @@ void Renderer::Impl::scene_pass(const Targets& t, const FrameSetup& f) {
     glUniform1f(scene["u_seg"], static_cast<float>(m.seg_class));
     glBindTexture(GL_TEXTURE_2D, m.texture);
     glBindVertexArray(m.vao);
-    glDrawElements(GL_TRIANGLES, m.index_count, GL_UNSIGNED_INT, nullptr);
+    draw_visible(m, vp);
   }
 }
 
@@ -828,6 +950,7 @@ void Renderer::set_world(World world) {
   I.ctx->make_current();
   while (!I.in_flight.empty()) I.collect_oldest();  // frames of the old scene stay collectable
   I.release_scene();
+  I.sun_vp_cached.clear();  // a new scene: the sun's shadow map is stale
   I.world = std::move(world);
   I.water = I.world.water;
   I.upload_scene(geo);
