@@ -94,7 +94,7 @@ std::vector<std::uint32_t> chunked_indices(const MeshData& mesh, std::vector<Chu
   auto centroid = [&](std::size_t t, int axis) {
     double c = 0.0;
     for (int k = 0; k < 3; ++k)
-      c += P[3 * mesh.indices[3 * t + static_cast<std::size_t>(k)] + static_cast<std::size_t>(axis)];
+      c += P[std::size_t{3} * mesh.indices[3 * t + static_cast<std::size_t>(k)] + static_cast<std::size_t>(axis)];
     return c / 3.0;
   };
   double lo[2] = {1e30, 1e30}, hi[2] = {-1e30, -1e30};
@@ -112,7 +112,8 @@ std::vector<std::uint32_t> chunked_indices(const MeshData& mesh, std::vector<Chu
     for (int a = 0; a < 2; ++a)
       c[a] =
           n[a] == 1 ? 0 : std::clamp(static_cast<int>((centroid(t, a) - lo[a]) / (hi[a] - lo[a]) * n[a]), 0, n[a] - 1);
-    cells[static_cast<std::size_t>(c[0] * n[1] + c[1])].push_back(t);
+    cells[static_cast<std::size_t>(c[0]) * static_cast<std::size_t>(n[1]) + static_cast<std::size_t>(c[1])].push_back(
+        t);
   }
   std::vector<std::uint32_t> out;
   out.reserve(mesh.indices.size());
@@ -126,7 +127,8 @@ std::vector<std::uint32_t> chunked_indices(const MeshData& mesh, std::vector<Chu
       for (int k = 0; k < 3; ++k) {
         const std::uint32_t v = mesh.indices[3 * t + static_cast<std::size_t>(k)];
         out.push_back(v);
-        const Eigen::Vector3f p(P[3 * v], P[3 * v + 1], P[3 * v + 2]);
+        const std::size_t b = std::size_t{3} * v;
+        const Eigen::Vector3f p(P[b], P[b + 1], P[b + 2]);
         ch.lo = ch.lo.cwiseMin(p);
         ch.hi = ch.hi.cwiseMax(p);
       }
@@ -161,6 +163,7 @@ void draw_visible(const GpuMesh& m, const Eigen::Matrix4f& vp) {
   auto flush = [&] {
     if (count > 0)
       glDrawElements(GL_TRIANGLES, count, GL_UNSIGNED_INT,
+                     // NOLINTNEXTLINE(performance-no-int-to-ptr): GL takes a buffer offset as a pointer
                      reinterpret_cast<const void*>(static_cast<std::uintptr_t>(first) * sizeof(std::uint32_t)));
     count = 0;
   };
@@ -491,8 +494,8 @@ Renderer::Impl::FrameSetup Renderer::Impl::setup_frame(const Pose& X_WB, const C
     X_WLo.linear() = X_WL.linear() * R_camera_body_to_optical();
     const Eigen::Matrix4f vp_W = projection_from_K(lc) * X_WLo.inverse().matrix().cast<float>();
     const Eigen::Matrix4f vp_C = vp_W * f.X_WC.matrix().cast<float>();
-    std::copy(vp_W.data(), vp_W.data() + 16, f.shadow_vp_W + 16 * i);
-    std::copy(vp_C.data(), vp_C.data() + 16, f.shadow_vp_C + 16 * i);
+    std::copy(vp_W.data(), vp_W.data() + 16, f.shadow_vp_W + std::ptrdiff_t{16} * i);
+    std::copy(vp_C.data(), vp_C.data() + 16, f.shadow_vp_C + std::ptrdiff_t{16} * i);
   }
   // The sun's shadow map: an orthographic view along the sunlight over a square of
   // 2 kSunShadowHalfM around the camera, its centre snapped to whole texels (no shimmering
@@ -588,7 +591,7 @@ void Renderer::Impl::shadow_pass(const FrameSetup& f) {
     }
     check_fbo("shadow map");
     glClearBufferfv(GL_DEPTH, 0, &one);
-    const float* vp_data = sun ? f.sun_vp : f.shadow_vp_W + 16 * i;
+    const float* vp_data = sun ? f.sun_vp : f.shadow_vp_W + std::ptrdiff_t{16} * i;
     glUniformMatrix4fv(shadow["u_vp"], 1, GL_FALSE, vp_data);
     const Eigen::Matrix4f vp = Eigen::Map<const Eigen::Matrix4f>(vp_data);
     for (const GpuMesh& m : meshes) {
