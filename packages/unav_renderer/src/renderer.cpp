@@ -235,7 +235,7 @@ struct Renderer::Impl {
   struct FrameSetup;
   FrameSetup setup_frame(const Pose& X_WB, const CameraModel& c) const;
   void shadow_pass(const FrameSetup& f);
-  void scene_pass(const Targets& t, const FrameSetup& f);
+  void scene_pass(const Targets& t, const FrameSetup& f, double stamp_s);
   void snow_pass(const FrameSetup& f, const CameraModel& c, double stamp_s);
   bool inscatter_pass(const Targets& t, const FrameSetup& f, const CameraModel& c, float* march_max_out);
   void post_pass(const Targets& t, const FrameSetup& f, const CameraModel& c, std::uint64_t seq, bool do_inscatter,
@@ -603,7 +603,7 @@ void Renderer::Impl::shadow_pass(const FrameSetup& f) {
 }
 
 // Scene geometry into colour (direct signal), camera-space depth and segmentation.
-void Renderer::Impl::scene_pass(const Targets& t, const FrameSetup& f) {
+void Renderer::Impl::scene_pass(const Targets& t, const FrameSetup& f, double stamp_s) {
   glBindFramebuffer(GL_FRAMEBUFFER, t.scene_fbo);
   glViewport(0, 0, t.width, t.height);
   const float zero[4] = {0, 0, 0, 0};
@@ -627,6 +627,8 @@ void Renderer::Impl::scene_pass(const Targets& t, const FrameSetup& f) {
   set3(scene["u_sun_dir_W"], world.sun.direction_W);
   set3(scene["u_E0"], world.sun.surface_irradiance);
   glUniform1f(scene["u_ambient"], static_cast<float>(world.sun.ambient_fraction));
+  glUniform1f(scene["u_caustics"], options.caustics ? static_cast<float>(options.caustic_strength) : 0.0f);
+  glUniform1f(scene["u_time"], static_cast<float>(std::fmod(stamp_s, 1.0e4)));
   set3(scene["u_Kd"], water.K_d);
   set3(scene["u_betaD"], water.beta_D);
   glUniform1i(scene["u_nlamps"], f.nl);
@@ -821,7 +823,7 @@ void Renderer::Impl::draw(const Pose& X_WB, const CameraModel& out_cam, double s
   };
   shadow_pass(f);
   lap(&timings.shadow_pass_ms);
-  scene_pass(t, f);
+  scene_pass(t, f, stamp_s);
   lap(&timings.scene_pass_ms);
   snow_pass(f, c, stamp_s);  // when marine snow is on
   lap(&timings.snow_pass_ms);

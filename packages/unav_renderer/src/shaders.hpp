@@ -54,6 +54,8 @@ uniform bool u_shadows;
 uniform sampler2DArrayShadow u_shadow;  // one depth layer per lamp
 uniform mat4 u_shadow_vp[4];            // world -> lamp clip
 uniform float u_shadow_texel;           // 1 / shadow map size
+uniform float u_caustics;               // caustic_strength (0 = off)
+uniform float u_time;                   // frame stamp [s]
 uniform bool u_sun_shadow;
 uniform mat4 u_sun_vp;                  // world -> sun clip (orthographic)
 uniform sampler2DShadow u_sun_map;
@@ -61,6 +63,20 @@ layout(location = 0) out vec4 o_color;   // rgb: direct signal D = J exp(-beta_D
 layout(location = 1) out float o_depth;  // z along the optical axis [m]
 
 vec3 tex_at(vec2 uv) { return texture(u_tex, uv / u_uv_scale).rgb; }
+
+// Zero-mean caustic network at horizontal position p [m], time t [s]: two domain-warped,
+// drifting layers of sin x sin cells, sharpened into thin bright lines (g |g| keeps the mean 0).
+float caustic_pattern(vec2 p, float t) {
+  float g = 0.0;
+  vec2 q = p * 1.9;
+  for (int k = 0; k < 2; ++k) {
+    vec2 w = q + 0.55 * vec2(sin(q.y * 1.3 + 0.8 * t + float(k)), sin(q.x * 1.1 - 0.6 * t + 2.0 * float(k)));
+    float s = sin(w.x + 0.35 * t) * sin(w.y - 0.3 * t);
+    g += s * abs(s);
+    q = mat2(0.8, 0.6, -0.6, 0.8) * q * 1.37 + vec2(3.1, 1.7);
+  }
+  return g;
+}
 
 // Share of lamp i's light reaching world point p (percentage-closer filtered); 1 outside the map.
 float lamp_visibility(int i, vec3 p) {
@@ -120,6 +136,11 @@ void main() {
     vec3 q = (u_sun_vp * vec4(v_pos_W, 1.0)).xyz * 0.5 + 0.5;
     if (all(greaterThanEqual(q, vec3(0.0))) && all(lessThanEqual(q, vec3(1.0))))
       ndl *= texture(u_sun_map, q);
+  }
+  if (u_caustics > 0.0 && ndl > 0.0) {
+    float Kd = u_Kd.g;
+    float A = u_caustics * exp(-depth * (2.0 * Kd + 1.0 / 15.0));
+    ndl *= max(1.0 + A * caustic_pattern(v_pos_W.xy, u_time), 0.0);
   }
   vec3 E = Ed * (u_ambient * (0.5 + 0.5 * up) + (1.0 - u_ambient) * ndl);
 

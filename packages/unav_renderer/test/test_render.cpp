@@ -17,6 +17,7 @@ RenderOptions exact_options() {
   RenderOptions o;
   o.forward_scatter = false;
   o.marine_snow = false;
+  o.caustics = false;
   o.noise = false;
   o.lamps = false;
   o.auto_exposure = false;

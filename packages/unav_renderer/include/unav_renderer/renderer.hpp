@@ -41,8 +41,14 @@ struct RenderOptions {
   /// PCF (soft edges) by the surfaces; the lamp maps also by the lamp in-scattering (shafts cut
   /// by objects). The sun's shadow removes its direct share (1 - ambient_fraction) only.
   bool shadows = true;
-  int shadow_map_size = 256;  ///< edge [px] of each lamp's shadow map, 16..8192
-  bool srgb_output = true;    ///< encode rgb8 as sRGB (false: linear 0..1 -> 0..255)
+  int shadow_map_size = 256;
+  /// Caustics: the sun's direct light on the seabed is focused by the moving surface into a
+  /// drifting network of bright lines, modulation 1 + A g(x, t) with g of mean ~0 and
+  /// A = caustic_strength exp(-d (2 K_d + 1 / 15 m)) at depth d (green K_d): clear shallow water
+  /// shows them, depth and turbidity wash them out. Animated with the frame stamp.
+  bool caustics = true;
+  double caustic_strength = 0.8;  ///< edge [px] of each lamp's shadow map, 16..8192
+  bool srgb_output = true;        ///< encode rgb8 as sRGB (false: linear 0..1 -> 0..255)
   /// Deterministic metering of the ambient light at the camera depth: gain =
   /// clamp(0.45 / luminance(E0 exp(-K_d d)), 0.25, 5), times CameraModel::exposure.
   bool auto_exposure = true;
