@@ -71,7 +71,7 @@ TEST(Ros2Msgs, ImageRoundTripKeepsPixels) {
   img.width(640);
   img.encoding("rgb8");
   img.step(640 * 3);
-  img.data().resize(640 * 480 * 3);
+  img.data().resize(std::size_t{640} * 480 * 3);
   for (size_t i = 0; i < img.data().size(); ++i) img.data()[i] = static_cast<uint8_t>(i * 31u);
   const auto bytes = serialize(type, &img);
   // 4 encapsulation + header (8 + 4 + 14 incl. NUL, padded to 28) + 2 uint32 + "rgb8" (4 + 5)

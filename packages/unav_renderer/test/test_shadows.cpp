@@ -77,12 +77,6 @@ int green_at(const Frame& f, const Eigen::Vector3d& p_W) {
   return f.rgb[3 * (static_cast<std::size_t>(v) * static_cast<std::size_t>(f.width) + static_cast<std::size_t>(u)) + 1];
 }
 
-double image_sum(const Frame& f) {
-  double s = 0.0;
-  for (auto v : f.rgb) s += v;
-  return s;
-}
-
 }  // namespace
 
 TEST(Shadows, ShadowedPatchReceivesOnlyTheAmbientLight) {
