@@ -44,6 +44,8 @@ UnderwaterRendererNode::UnderwaterRendererNode(const unav::NodeOptions& options)
   ro.noise = prm.noise;
   ro.marine_snow = prm.marine_snow;
   ro.forward_scatter = prm.forward_scatter;
+  ro.shadows = prm.shadows;
+  ro.caustics = prm.caustics;
   ro.seed = static_cast<std::uint64_t>(prm.seed);
   period_ = 1.0 / rate;
   if (world_path.empty() || cameras_path.empty())

@@ -45,6 +45,8 @@ struct UnderwaterRendererParams {
   bool noise = true;
   bool marine_snow = true;
   bool forward_scatter = true;
+  bool shadows = true;
+  bool caustics = true;
   int64_t seed = 1;
   std::string body_frame = "base_link_frd";
 
@@ -63,6 +65,8 @@ struct UnderwaterRendererParams {
     a->Visit(Field("noise", &noise).Doc("camera noise"));
     a->Visit(Field("marine_snow", &marine_snow).Doc("marine snow particles"));
     a->Visit(Field("forward_scatter", &forward_scatter).Doc("range-dependent blur"));
+    a->Visit(Field("shadows", &shadows).Doc("lamp and sun shadow maps"));
+    a->Visit(Field("caustics", &caustics).Doc("animated sunlight caustics"));
     a->Visit(Field("seed", &seed).Min(0.0).Doc("noise seed"));
     a->Visit(Field("body_frame", &body_frame).Doc("vehicle body frame (tf parent of the cameras)"));
   }
