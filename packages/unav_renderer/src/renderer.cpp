@@ -60,6 +60,7 @@ struct Targets {
   int width = 0, height = 0;  // internal size
   int out_width = 0, out_height = 0;
   double out_K[4] = {1, 1, 0, 0};  // the output camera's fx, fy, cx, cy (in air)
+  CameraModel seen;                // what the water sees: the fitted model behind a port (Frame::K/D)
   int is_width = 0, is_height = 0, is_scale = 1;
   GLuint is_fbo = 0, is_tex = 0;
   GLuint scene_fbo = 0, scene_color = 0, scene_zc = 0, scene_depth = 0;
@@ -79,6 +80,16 @@ void validate_options(const RenderOptions& o, const std::string& where) {
     throw ConfigError(where, "shadow_map_size", std::to_string(o.shadow_map_size), "must be in [16, 8192] px");
   if (o.lamp_scatter_downsample < 1)
     throw ConfigError(where, "lamp_scatter_downsample", std::to_string(o.lamp_scatter_downsample), "must be >= 1");
+}
+
+// A bound depth texture as a shadow map: bilinear depth comparison (hardware PCF), clamped.
+void shadow_sampling(GLenum target) {
+  glTexParameteri(target, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
+  glTexParameteri(target, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+  glTexParameteri(target, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+  glTexParameteri(target, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+  glTexParameteri(target, GL_TEXTURE_COMPARE_MODE, GL_COMPARE_REF_TO_TEXTURE);
+  glTexParameteri(target, GL_TEXTURE_COMPARE_FUNC, GL_LEQUAL);
 }
 
 constexpr int kShadowLayers = 4;          // one per lamp
@@ -362,8 +373,8 @@ Targets& Renderer::Impl::targets_for(const CameraModel& c) {
   // Behind a refracting port the scene is rendered with the water-side paraxial focal length
   // (1:1 sampling at the image centre); each output pixel's ray is undistorted in air, then
   // refracted by the port, then projected into that pinhole.
-  double magnification = 1.0;
-  if (c.port.refracts()) magnification = c.water_equivalent().fx / c.fx;
+  t.seen = c.water_equivalent();  // a least-squares fit behind a port: once per camera
+  const double magnification = t.seen.fx / c.fx;
   if (c.has_distortion() || c.port.refracts()) {
     // For every output (distorted) pixel, the undistorted pixel it sees.
     std::vector<cv::Point2f> src(static_cast<std::size_t>(c.width) * c.height);
@@ -541,24 +552,14 @@ void Renderer::Impl::shadow_pass(const FrameSetup& f) {
     glBindTexture(GL_TEXTURE_2D_ARRAY, shadow_tex);
     glTexImage3D(GL_TEXTURE_2D_ARRAY, 0, GL_DEPTH_COMPONENT32F, size, size, kShadowLayers, 0, GL_DEPTH_COMPONENT,
                  GL_FLOAT, nullptr);
-    glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
-    glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
-    glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
-    glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
-    glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_COMPARE_MODE, GL_COMPARE_REF_TO_TEXTURE);
-    glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_COMPARE_FUNC, GL_LEQUAL);
+    shadow_sampling(GL_TEXTURE_2D_ARRAY);
     if (sun_tex) glDeleteTextures(1, &sun_tex);
     sun_vp_cached.clear();
     glGenTextures(1, &sun_tex);
     glBindTexture(GL_TEXTURE_2D, sun_tex);
     const int sun_size = std::min(4096, kSunMapScale * size);
     glTexImage2D(GL_TEXTURE_2D, 0, GL_DEPTH_COMPONENT32F, sun_size, sun_size, 0, GL_DEPTH_COMPONENT, GL_FLOAT, nullptr);
-    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
-    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
-    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
-    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
-    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_COMPARE_MODE, GL_COMPARE_REF_TO_TEXTURE);
-    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_COMPARE_FUNC, GL_LEQUAL);
+    shadow_sampling(GL_TEXTURE_2D);
     if (!shadow_fbo) glGenFramebuffers(1, &shadow_fbo);
     shadow_size = size;
   }
@@ -1011,11 +1012,11 @@ void Renderer::submit(const Pose& X_WB, const std::string& camera, double stamp_
   s.meta.sequence = seq;
   s.meta.width = c.width;
   s.meta.height = c.height;
-  const CameraModel seen = c.water_equivalent();  // behind a port: the model fitted in water
-  s.meta.K = seen.K();
-  s.meta.D = seen.distortion;
+  const Targets& t = I.targets.at(c.name);  // made by draw()
+  s.meta.K = t.seen.K();
+  s.meta.D = t.seen.distortion;
   s.meta.X_WC = X_WB * c.X_BC;
-  I.start_readback(s, I.targets.at(c.name));
+  I.start_readback(s, t);
   I.in_flight.push_back(idx);
   I.timings.render_ms = ms_since(t0);
 }
