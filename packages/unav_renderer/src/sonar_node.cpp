@@ -64,10 +64,7 @@ SonarNode::SonarNode(const unav::NodeOptions& options) : Node("sonar", options, 
     } else {
       for (const auto& n : prm.sonars) models.push_back(unav::scene::load_sonar(prm.sonars_config, n));
     }
-    if (!prm.water.empty())
-      world.water = prm.water.find('/') != std::string::npos || prm.water.find(".yaml") != std::string::npos
-                        ? unav::scene::load_water_file(prm.water)
-                        : unav::scene::jerlov_preset(prm.water);
+    if (!prm.water.empty()) world.water = unav::scene::load_water_spec(prm.water);
   } catch (const std::exception& e) {
     throw unav::ConfigError(e.what());  // world/sonar/water errors name the file and key
   }

@@ -64,10 +64,7 @@ UnderwaterRendererNode::UnderwaterRendererNode(const unav::NodeOptions& options)
       for (const auto& n : only) picked.push_back(load_camera(cameras_path, n));  // error lists the file's cameras
       cams = std::move(picked);
     }
-    if (!water.empty())
-      world.water = water.find('/') != std::string::npos || water.find(".yaml") != std::string::npos
-                        ? load_water_file(water)
-                        : jerlov_preset(water);
+    if (!water.empty()) world.water = load_water_spec(water);
   } catch (const std::exception& e) {
     throw unav::ConfigError(e.what());  // world/camera/water errors name the file and key
   }

@@ -149,4 +149,9 @@ WaterModel load_water_file(const std::string& path) {
   return detail::parse_water(c, node, root["water"] ? "water" : "", false);
 }
 
+WaterModel load_water_spec(const std::string& spec) {
+  const bool file = spec.find('/') != std::string::npos || spec.find(".yaml") != std::string::npos;
+  return file ? load_water_file(spec) : jerlov_preset(spec);
+}
+
 }  // namespace unav::scene

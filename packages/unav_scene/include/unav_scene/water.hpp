@@ -61,4 +61,8 @@ WaterModel jerlov_preset(const std::string& name);
 /// followed by overrides, or explicit coefficients. Unknown keys are errors naming the file.
 WaterModel load_water_file(const std::string& path);
 
+/// The water a node parameter names: a Jerlov preset ("3C", "jerlov_II") or, when the text
+/// holds a '/' or ".yaml", a water YAML file. ConfigError as jerlov_preset / load_water_file.
+WaterModel load_water_spec(const std::string& spec);
+
 }  // namespace unav::scene
