@@ -6,35 +6,16 @@
 #include <cmath>
 #include <cstdio>
 
+#include "render_test_util.hpp"
 #include "unav_renderer/errors.hpp"
 #include "unav_renderer/renderer.hpp"
 
 using namespace unav::renderer;
+using unav::renderer::test::body_at;
+using unav::renderer::test::empty_world;
+using unav::renderer::test::exact_options;
 
 namespace {
-
-RenderOptions linear_exact() {
-  RenderOptions o;
-  o.forward_scatter = false;
-  o.marine_snow = false;
-  o.caustics = false;
-  o.noise = false;
-  o.lamps = false;
-  o.auto_exposure = false;
-  o.srgb_output = false;
-  o.texture_size = 64;
-  return o;
-}
-
-World empty_world() {
-  World w;
-  w.name = "optics";
-  w.file = "<test world>";
-  w.seabed.enabled = false;
-  return w;
-}
-
-Pose body_at(const Eigen::Vector3d& p_W) { return pose_from_xyz_rpy(p_W, Eigen::Vector3d::Zero()); }
 
 // A forward camera (optical axis = body x) with a centred principal point.
 CameraModel forward_camera(int w, int h, double f) {
@@ -89,9 +70,9 @@ TEST(CameraOptics, FlatPortMagnifiesByTheRefractiveIndexRatio) {
   CameraModel flat = air;
   flat.port.type = CameraPort::Type::kFlat;
   flat.port.glass_thickness_m = 0.01;
-  Renderer r(w, {air}, linear_exact());
+  Renderer r(w, {air}, exact_options());
   const double du_air = centroid(r.render(Pose::Identity(), "cam")).x() - air.cx;
-  Renderer rp(w, {flat}, linear_exact());
+  Renderer rp(w, {flat}, exact_options());
   const Frame fp = rp.render(Pose::Identity(), "cam");
   const double du_port = centroid(fp).x() - flat.cx;
   std::printf("image offset in air %.3f px, behind a flat port %.3f px: ratio %.4f (n_water / n_air = 1.34)\n", du_air,
@@ -112,7 +93,7 @@ TEST(CameraOptics, WaterEquivalentModelPredictsFarOffAxisPixels) {
        {Eigen::Vector3d(4.0, 1.5, 0.0), Eigen::Vector3d(4.0, -1.2, 0.9), Eigen::Vector3d(4.0, 0.6, -0.7)}) {
     World w = empty_world();
     w.objects.push_back(marker(p, 0.1));
-    Renderer r(w, {cam}, linear_exact());
+    Renderer r(w, {cam}, exact_options());
     const Frame f = r.render(Pose::Identity(), "cam");
     const Eigen::Vector3d pc = cam.X_BC.inverse() * p;
     std::vector<cv::Point3d> obj = {{pc.x(), pc.y(), pc.z()}};
@@ -136,8 +117,8 @@ TEST(CameraOptics, VignettingFollowsCosFourOfTheFieldAngle) {
   cam.exposure = 2.0;
   CameraModel vig = cam;
   vig.vignetting = 1.0;
-  Renderer r(empty_world(), {cam}, linear_exact());
-  Renderer rv(empty_world(), {vig}, linear_exact());
+  Renderer r(empty_world(), {cam}, exact_options());
+  Renderer rv(empty_world(), {vig}, exact_options());
   const Frame a = r.render(body_at({0, 0, 5.0}), "cam");
   const Frame b = rv.render(body_at({0, 0, 5.0}), "cam");
   double worst = 0.0;
@@ -163,9 +144,9 @@ TEST(CameraOptics, ShotNoiseStdGrowsAsTheSquareRootOfTheSignal) {
     CameraModel cam = forward_camera(160, 120, 120.0);
     cam.exposure = exposure;
     cam.shot_noise = 0.004;
-    RenderOptions noisy = linear_exact();
+    RenderOptions noisy = exact_options();
     noisy.noise = true;
-    Renderer clean_r(empty_world(), {cam}, linear_exact());
+    Renderer clean_r(empty_world(), {cam}, exact_options());
     Renderer noisy_r(empty_world(), {cam}, noisy);
     const Frame c = clean_r.render(body_at({0, 0, 5.0}), "cam");
     const Frame n = noisy_r.render(body_at({0, 0, 5.0}), "cam");
@@ -196,5 +177,5 @@ TEST(CameraOptics, CentredDomeChangesNothingAndBadPortsAreErrors) {
   CameraModel bad = cam;
   bad.port.type = CameraPort::Type::kFlat;
   bad.port.glass_thickness_m = -0.01;
-  EXPECT_THROW(Renderer(empty_world(), {bad}, linear_exact()), ConfigError);
+  EXPECT_THROW(Renderer(empty_world(), {bad}, exact_options()), ConfigError);
 }

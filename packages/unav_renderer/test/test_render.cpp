@@ -5,35 +5,16 @@
 
 #include <cmath>
 
+#include "render_test_util.hpp"
 #include "unav_renderer/errors.hpp"
 #include "unav_renderer/renderer.hpp"
 
 using namespace unav::renderer;
+using unav::renderer::test::body_at;
+using unav::renderer::test::empty_world;
+using unav::renderer::test::exact_options;
 
 namespace {
-
-// Exact optics: no blur, snow, noise, lamps, auto exposure; linear 8-bit output.
-RenderOptions exact_options() {
-  RenderOptions o;
-  o.forward_scatter = false;
-  o.marine_snow = false;
-  o.caustics = false;
-  o.noise = false;
-  o.lamps = false;
-  o.auto_exposure = false;
-  o.srgb_output = false;
-  o.texture_size = 64;
-  return o;
-}
-
-World empty_world() {
-  World w;
-  w.name = "test";
-  w.file = "<test world>";
-  w.seabed.enabled = false;
-  w.sun.direction_W = {0, 0, 1};
-  return w;
-}
 
 Object plane(const Eigen::Vector3d& p_W, const Eigen::Vector3d& rpy, double size, SegClass cls,
              const Eigen::Vector3d& albedo = {0.5, 0.5, 0.5}) {
@@ -66,8 +47,6 @@ CameraModel front_camera(int w, int h, double fx, double fy, double cx, double c
   c.X_BC.linear() = R_camera_body_to_optical();
   return c;
 }
-
-Pose body_at(const Eigen::Vector3d& p_W) { return pose_from_xyz_rpy(p_W, Eigen::Vector3d::Zero()); }
 
 Eigen::Vector3d mean_rgb(const Frame& f, int u0, int v0, int half) {
   Eigen::Vector3d s = Eigen::Vector3d::Zero();

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 
+#include "render_test_util.hpp"
 #include "unav_renderer/errors.hpp"
 #include "unav_renderer/renderer.hpp"
 
@@ -11,18 +12,12 @@ using namespace unav::renderer;
 
 namespace {
 
+// The exact optics of the image tests with the lamps, shadows and in-scattering chosen.
 RenderOptions exact(bool lamps, bool shadows, int scatter_samples) {
-  RenderOptions o;
-  o.forward_scatter = false;
-  o.marine_snow = false;
-  o.caustics = false;
-  o.noise = false;
+  RenderOptions o = unav::renderer::test::exact_options();
   o.lamps = lamps;
   o.shadows = shadows;
   o.lamp_scatter_samples = scatter_samples;
-  o.auto_exposure = false;
-  o.srgb_output = false;
-  o.texture_size = 64;
   return o;
 }
 

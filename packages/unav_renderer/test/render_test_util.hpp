@@ -1,0 +1,35 @@
+// Helpers shared by the renderer's image tests (one test executable).
+#pragma once
+
+#include "unav_renderer/renderer.hpp"
+
+namespace unav::renderer::test {
+
+// Exact optics: no blur, snow, caustics, noise, lamps, auto exposure; linear 8-bit output.
+inline RenderOptions exact_options() {
+  RenderOptions o;
+  o.forward_scatter = false;
+  o.marine_snow = false;
+  o.caustics = false;
+  o.noise = false;
+  o.lamps = false;
+  o.auto_exposure = false;
+  o.srgb_output = false;
+  o.texture_size = 64;
+  return o;
+}
+
+// Water only: no seabed, the sun straight down.
+inline World empty_world() {
+  World w;
+  w.name = "test";
+  w.file = "<test world>";
+  w.seabed.enabled = false;
+  w.sun.direction_W = {0, 0, 1};
+  return w;
+}
+
+// A level body at p_W (world_ned).
+inline Pose body_at(const Eigen::Vector3d& p_W) { return pose_from_xyz_rpy(p_W, Eigen::Vector3d::Zero()); }
+
+}  // namespace unav::renderer::test
