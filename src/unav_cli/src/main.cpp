@@ -15,6 +15,7 @@
 #include "cli_common.hpp"
 #include "graph.hpp"
 #include "raw_type.hpp"
+#include "security_command.hpp"
 #include "unav_introspection/cdr_codec.hpp"
 #include "unav_introspection/type_registry.hpp"
 #include "unav_launch/launch_description.hpp"
@@ -328,6 +329,7 @@ int main(int argc, char** argv) {
   app.add_subcommand("datagen", "randomized synthetic datasets, locally or on Slurm (unav datagen --help)");
 
   const auto run_bag = add_bag_command(app);
+  const auto run_security = add_security_command(app);
 
   CLI11_PARSE(app, argc, argv);
   if (full_length) echo_opts.truncate_length = intro::EchoOptions::kFullLength;
@@ -340,6 +342,7 @@ int main(int argc, char** argv) {
     if (node_list_cmd->parsed()) return node_list();
     if (launch_cmd->parsed()) return launch(launch_file, launch_args);
     if (app.got_subcommand("bag")) return run_bag();
+    if (app.got_subcommand("security")) return run_security();
   } catch (const UsageError& e) {
     std::cerr << "unav: error: " << e.what() << std::endl;
     return 2;

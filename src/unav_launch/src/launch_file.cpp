@@ -44,11 +44,16 @@ std::vector<std::string> split_whitespace(const std::string& text) {
 
 std::string type_name(const YAML::Node& node) {
   switch (node.Type()) {
-    case YAML::NodeType::Null: return "null";
-    case YAML::NodeType::Scalar: return "a scalar '" + node.Scalar() + "'";
-    case YAML::NodeType::Sequence: return "a sequence";
-    case YAML::NodeType::Map: return "a map";
-    default: return "undefined";
+    case YAML::NodeType::Null:
+      return "null";
+    case YAML::NodeType::Scalar:
+      return "a scalar '" + node.Scalar() + "'";
+    case YAML::NodeType::Sequence:
+      return "a sequence";
+    case YAML::NodeType::Map:
+      return "a map";
+    default:
+      return "undefined";
   }
 }
 
@@ -76,16 +81,14 @@ std::string normalize_namespace(const std::string& ns) {
   return out;
 }
 
-std::string quoted_list(const std::vector<std::string>& items) {
-  return items.empty() ? "none" : join(items, ", ");
-}
+std::string quoted_list(const std::vector<std::string>& items) { return items.empty() ? "none" : join(items, ", "); }
 
 // The variables visible in one launch file.
 struct Scope {
   std::string file;
-  std::string dir;                              // absolute folder of `file`, for $(dirname)
-  std::map<std::string, std::string> values;    // declared arguments
-  std::map<std::string, std::string> given;     // command line and include arguments
+  std::string dir;                            // absolute folder of `file`, for $(dirname)
+  std::map<std::string, std::string> values;  // declared arguments
+  std::map<std::string, std::string> given;   // command line and include arguments
 };
 
 class Loader {
@@ -100,8 +103,10 @@ class Loader {
     std::vector<std::string> declared(declared_.begin(), declared_.end());
     for (const auto& [name, value] : overrides_) {
       if (declared_.count(name) == 0) {
-        throw LaunchError(path + ": argument '" + name + "' given on the command line is not "
-                          "declared by the launch file (declared: " + quoted_list(declared) + ")");
+        throw LaunchError(path + ": argument '" + name +
+                          "' given on the command line is not "
+                          "declared by the launch file (declared: " +
+                          quoted_list(declared) + ")");
       }
     }
     return out_;
@@ -126,8 +131,7 @@ class Loader {
     }
     for (const auto& item : root) {
       if (item.first.as<std::string>() != "launch") {
-        throw LaunchError(path + ": unknown top-level key '" + item.first.as<std::string>() +
-                          "' (allowed: launch)");
+        throw LaunchError(path + ": unknown top-level key '" + item.first.as<std::string>() + "' (allowed: launch)");
       }
     }
     const YAML::Node entries = static_cast<const YAML::Node&>(root)["launch"];
@@ -159,8 +163,7 @@ class Loader {
         if (kind == "arg") {
           load_arg(body, scope, detail);
         } else if (kind == "node") {
-          load_node(body, scope, detail, path + ":" + std::to_string(line) + " launch[" +
-                                             std::to_string(i) + "].node");
+          load_node(body, scope, detail, path + ":" + std::to_string(line) + " launch[" + std::to_string(i) + "].node");
         } else {
           load_include(body, scope, depth);
         }
@@ -172,8 +175,7 @@ class Loader {
 
   // ---- field access -------------------------------------------------------------------
 
-  static void check_keys(const YAML::Node& map, const std::vector<std::string>& allowed,
-                         const std::string& field) {
+  static void check_keys(const YAML::Node& map, const std::vector<std::string>& allowed, const std::string& field) {
     for (const auto& item : map) {
       const std::string key = item.first.as<std::string>();
       if (std::find(allowed.begin(), allowed.end(), key) == allowed.end()) {
@@ -182,8 +184,8 @@ class Loader {
     }
   }
 
-  std::optional<std::string> get_string(const YAML::Node& map, const std::string& key,
-                                        const Scope& scope, const std::string& field = "") {
+  std::optional<std::string> get_string(const YAML::Node& map, const std::string& key, const Scope& scope,
+                                        const std::string& field = "") {
     const YAML::Node node = map[key];
     if (!node) {
       return std::nullopt;
@@ -281,8 +283,8 @@ class Loader {
       expect(argc == 1, "$(var NAME)");
       auto it = scope.values.find(words[1]);
       if (it == scope.values.end()) {
-        throw RuleError(what + ": argument '" + words[1] + "' is not declared (add '- arg: {name: " +
-                        words[1] + "}' before its use)");
+        throw RuleError(what + ": argument '" + words[1] + "' is not declared (add '- arg: {name: " + words[1] +
+                        "}' before its use)");
       }
       return it->second;
     }
@@ -313,8 +315,7 @@ class Loader {
   }
 
   static std::string package_not_found(const std::string& package) {
-    return "package '" + package + "' not found (searched prefixes: " +
-           quoted_list(package_search_prefixes(package)) +
+    return "package '" + package + "' not found (searched prefixes: " + quoted_list(package_search_prefixes(package)) +
            "; source install/setup.bash or set AMENT_PREFIX_PATH)";
   }
 
@@ -337,8 +338,7 @@ class Loader {
     } else if (auto fallback = get_string(body, "default", scope)) {
       value = *fallback;
     } else {
-      throw RuleError("argument '" + name + "' has no default and no value (pass " + name +
-                      ":=VALUE)");
+      throw RuleError("argument '" + name + "' has no default and no value (pass " + name + ":=VALUE)");
     }
     const YAML::Node description = body["description"];
     if (description && !description.IsScalar()) {
@@ -348,16 +348,17 @@ class Loader {
     out_.arguments.push_back({name, value, description ? description.Scalar() : "", scope.file});
   }
 
-  void load_node(const YAML::Node& body, const Scope& scope, std::string& detail,
-                 const std::string& source) {
+  void load_node(const YAML::Node& body, const Scope& scope, std::string& detail, const std::string& source) {
     NodeDescription node;
     node.source = source;
     // pkg and exec first, so every later message names the node.
     auto pkg = get_string(body, "pkg", scope);
     auto exec = get_string(body, "exec", scope);
     detail = " (pkg '" + pkg.value_or("?") + "', exec '" + exec.value_or("?") + "')";
-    check_keys(body, {"pkg", "exec", "name", "namespace", "param", "remap", "args", "env",
-                      "respawn", "respawn_delay", "required", "on_exit", "output"}, "");
+    check_keys(body,
+               {"pkg", "exec", "name", "namespace", "param", "remap", "args", "ros_args", "env", "respawn",
+                "respawn_delay", "required", "on_exit", "output"},
+               "");
     if (!pkg) throw RuleError("missing required key 'pkg'");
     if (!exec) throw RuleError("missing required key 'exec'");
     node.package = *pkg;
@@ -434,12 +435,12 @@ class Loader {
     }
 
     node.args = split_whitespace(get_string(body, "args", scope).value_or(""));
+    node.ros_args = split_whitespace(get_string(body, "ros_args", scope).value_or(""));
     node.respawn = get_bool(body, "respawn", scope).value_or(false);
     if (auto delay = get_string(body, "respawn_delay", scope)) {
       char* end = nullptr;
       node.respawn_delay_s = std::strtod(delay->c_str(), &end);
-      if (delay->empty() || *end != '\0' || !std::isfinite(node.respawn_delay_s) ||
-          node.respawn_delay_s < 0.0) {
+      if (delay->empty() || *end != '\0' || !std::isfinite(node.respawn_delay_s) || node.respawn_delay_s < 0.0) {
         throw RuleError("respawn_delay must be a number of seconds >= 0, got '" + *delay + "'");
       }
     }
@@ -484,8 +485,8 @@ class Loader {
       throw RuleError("included file '" + file + "' not found");
     }
     if (depth + 1 > kMaxIncludeDepth) {
-      throw RuleError("includes nested deeper than " + std::to_string(kMaxIncludeDepth) +
-                      " (recursive include of '" + file + "'?)");
+      throw RuleError("includes nested deeper than " + std::to_string(kMaxIncludeDepth) + " (recursive include of '" +
+                      file + "'?)");
     }
     Scope child;
     child.values = scope.values;
@@ -494,8 +495,7 @@ class Loader {
     for (std::size_t i = 0; args && i < args.size(); ++i) {
       std::string field;
       const YAML::Node item = get_map_item(args, i, "arg", {"name", "value"}, field);
-      child.given[require_string(item, "name", scope, field)] =
-          require_string(item, "value", scope, field);
+      child.given[require_string(item, "name", scope, field)] = require_string(item, "value", scope, field);
     }
     load_file(file, child, depth + 1);
   }
@@ -508,8 +508,7 @@ class Loader {
 
 }  // namespace
 
-LaunchDescription load_launch_file(const std::string& path,
-                                   const std::map<std::string, std::string>& arg_overrides) {
+LaunchDescription load_launch_file(const std::string& path, const std::map<std::string, std::string>& arg_overrides) {
   return Loader(arg_overrides).load(path);
 }
 
@@ -545,6 +544,7 @@ std::vector<std::string> node_argv(const NodeDescription& node) {
   for (const auto& [from, to] : node.remaps) {
     ros.insert(ros.end(), {"-r", from + ":=" + to});
   }
+  ros.insert(ros.end(), node.ros_args.begin(), node.ros_args.end());
   if (!ros.empty()) {
     argv.push_back("--ros-args");
     argv.insert(argv.end(), ros.begin(), ros.end());

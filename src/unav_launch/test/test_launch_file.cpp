@@ -57,9 +57,8 @@ launch:
   const NodeDescription& node = description.nodes[0];
   EXPECT_EQ(node.ns, "/auv");  // command line beats the default
   const std::vector<std::pair<std::string, std::string>> expected{
-      {"rate", "10.0"}, {"env", "from_env"}, {"fallback", "default value"},
-      {"share", prefix_ + "/share/fakepkg"}, {"prefix", prefix_}, {"here", root_ + "/x"},
-      {"list", "[1, 10.0]"}};
+      {"rate", "10.0"},    {"env", "from_env"},    {"fallback", "default value"}, {"share", prefix_ + "/share/fakepkg"},
+      {"prefix", prefix_}, {"here", root_ + "/x"}, {"list", "[1, 10.0]"}};
   ASSERT_EQ(node.parameters.size(), expected.size());
   for (std::size_t i = 0; i < expected.size(); ++i) {
     EXPECT_EQ(node.parameters[i].name, expected[i].first);
@@ -84,6 +83,7 @@ launch:
       remap:
         - {from: chatter, to: /rov/chatter}
       args: "--extra  flag"
+      ros_args: "--enclave /rov/talker"
       env: [{name: FOO, value: bar}]
       respawn: true
       respawn_delay: 1.5
@@ -92,10 +92,9 @@ launch:
 )yaml");
   const NodeDescription node = load_launch_file(file).nodes.at(0);
   const std::string exe = prefix_ + "/lib/fakepkg/talker";
-  EXPECT_EQ(node_argv(node),
-            (Strings{exe, "--extra", "flag", "--ros-args", "-r", "__node:=talker", "-r",
-                     "__ns:=/rov", "--params-file", prefix_ + "/share/fakepkg/config/talker.yaml",
-                     "-p", "rate:=10.0", "-r", "chatter:=/rov/chatter"}));
+  EXPECT_EQ(node_argv(node), (Strings{exe, "--extra", "flag", "--ros-args", "-r", "__node:=talker", "-r", "__ns:=/rov",
+                                      "--params-file", prefix_ + "/share/fakepkg/config/talker.yaml", "-p",
+                                      "rate:=10.0", "-r", "chatter:=/rov/chatter", "--enclave", "/rov/talker"}));
   EXPECT_TRUE(node.respawn);
   EXPECT_DOUBLE_EQ(node.respawn_delay_s, 1.5);
   EXPECT_TRUE(node.required);
@@ -148,23 +147,32 @@ TEST_F(LaunchFileTest, InvalidInputNamesFileEntryAndValue) {
       {node + "{pkg: fakepkg, exec: talker, respawn: maybe}", {entry, "respawn must be true or false, got 'maybe'"}},
       {node + "{pkg: fakepkg, exec: talker, respawn_delay: -1}", {entry, "respawn_delay", "'-1'"}},
       {node + "{pkg: fakepkg, exec: talker, remap: chatter}", {entry, "remap must be a sequence"}},
-      {node + "{pkg: fakepkg, exec: talker, param: [{name: r, value: {x: 1}}]}", {entry, "param[0]: value must be a string, got a map"}},
+      {node + "{pkg: fakepkg, exec: talker, param: [{name: r, value: {x: 1}}]}",
+       {entry, "param[0]: value must be a string, got a map"}},
       {node + "{pkg: fakepkg, exec: talker, param: [{nme: r}]}", {entry, "param[0]: unknown key 'nme'"}},
       {node + "{pkg: fakepkg, exec: talker, on_exit: restart}", {entry, "on_exit must be 'shutdown', got 'restart'"}},
       {node + "{pkg: fakepkg, exec: talker, output: file}", {entry, "output must be screen, log or both, got 'file'"}},
       {node + "{pkg: fakepkg, exec: talker, name: 'bad name'}", {entry, "name 'bad name' is not a valid"}},
-      {node + "{pkg: fakepkg, exec: talker, name: t, namespace: rov}\n  - node: {pkg: fakepkg, exec: talker, name: t, namespace: /rov/}",
-       {"bad.launch.yaml:4: launch[2].node (pkg 'fakepkg', exec 'talker')", "duplicate node name '/rov/t'", "bad.launch.yaml:3 launch[1].node"}},
-      {node + "{pkg: fakepkg, exec: talker, param: [{from: /nonexistent/p.yaml}]}", {entry, "param[0]: parameter file '/nonexistent/p.yaml' not found"}},
+      {node + "{pkg: fakepkg, exec: talker, name: t, namespace: rov}\n  - node: {pkg: fakepkg, exec: talker, name: t, "
+              "namespace: /rov/}",
+       {"bad.launch.yaml:4: launch[2].node (pkg 'fakepkg', exec 'talker')", "duplicate node name '/rov/t'",
+        "bad.launch.yaml:3 launch[1].node"}},
+      {node + "{pkg: fakepkg, exec: talker, param: [{from: /nonexistent/p.yaml}]}",
+       {entry, "param[0]: parameter file '/nonexistent/p.yaml' not found"}},
       {node + "{pkg: fakepkg, exec: talkr}",
-       {"launch[1].node (pkg 'fakepkg', exec 'talkr')", "executable 'talkr' not found in package 'fakepkg' (searched: " + prefix_ + "/lib/fakepkg)"}},
+       {"launch[1].node (pkg 'fakepkg', exec 'talkr')",
+        "executable 'talkr' not found in package 'fakepkg' (searched: " + prefix_ + "/lib/fakepkg)"}},
       {node + "{pkg: nopkg, exec: talker}", {"package 'nopkg' not found (searched prefixes: " + prefix_}},
-      {node + "{pkg: fakepkg, exec: talker, name: $(var nope)}", {entry, "name: $(var nope): argument 'nope' is not declared"}},
-      {node + "{pkg: fakepkg, exec: talker, name: $(env UNAV_TEST_UNSET)}", {"environment variable 'UNAV_TEST_UNSET' is not set"}},
+      {node + "{pkg: fakepkg, exec: talker, name: $(var nope)}",
+       {entry, "name: $(var nope): argument 'nope' is not declared"}},
+      {node + "{pkg: fakepkg, exec: talker, name: $(env UNAV_TEST_UNSET)}",
+       {"environment variable 'UNAV_TEST_UNSET' is not set"}},
       {node + "{pkg: fakepkg, exec: talker, name: $(anon x)}", {"unknown substitution '$(anon x)'"}},
       {node + "{pkg: fakepkg, exec: talker, name: $(var a}", {"unterminated substitution"}},
-      {"launch:\n  - arg: {name: needed}", {"launch[0].arg 'needed': argument 'needed' has no default", "needed:=VALUE"}},
-      {"launch:\n  - include: {file: missing.launch.yaml}", {"launch[0].include: included file '" + root_ + "/missing.launch.yaml' not found"}},
+      {"launch:\n  - arg: {name: needed}",
+       {"launch[0].arg 'needed': argument 'needed' has no default", "needed:=VALUE"}},
+      {"launch:\n  - include: {file: missing.launch.yaml}",
+       {"launch[0].include: included file '" + root_ + "/missing.launch.yaml' not found"}},
       {"launch:\n  - include: {file: bad.launch.yaml}", {"nested deeper than 32"}},
   };
   ::unsetenv("UNAV_TEST_UNSET");

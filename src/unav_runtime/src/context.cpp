@@ -11,6 +11,7 @@
 #include <fastdds/rtps/transport/shared_mem/SharedMemTransportDescriptor.h>
 #include <fastdds/dds/domain/DomainParticipant.hpp>
 #include <fastdds/dds/domain/DomainParticipantFactory.hpp>
+#include <fastdds/dds/log/Log.hpp>
 #include <fastdds/dds/publisher/DataWriter.hpp>
 #include <fastdds/dds/publisher/Publisher.hpp>
 #include <fastdds/dds/subscriber/DataReader.hpp>
@@ -82,6 +83,24 @@ Context::Context(int argc, const char* const* argv, const ContextOptions& option
   if (!args_.log_level.empty()) set_log_level(args_.log_level);
   domain_id_ = options.domain_id >= 0 ? options.domain_id : domain_from_env();
 
+  // DDS Security (SROS2 keystore, ROS_SECURITY_* switches): Fast DDS's built-in plugins.
+  // Resolved before any thread starts, so a refusal (Enforce without keys) is a plain exception.
+  const security::Environment sec = options.security ? *options.security : security::Environment::from_env();
+  const std::string enclave = !sec.enclave_override.empty() ? sec.enclave_override
+                              : !args_.enclave.empty()      ? args_.enclave
+                              : !options.enclave.empty()    ? options.enclave
+                                                            : "/";
+  std::string security_warning;
+  const auto security_properties = security::participant_properties(sec, enclave, &security_warning);
+  if (security_properties) secured_enclave_ = enclave;
+
+  // UNAV_FASTDDS_LOG=warning|info shows Fast DDS' own warnings (discovery, security handshakes).
+  if (const char* level = std::getenv("UNAV_FASTDDS_LOG")) {
+    const std::string l = level;
+    if (l == "warning") eprosima::fastdds::dds::Log::SetVerbosity(eprosima::fastdds::dds::Log::Warning);
+    if (l == "info") eprosima::fastdds::dds::Log::SetVerbosity(eprosima::fastdds::dds::Log::Info);
+  }
+
   handle_signals_ = options.handle_signals;
   if (handle_signals_) {
     // A process started in the background by a non-interactive shell inherits SIGINT ignored,
@@ -95,6 +114,35 @@ Context::Context(int argc, const char* const* argv, const ContextOptions& option
     signal_thread_ = std::thread([this] { signal_loop(); });
   }
 
+  try {
+    create_participant(argc, argv, options, enclave, security_properties, security_warning, sec.keystore);
+  } catch (...) {
+    // The destructor will not run: stop what the constructor started, then report.
+    if (participant_) {
+      participant_->delete_contained_entities();
+      fdds::DomainParticipantFactory::get_instance()->delete_participant(participant_);
+      participant_ = nullptr;
+    }
+    stop_signal_thread();
+    throw;
+  }
+}
+
+Context::~Context() {
+  for (auto it = shutdown_hooks_.rbegin(); it != shutdown_hooks_.rend(); ++it) (*it)();
+  executor_.shutdown();
+  clock_subscription_.reset();
+  if (participant_) {
+    participant_->delete_contained_entities();
+    fdds::DomainParticipantFactory::get_instance()->delete_participant(participant_);
+  }
+  stop_signal_thread();
+}
+
+void Context::create_participant(
+    int argc, const char* const* argv, const ContextOptions& options, const std::string& enclave,
+    const std::optional<std::vector<std::pair<std::string, std::string>>>& security_properties,
+    const std::string& security_warning, const std::string& keystore) {
   fdds::DomainParticipantQos pqos;
   std::string pname = options.participant_name;
   if (pname.empty() && argc > 0 && argv && argv[0]) {
@@ -102,9 +150,14 @@ Context::Context(int argc, const char* const* argv, const ContextOptions& option
     pname = pname.substr(pname.find_last_of('/') + 1);
   }
   pqos.name(pname.empty() ? "unav" : pname);
+  if (security_properties) {
+    for (const auto& [name, value] : *security_properties) pqos.properties().properties().emplace_back(name, value);
+  } else if (!security_warning.empty()) {
+    make_logger(pqos.name().to_string())->warn("{}", security_warning);
+  }
   // ROS 2 participants announce their security enclave in USER_DATA.
-  const std::string enclave = "enclave=/;";
-  pqos.user_data().data_vec(std::vector<eprosima::fastrtps::rtps::octet>(enclave.begin(), enclave.end()));
+  const std::string user_data = "enclave=" + enclave + ";";
+  pqos.user_data().data_vec(std::vector<eprosima::fastrtps::rtps::octet>(user_data.begin(), user_data.end()));
   pqos.transport().use_builtin_transports = false;
   // UNAV_TRANSPORT=udp turns shared memory off (debugging, containers without /dev/shm).
   const char* transport = std::getenv("UNAV_TRANSPORT");
@@ -121,8 +174,13 @@ Context::Context(int argc, const char* const* argv, const ContextOptions& option
   participant_ = fdds::DomainParticipantFactory::get_instance()->create_participant(
       domain_id_, pqos, options.participant_listener,
       options.participant_listener ? fdds::StatusMask::none() : fdds::StatusMask::all());
-  if (!participant_)
-    throw MiddlewareError("Fast DDS could not create a participant on domain " + std::to_string(domain_id_));
+  if (!participant_) {
+    throw MiddlewareError("Fast DDS could not create a participant on domain " + std::to_string(domain_id_) +
+                          (secured_enclave_.empty()
+                               ? std::string()
+                               : " with security enclave '" + secured_enclave_ + "' (keystore " + keystore +
+                                     "): its certificate, key or signed documents were refused"));
+  }
   publisher_ = participant_->create_publisher(fdds::PUBLISHER_QOS_DEFAULT);
   subscriber_ = participant_->create_subscriber(fdds::SUBSCRIBER_QOS_DEFAULT);
   if (!publisher_ || !subscriber_) throw MiddlewareError("Fast DDS could not create a publisher/subscriber");
@@ -132,19 +190,11 @@ Context::Context(int argc, const char* const* argv, const ContextOptions& option
   graph_writer_ = create_writer(graph_topic, QoS::static_latched());
 }
 
-Context::~Context() {
-  for (auto it = shutdown_hooks_.rbegin(); it != shutdown_hooks_.rend(); ++it) (*it)();
-  executor_.shutdown();
-  clock_subscription_.reset();
-  if (participant_) {
-    participant_->delete_contained_entities();
-    fdds::DomainParticipantFactory::get_instance()->delete_participant(participant_);
-  }
-  if (handle_signals_) {
-    exiting_ = true;
-    pthread_kill(signal_thread_.native_handle(), SIGUSR2);
-    signal_thread_.join();
-  }
+void Context::stop_signal_thread() {
+  if (!handle_signals_ || !signal_thread_.joinable()) return;
+  exiting_ = true;
+  pthread_kill(signal_thread_.native_handle(), SIGUSR2);
+  signal_thread_.join();
 }
 
 void Context::signal_loop() {
@@ -194,6 +244,12 @@ fdds::Topic* Context::topic(const std::string& dds_topic, fdds::TopicDataType* t
   return t;
 }
 
+std::string Context::access_hint(const char* way) const {
+  if (secured_enclave_.empty()) return "";
+  return std::string(": access control denies it? enclave '") + secured_enclave_ + "' must be allowed to " + way +
+         " it (its permissions.xml in the keystore)";
+}
+
 fdds::DataWriter* Context::create_writer(fdds::Topic* t, const QoS& q) {
   fdds::DataWriterQos wqos = publisher_->get_default_datawriter_qos();
   apply_qos(q, wqos.reliability(), wqos.durability(), wqos.history());
@@ -206,7 +262,8 @@ fdds::DataWriter* Context::create_writer(fdds::Topic* t, const QoS& q) {
     wqos.reliable_writer_qos().times.heartbeatPeriod = eprosima::fastrtps::Duration_t(0, 200000000);
   }
   fdds::DataWriter* w = publisher_->create_datawriter(t, wqos);
-  if (!w) throw MiddlewareError("Fast DDS could not create a writer on '" + t->get_name() + "'");
+  if (!w)
+    throw MiddlewareError("Fast DDS could not create a writer on '" + t->get_name() + "'" + access_hint("publish"));
   return w;
 }
 
@@ -217,7 +274,8 @@ fdds::DataReader* Context::create_reader(fdds::Topic* t, const QoS& q, void* lis
   rqos.data_sharing().off();
   fdds::DataReader* r = subscriber_->create_datareader(t, rqos, static_cast<fdds::DataReaderListener*>(listener),
                                                        fdds::StatusMask::data_available());
-  if (!r) throw MiddlewareError("Fast DDS could not create a reader on '" + t->get_name() + "'");
+  if (!r)
+    throw MiddlewareError("Fast DDS could not create a reader on '" + t->get_name() + "'" + access_hint("subscribe"));
   return r;
 }
 

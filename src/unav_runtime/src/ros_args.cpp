@@ -59,6 +59,8 @@ RosArgs parse_ros_args(const std::vector<std::string>& argv) {
         out.node_namespace = r.to;
       else
         out.remaps.push_back(r);
+    } else if (a == "-e" || a == "--enclave") {
+      out.enclave = value("an enclave name (/rov/physics_server)");
     } else if (a == "--params-file") {
       out.params_files.push_back(value("a file path"));
     } else if (a == "--log-level") {
@@ -75,7 +77,7 @@ RosArgs parse_ros_args(const std::vector<std::string>& argv) {
       // accepted for compatibility with ros2 launch; no effect
     } else {
       throw ArgumentError("unknown ROS argument '" + a +
-                          "' (known: -p/--param, -r/--remap, --params-file, --log-level)");
+                          "' (known: -p/--param, -r/--remap, --params-file, --log-level, -e/--enclave)");
     }
   }
   return out;

@@ -42,10 +42,9 @@ TEST(Names, RemapsApplyToResolvedNames) {
 }
 
 TEST(RosArgs, ParsesRos2Syntax) {
-  const RosArgs a = parse_ros_args(std::vector<std::string>{"exe", "pos", "--ros-args", "-p", "rate:=2.5", "-r",
-                                                            "__node:=t", "-r", "__ns:=/rov", "--params-file", "f.yaml",
-                                                            "-r", "talker:chatter:=/c", "--log-level", "debug", "--",
-                                                            "tail"});
+  const RosArgs a = parse_ros_args(std::vector<std::string>{
+      "exe", "pos", "--ros-args", "-p", "rate:=2.5", "-r", "__node:=t", "-r", "__ns:=/rov", "--params-file", "f.yaml",
+      "-r", "talker:chatter:=/c", "--log-level", "debug", "-e", "/rov/t", "--", "tail"});
   EXPECT_EQ(a.non_ros_args, (std::vector<std::string>{"exe", "pos", "tail"}));
   ASSERT_EQ(a.params.size(), 1u);
   EXPECT_EQ(a.params[0].name, "rate");
@@ -57,6 +56,8 @@ TEST(RosArgs, ParsesRos2Syntax) {
   EXPECT_EQ(a.remaps[0].node, "talker");
   EXPECT_EQ(a.remaps[0].from, "chatter");
   EXPECT_EQ(a.log_level, "debug");
+  EXPECT_EQ(a.enclave, "/rov/t");
+  EXPECT_EQ(parse_ros_args(std::vector<std::string>{"exe", "--ros-args", "--enclave", "/x"}).enclave, "/x");
 }
 
 TEST(RosArgs, BadArgumentsNameTheArgument) {

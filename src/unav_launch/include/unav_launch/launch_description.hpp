@@ -5,6 +5,7 @@
 //     - node: {pkg: unav_examples, exec: talker, name: talker, namespace: rov,
 //              param: [{from: FILE}, {name: rate, value: "$(var rate)"}],
 //              remap: [{from: chatter, to: /rov/chatter}], args: "--extra flag",
+//              ros_args: "--enclave /rov/talker",
 //              env: [{name: FOO, value: bar}], respawn: true, respawn_delay: 1.0,
 //              required: true, output: screen}     # `on_exit: shutdown` == `required: true`
 //     - include: {file: "$(dirname)/other.launch.yaml", arg: [{name: rate, value: "5"}]}
@@ -34,28 +35,29 @@ class LaunchError : public std::runtime_error {
 
 /// One `param` entry of a node, in file order.
 struct NodeParameter {
-  std::string file;   ///< Parameters file (existing), passed as --params-file FILE; or empty.
-  std::string name;   ///< When file is empty: passed as -p NAME:=VALUE.
+  std::string file;  ///< Parameters file (existing), passed as --params-file FILE; or empty.
+  std::string name;  ///< When file is empty: passed as -p NAME:=VALUE.
   std::string value;
 };
 
 /// A node to start, with every substitution resolved and every path checked.
 struct NodeDescription {
   std::string package;
-  std::string executable;       ///< Executable name as in the file.
-  std::string executable_path;  ///< Resolved file, <prefix>/lib/<package>/<executable>.
-  std::string name;             ///< Node name remap (-r __node:=); empty keeps the node's own.
-  std::string ns;               ///< Absolute namespace ("/rov"), empty for none.
-  std::vector<std::string> args;  ///< Extra argv before --ros-args.
+  std::string executable;             ///< Executable name as in the file.
+  std::string executable_path;        ///< Resolved file, <prefix>/lib/<package>/<executable>.
+  std::string name;                   ///< Node name remap (-r __node:=); empty keeps the node's own.
+  std::string ns;                     ///< Absolute namespace ("/rov"), empty for none.
+  std::vector<std::string> args;      ///< Extra argv before --ros-args.
+  std::vector<std::string> ros_args;  ///< Extra ROS arguments after --ros-args (`--enclave /e`).
   std::vector<NodeParameter> parameters;
   std::vector<std::pair<std::string, std::string>> remaps;  ///< from, to
   std::vector<std::pair<std::string, std::string>> env;     ///< name, value (added/overridden)
   bool respawn = false;
-  double respawn_delay_s = 0.0;  ///< Wait before a respawn [s].
-  bool required = false;         ///< Its exit shuts the whole launch down.
+  double respawn_delay_s = 0.0;   ///< Wait before a respawn [s].
+  bool required = false;          ///< Its exit shuts the whole launch down.
   std::string output = "screen";  ///< "screen", "log" or "both"; all output goes to the
                                   ///< supervisor's stream (no log files).
-  std::string source;  ///< Where it was declared: "file:line launch[i].node".
+  std::string source;             ///< Where it was declared: "file:line launch[i].node".
 };
 
 /// A resolved launch argument.
@@ -83,7 +85,7 @@ LaunchDescription load_launch_file(const std::string& path,
 std::map<std::string, std::string> parse_launch_arguments(const std::vector<std::string>& items);
 
 /// The node's argv: [executable_path, args..., --ros-args, -r, __node:=NAME, -r, __ns:=/NS,
-/// (--params-file F | -p k:=v)..., (-r from:=to)...]; no --ros-args when there is nothing
+/// (--params-file F | -p k:=v)..., (-r from:=to)..., ros_args...]; no --ros-args when there is nothing
 /// to pass after it.
 std::vector<std::string> node_argv(const NodeDescription& node);
 

@@ -8,6 +8,7 @@
 #include <map>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <string>
 #include <thread>
 #include <vector>
@@ -16,6 +17,7 @@
 #include "unav_runtime/executor.hpp"
 #include "unav_runtime/qos.hpp"
 #include "unav_runtime/ros_args.hpp"
+#include "unav_runtime/security.hpp"
 
 namespace eprosima::fastdds::dds {
 class DomainParticipant;
@@ -45,6 +47,11 @@ struct ContextOptions {
   uint32_t shm_segment_bytes = 32u * 1024u * 1024u;
   /// Participant name shown by DDS tools; defaults to argv[0]'s base name.
   std::string participant_name;
+  /// DDS Security switches; unset: read ROS_SECURITY_* from the environment (security.hpp).
+  /// The enclave is ROS_SECURITY_ENCLAVE_OVERRIDE, else `--ros-args --enclave`, else `enclave`
+  /// below, else "/".
+  std::optional<security::Environment> security;
+  std::string enclave;
   /// Attached at creation so no discovery event is missed (tools listing the graph).
   eprosima::fastdds::dds::DomainParticipantListener* participant_listener = nullptr;
 };
@@ -59,6 +66,8 @@ class Context {
 
   const RosArgs& args() const { return args_; }
   int domain_id() const { return domain_id_; }
+  /// The security enclave this participant authenticated as; empty when security is off.
+  const std::string& secured_enclave() const { return secured_enclave_; }
   Executor& executor() { return executor_; }
   Clock& clock() { return clock_; }
 
@@ -90,9 +99,15 @@ class Context {
 
  private:
   void signal_loop();
+  void stop_signal_thread();
+  void create_participant(int argc, const char* const* argv, const ContextOptions& options, const std::string& enclave,
+                          const std::optional<std::vector<std::pair<std::string, std::string>>>& security_properties,
+                          const std::string& security_warning, const std::string& keystore);
+  std::string access_hint(const char* way) const;
 
   RosArgs args_;
   int domain_id_ = 0;
+  std::string secured_enclave_;
   Clock clock_;
   Executor executor_{clock_};
   eprosima::fastdds::dds::DomainParticipant* participant_ = nullptr;

@@ -1,5 +1,5 @@
 // Command-line arguments in ROS 2 form: `--ros-args --params-file F -p name:=value -r from:=to
-// -r __node:=name -r __ns:=/ns --log-level debug [--]`.
+// -r __node:=name -r __ns:=/ns --log-level debug -e /enclave [--]`.
 #pragma once
 
 #include <string>
@@ -19,9 +19,10 @@ struct RosArgs {
   std::vector<std::string> params_files;
   std::vector<ParamOverride> params;
   std::vector<RemapRule> remaps;
-  std::string node_name;  ///< from `-r __node:=name`, empty if absent
-  std::string node_namespace;  ///< from `-r __ns:=/ns`, empty if absent
-  std::string log_level;  ///< from `--log-level`, empty if absent
+  std::string node_name;                  ///< from `-r __node:=name`, empty if absent
+  std::string node_namespace;             ///< from `-r __ns:=/ns`, empty if absent
+  std::string log_level;                  ///< from `--log-level`, empty if absent
+  std::string enclave;                    ///< from `-e/--enclave` (DDS Security), empty if absent
   std::vector<std::string> non_ros_args;  ///< everything outside --ros-args (argv[0] first)
 };
 
