@@ -1,10 +1,14 @@
 // Publish-to-receive latency between two processes (fork), through the unav runtime and through
-// a minimal raw Fast DDS program with the same QoS and transports, in the same run; plus image
-// throughput. Prints a Markdown table. Usage: bench_latency [samples_small] [samples_image]
+// a minimal raw Fast DDS program with the same QoS and transports, in the same run, and through
+// the runtime with DDS Security on (SROS2 default governance: RTPS signed, data encrypted with
+// AES-GCM); plus image throughput. Prints a Markdown table.
+// Usage: bench_latency [samples_small] [samples_image]
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include <algorithm>
+#include <filesystem>
+#include <string>
 #include <cstdio>
 #include <cstdlib>
 #include <time.h>
@@ -24,11 +28,30 @@
 
 #include "sensor_msgs/msg/image.hpp"
 #include "unav_runtime/runtime.hpp"
+#include "unav_runtime/security.hpp"
 
 namespace fdds = eprosima::fastdds::dds;
 using namespace std::chrono_literals;
 
 namespace {
+
+// Set by main() for the secured rows: a keystore made before any fork.
+std::string g_keystore;  // NOLINT(cppcoreguidelines-avoid-non-const-global-variables)
+
+unav::ContextOptions runtime_options(int domain, bool secured) {
+  unav::ContextOptions o;
+  o.domain_id = domain;
+  o.handle_signals = false;
+  unav::security::Environment env;
+  if (secured) {
+    env.enable = true;
+    env.enforce = true;
+    env.keystore = g_keystore;
+    env.enclave_override = "/bench";
+  }
+  o.security = env;
+  return o;
+}
 
 int64_t mono_ns() {
   timespec ts;
@@ -115,7 +138,7 @@ Stats summarize(std::vector<int64_t> lat, size_t bytes, double seconds) {
 }
 
 // Child: subscribe, collect `n` samples (or until timeout), write Stats to `fd`.
-void run_sub(bool raw, int domain, size_t n, double period_s, int fd) {
+void run_sub(bool raw, bool secured, int domain, size_t n, double period_s, int fd) {
   const double seconds = static_cast<double>(n) * period_s;
   Stats s{};
   if (raw) {
@@ -135,10 +158,7 @@ void run_sub(bool raw, int domain, size_t n, double period_s, int fd) {
     p->delete_contained_entities();
     fdds::DomainParticipantFactory::get_instance()->delete_participant(p);
   } else {
-    unav::ContextOptions o;
-    o.domain_id = domain;
-    o.handle_signals = false;
-    unav::Context ctx(o);
+    unav::Context ctx(runtime_options(domain, secured));
     unav::Node node("bench_sub", {&ctx});
     std::vector<int64_t> lat;
     size_t bytes = 0;
@@ -156,7 +176,7 @@ void run_sub(bool raw, int domain, size_t n, double period_s, int fd) {
 
 // Parent: publish `n` samples every `period_s` once matched (both modes use raw writers'
 // matched status through the runtime or raw API).
-void run_pub(bool raw, int domain, bool big, size_t n, double period_s) {
+void run_pub(bool raw, bool secured, int domain, bool big, size_t n, double period_s) {
   auto msg = make_sample(big);
   auto pace = [&](auto&& publish, auto&& matched) {
     const auto until = std::chrono::steady_clock::now() + 15s;
@@ -188,23 +208,20 @@ void run_pub(bool raw, int domain, bool big, size_t n, double period_s) {
     p->delete_contained_entities();
     fdds::DomainParticipantFactory::get_instance()->delete_participant(p);
   } else {
-    unav::ContextOptions o;
-    o.domain_id = domain;
-    o.handle_signals = false;
-    unav::Context ctx(o);
+    unav::Context ctx(runtime_options(domain, secured));
     unav::Node node("bench_pub", {&ctx});
     auto pub = node.create_publisher<sensor_msgs::msg::Image>("/bench", unav::QoS::reliable(10));
     pace([&] { pub->publish(msg); }, [&] { return pub->subscription_count() > 0; });
   }
 }
 
-Stats measure(bool raw, bool big, size_t n, double period_s, int domain) {
+Stats measure(bool raw, bool secured, bool big, size_t n, double period_s, int domain) {
   int fds[2];
   if (pipe(fds) != 0) std::abort();
   const pid_t child = fork();
   if (child == 0) {
     close(fds[0]);
-    run_sub(raw, domain, n, period_s, fds[1]);
+    run_sub(raw, secured, domain, n, period_s, fds[1]);
     _exit(0);
   }
   // The publisher runs in a child too: Fast DDS must never be initialised in a process that
@@ -213,7 +230,7 @@ Stats measure(bool raw, bool big, size_t n, double period_s, int domain) {
   if (pub == 0) {
     close(fds[0]);
     close(fds[1]);
-    run_pub(raw, domain, big, n, period_s);
+    run_pub(raw, secured, domain, big, n, period_s);
     _exit(0);
   }
   close(fds[1]);
@@ -242,13 +259,19 @@ int main(int argc, char** argv) {
   const Case cases[] = {{"100 B Image", false, n_small, 0.002},
                         {"640x480 rgb8 (921,600 B)", true, n_image, 1.0 / 30.0},
                         {"640x480 rgb8, throughput", true, n_image, 1.0 / 500.0}};
+  g_keystore = "/tmp/unav_bench_keystore_" + std::to_string(getpid());
+  std::filesystem::remove_all(g_keystore);
+  unav::security::create_keystore(g_keystore);
+  unav::security::create_enclave(g_keystore, "/bench");
+  const char* paths[] = {"raw Fast DDS", "unav runtime", "unav runtime, secured"};
   for (const auto& c : cases) {
-    for (bool raw : {true, false}) {
-      const Stats s = measure(raw, c.big, c.n, c.period, domain);
-      std::printf("| %s | %s | %zu | %.0f Hz | %.3f | %.3f | %.1f |\n", c.name, raw ? "raw Fast DDS" : "unav runtime",
-                  s.n, 1.0 / c.period, s.p50_ms, s.p99_ms, s.mbps);
+    for (int path = 0; path < 3; ++path) {
+      const Stats s = measure(path == 0, path == 2, c.big, c.n, c.period, domain);
+      std::printf("| %s | %s | %zu | %.0f Hz | %.3f | %.3f | %.1f |\n", c.name, paths[path], s.n, 1.0 / c.period,
+                  s.p50_ms, s.p99_ms, s.mbps);
       std::fflush(stdout);
     }
   }
+  std::filesystem::remove_all(g_keystore);
   return 0;
 }
