@@ -45,6 +45,7 @@ struct KltVoNodeParams {
   std::string lockstep_name = "klt_vo";
   double image_period = 0.1;
   std::string body_frame = "base_link_frd";
+  int64_t path_max_poses = 3000;
 
   template <class Archive>
   void Serialize(Archive* a) {
@@ -58,6 +59,10 @@ struct KltVoNodeParams {
     a->Visit(
         Field("image_period", &image_period).Range(1e-3, 10.0).Unit("s").Doc("camera frame period (lockstep acks)"));
     a->Visit(Field("body_frame", &body_frame).Doc("vehicle body frame (tf parent of the camera)"));
+    a->Visit(Field("path_max_poses", &path_max_poses)
+                 .Range(1, 1e7)
+                 .Doc("poses kept in the published path (the latest; odometry has every one): bounds memory "
+                      "and the path message on long runs"));
   }
 };
 
@@ -72,6 +77,7 @@ class KltVoNode : public unav::Node {
     lockstep_ = prm.lockstep;
     ack_name_ = prm.lockstep_name;
     image_period_ = prm.image_period;
+    path_max_poses_ = static_cast<size_t>(prm.path_max_poses);
     if (!prm.cameras_config.empty()) {
       X_BC_ = unav::scene::load_camera(prm.cameras_config, cam).X_BC;  // ConfigError names file and camera
       have_mount_ = true;
@@ -200,7 +206,11 @@ class KltVoNode : public unav::Node {
     geometry_msgs::msg::dds_::PoseStamped_ ps;
     ps.header() = o.header();
     ps.pose() = p;
-    path_.poses().push_back(ps);
+    auto& poses = path_.poses();
+    poses.push_back(ps);
+    // Keep the latest path_max_poses_; trim in batches of a quarter so the cost stays O(1) per pose.
+    if (poses.size() > path_max_poses_ + path_max_poses_ / 4)
+      poses.erase(poses.begin(), poses.end() - static_cast<std::ptrdiff_t>(path_max_poses_));
     if (++frames_ % 10 == 0) {
       path_.header().stamp() = h.stamp();
       path_pub_->publish(path_);
@@ -224,6 +234,7 @@ class KltVoNode : public unav::Node {
   std::map<int64_t, GrayFrame> grays_;
   std::map<int64_t, cv::Mat> depths_;
   nav_msgs::msg::Path path_;
+  size_t path_max_poses_ = 3000;
   uint64_t frames_ = 0;
   std::shared_ptr<unav::Publisher<nav_msgs::msg::Odometry>> odom_pub_;
   std::shared_ptr<unav::Publisher<nav_msgs::msg::Path>> path_pub_;
@@ -233,4 +244,6 @@ class KltVoNode : public unav::Node {
 
 }  // namespace unav::localization
 
+#ifndef UNAV_KLT_VO_NO_MAIN
 int main(int argc, char** argv) { return unav::run_node<unav::localization::KltVoNode>(argc, argv); }
+#endif

@@ -6,13 +6,15 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <time.h>
 #include <algorithm>
-#include <filesystem>
-#include <string>
 #include <cstdio>
 #include <cstdlib>
-#include <time.h>
+#include <filesystem>
+#include <string>
 
+#include <fastdds/rtps/transport/UDPv4TransportDescriptor.h>
+#include <fastdds/rtps/transport/shared_mem/SharedMemTransportDescriptor.h>
 #include <fastdds/dds/domain/DomainParticipant.hpp>
 #include <fastdds/dds/domain/DomainParticipantFactory.hpp>
 #include <fastdds/dds/publisher/DataWriter.hpp>
@@ -23,8 +25,6 @@
 #include <fastdds/dds/subscriber/Subscriber.hpp>
 #include <fastdds/dds/topic/Topic.hpp>
 #include <fastdds/dds/topic/TypeSupport.hpp>
-#include <fastdds/rtps/transport/UDPv4TransportDescriptor.h>
-#include <fastdds/rtps/transport/shared_mem/SharedMemTransportDescriptor.h>
 
 #include "sensor_msgs/msg/image.hpp"
 #include "unav_runtime/runtime.hpp"
@@ -167,8 +167,8 @@ void run_sub(bool raw, bool secured, int domain, size_t n, double period_s, int 
                                                                    lat.push_back(latency_of(m));
                                                                    bytes += m.data().size();
                                                                  });
-    ctx.spin_until([&] { return lat.size() >= n; }, std::chrono::duration_cast<std::chrono::nanoseconds>(
-                                                         std::chrono::duration<double>(seconds + 15.0)));
+    ctx.spin_until([&] { return lat.size() >= n; },
+                   std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::duration<double>(seconds + 15.0)));
     s = summarize(lat, bytes, seconds);
   }
   (void)!write(fd, &s, sizeof(s));
