@@ -113,9 +113,12 @@ PhysicsServer::PhysicsServer(const unav::NodeOptions& options) : Node("physics_s
   if (sp.gps.enabled) gps_pub_ = create_publisher<sensor_msgs::msg::NavSatFix>("gps", unav::QoS::sensor_data());
   command_sub_ = create_subscription<unav_msgs::msg::ThrusterCommand>(
       "thrusters/command", unav::QoS::reliable(), [this](const unav_msgs::msg::ThrusterCommand& m) { on_command(m); });
-  if (lockstep_)
+  if (lockstep_) {
     ack_sub_ = create_subscription<unav_msgs::msg::LockstepAck>(
         "/lockstep/ack", unav::QoS::reliable(100), [this](const unav_msgs::msg::LockstepAck& m) { on_ack(m); });
+    drop_sub_ = create_subscription<std_msgs::msg::String>(
+        "/lockstep/drop", unav::QoS::reliable(), [this](const std_msgs::msg::String& m) { on_drop(m.data()); });
+  }
 
   odom_.header().frame_id(world_frame_);
   odom_.child_frame_id(body_frame_);
@@ -385,6 +388,18 @@ void PhysicsServer::on_ack(const unav_msgs::msg::LockstepAck& msg) {
   const bool known = barrier_->has_acked(who);
   if (!barrier_->on_ack(who, unav::nanoseconds(msg.header())) && !known)
     logger()->warn("lockstep ack from '{}', which is not in lockstep_participants", who);
+  if (barrier_t_ >= 0.0 && barrier_open()) run_steps();
+}
+
+void PhysicsServer::on_drop(const std::string& who) {
+  if (!barrier_->drop(who)) {
+    std::string listed;
+    for (const auto& p : barrier_->participants()) listed += " " + p;
+    logger()->warn("/lockstep/drop '{}': not a lockstep participant (waiting for:{})", who,
+                   listed.empty() ? " nobody" : listed);
+    return;
+  }
+  logger()->warn("lockstep: no longer waiting for '{}' (dropped through /lockstep/drop)", who);
   if (barrier_t_ >= 0.0 && barrier_open()) run_steps();
 }
 

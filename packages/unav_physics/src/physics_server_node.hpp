@@ -3,6 +3,7 @@
 // Ports (names relative to the node namespace, default /rov; frames world_ned / base_link_frd):
 //   sub  thrusters/command     unav_msgs/ThrusterCommand          reliable     u_i in [-1, 1]
 //   sub  /lockstep/ack         unav_msgs/LockstepAck              reliable     (lockstep mode)
+//   sub  /lockstep/drop        std_msgs/String                    reliable     stop waiting for a participant
 //   pub  /clock                rosgraph_msgs/Clock                reliable     every publish tick
 //   pub  ground_truth/odom     nav_msgs/Odometry                  reliable     publish_rate
 //   pub  /tf                   tf2_msgs/TFMessage                 reliable     publish_rate, world_frame -> body_frame
@@ -26,7 +27,10 @@
 //             (the controller chain stamps its command with the state's time).
 //             With no participants and no command wait, it runs as fast as it can. While it
 //             holds, the barrier's state is published again every wall second (late joiners)
-//             and a warning names the missing participants every 5 s.
+//             and a warning names the missing participants 3 s into a hold, then every 5 s.
+//             A participant that hung or died for good can be dropped from the barrier while
+//             the run goes on: `unav topic pub --once /lockstep/drop std_msgs/msg/String
+//             '{data: recorder}'`.
 // Failsafe: no command for command_timeout seconds of simulated time -> zero thrust, logged once.
 // World: with `world` set, the world file's seabed (flat, relief, heightmap; the renderer's scene)
 // is the contact surface and the DVL/altimeter target, and its `current` is the water current.
@@ -45,6 +49,7 @@
 #include "sensor_msgs/msg/magnetic_field.hpp"
 #include "sensor_msgs/msg/nav_sat_fix.hpp"
 #include "sensor_msgs/msg/range.hpp"
+#include "std_msgs/msg/string.hpp"
 #include "tf2_msgs/msg/tf_message.hpp"
 #include "unav_common/config.hpp"
 #include "unav_msgs/msg/dvl.hpp"
@@ -128,6 +133,7 @@ class PhysicsServer : public unav::Node {
  private:
   void on_command(const unav_msgs::msg::ThrusterCommand& msg);
   void on_ack(const unav_msgs::msg::LockstepAck& msg);
+  void on_drop(const std::string& who);
   bool barrier_open() const;
   int64_t barrier_ns() const;
   void hold_at_barrier();
@@ -173,6 +179,7 @@ class PhysicsServer : public unav::Node {
   std::shared_ptr<unav::Publisher<sensor_msgs::msg::NavSatFix>> gps_pub_;
   std::shared_ptr<unav::Subscription<unav_msgs::msg::ThrusterCommand>> command_sub_;
   std::shared_ptr<unav::Subscription<unav_msgs::msg::LockstepAck>> ack_sub_;
+  std::shared_ptr<unav::Subscription<std_msgs::msg::String>> drop_sub_;
   std::shared_ptr<unav::Timer> timer_;
 
   // Reused messages (no allocation per publish after the first).

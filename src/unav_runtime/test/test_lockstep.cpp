@@ -29,6 +29,19 @@ TEST(LockstepBarrier, OpensOnlyWhenEveryListedParticipantAckedTheInstant) {
   EXPECT_FALSE(b.meets(T - kMs, T));
 }
 
+TEST(LockstepBarrier, DroppedParticipantIsNoLongerWaitedFor) {
+  unav::lockstep::Barrier b({"renderer", "recorder"}, 500000);
+  b.on_ack("renderer", 100000000);
+  EXPECT_FALSE(b.open(100000000));
+  EXPECT_EQ(b.missing(100000000), std::vector<std::string>{"recorder"});
+  EXPECT_FALSE(b.drop("sonar"));  // not listed
+  EXPECT_TRUE(b.drop("recorder"));
+  EXPECT_TRUE(b.open(100000000));
+  EXPECT_FALSE(b.open(150000000));  // the renderer still counts
+  EXPECT_EQ(b.participants(), std::vector<std::string>{"renderer"});
+  EXPECT_FALSE(b.on_ack("recorder", 150000000));  // its acks are kept but no longer listed
+}
+
 TEST(LockstepBarrier, NoParticipantsMeansAlwaysOpen) {
   Barrier b({}, 0);
   EXPECT_TRUE(b.open(123));

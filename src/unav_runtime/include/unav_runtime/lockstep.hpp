@@ -43,6 +43,14 @@ class Barrier {
       it->second = std::max(it->second, t_ns);
     return std::find(participants_.begin(), participants_.end(), who) != participants_.end();
   }
+  /// Stops waiting for `who` (a participant that hung or died for good: the run goes on without
+  /// it). Returns false when `who` is not a listed participant.
+  bool drop(const std::string& who) {
+    const auto it = std::find(participants_.begin(), participants_.end(), who);
+    if (it == participants_.end()) return false;
+    participants_.erase(it);
+    return true;
+  }
   /// Whether `who` has acked anything yet.
   bool has_acked(const std::string& who) const { return last_ack_.count(who) != 0; }
   /// True when every participant acked an instant >= barrier (within the tolerance).
