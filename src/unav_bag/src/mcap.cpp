@@ -81,6 +81,8 @@ class McapStorage final : public BagWriter::Storage {
     h.str("unav-sim unav_bag");
     append_record(head, kHeader, h.b);
     emit(head);
+    if (std::fflush(f_) != 0) fail("write");
+    good_offset_ = offset_;
   }
   ~McapStorage() override {
     if (f_) std::fclose(f_);
@@ -116,6 +118,7 @@ class McapStorage final : public BagWriter::Storage {
   }
 
   void write(size_t topic, int64_t timestamp_ns, const uint8_t* data, size_t size) override {
+    if (broken_) throw BagError(path_ + ": not written: an earlier write failed");
     const auto channel_id = static_cast<uint16_t>(topic + 1);
     const auto t = static_cast<uint64_t>(timestamp_ns);
     chunk_index_[channel_id].emplace_back(t, chunk_.size());
@@ -145,6 +148,13 @@ class McapStorage final : public BagWriter::Storage {
   }
 
   void close(const std::string& /*metadata_yaml*/) override {
+    if (broken_) {
+      // write() failed earlier (disk full): the file was cut back to its last complete chunk and
+      // closed with a data end + footer. No metadata.yaml: its counts would include lost messages.
+      throw BagError(path_ + ": the bag ends after its last complete chunk (byte " + std::to_string(good_offset_) +
+                     ", " + std::to_string(persisted_messages_) +
+                     " messages); no metadata.yaml (readers scan the file)");
+    }
     if (!f_) return;
     flush_chunk();
     // Data end: CRC of every byte of the data section.
@@ -220,6 +230,36 @@ class McapStorage final : public BagWriter::Storage {
   }
 
  private:
+  // A write failed (disk full, file size limit): keep what is complete. The file is cut back to
+  // the end of the last chunk that was written whole with its indexes (so it ends at a record
+  // boundary), then a data end (CRC 0: not computed) and a footer (no summary) close it, in the
+  // bytes the cut freed; if even that fails, it ends at the record boundary (readers that scan
+  // records still read every complete chunk).
+  void salvage() {
+    broken_ = true;
+    if (f_) std::fclose(f_);  // may flush part of the buffer: cut below
+    f_ = nullptr;
+    if (::truncate(path_.c_str(), static_cast<off_t>(good_offset_)) != 0) return;
+    std::string tail;
+    Buf de;
+    de.u32(0);
+    append_record(tail, kDataEnd, de.b);
+    Buf fo;
+    fo.u64(0);  // no summary section
+    fo.u64(0);  // no summary offsets
+    fo.u32(0);  // no summary CRC
+    append_record(tail, kFooter, fo.b);
+    tail.append(reinterpret_cast<const char*>(kMagic), sizeof(kMagic));
+    FILE* f = std::fopen(path_.c_str(), "r+b");
+    if (!f) return;
+    const bool ok = std::fseek(f, static_cast<long>(good_offset_), SEEK_SET) == 0 &&
+                    std::fwrite(tail.data(), 1, tail.size(), f) == tail.size() && std::fflush(f) == 0;
+    std::fclose(f);
+    if (!ok && ::truncate(path_.c_str(), static_cast<off_t>(good_offset_)) != 0) {
+      // nothing more can be done: the error thrown by the caller names the failure
+    }
+  }
+
   [[noreturn]] void fail(const char* what) {
     throw BagError(path_ + ": " + what + " failed: " + std::strerror(errno) + " (" + std::to_string(offset_) +
                    " bytes written)");
@@ -259,8 +299,13 @@ class McapStorage final : public BagWriter::Storage {
     head.u64(c.b.size() + payload.size());
     rec = head.b + c.b;
     const uint64_t chunk_offset = offset_;
-    emit(rec);
-    emit(payload);
+    try {
+      emit(rec);
+      emit(payload);
+    } catch (const BagError&) {
+      salvage();
+      throw;
+    }
     const uint64_t chunk_length = offset_ - chunk_offset;
     // One message index per channel with messages in this chunk, right after the chunk.
     std::string indexes;
@@ -276,7 +321,15 @@ class McapStorage final : public BagWriter::Storage {
       }
       append_record(indexes, kMessageIndex, mi.b);
     }
-    emit(indexes);
+    try {
+      emit(indexes);
+      if (std::fflush(f_) != 0) fail("write");
+    } catch (const BagError&) {
+      salvage();
+      throw;
+    }
+    good_offset_ = offset_;
+    persisted_messages_ += chunk_messages_;
     Buf ci;
     ci.u64(chunk_messages_ ? chunk_start_ : 0);
     ci.u64(chunk_messages_ ? chunk_end_ : 0);
@@ -310,6 +363,9 @@ class McapStorage final : public BagWriter::Storage {
   std::map<uint16_t, std::vector<std::pair<uint64_t, uint64_t>>> chunk_index_;
   uint64_t chunk_start_ = 0, chunk_end_ = 0, chunk_messages_ = 0;
   uint64_t message_count_ = 0, start_ = 0, end_ = 0;
+  uint64_t good_offset_ = 0;         ///< file size up to the last chunk written whole
+  uint64_t persisted_messages_ = 0;  ///< messages in those chunks
+  bool broken_ = false;              ///< a write failed: nothing more is written
 };
 
 // ---------------------------------------------------------------------------------------------

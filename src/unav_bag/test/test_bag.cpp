@@ -1,5 +1,10 @@
 #include <gtest/gtest.h>
 
+#include <signal.h>
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
 #include <filesystem>
 #include <fstream>
 #include <random>
@@ -209,6 +214,66 @@ TEST(AsyncRecorder, DropsAreCountedNeverSilent) {
   EXPECT_EQ(c.written + c.dropped, c.received);
   EXPECT_GT(c.dropped, 0u);
   EXPECT_EQ(BagReader(dir).info().message_count, c.written);
+}
+
+// A full disk, made by a file size limit (RLIMIT_FSIZE: writes beyond it fail with EFBIG, as
+// ENOSPC would) in a child process: the recorder reports it, and the bag on disk stays readable
+// with every message of the chunks written whole, each intact, the file closed with a footer.
+TEST(AsyncRecorder, FullDiskLeavesAValidBagOfWhatWasWritten) {
+  const std::string dir = temp_dir("full_disk");
+  const std::string err_file = dir + ".err";
+  constexpr size_t kMessage = 20000, kLimit = 600000;
+  const pid_t child = ::fork();
+  if (child == 0) {
+    ::signal(SIGXFSZ, SIG_IGN);
+    rlimit lim{kLimit, kLimit};
+    ::setrlimit(RLIMIT_FSIZE, &lim);
+    BagWriter::Options o;
+    o.chunk_size = size_t{64} * 1024;
+    AsyncRecorder rec(std::make_unique<BagWriter>(dir, o), 64u << 20);
+    const size_t t = rec.add_topic(topic("/img", "sensor_msgs/msg/Image"));
+    for (int i = 0; i < 100; ++i) rec.enqueue(t, 1000 + i, payload(kMessage, i));
+    std::string error;
+    try {
+      rec.close();
+    } catch (const BagError& e) {
+      error = e.what();
+    }
+    std::ofstream(err_file) << error;
+    ::_exit(error.empty() ? 1 : 0);
+  }
+  int status = 0;
+  ASSERT_EQ(::waitpid(child, &status, 0), child);
+  ASSERT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << "the full disk was not reported";
+  std::ifstream in(err_file);
+  const std::string error((std::istreambuf_iterator<char>(in)), {});
+  std::printf("recorder on a full disk: %s\n", error.c_str());
+  EXPECT_NE(error.find("File too large"), std::string::npos) << error;
+  EXPECT_NE(error.find("ends after its last complete chunk"), std::string::npos) << error;
+  EXPECT_FALSE(fs::exists(fs::path(dir) / "metadata.yaml"));
+  const fs::path file = fs::path(dir) / "full_disk_0.mcap";
+  EXPECT_LE(fs::file_size(file), kLimit);
+  {
+    std::ifstream f(file, std::ios::binary);
+    f.seekg(-8, std::ios::end);
+    char magic[8];
+    f.read(magic, 8);
+    EXPECT_EQ(std::string(magic, 8), std::string("\x89MCAP0\r\n", 8));  // closed, not cut mid-record
+  }
+  BagReader r(dir);
+  Message m;
+  int n = 0;
+  while (r.next(m)) {
+    ASSERT_EQ(m.timestamp_ns, 1000 + n);
+    ASSERT_EQ(m.data, payload(kMessage, n)) << "message " << n;
+    ++n;
+  }
+  std::printf("%d messages of %zu bytes readable from a %zu-byte file (limit %zu)\n", n, kMessage,
+              static_cast<size_t>(fs::file_size(file)), kLimit);
+  // Chunks of >= 64 KB hold 4 messages each: everything up to the last whole chunk under the
+  // limit, i.e. at least (600000 - one chunk and its indexes) / 20000 ~ 26 messages.
+  EXPECT_GE(n, 24);
+  EXPECT_LT(n, 30);
 }
 
 TEST(AsyncRecorder, AmpleQueueKeepsEverythingFromManyThreads) {

@@ -170,14 +170,15 @@ int record(const RecordOptions& o) {
     if (now - last_report >= 1s) {  // drops are reported as they happen, not only at the end
       last_report = now;
       const uint64_t d = rec->dropped();
-      if (d > reported_drops) {
+      const std::string error = rec->error();
+      if (d > reported_drops && error.empty()) {
         std::cerr << "[WARN] [unav_bag]: " << d - reported_drops
                   << " messages dropped: the disk is slower than the data (queue "
                   << rec->peak_queued_bytes() / (1 << 20) << " MiB of " << o.max_cache_size / (1 << 20)
                   << "; raise --max-cache-size)" << std::endl;
         reported_drops = d;
       }
-      if (!rec->error().empty()) break;
+      if (!error.empty()) break;  // a write failed (disk full...): close() reports what the bag holds
     }
   }
   discovery_timer->cancel();
