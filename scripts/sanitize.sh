@@ -15,7 +15,9 @@ colcon --log-base log_asan build --build-base build_asan --install-base install_
   --event-handlers console_cohesion- status- "${select[@]}" \
   --cmake-args -DCMAKE_BUILD_TYPE=RelWithDebInfo "-DCMAKE_CXX_FLAGS=$flags" "-DCMAKE_C_FLAGS=$flags" \
   "-DCMAKE_EXE_LINKER_FLAGS=-fsanitize=address,undefined" "-DCMAKE_SHARED_LINKER_FLAGS=-fsanitize=address,undefined"
-export ASAN_OPTIONS="detect_leaks=0:halt_on_error=1:abort_on_error=0:exitcode=1"
+# new_delete_type_mismatch=0: Fast DDS 2.9 frees its StatisticsReaderImpl with a sized delete of
+# another type inside delete_datareader() (all frames in libfastrtps): its bug, not ours.
+export ASAN_OPTIONS="detect_leaks=0:new_delete_type_mismatch=0:halt_on_error=1:abort_on_error=0:exitcode=1"
 export UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1"
 test_select=()
 [ $# -gt 0 ] && test_select=(--packages-select "$@")
