@@ -18,10 +18,12 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-// Loops until stopped; `trap` chooses how it reacts to signals. Writes its pid to DIR/<name>.pid.
+// Loops until stopped; `trap` chooses how it reacts to signals. Writes its pid to DIR/<name>.pid
+// once the trap is set (tests signal it as soon as the pid file appears: with the trap after it,
+// a loaded machine let SIGINT arrive first and kill a child meant to ignore it).
 std::string looping(const std::string& name, const std::string& trap) {
-  return "echo $$ > \"$DIR/" + name + ".pid.tmp\"; mv \"$DIR/" + name + ".pid.tmp\" \"$DIR/" + name +
-         ".pid\"\n" + trap + "\nwhile true; do sleep 0.02; done";
+  return trap + "\necho $$ > \"$DIR/" + name + ".pid.tmp\"; mv \"$DIR/" + name + ".pid.tmp\" \"$DIR/" + name +
+         ".pid\"\nwhile true; do sleep 0.02; done";
 }
 
 class SupervisorTest : public FakePrefix {
@@ -72,9 +74,7 @@ class SupervisorTest : public FakePrefix {
 
   static bool alive(pid_t pid) { return pid > 0 && ::kill(pid, 0) == 0; }
 
-  bool contains(const std::string& text) const {
-    return output_.str().find(text) != std::string::npos;
-  }
+  bool contains(const std::string& text) const { return output_.str().find(text) != std::string::npos; }
 
   std::ostringstream output_;
   double elapsed_s_ = 0.0;
@@ -113,8 +113,7 @@ TEST_F(SupervisorTest, FailedNodeMakesResultOneAndIsLogged) {
 TEST_F(SupervisorTest, RequiredExitStopsSiblingsQuickly) {
   NodeDescription required = node("boss", "sleep 0.2; exit 3");
   required.required = true;
-  const NodeDescription sibling =
-      node("worker", looping("worker", "trap 'echo worker stopping; exit 0' INT"));
+  const NodeDescription sibling = node("worker", looping("worker", "trap 'echo worker stopping; exit 0' INT"));
   EXPECT_EQ(run_nodes({required, sibling}, 3.0), 3);
   EXPECT_LT(elapsed_s_, 1.5);  // SIGINT is honoured well before the 3 s grace period
   EXPECT_TRUE(contains("required process [boss-1] has exited, shutting down")) << output_.str();
@@ -127,8 +126,8 @@ TEST_F(SupervisorTest, RespawnRestartsNodeUntilRequiredNodeEnds) {
   flaky.respawn = true;
   flaky.respawn_delay_s = 0.05;
   // Ends once flaky has started three times: the required watcher exits 0, so the launch does.
-  NodeDescription watcher = node("watcher",
-      "while [ \"$(cat \"$DIR/starts\" 2>/dev/null | wc -l)\" -lt 3 ]; do sleep 0.02; done");
+  NodeDescription watcher =
+      node("watcher", "while [ \"$(cat \"$DIR/starts\" 2>/dev/null | wc -l)\" -lt 3 ]; do sleep 0.02; done");
   watcher.required = true;
   EXPECT_EQ(run_nodes({flaky, watcher}), 0);
   std::ifstream starts(root_ + "/starts");
@@ -140,9 +139,9 @@ TEST_F(SupervisorTest, RespawnRestartsNodeUntilRequiredNodeEnds) {
 
 TEST_F(SupervisorTest, SigintStopsChildrenThatTrapIt) {
   std::thread interrupter = interrupt_when_started({"a", "b"});
-  const int code = run_nodes({node("a", looping("a", "trap 'echo a got SIGINT; exit 0' INT")),
-                              node("b", looping("b", "trap 'exit 5' INT"))},
-                             3.0);
+  const int code = run_nodes(
+      {node("a", looping("a", "trap 'echo a got SIGINT; exit 0' INT")), node("b", looping("b", "trap 'exit 5' INT"))},
+      3.0);
   interrupter.join();
   EXPECT_EQ(code, 128 + SIGINT);
   EXPECT_LT(elapsed_s_, 2.0);
