@@ -63,7 +63,7 @@ class SupervisorTest : public FakePrefix {
   }
 
   // SIGINT to this process (the supervisor) once every named node has written its pid.
-  std::thread interrupt_when_started(std::vector<std::string> names) {
+  std::thread interrupt_when_started(const std::vector<std::string>& names) {
     return std::thread([this, names] {
       for (const auto& name : names) {
         wait_pid(name);
