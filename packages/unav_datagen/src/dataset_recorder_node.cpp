@@ -113,21 +113,22 @@ class DatasetRecorder : public unav::Node {
     if (prm.lockstep) acker_ = std::make_unique<unav::lockstep::Acker>(*this, ack_name_);  // answers every state
     const std::string base = "camera/" + camera_;
     const unav::QoS q = unav::QoS::reliable(5);
-    rgb_sub_ =
-        create_subscription<sensor_msgs::msg::Image>(base + "/image_raw", q, [this](const sensor_msgs::msg::Image& m) {
+    const unav::QoS images = q.with_data_sharing();  // from the renderer's shared pool, on one host
+    rgb_sub_ = create_subscription<sensor_msgs::msg::Image>(
+        base + "/image_raw", images, [this](const sensor_msgs::msg::Image& m) {
           if (!check(m, "rgb8", 3)) return;
           const double t = stamp_of(m.header());
           writer_->write_rgb(t, static_cast<int>(m.width()), static_cast<int>(m.height()), m.data().data());
           pose_sync_.add_first(unav::nanoseconds(m.header()), t);
         });
     depth_sub_ = create_subscription<sensor_msgs::msg::Image>(
-        base + "/depth/image_raw", q, [this](const sensor_msgs::msg::Image& m) {
+        base + "/depth/image_raw", images, [this](const sensor_msgs::msg::Image& m) {
           if (!check(m, "32FC1", 4)) return;
           writer_->write_depth(stamp_of(m.header()), static_cast<int>(m.width()), static_cast<int>(m.height()),
                                reinterpret_cast<const float*>(m.data().data()));
         });
     seg_sub_ = create_subscription<sensor_msgs::msg::Image>(
-        base + "/segmentation/image_raw", q, [this](const sensor_msgs::msg::Image& m) {
+        base + "/segmentation/image_raw", images, [this](const sensor_msgs::msg::Image& m) {
           if (!check(m, "mono8", 1)) return;
           writer_->write_segmentation(stamp_of(m.header()), static_cast<int>(m.width()), static_cast<int>(m.height()),
                                       m.data().data());

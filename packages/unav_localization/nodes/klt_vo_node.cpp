@@ -111,7 +111,7 @@ class KltVoNode : public unav::Node {
                                                                     try_process();
                                                                   });
     rgb_sub_ = create_subscription<sensor_msgs::msg::Image>(
-        base + "/image_raw", unav::QoS::reliable(20), [this](const sensor_msgs::msg::Image& m) {
+        base + "/image_raw", unav::QoS::reliable(20).with_data_sharing(), [this](const sensor_msgs::msg::Image& m) {
           if (m.encoding() != "rgb8") return;
           cv::Mat rgb(static_cast<int>(m.height()), static_cast<int>(m.width()), CV_8UC3,
                       const_cast<uint8_t*>(m.data().data()));
@@ -122,7 +122,8 @@ class KltVoNode : public unav::Node {
         });
     if (!monocular()) {
       depth_sub_ = create_subscription<sensor_msgs::msg::Image>(
-          base + "/depth/image_raw", unav::QoS::reliable(20), [this](const sensor_msgs::msg::Image& m) {
+          base + "/depth/image_raw", unav::QoS::reliable(20).with_data_sharing(),
+          [this](const sensor_msgs::msg::Image& m) {
             if (m.encoding() != "32FC1") return;
             depths_[key(m.header())] = cv::Mat(static_cast<int>(m.height()), static_cast<int>(m.width()), CV_32FC1,
                                                const_cast<uint8_t*>(m.data().data()))

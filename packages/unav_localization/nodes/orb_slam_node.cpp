@@ -96,8 +96,9 @@ class OrbSlamNode : public unav::Node {
     if (lockstep_) acker_ = std::make_unique<unav::lockstep::Acker>(*this, ack_name_, image_period_ - 1e-3);
     info_sub_ = create_subscription<sensor_msgs::msg::CameraInfo>(
         base + "/camera_info", unav::QoS::reliable(5), [this](const sensor_msgs::msg::CameraInfo& m) { on_info(m); });
-    image_sub_ = create_subscription<sensor_msgs::msg::Image>(
-        base + "/image_raw", unav::QoS::reliable(50), [this](const sensor_msgs::msg::Image& m) { on_image(m); });
+    image_sub_ =
+        create_subscription<sensor_msgs::msg::Image>(base + "/image_raw", unav::QoS::reliable(50).with_data_sharing(),
+                                                     [this](const sensor_msgs::msg::Image& m) { on_image(m); });
   }
 
   ~OrbSlamNode() override {

@@ -43,9 +43,9 @@ DrlPlannerNode::DrlPlannerNode(const unav::NodeOptions& options) : Node("drl_pla
   }
   hold_depth_ = p_.hold_depth;
   pub_ = create_publisher<geometry_msgs::msg::PoseStamped>("control/pose_setpoint", unav::QoS::reliable());
-  image_sub_ =
-      create_subscription<sensor_msgs::msg::Image>("camera/" + p_.camera + "/image_raw", unav::QoS::reliable(5),
-                                                   [this](const sensor_msgs::msg::Image& m) { on_image(m); });
+  image_sub_ = create_subscription<sensor_msgs::msg::Image>("camera/" + p_.camera + "/image_raw",
+                                                            unav::QoS::reliable(5).with_data_sharing(),
+                                                            [this](const sensor_msgs::msg::Image& m) { on_image(m); });
   odom_sub_ = create_subscription<nav_msgs::msg::Odometry>("ground_truth/odom", unav::QoS::reliable(),
                                                            [this](const nav_msgs::msg::Odometry& m) { on_odom(m); });
   logger()->info("policy {}, a waypoint every {:.2f} s from camera/{}/image_raw{}", policy_->name(), p_.step_period,

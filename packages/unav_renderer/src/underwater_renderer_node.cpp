@@ -1,5 +1,6 @@
 #include "underwater_renderer_node.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 
@@ -21,6 +22,18 @@ void fill_image(sensor_msgs::msg::Image& m, int w, int h, const char* encoding, 
   m.encoding(encoding);
   m.is_bigendian(0);
   m.step(static_cast<uint32_t>(w * bytes_per_px));
+}
+
+// An image stream's QoS: reliable, data-sharing bounded by the serialized size of its images (data
+// and frame id). A data-sharing reader's samples live in the writer's pool (depth + 1 payloads),
+// so the depth is that of the deepest image reader (klt_vo: 20) — one that falls behind loses no
+// more than by transport — within 64 MiB of shared memory a stream, and at least 5 frames.
+unav::QoS image_qos(sensor_msgs::msg::Image proto, const std::string& frame_id) {
+  proto.header().frame_id(frame_id);
+  proto.data().resize(size_t{proto.step()} * proto.height());
+  const uint32_t bound = unav::serialized_bytes(proto);
+  const auto depth = static_cast<int32_t>(std::clamp<uint32_t>((64u << 20) / bound, 5, 20));
+  return unav::QoS::reliable(depth).with_data_sharing(bound);
 }
 
 }  // namespace
@@ -79,13 +92,19 @@ UnderwaterRendererNode::UnderwaterRendererNode(const unav::NodeOptions& options)
     CameraPorts p;
     p.name = c.name;
     const std::string base = "camera/" + c.name;
-    p.image = create_publisher<sensor_msgs::msg::Image>(base + "/image_raw", qos);
-    p.info = create_publisher<sensor_msgs::msg::CameraInfo>(base + "/camera_info", qos);
-    if (publish_depth_) p.depth = create_publisher<sensor_msgs::msg::Image>(base + "/depth/image_raw", qos);
-    if (publish_seg_) p.seg = create_publisher<sensor_msgs::msg::Image>(base + "/segmentation/image_raw", qos);
     fill_image(p.image_msg, c.width, c.height, "rgb8", 3);
     fill_image(p.depth_msg, c.width, c.height, "32FC1", 4);
     fill_image(p.seg_msg, c.width, c.height, "mono8", 1);
+    // Images go by data-sharing to the readers on this host that ask for it (VO, SLAM, dataset
+    // recorder, DRL planner); ROS 2 tools and other hosts get them by transport.
+    const std::string frame_id = c.name + "_optical";
+    p.image = create_publisher<sensor_msgs::msg::Image>(base + "/image_raw", image_qos(p.image_msg, frame_id));
+    p.info = create_publisher<sensor_msgs::msg::CameraInfo>(base + "/camera_info", qos);
+    if (publish_depth_)
+      p.depth = create_publisher<sensor_msgs::msg::Image>(base + "/depth/image_raw", image_qos(p.depth_msg, frame_id));
+    if (publish_seg_)
+      p.seg =
+          create_publisher<sensor_msgs::msg::Image>(base + "/segmentation/image_raw", image_qos(p.seg_msg, frame_id));
     auto& ci = p.info_msg;
     ci.width(static_cast<uint32_t>(c.width));
     ci.height(static_cast<uint32_t>(c.height));
@@ -120,6 +139,11 @@ UnderwaterRendererNode::~UnderwaterRendererNode() = default;
 void UnderwaterRendererNode::on_odom(const nav_msgs::msg::Odometry& odom) {
   const double t = unav::seconds(odom.header());
   const double eps = 1e-6;  // stamps are integer nanoseconds
+  if (next_frame_t_ < 0.0) {
+    // The first frame is on the grid of the period (k * period), also for a renderer that starts
+    // (or is respawned) mid-run: a dataset's frames stay evenly spaced.
+    next_frame_t_ = std::ceil((t - eps) / period_) * period_;
+  }
   if (t + eps >= next_frame_t_) {
     render_and_publish(unav::from_msg(odom.pose().pose()), odom.header());
     // Next frame instant: the next multiple of the period after t (no drift, no bursts).

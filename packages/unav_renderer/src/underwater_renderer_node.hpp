@@ -92,7 +92,7 @@ class UnderwaterRendererNode : public unav::Node {
   std::unique_ptr<Renderer> renderer_;
   std::vector<CameraPorts> cameras_;
   double period_ = 0.1;
-  double next_frame_t_ = 0.0;
+  double next_frame_t_ = -1.0;  // set by the first odometry
   bool lockstep_ = false;
   bool publish_depth_ = true, publish_seg_ = true;
   std::string ack_name_;

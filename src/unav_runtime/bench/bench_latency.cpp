@@ -1,7 +1,8 @@
 // Publish-to-receive latency between two processes (fork), through the unav runtime and through
-// a minimal raw Fast DDS program with the same QoS and transports, in the same run, and through
-// the runtime with DDS Security on (SROS2 default governance: RTPS signed, data encrypted with
-// AES-GCM); plus image throughput. Prints a Markdown table.
+// a minimal raw Fast DDS program with the same QoS and transports, in the same run: both with and
+// without data-sharing delivery (the Image type bounded to the image's size, registered under its
+// ROS 2 name), and through the runtime with DDS Security on (SROS2 default governance: RTPS
+// signed, data encrypted with AES-GCM); plus image throughput. Prints a Markdown table.
 // Usage: bench_latency [samples_small] [samples_image]
 #include <sys/wait.h>
 #include <unistd.h>
@@ -34,6 +35,25 @@ namespace fdds = eprosima::fastdds::dds;
 using namespace std::chrono_literals;
 
 namespace {
+
+enum class Path { kRaw, kRawDataSharing, kRuntime, kRuntimeDataSharing, kRuntimeSecured };
+const char* path_name(Path p) {
+  switch (p) {
+    case Path::kRaw:
+      return "raw Fast DDS";
+    case Path::kRawDataSharing:
+      return "raw Fast DDS, data-sharing";
+    case Path::kRuntime:
+      return "unav runtime";
+    case Path::kRuntimeDataSharing:
+      return "unav runtime, data-sharing";
+    case Path::kRuntimeSecured:
+      return "unav runtime, secured";
+  }
+  return "?";
+}
+bool is_raw(Path p) { return p == Path::kRaw || p == Path::kRawDataSharing; }
+bool uses_data_sharing(Path p) { return p == Path::kRawDataSharing || p == Path::kRuntimeDataSharing; }
 
 // Set by main() for the secured rows: a keystore made before any fork.
 std::string g_keystore;  // NOLINT(cppcoreguidelines-avoid-non-const-global-variables)
@@ -93,7 +113,7 @@ struct Stats {
   size_t n;
 };
 
-// --- raw Fast DDS (same QoS: reliable keep last 10, SHM 32 MiB + UDPv4, data-sharing off) ---
+// --- raw Fast DDS (same QoS: reliable keep last 10, SHM 32 MiB + UDPv4, data-sharing as the row says) ---
 struct RawListener : fdds::DataReaderListener {
   std::vector<int64_t> lat;
   size_t bytes = 0;
@@ -119,12 +139,24 @@ fdds::DomainParticipant* raw_participant(int domain) {
 }
 
 template <typename Qos>
-void raw_qos(Qos& q) {
+void raw_qos(Qos& q, bool data_sharing, bool writer) {
   q.reliability().kind = fdds::RELIABLE_RELIABILITY_QOS;
   q.history().kind = fdds::KEEP_LAST_HISTORY_QOS;
   q.history().depth = 10;
   q.endpoint().history_memory_policy = eprosima::fastrtps::rtps::PREALLOCATED_WITH_REALLOC_MEMORY_MODE;
   q.data_sharing().off();
+  if (data_sharing) {
+    q.data_sharing().automatic();
+    q.endpoint().history_memory_policy = writer ? eprosima::fastrtps::rtps::PREALLOCATED_MEMORY_MODE
+                                                : eprosima::fastrtps::rtps::DYNAMIC_REUSABLE_MEMORY_MODE;
+  }
+}
+
+// The raw type support, bounded for data-sharing (the bound of the 640x480 image) or as generated.
+fdds::TypeSupport raw_type(bool data_sharing) {
+  auto* t = new unav::SwitchableBoundType<sensor_msgs::msg::dds_::Image_PubSubType>();
+  if (data_sharing) t->set_bound(unav::serialized_bytes(make_sample(true)));
+  return fdds::TypeSupport(t);
 }
 
 Stats summarize(std::vector<int64_t> lat, size_t bytes, double seconds) {
@@ -138,17 +170,17 @@ Stats summarize(std::vector<int64_t> lat, size_t bytes, double seconds) {
 }
 
 // Child: subscribe, collect `n` samples (or until timeout), write Stats to `fd`.
-void run_sub(bool raw, bool secured, int domain, size_t n, double period_s, int fd) {
+void run_sub(Path path, int domain, size_t n, double period_s, int fd) {
   const double seconds = static_cast<double>(n) * period_s;
   Stats s{};
-  if (raw) {
+  if (is_raw(path)) {
     auto* p = raw_participant(domain);
-    fdds::TypeSupport ts(new sensor_msgs::msg::dds_::Image_PubSubType());
+    fdds::TypeSupport ts = raw_type(uses_data_sharing(path));
     ts.register_type(p);
     auto* t = p->create_topic("rt/bench", ts.get_type_name(), fdds::TOPIC_QOS_DEFAULT);
     auto* sub = p->create_subscriber(fdds::SUBSCRIBER_QOS_DEFAULT);
     fdds::DataReaderQos rq = sub->get_default_datareader_qos();
-    raw_qos(rq);
+    raw_qos(rq, uses_data_sharing(path), false);
     RawListener l;
     auto* r = sub->create_datareader(t, rq, &l);
     const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(seconds + 15.0);
@@ -158,15 +190,16 @@ void run_sub(bool raw, bool secured, int domain, size_t n, double period_s, int 
     p->delete_contained_entities();
     fdds::DomainParticipantFactory::get_instance()->delete_participant(p);
   } else {
-    unav::Context ctx(runtime_options(domain, secured));
+    unav::Context ctx(runtime_options(domain, path == Path::kRuntimeSecured));
     unav::Node node("bench_sub", {&ctx});
     std::vector<int64_t> lat;
     size_t bytes = 0;
-    auto sub = node.create_subscription<sensor_msgs::msg::Image>("/bench", unav::QoS::reliable(10),
-                                                                 [&](const sensor_msgs::msg::Image& m) {
-                                                                   lat.push_back(latency_of(m));
-                                                                   bytes += m.data().size();
-                                                                 });
+    const unav::QoS q =
+        path == Path::kRuntimeDataSharing ? unav::QoS::reliable(10).with_data_sharing() : unav::QoS::reliable(10);
+    auto sub = node.create_subscription<sensor_msgs::msg::Image>("/bench", q, [&](const sensor_msgs::msg::Image& m) {
+      lat.push_back(latency_of(m));
+      bytes += m.data().size();
+    });
     ctx.spin_until([&] { return lat.size() >= n; },
                    std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::duration<double>(seconds + 15.0)));
     s = summarize(lat, bytes, seconds);
@@ -176,7 +209,7 @@ void run_sub(bool raw, bool secured, int domain, size_t n, double period_s, int 
 
 // Parent: publish `n` samples every `period_s` once matched (both modes use raw writers'
 // matched status through the runtime or raw API).
-void run_pub(bool raw, bool secured, int domain, bool big, size_t n, double period_s) {
+void run_pub(Path path, int domain, bool big, size_t n, double period_s) {
   auto msg = make_sample(big);
   auto pace = [&](auto&& publish, auto&& matched) {
     const auto until = std::chrono::steady_clock::now() + 15s;
@@ -190,14 +223,14 @@ void run_pub(bool raw, bool secured, int domain, bool big, size_t n, double peri
       std::this_thread::sleep_until(next);
     }
   };
-  if (raw) {
+  if (is_raw(path)) {
     auto* p = raw_participant(domain);
-    fdds::TypeSupport ts(new sensor_msgs::msg::dds_::Image_PubSubType());
+    fdds::TypeSupport ts = raw_type(uses_data_sharing(path));
     ts.register_type(p);
     auto* t = p->create_topic("rt/bench", ts.get_type_name(), fdds::TOPIC_QOS_DEFAULT);
     auto* pub = p->create_publisher(fdds::PUBLISHER_QOS_DEFAULT);
     fdds::DataWriterQos wq = pub->get_default_datawriter_qos();
-    raw_qos(wq);
+    raw_qos(wq, uses_data_sharing(path), true);
     auto* w = pub->create_datawriter(t, wq);
     pace([&] { w->write(&msg); },
          [&] {
@@ -208,20 +241,24 @@ void run_pub(bool raw, bool secured, int domain, bool big, size_t n, double peri
     p->delete_contained_entities();
     fdds::DomainParticipantFactory::get_instance()->delete_participant(p);
   } else {
-    unav::Context ctx(runtime_options(domain, secured));
+    unav::Context ctx(runtime_options(domain, path == Path::kRuntimeSecured));
     unav::Node node("bench_pub", {&ctx});
-    auto pub = node.create_publisher<sensor_msgs::msg::Image>("/bench", unav::QoS::reliable(10));
+    // The bound is the largest sample of the run (the image), as a camera node sets it.
+    const unav::QoS q = path == Path::kRuntimeDataSharing
+                            ? unav::QoS::reliable(10).with_data_sharing(unav::serialized_bytes(make_sample(true)))
+                            : unav::QoS::reliable(10);
+    auto pub = node.create_publisher<sensor_msgs::msg::Image>("/bench", q);
     pace([&] { pub->publish(msg); }, [&] { return pub->subscription_count() > 0; });
   }
 }
 
-Stats measure(bool raw, bool secured, bool big, size_t n, double period_s, int domain) {
+Stats measure(Path path, bool big, size_t n, double period_s, int domain) {
   int fds[2];
   if (pipe(fds) != 0) std::abort();
   const pid_t child = fork();
   if (child == 0) {
     close(fds[0]);
-    run_sub(raw, secured, domain, n, period_s, fds[1]);
+    run_sub(path, domain, n, period_s, fds[1]);
     _exit(0);
   }
   // The publisher runs in a child too: Fast DDS must never be initialised in a process that
@@ -230,7 +267,7 @@ Stats measure(bool raw, bool secured, bool big, size_t n, double period_s, int d
   if (pub == 0) {
     close(fds[0]);
     close(fds[1]);
-    run_pub(raw, secured, domain, big, n, period_s);
+    run_pub(path, domain, big, n, period_s);
     _exit(0);
   }
   close(fds[1]);
@@ -263,11 +300,12 @@ int main(int argc, char** argv) {
   std::filesystem::remove_all(g_keystore);
   unav::security::create_keystore(g_keystore);
   unav::security::create_enclave(g_keystore, "/bench");
-  const char* paths[] = {"raw Fast DDS", "unav runtime", "unav runtime, secured"};
+  const Path paths[] = {Path::kRaw, Path::kRawDataSharing, Path::kRuntime, Path::kRuntimeDataSharing,
+                        Path::kRuntimeSecured};
   for (const auto& c : cases) {
-    for (int path = 0; path < 3; ++path) {
-      const Stats s = measure(path == 0, path == 2, c.big, c.n, c.period, domain);
-      std::printf("| %s | %s | %zu | %.0f Hz | %.3f | %.3f | %.1f |\n", c.name, paths[path], s.n, 1.0 / c.period,
+    for (const Path path : paths) {
+      const Stats s = measure(path, c.big, c.n, c.period, domain);
+      std::printf("| %s | %s | %zu | %.0f Hz | %.3f | %.3f | %.1f |\n", c.name, path_name(path), s.n, 1.0 / c.period,
                   s.p50_ms, s.p99_ms, s.mbps);
       std::fflush(stdout);
     }

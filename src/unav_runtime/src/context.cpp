@@ -101,6 +101,18 @@ Context::Context(int argc, const char* const* argv, const ContextOptions& option
     if (l == "info") eprosima::fastdds::dds::Log::SetVerbosity(eprosima::fastdds::dds::Log::Info);
   }
 
+  data_sharing_ = options.data_sharing;
+  if (const char* ds = std::getenv("UNAV_DATA_SHARING")) {
+    const std::string v = ds;
+    if (v == "off" || v == "0" || v == "false") {
+      data_sharing_ = false;
+    } else if (v != "on" && v != "1" && v != "true" && !v.empty()) {
+      throw ConfigError("environment UNAV_DATA_SHARING='" + v + "': expected on or off");
+    }
+  }
+  if (const char* transport = std::getenv("UNAV_TRANSPORT"); transport && std::string(transport) == "udp")
+    data_sharing_ = false;  // no shared memory at all
+
   handle_signals_ = options.handle_signals;
   if (handle_signals_) {
     // A process started in the background by a non-interactive shell inherits SIGINT ignored,
@@ -250,6 +262,25 @@ std::string Context::access_hint(const char* way) const {
          " it (its permissions.xml in the keystore)";
 }
 
+BoundSwitch* Context::data_sharing_type(fdds::Topic* t, const QoS& q, bool writer) {
+  if (!q.data_sharing || !data_sharing_ || !secured_enclave_.empty()) return nullptr;  // Fast DDS: not with security
+  if (writer && q.max_sample_bytes == 0)
+    throw ConfigError("topic '" + t->get_name() +
+                      "': a data-sharing writer needs QoS max_sample_bytes, the largest serialized sample "
+                      "(unav::serialized_bytes of the biggest message it will publish)");
+  if (writer && q.max_sample_bytes > (1u << 30))
+    throw ConfigError("topic '" + t->get_name() + "': QoS max_sample_bytes = " + std::to_string(q.max_sample_bytes) +
+                      " is over the 1 GiB a data-sharing sample may have");
+  auto* bs = dynamic_cast<BoundSwitch*>(participant_->find_type(t->get_type_name()).get());
+  if (!bs)
+    make_logger("unav_runtime")
+        ->warn(
+            "topic '{}': its type '{}' was registered without a bound switch, "
+            "so it goes through the transports instead of data-sharing",
+            t->get_name(), t->get_type_name());
+  return bs;
+}
+
 fdds::DataWriter* Context::create_writer(fdds::Topic* t, const QoS& q) {
   fdds::DataWriterQos wqos = publisher_->get_default_datawriter_qos();
   apply_qos(q, wqos.reliability(), wqos.durability(), wqos.history());
@@ -261,7 +292,25 @@ fdds::DataWriter* Context::create_writer(fdds::Topic* t, const QoS& q) {
     // heartbeat: 200 ms instead of Fast DDS' 3 s default.
     wqos.reliable_writer_qos().times.heartbeatPeriod = eprosima::fastrtps::Duration_t(0, 200000000);
   }
-  fdds::DataWriter* w = publisher_->create_datawriter(t, wqos);
+  fdds::DataWriter* w = nullptr;
+  if (BoundSwitch* bounded = data_sharing_type(t, q, true)) {
+    // A pool of depth + 1 payloads of the bound in shared memory, written in place; readers on
+    // this host with data-sharing read from it, all others get the same bytes by transport.
+    fdds::DataWriterQos ds = wqos;
+    ds.data_sharing().automatic();
+    ds.endpoint().history_memory_policy = eprosima::fastrtps::rtps::PREALLOCATED_MEMORY_MODE;
+    std::lock_guard<std::mutex> lock(endpoint_mutex_);
+    bounded->set_bound(q.max_sample_bytes);
+    w = publisher_->create_datawriter(t, ds);
+    bounded->set_bound(0);
+    if (!w)
+      make_logger("unav_runtime")
+          ->warn(
+              "topic '{}': no data-sharing writer ({} bytes a sample; /dev/shm full?): "
+              "falling back to the transports",
+              t->get_name(), q.max_sample_bytes);
+  }
+  if (!w) w = publisher_->create_datawriter(t, wqos);
   if (!w)
     throw MiddlewareError("Fast DDS could not create a writer on '" + t->get_name() + "'" + access_hint("publish"));
   return w;
@@ -272,8 +321,21 @@ fdds::DataReader* Context::create_reader(fdds::Topic* t, const QoS& q, void* lis
   apply_qos(q, rqos.reliability(), rqos.durability(), rqos.history());
   rqos.endpoint().history_memory_policy = eprosima::fastrtps::rtps::PREALLOCATED_WITH_REALLOC_MEMORY_MODE;
   rqos.data_sharing().off();
-  fdds::DataReader* r = subscriber_->create_datareader(t, rqos, static_cast<fdds::DataReaderListener*>(listener),
-                                                       fdds::StatusMask::data_available());
+  auto* l = static_cast<fdds::DataReaderListener*>(listener);
+  fdds::DataReader* r = nullptr;
+  if (BoundSwitch* bounded = data_sharing_type(t, q, false)) {
+    // Fast DDS wants a bounded type for a data-sharing reader but never sizes anything by it
+    // with dynamic memory: samples by transport (other vendors, other hosts, writers without
+    // data-sharing) still arrive whatever their size.
+    fdds::DataReaderQos ds = rqos;
+    ds.data_sharing().automatic();
+    ds.endpoint().history_memory_policy = eprosima::fastrtps::rtps::DYNAMIC_REUSABLE_MEMORY_MODE;
+    std::lock_guard<std::mutex> lock(endpoint_mutex_);
+    bounded->set_bound(BoundSwitch::kReaderBound);
+    r = subscriber_->create_datareader(t, ds, l, fdds::StatusMask::data_available());
+    bounded->set_bound(0);
+  }
+  if (!r) r = subscriber_->create_datareader(t, rqos, l, fdds::StatusMask::data_available());
   if (!r)
     throw MiddlewareError("Fast DDS could not create a reader on '" + t->get_name() + "'" + access_hint("subscribe"));
   return r;

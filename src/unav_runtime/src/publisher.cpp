@@ -8,6 +8,8 @@
 #include <fastdds/dds/subscriber/SampleInfo.hpp>
 #include <fastdds/dds/topic/Topic.hpp>
 
+#include "unav_runtime/logging.hpp"
+
 namespace fdds = eprosima::fastdds::dds;
 
 namespace unav {
@@ -28,7 +30,7 @@ class ReaderListener : public fdds::DataReaderListener {
 }  // namespace
 
 PublisherBase::PublisherBase(Context& ctx, const std::string& topic, fdds::TopicDataType* type, const QoS& qos)
-    : ctx_(ctx), topic_(topic) {
+    : ctx_(ctx), topic_(topic), max_sample_bytes_(qos.data_sharing ? qos.max_sample_bytes : 0) {
   writer_ = ctx_.create_writer(ctx_.topic(topic, type), qos);
 }
 
@@ -41,7 +43,17 @@ int PublisherBase::subscription_count() const {
 }
 
 bool PublisherBase::write(const void* sample) {
-  return writer_->write(const_cast<void*>(sample));
+  const bool ok = writer_->write(const_cast<void*>(sample));
+  if (!ok && !write_failure_reported_) {
+    write_failure_reported_ = true;  // once: a camera at 30 Hz would flood the log
+    make_logger("unav_runtime")
+        ->error(
+            "topic '{}': the middleware refused a sample{}", topic_,
+            max_sample_bytes_ != 0
+                ? " (larger than the data-sharing bound max_sample_bytes = " + std::to_string(max_sample_bytes_) + "?)"
+                : std::string());
+  }
+  return ok;
 }
 
 SubscriptionBase::SubscriptionBase(Context& ctx, const std::string& topic, fdds::TopicDataType* type, const QoS&)

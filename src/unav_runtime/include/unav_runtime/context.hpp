@@ -35,6 +35,7 @@ class DomainParticipantListener;
 namespace unav {
 
 class Node;
+class BoundSwitch;
 
 struct ContextOptions {
   /// DDS domain; -1 reads ROS_DOMAIN_ID (default 0).
@@ -45,6 +46,9 @@ struct ContextOptions {
   /// Shared-memory segment per participant: larger than the biggest sample (a 640x480 rgb8
   /// image is 0.9 MB), so same-host images travel through shared memory in one piece.
   uint32_t shm_segment_bytes = 32u * 1024u * 1024u;
+  /// Data-sharing delivery for endpoints whose QoS asks for it (QoS::data_sharing);
+  /// UNAV_DATA_SHARING=off or UNAV_TRANSPORT=udp turn it off for the process.
+  bool data_sharing = true;
   /// Participant name shown by DDS tools; defaults to argv[0]'s base name.
   std::string participant_name;
   /// DDS Security switches; unset: read ROS_SECURITY_* from the environment (security.hpp).
@@ -104,6 +108,8 @@ class Context {
                           const std::optional<std::vector<std::pair<std::string, std::string>>>& security_properties,
                           const std::string& security_warning, const std::string& keystore);
   std::string access_hint(const char* way) const;
+  /// The topic's type as a BoundSwitch when data-sharing applies to `q`; nullptr otherwise.
+  BoundSwitch* data_sharing_type(eprosima::fastdds::dds::Topic* topic, const QoS& q, bool writer);
 
   RosArgs args_;
   int domain_id_ = 0;
@@ -114,6 +120,8 @@ class Context {
   eprosima::fastdds::dds::Publisher* publisher_ = nullptr;
   eprosima::fastdds::dds::Subscriber* subscriber_ = nullptr;
   std::mutex mutex_;
+  std::mutex endpoint_mutex_;  // a type's bound is set for one endpoint creation at a time
+  bool data_sharing_ = true;
   std::map<std::string, eprosima::fastdds::dds::Topic*> topics_;
   std::vector<std::unique_ptr<eprosima::fastdds::dds::TopicDataType>> owned_types_;
   std::vector<Node*> nodes_;

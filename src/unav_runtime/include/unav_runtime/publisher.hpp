@@ -1,6 +1,7 @@
 // Typed publisher and subscription over Fast DDS.
 #pragma once
 
+#include <cstdint>
 #include <functional>
 #include <memory>
 #include <string>
@@ -14,6 +15,42 @@ namespace unav {
 /// declaration in the ROS-style header (<pkg>/msg/<type>.hpp).
 template <typename Msg>
 using TypeSupportOf = decltype(unav_type_support_of(static_cast<const Msg*>(nullptr)));
+
+/// CDR size of `msg` without the 4-byte encapsulation: a writer's QoS::max_sample_bytes is this
+/// for its largest message (an image of the camera's size with its frame id and encoding).
+template <typename Msg>
+uint32_t serialized_bytes(const Msg& msg) {
+  return static_cast<uint32_t>(Msg::getCdrSerializedSize(msg));
+}
+
+/// Lets the Context give a type a bound while it creates one endpoint: Fast DDS asks
+/// is_bounded() and reads m_typeSize only when it creates a writer or reader, and data-sharing
+/// needs a bounded type (a fixed payload size for the shared pool). One type object serves a
+/// topic's writers and readers in a participant, so the bound is set per endpoint creation and
+/// cleared after it; the wire format never changes.
+class BoundSwitch {
+ public:
+  /// For a reader: bounded for Fast DDS's data-sharing check, the payload size left as generated.
+  static constexpr uint32_t kReaderBound = UINT32_MAX;
+  virtual ~BoundSwitch() = default;
+  /// A writer's largest serialized sample, kReaderBound, or 0 to clear (unbounded again).
+  virtual void set_bound(uint32_t serialized_bytes) = 0;
+};
+
+template <typename Base>
+class SwitchableBoundType final : public Base, public BoundSwitch {
+ public:
+  bool is_bounded() const override { return bound_ != 0; }
+  void set_bound(uint32_t serialized_bytes) override {
+    bound_ = serialized_bytes;
+    // + encapsulation, + up to 3 bytes of alignment as the generated constructor allows.
+    this->m_typeSize = bound_ != 0 && bound_ != kReaderBound ? bound_ + 4 + 3 : unbounded_size_;
+  }
+
+ private:
+  uint32_t unbounded_size_ = this->m_typeSize;
+  uint32_t bound_ = 0;
+};
 
 /// Non-template part: owns the DataWriter.
 class PublisherBase {
@@ -34,13 +71,15 @@ class PublisherBase {
   Context& ctx_;
   std::string topic_;
   eprosima::fastdds::dds::DataWriter* writer_ = nullptr;
+  uint32_t max_sample_bytes_ = 0;  // data-sharing bound, for the error when a sample exceeds it
+  bool write_failure_reported_ = false;
 };
 
 template <typename Msg>
 class Publisher : public PublisherBase {
  public:
   Publisher(Context& ctx, const std::string& topic, const QoS& qos)
-      : PublisherBase(ctx, topic, new TypeSupportOf<Msg>(), qos) {}
+      : PublisherBase(ctx, topic, new SwitchableBoundType<TypeSupportOf<Msg>>(), qos) {}
   /// Serialises `msg` once into the transport; false if the middleware refused it.
   bool publish(const Msg& msg) { return write(&msg); }
 };
@@ -48,8 +87,7 @@ class Publisher : public PublisherBase {
 /// Non-template part: owns the DataReader and is its listener.
 class SubscriptionBase : public Waitable, public std::enable_shared_from_this<SubscriptionBase> {
  public:
-  SubscriptionBase(Context& ctx, const std::string& topic, eprosima::fastdds::dds::TopicDataType* type,
-                   const QoS& qos);
+  SubscriptionBase(Context& ctx, const std::string& topic, eprosima::fastdds::dds::TopicDataType* type, const QoS& qos);
   ~SubscriptionBase() override;
   SubscriptionBase(const SubscriptionBase&) = delete;
   SubscriptionBase& operator=(const SubscriptionBase&) = delete;
@@ -77,7 +115,8 @@ template <typename Msg>
 class Subscription : public SubscriptionBase {
  public:
   Subscription(Context& ctx, const std::string& topic, const QoS& qos, std::function<void(const Msg&)> callback)
-      : SubscriptionBase(ctx, topic, new TypeSupportOf<Msg>(), qos), callback_(std::move(callback)) {}
+      : SubscriptionBase(ctx, topic, new SwitchableBoundType<TypeSupportOf<Msg>>(), qos),
+        callback_(std::move(callback)) {}
   bool execute() override {
     // A bounded batch per turn keeps one busy topic from starving the others.
     for (int i = 0; i < 16; ++i) {
