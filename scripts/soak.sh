@@ -1,24 +1,29 @@
 #!/usr/bin/env bash
 # Soak run: the turbid pipe-inspection demo with every node (physics, MPC, allocator, follower,
-# renderer, sonar, dataset recorder, VO, evaluator) in lockstep, looped over the pipeline for
-# MINUTES of wall time. Every 30 s it samples each node's resident memory (/proc/PID/status VmRSS),
+# renderer, sonar, dataset recorder, VO, evaluator) in lockstep, flying episode after episode over
+# the pipeline for MINUTES of wall time: every EPISODE_S seconds (default 60) a new episode starts
+# in the same processes (/rov/sim/reset: the vehicle back at the start, at rest; the follower's
+# path from its first waypoint; simulated time runs on). Every 30 s it samples each node's resident memory (/proc/PID/status VmRSS),
 # its open file descriptors and the simulated time; at the end it checks that no node died, that
 # simulated time advanced in every interval (no stuck lockstep barrier), that no node's memory
 # grew by more than 5 % between the second sample and the last (allocations settle in the first
 # 30 s) — except the trajectory_evaluator, which keeps every pose for the APE it computes at
 # shutdown (growth reported, ~1.5 MB per minute) — and that no node's open files grew. Writes OUT/rss.csv and OUT/summary.txt; exit 1 on
 # a failed check. Not a test (an hour is far beyond CI): run it before a release.
-#   scripts/soak.sh [MINUTES=60] [OUT=out/soak]
+# Also reported: episodes started, lockstep holds logged, /dev/shm entries before and after.
+#   scripts/soak.sh [MINUTES=60] [OUT=out/soak] [EPISODE_S=60]
 set -euo pipefail
 cd "$(dirname "$0")/.."
 minutes="${1:-60}"
 out="${2:-out/soak}"
+episode_s="${3:-60}"
+start_pose='{position: {x: -1.5, y: 0.0, z: 8.35}, orientation: {x: 0.0, y: 0.0, z: 0.0, w: 1.0}}'
+shm_before=$(ls /dev/shm | wc -l)
 set +u; source install/setup.bash; set -u
 mkdir -p "$out"
 rm -f "$out/rss.csv" "$out/summary.txt"
 export ROS_DOMAIN_ID="${ROS_DOMAIN_ID:-77}"
-# duration:=0: until stopped; the follower loops (the flight ends over the pipeline's end, so the
-# run keeps rendering and pinging there).
+# duration:=0: until stopped; each episode flies the pipeline from its start.
 unav launch launch_scripts/pipe_inspection_turbid.launch.yaml output_dir:="$out/run" duration:=0 \
   >"$out/launch.log" 2>&1 &
 launch_pid=$!
@@ -29,6 +34,8 @@ nodes=$(grep -o '\[[a-z_]*-[0-9]*\]: process started with pid \[[0-9]*\]' "$out/
 [ -n "$nodes" ] || { echo "soak: no node started"; tail -20 "$out/launch.log"; exit 1; }
 echo "t_s,node,pid,rss_kb,sim_time_s,open_fds" >"$out/rss.csv"
 end=$((SECONDS + minutes * 60))
+next_episode=$((SECONDS + episode_s))
+resets=0
 sample() {
   local sim
   sim=$(timeout 10 unav topic echo /clock --once 2>/dev/null | awk '$1=="sec:"{s=$2} $1=="nanosec:"{printf "%.3f", s + $2 / 1e9; exit}')
@@ -41,11 +48,21 @@ sample() {
 }
 while [ $SECONDS -lt $end ]; do
   sample
+  if [ $SECONDS -ge $next_episode ]; then
+    unav topic pub --once -w 1 /rov/sim/reset geometry_msgs/msg/Pose "$start_pose" >/dev/null 2>&1 \
+      && resets=$((resets + 1))
+    next_episode=$((next_episode + episode_s))
+  fi
   sleep 30
 done
 sample
 {
   echo "soak: $minutes min, $(echo "$nodes" | wc -w) nodes"
+  episodes=$(grep -c "\] episode [0-9]*: the vehicle is at" "$out/launch.log" || true)
+  echo "episodes: $((episodes + 1)) ($resets resets sent, $episodes started)"
+  [ "$episodes" -eq "$resets" ] || echo "FAIL: $resets resets sent but $episodes episodes started"
+  echo "lockstep holds logged (a participant late by 3 s or more): $(grep -c "lockstep: holding at" "$out/launch.log" || true)"
+  echo "/dev/shm entries: $shm_before before, $(ls /dev/shm | wc -l) during the run's last sample"
   if grep -q ",dead," "$out/rss.csv"; then
     echo "FAIL: a node died: $(grep ',dead,' "$out/rss.csv" | cut -d, -f2 | sort -u | tr '\n' ' ')"
   fi

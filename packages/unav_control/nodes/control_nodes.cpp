@@ -142,6 +142,10 @@ MpcControllerNode::MpcControllerNode(const unav::NodeOptions& options) : Node("m
 }
 
 void MpcControllerNode::on_odom(const nav_msgs::msg::Odometry& m) {
+  if (const std::string why = unav::odometry_problem(m); !why.empty()) {
+    rejections_.reject(odom_sub_->topic_name(), why);
+    return;
+  }
   const double t = stamp_of(m.header());
   if (have_output_ && std::abs(t - last_output_t_) < 1e-9) {
     // The same state again: the physics re-publishes a held lockstep barrier when an answer was
@@ -228,8 +232,21 @@ WaypointFollowerNode::WaypointFollowerNode(const unav::NodeOptions& options)
                                                            logger()->warn("path rejected: {}", err);
                                                          finished_logged_ = false;
                                                        });
+  reset_sub_ = create_subscription<geometry_msgs::msg::Pose>("sim/reset", unav::QoS::reliable(),
+                                                             [this](const geometry_msgs::msg::Pose& m) {
+                                                               // As the physics server: a bad pose
+                                                               // starts no episode.
+                                                               if (!unav::pose_problem(m).empty()) return;
+                                                               std::vector<PoseSetpoint> restart = follower_.path();
+                                                               if (!restart.empty()) follower_.SetPath(restart);
+                                                               finished_logged_ = false;
+                                                             });
   odom_sub_ = create_subscription<nav_msgs::msg::Odometry>(
       "ground_truth/odom", unav::QoS::reliable(), [this](const nav_msgs::msg::Odometry& m) {
+        if (const std::string why = unav::odometry_problem(m); !why.empty()) {
+          rejections_.reject(odom_sub_->topic_name(), why);
+          return;
+        }
         // Without a path: a hold setpoint at the current position.
         const WaypointUpdate u = follower_.Update(unav::from_msg(m.pose().pose().position()));
         if (u.finished && !finished_logged_) {

@@ -8,7 +8,8 @@
 //   params: config_file (allocator YAML; default <unav_resources>/config/controllers/allocator.yaml)
 //
 // mpc_controller
-//   sub  ground_truth/odom (remap to any odometry)  nav_msgs/Odometry  world_ned / base_link_frd
+//   sub  ground_truth/odom (remap to any odometry)  nav_msgs/Odometry  world_ned / base_link_frd;
+//        NaN/Inf or a non-unit quaternion is rejected and counted (no solve, no answer)
 //   sub  control/pose_setpoint    geometry_msgs/PoseStamped (world_ned)
 //   pub  control/wrench_command   geometry_msgs/WrenchStamped, stamped with the state's time
 //   Solves once per odometry whose stamp reached the next multiple of the MPC dt (lockstep: the
@@ -21,6 +22,8 @@
 // waypoint_follower
 //   sub  ground_truth/odom        nav_msgs/Odometry
 //   sub  control/path             nav_msgs/Path (world_ned); replaces the current path
+//   sub  sim/reset                geometry_msgs/Pose: a new episode (physics_server): the path
+//                                 starts again from its first waypoint
 //   pub  control/pose_setpoint    geometry_msgs/PoseStamped, on every odometry
 //   params: waypoints (flat [x, y, z, ...] NED, m), pipeline_world (world.yaml: follow its first
 //           pipeline), height_above_pipe (m), acceptance_radius (m)
@@ -29,6 +32,7 @@
 #include <memory>
 #include <optional>
 
+#include "geometry_msgs/msg/pose.hpp"
 #include "geometry_msgs/msg/pose_stamped.hpp"
 #include "geometry_msgs/msg/wrench_stamped.hpp"
 #include "nav_msgs/msg/odometry.hpp"
@@ -40,6 +44,7 @@
 #include "unav_control/waypoint_follower.hpp"
 #include "unav_msgs/msg/thruster_command.hpp"
 #include "unav_runtime/runtime.hpp"
+#include "unav_runtime/validation.hpp"
 
 namespace unav::control {
 
@@ -100,6 +105,8 @@ class MpcControllerNode : public unav::Node {
  public:
   explicit MpcControllerNode(const unav::NodeOptions& options);
   const MpcSummary& last_summary() const { return last_; }
+  /// Rejected odometry (NaN/Inf, not a rotation): never solved, never answered.
+  const unav::RejectionCounter& rejections() const { return rejections_; }
 
  private:
   void on_odom(const nav_msgs::msg::Odometry& m);
@@ -117,6 +124,7 @@ class MpcControllerNode : public unav::Node {
   geometry_msgs::msg::WrenchStamped last_output_;
   double last_output_t_ = -1.0;
   bool have_output_ = false;
+  unav::RejectionCounter rejections_{logger()};
   std::shared_ptr<unav::Subscription<nav_msgs::msg::Odometry>> odom_sub_;
   std::shared_ptr<unav::Subscription<geometry_msgs::msg::PoseStamped>> sp_sub_;
   std::shared_ptr<unav::Publisher<geometry_msgs::msg::WrenchStamped>> pub_;
@@ -125,10 +133,14 @@ class MpcControllerNode : public unav::Node {
 class WaypointFollowerNode : public unav::Node {
  public:
   explicit WaypointFollowerNode(const unav::NodeOptions& options);
+  const unav::RejectionCounter& rejections() const { return rejections_; }
+  const WaypointFollower& follower() const { return follower_; }
 
  private:
   WaypointFollower follower_;
   bool finished_logged_ = false;
+  unav::RejectionCounter rejections_{logger()};
+  std::shared_ptr<unav::Subscription<geometry_msgs::msg::Pose>> reset_sub_;
   std::shared_ptr<unav::Subscription<nav_msgs::msg::Odometry>> odom_sub_;
   std::shared_ptr<unav::Subscription<nav_msgs::msg::Path>> path_sub_;
   std::shared_ptr<unav::Publisher<geometry_msgs::msg::PoseStamped>> pub_;

@@ -31,6 +31,7 @@
 #include "unav_runtime/runtime.hpp"
 #include "unav_runtime/synchronizer.hpp"
 #include "unav_runtime/tf_static.hpp"
+#include "unav_runtime/validation.hpp"
 #include "unav_scene/camera.hpp"
 #include "unav_scene/world.hpp"
 
@@ -150,6 +151,10 @@ class DatasetRecorder : public unav::Node {
                                                                   });
     odom_sub_ = create_subscription<nav_msgs::msg::Odometry>(
         "ground_truth/odom", unav::QoS::reliable(100), [this](const nav_msgs::msg::Odometry& m) {
+          if (const std::string why = unav::odometry_problem(m); !why.empty()) {
+            rejections_.reject(odom_sub_->topic_name(), why);  // not in the dataset, not acked
+            return;
+          }
           pose_sync_.add_second(unav::nanoseconds(m.header()), unav::from_msg(m.pose().pose()));
           if (acker_) acker_->ack(m.header());
         });
@@ -217,6 +222,7 @@ class DatasetRecorder : public unav::Node {
   std::shared_ptr<unav::Subscription<sensor_msgs::msg::Image>> rgb_sub_, depth_sub_, seg_sub_;
   std::shared_ptr<unav::Subscription<sensor_msgs::msg::CameraInfo>> info_sub_;
   std::shared_ptr<unav::Subscription<nav_msgs::msg::Odometry>> odom_sub_;
+  unav::RejectionCounter rejections_{logger()};  // odometry with NaN/Inf or a non-rotation
   std::shared_ptr<unav::Subscription<sensor_msgs::msg::Imu>> imu_sub_;
 };
 

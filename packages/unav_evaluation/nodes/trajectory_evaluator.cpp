@@ -20,19 +20,22 @@
 namespace unav::evaluation {
 namespace {
 
-template <class Header, class Pose>
-void append_pose(Trajectory& t, const Header& h, const Pose& p) {
+// Appends the pose unless its stamp is not after the last one (re-published states, reordering);
+// returns why it cannot be used (NaN/Inf, not a unit quaternion), empty otherwise.
+std::string append_pose(Trajectory& t, const std_msgs::msg::Header& h, const geometry_msgs::msg::Pose& p) {
+  if (std::string why = unav::pose_problem(p); !why.empty()) return why;
   const double stamp = unav::Time::from_msg(h.stamp().sec(), h.stamp().nanosec()).seconds();
-  if (!t.empty() && stamp <= t.stamps.back()) return;  // duplicates (re-published states) and reordering
+  if (!t.empty() && stamp <= t.stamps.back()) return "";
   Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
-  X.translation() = Eigen::Vector3d(p.position().x(), p.position().y(), p.position().z());
-  const Eigen::Quaterniond q(p.orientation().w(), p.orientation().x(), p.orientation().y(), p.orientation().z());
-  if (!X.translation().allFinite() || !q.coeffs().allFinite() || q.norm() < 1e-6) return;
-  X.linear() = q.normalized().toRotationMatrix();
+  X.translation() = unav::from_msg(p.position());
+  X.linear() = unav::from_msg(p.orientation()).normalized().toRotationMatrix();
   t.push_back(stamp, X);
+  return "";
 }
 
-void append(Trajectory& t, const nav_msgs::msg::Odometry& m) { append_pose(t, m.header(), m.pose().pose()); }
+std::string append(Trajectory& t, const nav_msgs::msg::Odometry& m) {
+  return append_pose(t, m.header(), m.pose().pose());
+}
 
 std::string strip_slash(std::string f) {
   while (!f.empty() && f.front() == '/') f.erase(0, 1);
@@ -118,12 +121,12 @@ TrajectoryEvaluator::TrajectoryEvaluator(const unav::NodeOptions& options)
   if (ec) throw unav::ConfigError("output_dir '" + output_dir_ + "': cannot create: " + ec.message());
   subs_.push_back(create_subscription<nav_msgs::msg::Odometry>(
       "ground_truth/odom", unav::QoS::reliable(100),
-      [this](const nav_msgs::msg::Odometry& m) { append(ground_truth_, m); }));
+      [this](const nav_msgs::msg::Odometry& m) { check(append(ground_truth_, m), "ground_truth/odom"); }));
   for (const auto& n : names) {
     estimates_[n];
     subs_.push_back(create_subscription<nav_msgs::msg::Odometry>(
         "localization/" + n + "/odom", unav::QoS::reliable(100),
-        [this, n](const nav_msgs::msg::Odometry& m) { append(estimates_[n], m); }));
+        [this, n](const nav_msgs::msg::Odometry& m) { check(append(estimates_[n], m), n); }));
     path_subs_.push_back(create_subscription<nav_msgs::msg::Path>(
         "localization/" + n + "/path", unav::QoS::reliable(2),
         [this, n](const nav_msgs::msg::Path& m) { paths_[n] = from_path(m); }));
@@ -151,15 +154,17 @@ TrajectoryEvaluator::TrajectoryEvaluator(const unav::NodeOptions& options)
     }
     if (kind == "odom") {
       subs_.push_back(create_subscription<nav_msgs::msg::Odometry>(
-          src, unav::QoS::reliable(100), [this, n](const nav_msgs::msg::Odometry& m) { append(estimates_[n], m); }));
+          src, unav::QoS::reliable(100),
+          [this, n](const nav_msgs::msg::Odometry& m) { check(append(estimates_[n], m), n); }));
     } else if (kind == "pose") {
       pose_subs_.push_back(create_subscription<geometry_msgs::msg::PoseStamped>(
-          src, unav::QoS::reliable(100),
-          [this, n](const geometry_msgs::msg::PoseStamped& m) { append_pose(estimates_[n], m.header(), m.pose()); }));
+          src, unav::QoS::reliable(100), [this, n](const geometry_msgs::msg::PoseStamped& m) {
+            check(append_pose(estimates_[n], m.header(), m.pose()), n);
+          }));
     } else if (kind == "pose_cov") {
       pose_cov_subs_.push_back(create_subscription<geometry_msgs::msg::PoseWithCovarianceStamped>(
           src, unav::QoS::reliable(100), [this, n](const geometry_msgs::msg::PoseWithCovarianceStamped& m) {
-            append_pose(estimates_[n], m.header(), m.pose().pose());
+            check(append_pose(estimates_[n], m.header(), m.pose().pose()), n);
           }));
     } else if (kind == "tf") {
       const size_t dot = src.find('.');
@@ -182,7 +187,7 @@ TrajectoryEvaluator::TrajectoryEvaluator(const unav::NodeOptions& options)
             p.position().y(tr.transform().translation().y());
             p.position().z(tr.transform().translation().z());
             p.orientation(tr.transform().rotation());
-            append_pose(estimates_[it->second], tr.header(), p);
+            check(append_pose(estimates_[it->second], tr.header(), p), it->second);
           }
         });
   }

@@ -45,6 +45,7 @@
 #include "unav_evaluation/report.hpp"
 #include "unav_runtime/runtime.hpp"
 #include "unav_runtime/tf_static.hpp"
+#include "unav_runtime/validation.hpp"
 #include "unav_scene/world.hpp"
 
 namespace unav::evaluation {
@@ -95,13 +96,18 @@ class TrajectoryEvaluator : public unav::Node {
   ~TrajectoryEvaluator() override;
   /// Writes every output now (also called by the destructor); returns the results.
   std::vector<AlgorithmResult> write_outputs();
+  /// Poses rejected (NaN/Inf, not a unit quaternion), by estimator name or "ground_truth/odom".
+  const unav::RejectionCounter& rejections() const { return rejections_; }
 
  private:
   void write_pipe_tracking(const std::string& path);
+  void check(const std::string& problem, const std::string& source) {
+    if (!problem.empty()) rejections_.reject(source, problem);
+  }
+  unav::RejectionCounter rejections_{logger()};
   std::unique_ptr<unav::scene::World> pipe_world_;
   double pipe_loss_m_ = 2.5;
 
- public:
  private:
   std::string output_dir_, trajectory_name_;
   Alignment alignment_ = Alignment::kSim3;

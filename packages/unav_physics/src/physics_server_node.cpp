@@ -113,6 +113,8 @@ PhysicsServer::PhysicsServer(const unav::NodeOptions& options) : Node("physics_s
   if (sp.gps.enabled) gps_pub_ = create_publisher<sensor_msgs::msg::NavSatFix>("gps", unav::QoS::sensor_data());
   command_sub_ = create_subscription<unav_msgs::msg::ThrusterCommand>(
       "thrusters/command", unav::QoS::reliable(), [this](const unav_msgs::msg::ThrusterCommand& m) { on_command(m); });
+  reset_sub_ = create_subscription<geometry_msgs::msg::Pose>(
+      "sim/reset", unav::QoS::reliable(), [this](const geometry_msgs::msg::Pose& m) { on_reset(m); });
   if (lockstep_) {
     ack_sub_ = create_subscription<unav_msgs::msg::LockstepAck>(
         "/lockstep/ack", unav::QoS::reliable(100), [this](const unav_msgs::msg::LockstepAck& m) { on_ack(m); });
@@ -401,6 +403,20 @@ void PhysicsServer::on_drop(const std::string& who) {
   }
   logger()->warn("lockstep: no longer waiting for '{}' (dropped through /lockstep/drop)", who);
   if (barrier_t_ >= 0.0 && barrier_open()) run_steps();
+}
+
+void PhysicsServer::on_reset(const geometry_msgs::msg::Pose& pose) {
+  if (const std::string why = unav::pose_problem(pose); !why.empty()) {
+    rejections_.reject(reset_sub_->topic_name(), why);
+    return;
+  }
+  RigidBodyState x;
+  x.p_WB_W = unav::from_msg(pose.position());
+  x.q_WB = unav::from_msg(pose.orientation());  // normalised by teleport()
+  sim_->teleport(x);
+  ++episodes_;
+  logger()->info("episode {}: the vehicle is at [{:.3f}, {:.3f}, {:.3f}] m (NED), at rest, t = {:.3f} s", episodes_,
+                 x.p_WB_W.x(), x.p_WB_W.y(), x.p_WB_W.z(), sim_->time());
 }
 
 }  // namespace unav::physics

@@ -4,6 +4,8 @@
 //   sub  thrusters/command     unav_msgs/ThrusterCommand          reliable     u_i in [-1, 1]
 //   sub  /lockstep/ack         unav_msgs/LockstepAck              reliable     (lockstep mode)
 //   sub  /lockstep/drop        std_msgs/String                    reliable     stop waiting for a participant
+//   sub  sim/reset             geometry_msgs/Pose                 reliable     new episode: the vehicle to
+//                                                                             this pose at rest, time runs on
 //   pub  /clock                rosgraph_msgs/Clock                reliable     every publish tick
 //   pub  ground_truth/odom     nav_msgs/Odometry                  reliable     publish_rate
 //   pub  /tf                   tf2_msgs/TFMessage                 reliable     publish_rate, world_frame -> body_frame
@@ -42,6 +44,7 @@
 #include <vector>
 
 #include "geometry_msgs/msg/point_stamped.hpp"
+#include "geometry_msgs/msg/pose.hpp"
 #include "nav_msgs/msg/odometry.hpp"
 #include "rosgraph_msgs/msg/clock.hpp"
 #include "sensor_msgs/msg/fluid_pressure.hpp"
@@ -59,6 +62,7 @@
 #include "unav_physics/simulator.hpp"
 #include "unav_runtime/lockstep.hpp"
 #include "unav_runtime/runtime.hpp"
+#include "unav_runtime/validation.hpp"
 #include "unav_scene/world.hpp"
 
 namespace unav::physics {
@@ -134,6 +138,13 @@ class PhysicsServer : public unav::Node {
   void on_command(const unav_msgs::msg::ThrusterCommand& msg);
   void on_ack(const unav_msgs::msg::LockstepAck& msg);
   void on_drop(const std::string& who);
+  void on_reset(const geometry_msgs::msg::Pose& pose);
+
+ public:
+  /// Rejected input messages by topic (sim/reset: NaN/Inf, not a unit quaternion).
+  const unav::RejectionCounter& rejections() const { return rejections_; }
+
+ private:
   bool barrier_open() const;
   int64_t barrier_ns() const;
   void hold_at_barrier();
@@ -180,6 +191,9 @@ class PhysicsServer : public unav::Node {
   std::shared_ptr<unav::Subscription<unav_msgs::msg::ThrusterCommand>> command_sub_;
   std::shared_ptr<unav::Subscription<unav_msgs::msg::LockstepAck>> ack_sub_;
   std::shared_ptr<unav::Subscription<std_msgs::msg::String>> drop_sub_;
+  std::shared_ptr<unav::Subscription<geometry_msgs::msg::Pose>> reset_sub_;
+  unav::RejectionCounter rejections_{logger()};
+  int episodes_ = 1;
   std::shared_ptr<unav::Timer> timer_;
 
   // Reused messages (no allocation per publish after the first).

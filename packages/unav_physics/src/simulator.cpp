@@ -58,17 +58,22 @@ Simulator::Simulator(const VehicleParams& vehicle, const SimulatorOptions& optio
   reset(initial);
 }
 
-void Simulator::reset(const RigidBodyState& x) {
+void Simulator::teleport(const RigidBodyState& x) {
   if (!(x.p_WB_W.allFinite() && x.q_WB.coeffs().allFinite() && x.v_WB_B.allFinite() && x.w_WB_B.allFinite() &&
         x.q_WB.norm() > 1e-9)) {
     throw ConfigError("initial state must be finite with a non-zero quaternion");
   }
   x_ = x;
   x_.q_WB.normalize();
-  steps_ = 0;
   thrusters_.reset();
   u_cmd_.setZero(thrusters_.size());
   u_zero_.setZero(thrusters_.size());
+  nu_dot_fresh_ = false;
+}
+
+void Simulator::reset(const RigidBodyState& x) {
+  teleport(x);
+  steps_ = 0;
   timeout_ = CommandTimeout(options_.command_timeout);
   timed_out_ = false;
   nu_dot_fresh_ = false;

@@ -126,6 +126,60 @@ TEST(PhysicsServer, LockstepHoldsEachBarrierUntilTheCommandArrives) {
   EXPECT_EQ(t.transform().rotation().w(), h.odoms.back().pose().pose().orientation().w());
 }
 
+// A new episode on sim/reset: the vehicle jumps to the pose given, at rest, while simulated
+// time runs on (no stamp goes back); a NaN or non-rotation pose is rejected and counted.
+TEST(PhysicsServer, ResetStartsAnEpisodeWhileTimeRunsOn) {
+  Harness h({"-p", "mode:=lockstep", "-p", "lockstep_wait_for_command:=true", "-p", "lockstep_period:=0.05", "-p",
+             "publish_rate:=20.0"});
+  auto reset_pub = h.probe->create_publisher<geometry_msgs::msg::Pose>("/rov/sim/reset", unav::QoS::reliable());
+  std::vector<unav::testing::Link> links;
+  for (const auto* s : h.server->subscriptions())
+    if (s->topic_name() == reset_pub->topic_name()) links.push_back(make_link(*reset_pub, *s));
+  ASSERT_EQ(links.size(), 1u);
+  ASSERT_TRUE(unav::testing::wait_for_match({h.server_ctx.get(), h.test_ctx.get()}, links));
+  double answered = -1.0;
+  auto answer = [&] {
+    EXPECT_TRUE(h.spin_until([&] { return !h.odoms.empty() && stamp_s(h.odoms.back().header()) > answered; }, 10s));
+    answered = stamp_s(h.odoms.back().header());
+    h.command(answered, kSurge);
+  };
+  for (int k = 0; k < 10; ++k) answer();  // flying forward: ~0.1 m/s after 0.45 s
+  geometry_msgs::msg::Pose bad;
+  bad.position().x(std::nan(""));
+  reset_pub->publish(bad);
+  bad.position().x(0.0);
+  bad.orientation().w(0.0);  // all-zero quaternion
+  reset_pub->publish(bad);
+  ASSERT_TRUE(h.spin_until([&] { return h.server->rejections().count("rt/rov/sim/reset") == 2; }, 10s));
+  geometry_msgs::msg::Pose start;
+  start.position().x(5.0);
+  start.position().y(-2.0);
+  start.position().z(3.0);
+  start.orientation().z(std::sqrt(0.5));  // yaw 90 degrees
+  start.orientation().w(std::sqrt(0.5));
+  reset_pub->publish(start);
+  ASSERT_TRUE(h.spin_until([&] { return h.server->simulator().state().p_WB_W.x() > 4.0; }, 10s)) << "no reset";
+  const double v_before = h.odoms.back().twist().twist().linear().x();
+  EXPECT_EQ(h.server->simulator().state().v_WB_B.norm(), 0.0) << "at rest";
+  EXPECT_EQ(h.server->simulator().thrusters().thrust().norm(), 0.0) << "thrusters stopped";
+  const double t_reset = h.server->simulator().time();
+  EXPECT_GE(t_reset, 0.45) << "time must not go back to 0";
+  // The first state published after it: at the new pose (within the few mm that one 0.05 s
+  // barrier of buoyancy and spinning-up thrust moves it), at rest, stamped after the last one.
+  while (stamp_s(h.odoms.back().header()) <= t_reset + 1e-9) answer();
+  const auto& o = h.odoms.back();
+  EXPECT_NEAR(stamp_s(o.header()), t_reset + 0.05, 1e-9);
+  EXPECT_NEAR(o.pose().pose().position().x(), 5.0, 0.01);
+  EXPECT_NEAR(o.pose().pose().position().y(), -2.0, 0.01);
+  EXPECT_NEAR(o.pose().pose().position().z(), 3.0, 0.01);
+  EXPECT_NEAR(o.pose().pose().orientation().z(), std::sqrt(0.5), 1e-3);
+  // From rest, one barrier of the surge command (thrust spinning up through its 0.1 s lag) gives
+  // ~0.03 m/s; the last episode's speed was several times that.
+  EXPECT_GT(v_before, 0.1);
+  EXPECT_LT(std::abs(o.twist().twist().linear().x()), 0.05) << "the forward speed of the last episode remains";
+  EXPECT_EQ(h.server->rejections().total(), 2u);
+}
+
 TEST(PhysicsServer, LockstepWaitsForEveryParticipantAck) {
   Harness h({"-p", "mode:=lockstep", "-p", "lockstep_participants:=[renderer]", "-p", "lockstep_period:=0.1"});
   h.spin_until([] { return false; }, 300ms);

@@ -75,6 +75,10 @@ void DrlPlannerNode::on_image(const sensor_msgs::msg::Image& m) {
 }
 
 void DrlPlannerNode::on_odom(const nav_msgs::msg::Odometry& m) {
+  if (const std::string why = unav::odometry_problem(m); !why.empty()) {
+    rejections_.reject(odom_sub_->topic_name(), why);
+    return;
+  }
   const std::int64_t t = unav::nanoseconds(m.header());
   if (hold_depth_ < 0.0) hold_depth_ = m.pose().pose().position().z();
   if (next_decision_ns_ < 0) next_decision_ns_ = t;

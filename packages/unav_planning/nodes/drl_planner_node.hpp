@@ -23,6 +23,7 @@
 #include "unav_control/pipe_action.hpp"
 #include "unav_planning/pipe_policy.hpp"
 #include "unav_runtime/runtime.hpp"
+#include "unav_runtime/validation.hpp"
 
 namespace unav::planning {
 
@@ -87,6 +88,7 @@ class DrlPlannerNode : public unav::Node {
   std::uint64_t decisions_ = 0;
   double inference_ms_ = 0.0;
   std::shared_ptr<unav::Subscription<nav_msgs::msg::Odometry>> odom_sub_;
+  unav::RejectionCounter rejections_{logger()};  // odometry with NaN/Inf or a non-rotation
   std::shared_ptr<unav::Subscription<sensor_msgs::msg::Image>> image_sub_;
   std::shared_ptr<unav::Publisher<geometry_msgs::msg::PoseStamped>> pub_;
 };

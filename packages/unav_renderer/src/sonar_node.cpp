@@ -115,6 +115,10 @@ SonarNode::SonarNode(const unav::NodeOptions& options) : Node("sonar", options, 
 SonarNode::~SonarNode() = default;
 
 void SonarNode::on_odom(const nav_msgs::msg::Odometry& odom) {
+  if (const std::string why = unav::odometry_problem(odom); !why.empty()) {
+    rejections_.reject(odom_sub_->topic_name(), why);  // neither rendered nor acked
+    return;
+  }
   const double t = unav::seconds(odom.header());
   const double eps = 1e-6;  // stamps are integer nanoseconds
   const Pose X_WB = unav::from_msg(odom.pose().pose());

@@ -137,6 +137,10 @@ UnderwaterRendererNode::UnderwaterRendererNode(const unav::NodeOptions& options)
 UnderwaterRendererNode::~UnderwaterRendererNode() = default;
 
 void UnderwaterRendererNode::on_odom(const nav_msgs::msg::Odometry& odom) {
+  if (const std::string why = unav::odometry_problem(odom); !why.empty()) {
+    rejections_.reject(odom_sub_->topic_name(), why);  // neither rendered nor acked
+    return;
+  }
   const double t = unav::seconds(odom.header());
   const double eps = 1e-6;  // stamps are integer nanoseconds
   if (next_frame_t_ < 0.0) {

@@ -28,6 +28,7 @@
 #include "unav_renderer/renderer.hpp"
 #include "unav_runtime/lockstep_ack.hpp"
 #include "unav_runtime/runtime.hpp"
+#include "unav_runtime/validation.hpp"
 
 namespace unav::renderer {
 
@@ -99,6 +100,7 @@ class UnderwaterRendererNode : public unav::Node {
   std::uint64_t frames_ = 0;
   std::shared_ptr<unav::Subscription<nav_msgs::msg::Odometry>> odom_sub_;
   std::unique_ptr<unav::lockstep::Acker> acker_;
+  unav::RejectionCounter rejections_{logger()};  // ground_truth/odom with NaN/Inf or a non-rotation
   std::shared_ptr<unav::Publisher<tf2_msgs::msg::TFMessage>> tf_static_pub_;
 };
 

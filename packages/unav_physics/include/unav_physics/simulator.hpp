@@ -84,6 +84,10 @@ class Simulator {
 
   /// Resets time to 0, the state to x, thrusters to rest and the command to zero.
   void reset(const RigidBodyState& x);
+  /// A new episode while time runs on: the state becomes x (its velocities included), the
+  /// thrusters stop and the command is zero until the next one; time, the sensors' noise streams
+  /// and the failsafe clock continue. Throws ConfigError for a non-finite x or a zero quaternion.
+  void teleport(const RigidBodyState& x);
 
   double time() const { return static_cast<double>(steps_) * options_.dt; }  ///< s
   std::uint64_t steps() const { return steps_; }
