@@ -2,12 +2,17 @@
 # Faults injected into the running pipe-inspection demo (lockstep):
 #  1. SIGKILL of a non-required node (klt_vo): the launch reports it by name and exit code, the
 #     rest keeps running (frames keep coming) and nothing else stops;
-#  2. a lockstep participant that hangs (SIGSTOP of the dataset recorder): the physics server
+#  2. SIGKILL of a lockstep participant launched to respawn (the renderer, renderer_respawn:=true):
+#     the launch reports and restarts it, the new renderer gets the held barrier's state (sent
+#     again every second) and rejoins; frames go on with no stamp missing or written twice;
+#  3. NaN odometry and a NaN thruster command published by an outsider: rejected and counted
+#     by name (physics, MPC, renderer, recorder), not acked, the run goes on;
+#  4. a lockstep participant that hangs (SIGSTOP of the dataset recorder): the physics server
 #     names it within 5 s of wall time, simulated time stops (nothing is skipped), and after
 #     SIGCONT the run goes on with no frame missing;
-#  3. the same participant hangs again and is dropped from the barrier (/lockstep/drop): the
+#  5. the same participant hangs again and is dropped from the barrier (/lockstep/drop): the
 #     physics server says so and simulated time runs on without it;
-#  4. Ctrl-C at the end: exit 130, frames = poses, frame stamps contiguous up to the drop.
+#  6. Ctrl-C at the end: exit 130, frames = poses, frame stamps contiguous up to the drop.
 set -euo pipefail
 trap 'echo "FAIL: unexpected exit at line $LINENO: $BASH_COMMAND"' ERR
 ws="$1"
@@ -32,9 +37,11 @@ wait_frames() {  # N TIMEOUT_S
   done
   return 1
 }
-pid_of() { pgrep -f -- "lib/$1/$2 " | head -1; }
+# This test's node (a child of its launch), never one of another run on the machine.
+pid_of() { pgrep -P "$launch_pid" -f -- "lib/$1/$2 " | head -1; }
 
-unav launch "$ws/launch_scripts/pipe_inspection.launch.yaml" output_dir:="$out/ds" >"$log" 2>&1 &
+unav launch "$ws/launch_scripts/pipe_inspection.launch.yaml" output_dir:="$out/ds" \
+  renderer_respawn:=true renderer_required:=false >"$log" 2>&1 &
 launch_pid=$!
 wait_frames 11 90 || fail "the demo did not start recording"
 
@@ -52,7 +59,38 @@ for node in physics_server control_allocator mpc_controller waypoint_follower un
 done
 echo "klt_vo killed: reported, $(frames) frames and counting"
 
-# 2. A lockstep participant hangs: named within 5 s, time stops, SIGCONT resumes.
+# 2. SIGKILL a lockstep participant that respawns: it rejoins, nothing is lost or doubled.
+r_pid=$(pid_of unav_renderer underwater_renderer)
+[ -n "$r_pid" ] || fail "no underwater_renderer process"
+n=$(frames)
+kill -KILL "$r_pid"
+for _ in $(seq 1 50); do grep -q "underwater_renderer-5\]: process has died \[pid $r_pid, exit code -9" "$log" && break; sleep 0.1; done
+grep -q "underwater_renderer-5\]: process has died \[pid $r_pid, exit code -9" "$log" || fail "the renderer's death was not reported"
+wait_frames $((n + 10)) 90 || fail "frames stopped after the renderer was killed and respawned ($(frames), $n before)"
+new_pid=$(pid_of unav_renderer underwater_renderer)
+[ -n "$new_pid" ] && [ "$new_pid" != "$r_pid" ] || fail "the renderer was not respawned"
+kill -0 "$launch_pid" || fail "the launch ended with the renderer"
+echo "renderer killed: respawned as pid $new_pid, rejoined lockstep, $(frames) frames"
+
+# 3. An outsider publishes NaN odometry and a NaN thruster command: rejected, counted, not acked.
+nan_odom='{header: {stamp: {sec: 900}, frame_id: world_ned}, pose: {pose: {position: {x: .nan}, orientation: {w: 1.0}}}}'
+# -w: publish once the renderer, recorder and MPC (among others) / the physics server matched.
+timeout 30 unav topic pub --once -w 3 /rov/ground_truth/odom nav_msgs/msg/Odometry "$nan_odom" >/dev/null \
+  || fail "could not publish the NaN odometry"
+timeout 30 unav topic pub --once -w 1 /rov/thrusters/command unav_msgs/msg/ThrusterCommand \
+  '{header: {stamp: {sec: 900}}, u: [.nan, 0, 0, 0, 0, 0, 0, 0]}' >/dev/null || fail "could not publish the NaN command"
+for who in underwater_renderer dataset_recorder mpc_controller; do
+  for _ in $(seq 1 50); do grep -q "$who\]: message on 'rt/rov/ground_truth/odom' rejected: pose.pose.position.x = nan" "$log" && break; sleep 0.1; done
+  grep -q "$who\]: message on 'rt/rov/ground_truth/odom' rejected: pose.pose.position.x = nan: must be finite (1 rejected" "$log" \
+    || fail "$who did not reject the NaN odometry"
+done
+for _ in $(seq 1 50); do grep -q "physics_server\]: thruster command rejected (non-finite" "$log" && break; sleep 0.1; done
+grep -q "physics_server\]: thruster command rejected" "$log" || fail "the physics server did not reject the NaN command"
+n=$(frames)
+wait_frames $((n + 10)) 60 || fail "frames stopped after the NaN messages ($(frames))"
+echo "NaN odometry rejected by renderer, recorder and MPC; NaN command by the physics; $(frames) frames"
+
+# 4. A lockstep participant hangs: named within 5 s, time stops, SIGCONT resumes.
 rec_pid=$(pid_of unav_datagen dataset_recorder)
 [ -n "$rec_pid" ] || fail "no dataset_recorder process"
 before=$(grep -c "waiting for:.*recorder" "$log" || true)
@@ -75,7 +113,7 @@ wait_frames $((n + 10)) 60 || fail "no frames after the recorder resumed ($(fram
 # Every frame so far is there, in order (checked at the end).
 n_before_drop=$(frames)
 
-# 3. It hangs again and is dropped: the run goes on without it.
+# 5. It hangs again and is dropped: the run goes on without it.
 rec_pid=$(pid_of unav_datagen dataset_recorder)
 before=$(grep -c "waiting for:.*recorder" "$log" || true)
 kill -STOP "$rec_pid"
@@ -91,7 +129,7 @@ echo "recorder dropped at t = $held s: simulated time went on to $clock s"
 kill -CONT "$rec_pid"
 rec_pid=
 
-# 4. Ctrl-C: nothing lost up to the drop.
+# 6. Ctrl-C: nothing lost up to the drop.
 kill -INT "$launch_pid"
 rc=0; wait "$launch_pid" || rc=$?
 launch_pid=

@@ -117,20 +117,20 @@ class DatasetRecorder : public unav::Node {
     const unav::QoS images = q.with_data_sharing();  // from the renderer's shared pool, on one host
     rgb_sub_ = create_subscription<sensor_msgs::msg::Image>(
         base + "/image_raw", images, [this](const sensor_msgs::msg::Image& m) {
-          if (!check(m, "rgb8", 3)) return;
+          if (!check(m, "rgb8", 3) || !fresh(last_rgb_t_, m)) return;
           const double t = stamp_of(m.header());
           writer_->write_rgb(t, static_cast<int>(m.width()), static_cast<int>(m.height()), m.data().data());
           pose_sync_.add_first(unav::nanoseconds(m.header()), t);
         });
     depth_sub_ = create_subscription<sensor_msgs::msg::Image>(
         base + "/depth/image_raw", images, [this](const sensor_msgs::msg::Image& m) {
-          if (!check(m, "32FC1", 4)) return;
+          if (!check(m, "32FC1", 4) || !fresh(last_depth_t_, m)) return;
           writer_->write_depth(stamp_of(m.header()), static_cast<int>(m.width()), static_cast<int>(m.height()),
                                reinterpret_cast<const float*>(m.data().data()));
         });
     seg_sub_ = create_subscription<sensor_msgs::msg::Image>(
         base + "/segmentation/image_raw", images, [this](const sensor_msgs::msg::Image& m) {
-          if (!check(m, "mono8", 1)) return;
+          if (!check(m, "mono8", 1) || !fresh(last_seg_t_, m)) return;
           writer_->write_segmentation(stamp_of(m.header()), static_cast<int>(m.width()), static_cast<int>(m.height()),
                                       m.data().data());
         });
@@ -189,6 +189,18 @@ class DatasetRecorder : public unav::Node {
   }
 
  private:
+  // A frame at or before the stream's last one is not written twice: a renderer respawned while
+  // the lockstep barrier held renders the held instant again.
+  bool fresh(double& last_t, const sensor_msgs::msg::Image& m) {
+    const double t = stamp_of(m.header());
+    if (t <= last_t) {
+      logger()->info("frame at t = {:.3f} s on '{}' is not after the last one ({:.3f} s): not written again", t,
+                     m.header().frame_id(), last_t);
+      return false;
+    }
+    last_t = t;
+    return true;
+  }
   bool check(const sensor_msgs::msg::Image& m, const char* encoding, size_t bpp) {
     if (m.encoding() == encoding && m.data().size() == static_cast<size_t>(m.width()) * m.height() * bpp) return true;
     logger()->warn("skipping an image with encoding '{}' and {} bytes (expected {} {}x{})", m.encoding(),
@@ -222,7 +234,9 @@ class DatasetRecorder : public unav::Node {
   std::shared_ptr<unav::Subscription<sensor_msgs::msg::Image>> rgb_sub_, depth_sub_, seg_sub_;
   std::shared_ptr<unav::Subscription<sensor_msgs::msg::CameraInfo>> info_sub_;
   std::shared_ptr<unav::Subscription<nav_msgs::msg::Odometry>> odom_sub_;
-  unav::RejectionCounter rejections_{logger()};  // odometry with NaN/Inf or a non-rotation
+  unav::RejectionCounter rejections_{logger()};
+  double last_rgb_t_ = -1.0, last_depth_t_ = -1.0,
+         last_seg_t_ = -1.0;  // stamps start at 0  // odometry with NaN/Inf or a non-rotation
   std::shared_ptr<unav::Subscription<sensor_msgs::msg::Imu>> imu_sub_;
 };
 
