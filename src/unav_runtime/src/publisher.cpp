@@ -82,7 +82,13 @@ int SubscriptionBase::publisher_count() const {
   return status.current_count;
 }
 
-void SubscriptionBase::on_data() { ctx_.executor().notify(shared_from_this()); }
+void SubscriptionBase::on_data() {
+  auto self = shared_from_this();
+  ctx_.executor().notify(self);
+  // The executor may have taken everything before the prefetch: then nothing was prefetched. If
+  // it took a sample, the executor may have gone back to sleep meanwhile: wake it for that one.
+  if (prefetch()) ctx_.executor().notify(self);
+}
 
 bool SubscriptionBase::take(void* sample) {
   fdds::SampleInfo info;

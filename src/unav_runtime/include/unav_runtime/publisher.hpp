@@ -4,7 +4,9 @@
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <mutex>
 #include <string>
+#include <utility>
 
 #include "unav_runtime/context.hpp"
 #include "unav_runtime/executor.hpp"
@@ -96,12 +98,19 @@ class SubscriptionBase : public Waitable, public std::enable_shared_from_this<Su
   eprosima::fastdds::dds::DataReader* reader() const { return reader_; }
   /// Creates the reader; called once by the node after construction (needs shared_from_this).
   void start(const QoS& qos);
-  /// Listener thread entry: enqueue on the executor.
+  /// Listener thread entry: wakes the executor, then takes one sample ahead while it wakes up
+  /// (prefetch), so a large message's deserialisation overlaps the thread switch.
   void on_data();
 
  protected:
   /// Takes one sample into `sample`; true if a valid sample was taken.
   bool take(void* sample);
+  /// Listener thread: takes one sample into the spare slot if it is free and no take is under
+  /// way; true if it did. Default: no prefetch (the executor takes everything).
+  virtual bool prefetch() { return false; }
+  /// Every take, the listener's prefetch and the executor's, holds it: samples reach the
+  /// callback in the order they were taken (the prefetched one first).
+  std::mutex take_mutex_;
 
  private:
   Context& ctx_;
@@ -120,15 +129,33 @@ class Subscription : public SubscriptionBase {
   bool execute() override {
     // A bounded batch per turn keeps one busy topic from starving the others.
     for (int i = 0; i < 16; ++i) {
-      if (!take(&sample_)) return false;
+      {
+        std::lock_guard<std::mutex> lock(take_mutex_);
+        if (prefetched_) {
+          std::swap(sample_, spare_);  // buffers trade places: nothing is copied or allocated
+          prefetched_ = false;
+        } else if (!take(&sample_)) {
+          return false;
+        }
+      }
       callback_(sample_);
     }
     return true;
   }
 
+ protected:
+  bool prefetch() override {
+    std::unique_lock<std::mutex> lock(take_mutex_, std::try_to_lock);
+    if (!lock.owns_lock() || prefetched_) return false;
+    prefetched_ = take(&spare_);
+    return prefetched_;
+  }
+
  private:
   std::function<void(const Msg&)> callback_;
   Msg sample_;  // reused: an image's buffer is allocated once
+  Msg spare_;   // the prefetched sample (take_mutex_)
+  bool prefetched_ = false;
 };
 
 }  // namespace unav
