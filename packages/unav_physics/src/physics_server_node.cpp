@@ -4,6 +4,7 @@
 #include <cmath>
 #include <limits>
 
+#include <spdlog/fmt/fmt.h>
 #include <fastdds/dds/publisher/DataWriter.hpp>
 #include "unav_common/resources.hpp"
 #include "unav_scene/world.hpp"
@@ -97,7 +98,9 @@ PhysicsServer::PhysicsServer(const unav::NodeOptions& options) : Node("physics_s
 
   // Ports.
   clock_pub_ = create_publisher<rosgraph_msgs::msg::Clock>("/clock", unav::QoS::reliable(1));
-  odom_pub_ = create_publisher<nav_msgs::msg::Odometry>("ground_truth/odom", unav::QoS::reliable());
+  // 100 deep (5 s of lockstep barriers, ~80 kB): a consumer stalled for a while (or dropped from
+  // the lockstep) catches up on what its own reader history can hold.
+  odom_pub_ = create_publisher<nav_msgs::msg::Odometry>("ground_truth/odom", unav::QoS::reliable(100));
   tf_pub_ = create_publisher<tf2_msgs::msg::TFMessage>("/tf", unav::QoS::reliable(100));
   tf_.transforms().resize(1);
   thruster_pub_ = create_publisher<unav_msgs::msg::ThrusterState>("thrusters/state", unav::QoS::reliable());
@@ -366,6 +369,15 @@ void PhysicsServer::publish_sensors() {
 }
 
 void PhysicsServer::on_command(const unav_msgs::msg::ThrusterCommand& msg) {
+  // A command answers a state already published: one stamped ahead of simulated time is garbage
+  // (or an outsider's), and taken as is it would answer every lockstep barrier up to its stamp.
+  if (const double stamp = unav::seconds(msg.header()); stamp > sim_->time() + kMaxCommandLead) {
+    rejections_.reject(command_sub_->topic_name(),
+                       fmt::format("header.stamp = {:.3f} s is {:.3f} s after the simulated time {:.3f} s (more than "
+                                   "{} s ahead: a command answers a state that was published)",
+                                   stamp, stamp - sim_->time(), sim_->time(), kMaxCommandLead));
+    return;
+  }
   const CommandStatus status = sim_->set_command(sim_->time(), msg.u());
   if (status == CommandStatus::kRejectedWrongLength || status == CommandStatus::kRejectedNonFinite) {
     const auto& st = sim_->command_stats();

@@ -1,13 +1,15 @@
 // physics_server: the simulated vehicle as a node. Owns simulated time and publishes /clock.
 //
 // Ports (names relative to the node namespace, default /rov; frames world_ned / base_link_frd):
-//   sub  thrusters/command     unav_msgs/ThrusterCommand          reliable     u_i in [-1, 1]
+//   sub  thrusters/command     unav_msgs/ThrusterCommand          reliable     u_i in [-1, 1]; NaN/Inf, a wrong
+//                                                                             length or a stamp > 1 s ahead of
+//                                                                             simulated time: rejected, counted
 //   sub  /lockstep/ack         unav_msgs/LockstepAck              reliable     (lockstep mode)
 //   sub  /lockstep/drop        std_msgs/String                    reliable     stop waiting for a participant
 //   sub  sim/reset             geometry_msgs/Pose                 reliable     new episode: the vehicle to
 //                                                                             this pose at rest, time runs on
 //   pub  /clock                rosgraph_msgs/Clock                reliable     every publish tick
-//   pub  ground_truth/odom     nav_msgs/Odometry                  reliable     publish_rate
+//   pub  ground_truth/odom     nav_msgs/Odometry                  reliable 100 publish_rate
 //   pub  /tf                   tf2_msgs/TFMessage                 reliable     publish_rate, world_frame -> body_frame
 //   pub  thrusters/state       unav_msgs/ThrusterState            reliable     thruster_state_rate
 //   pub  imu                   sensor_msgs/Imu                    sensor_data  per vehicle config
@@ -136,6 +138,7 @@ class PhysicsServer : public unav::Node {
 
  private:
   void on_command(const unav_msgs::msg::ThrusterCommand& msg);
+  static constexpr double kMaxCommandLead = 1.0;  ///< s a command's stamp may be ahead of simulated time
   void on_ack(const unav_msgs::msg::LockstepAck& msg);
   void on_drop(const std::string& who);
   void on_reset(const geometry_msgs::msg::Pose& pose);

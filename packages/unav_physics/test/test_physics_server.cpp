@@ -197,7 +197,9 @@ TEST(PhysicsServer, RealtimeFailsafeAndBadCommands) {
   h.command(0.0, kSurge);
   h.command(0.0, {0.1, 0.2});                  // wrong length: rejected
   h.command(0.0, {NAN, 0, 0, 0, 0, 0, 0, 0});  // NaN: rejected
+  h.command(1000.0, kSurge);                   // stamped 1000 s ahead of simulated time: rejected
   ASSERT_TRUE(h.spin_until([&] { return h.server->simulator().command_stats().rejected_non_finite == 1; }, 5s));
+  ASSERT_TRUE(h.spin_until([&] { return h.server->rejections().count("rt/rov/thrusters/command") == 1; }, 5s));
   EXPECT_EQ(h.server->simulator().command_stats().rejected_wrong_length, 1u);
   EXPECT_EQ(h.server->simulator().command_stats().accepted, 1u);
   // Simulated time follows the wall clock from the server's start, so the command was applied at
