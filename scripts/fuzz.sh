@@ -8,7 +8,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 secs="${1:-300}"; shift || true
 targets=("$@")
-[ ${#targets[@]} -gt 0 ] || targets=(fuzz_cdr fuzz_idl fuzz_mcap fuzz_trajectory fuzz_spec fuzz_launch)
+[ ${#targets[@]} -gt 0 ] || targets=(fuzz_cdr fuzz_idl fuzz_mcap fuzz_trajectory fuzz_spec fuzz_launch fuzz_configs fuzz_params)
 mkdir -p out/fuzz
 for t in "${targets[@]}"; do
   exe=install/unav_fuzz/lib/unav_fuzz/$t

@@ -44,15 +44,27 @@ bool key_matches_node(const std::string& key, const std::string& ns, const std::
   return glob_match(pat, 0, fqn, 0);
 }
 
-void flatten(const YAML::Node& node, const std::string& prefix, const std::string& source,
+// A map key as text; a key that is itself a list or a map (YAML `? [a, b]: v`) names nothing.
+std::string key_text(const YAML::Node& key, const std::string& file, const std::string& where) {
+  if (!key.IsScalar())
+    throw ParameterError("params file '" + file + "': a key " + where + " at line " +
+                         std::to_string(key.Mark().line + 1) + " is a " +
+                         (key.IsSequence() ? "list"
+                          : key.IsMap()    ? "map"
+                                           : "null") +
+                         ": keys must be node or parameter names");
+  return key.Scalar();
+}
+
+void flatten(const YAML::Node& node, const std::string& prefix, const std::string& file,
              std::map<std::string, ParameterOverride>& out) {
   for (const auto& kv : node) {
-    const std::string key = kv.first.as<std::string>();
+    const std::string key = key_text(kv.first, file, prefix.empty() ? "in ros__parameters" : "under '" + prefix + "'");
     const std::string name = prefix.empty() ? key : prefix + "." + key;
     if (kv.second.IsMap())
-      flatten(kv.second, name, source, out);
+      flatten(kv.second, name, file, out);
     else
-      out[name] = ParameterOverride{kv.second, source};
+      out[name] = ParameterOverride{kv.second, "params file '" + file + "'"};
   }
 }
 
@@ -73,20 +85,22 @@ ParameterOverrides::ParameterOverrides(const RosArgs& args, const std::string& n
     if (root.IsNull()) continue;
     if (!root.IsMap()) throw ParameterError("params file '" + file + "': top level must be a map of node names");
     for (const auto& entry : root) {
-      const std::string key = entry.first.as<std::string>();
+      const std::string key = key_text(entry.first, file, "at the top level");
       const YAML::Node body = entry.second;
       if (!body.IsMap() || !body["ros__parameters"])
         throw ParameterError("params file '" + file + "': key '" + key +
                              "' must contain 'ros__parameters' (layout: node_name: {ros__parameters: {...}})");
-      for (const auto& k : body)
-        if (k.first.as<std::string>() != "ros__parameters")
-          throw ParameterError("params file '" + file + "': key '" + key + "." + k.first.as<std::string>() +
+      for (const auto& k : body) {
+        const std::string sub = key_text(k.first, file, "under '" + key + "'");
+        if (sub != "ros__parameters")
+          throw ParameterError("params file '" + file + "': key '" + key + "." + sub +
                                "' is unknown (only 'ros__parameters' is allowed there)");
+      }
       if (!key_matches_node(key, node_namespace, node_name)) continue;
       const YAML::Node params = body["ros__parameters"];
       if (!params.IsMap() && !params.IsNull())
         throw ParameterError("params file '" + file + "': '" + key + ".ros__parameters' must be a map");
-      if (params.IsMap()) flatten(params, "", "params file '" + file + "'", values_);
+      if (params.IsMap()) flatten(params, "", file, values_);
     }
   }
   for (const auto& p : args.params) {

@@ -64,3 +64,17 @@ TEST(Parameters, BadFilesNameTheFile) {
   const std::string wrong_layout = error_of([&] { ParameterOverrides(args_with({layout}), "/", "talker"); });
   EXPECT_NE(wrong_layout.find("ros__parameters"), std::string::npos) << wrong_layout;
 }
+
+// Found by fuzz_params: a key that is a list or a map (YAML's `? [a, b]: v`) escaped as
+// YAML::TypedBadConversion; now a ParameterError naming the file, the place and the line.
+TEST(Parameters, NonScalarKeysNameTheFileAndLine) {
+  const auto top = write_temp("complex_top.yaml", "? [a, b]\n: {ros__parameters: {rate: 1}}\n");
+  const std::string e1 = error_of([&] { ParameterOverrides(args_with({top}), "/", "talker"); });
+  EXPECT_NE(e1.find("complex_top.yaml"), std::string::npos) << e1;
+  EXPECT_NE(e1.find("at the top level at line 1 is a list"), std::string::npos) << e1;
+  const auto inner =
+      write_temp("complex_inner.yaml", "talker:\n  ros__parameters:\n    gains:\n      ? {x: 1}\n      : 2\n");
+  const std::string e2 = error_of([&] { ParameterOverrides(args_with({inner}), "/", "talker"); });
+  EXPECT_NE(e2.find("complex_inner.yaml"), std::string::npos) << e2;
+  EXPECT_NE(e2.find("under 'gains' at line 4 is a map"), std::string::npos) << e2;
+}
