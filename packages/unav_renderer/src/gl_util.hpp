@@ -37,8 +37,15 @@ inline GLuint compile(GLenum type, const char* src, const char* name) {
 class Program {
  public:
   Program() = default;
-  Program(const char* vs, const char* fs, const char* name) {
-    const GLuint v = compile(GL_VERTEX_SHADER, vs, name), f = compile(GL_FRAGMENT_SHADER, fs, name);
+  /// `defines` ("#define X 1\n...") go after the fragment shader's #version line: shader variants
+  /// specialised at compile time (llvmpipe runs both sides of a branch on a uniform).
+  Program(const char* vs, const char* fs, const char* name, const std::string& defines = "") {
+    std::string fs_text = fs;
+    if (!defines.empty()) {
+      const std::size_t eol = fs_text.find('\n', fs_text.find("#version"));
+      fs_text.insert(eol == std::string::npos ? fs_text.size() : eol + 1, defines);
+    }
+    const GLuint v = compile(GL_VERTEX_SHADER, vs, name), f = compile(GL_FRAGMENT_SHADER, fs_text.c_str(), name);
     id_ = glCreateProgram();
     glAttachShader(id_, v);
     glAttachShader(id_, f);

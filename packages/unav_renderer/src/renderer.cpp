@@ -6,6 +6,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <deque>
@@ -212,8 +213,11 @@ struct Renderer::Impl {
   WaterModel water;
   std::vector<GpuMesh> meshes;
   std::map<std::string, GLuint> textures;
-  Program scene, snow, post, inscatter, shadow;
+  std::array<Program, 8> scene_variants;      // by material: triplanar | macro << 1 | sections << 2
+  std::map<unsigned, Program> post_variants;  // by feature set (post_program())
+  Program snow, inscatter, shadow;
   GLuint shadow_tex = 0, shadow_fbo = 0;  // depth array, one layer per lamp
+  GLuint shadow_nearest = 0;              // sampler: one depth test per lookup (the in-scatter march, smooth anyway)
   GLuint sun_tex = 0;                     // the sun's depth map
   std::vector<float> sun_vp_cached;       // the matrix sun_tex was rendered with (empty: none)
   int shadow_size = 0;
@@ -247,6 +251,8 @@ struct Renderer::Impl {
   FrameSetup setup_frame(const Pose& X_WB, const CameraModel& c) const;
   void shadow_pass(const FrameSetup& f);
   void scene_pass(const Targets& t, const FrameSetup& f, double stamp_s);
+  Program& scene_program(const GpuMesh& m, const FrameSetup& f, double stamp_s, unsigned* set_up);
+  Program& post_program(const std::array<bool, 6>& features);
   void snow_pass(const FrameSetup& f, const CameraModel& c, double stamp_s);
   bool inscatter_pass(const Targets& t, const FrameSetup& f, const CameraModel& c, float* march_max_out);
   void post_pass(const Targets& t, const FrameSetup& f, const CameraModel& c, std::uint64_t seq, bool do_inscatter,
@@ -603,6 +609,49 @@ void Renderer::Impl::shadow_pass(const FrameSetup& f) {
   glDisable(GL_POLYGON_OFFSET_FILL);
 }
 
+// The scene program of a material variant (compiled on first use), with this frame's uniforms
+// set the first time it is used in the pass.
+Program& Renderer::Impl::scene_program(const GpuMesh& m, const FrameSetup& f, double stamp_s, unsigned* set_up) {
+  const unsigned v = (m.triplanar ? 1u : 0u) | (m.macro ? 2u : 0u) | (m.sections ? 4u : 0u);
+  Program& p = scene_variants[v];
+  if (p.id() == 0) {
+    const std::string defines = std::string("#define TRIPLANAR ") + ((v & 1u) ? "1" : "0") + "\n#define MACRO " +
+                                ((v & 2u) ? "1" : "0") + "\n#define SECTIONS " + ((v & 4u) ? "1" : "0") + "\n";
+    p = Program(detail::kSceneVS, detail::kSceneFS, "scene", defines);
+  }
+  p.use();
+  if (*set_up & (1u << v)) return p;
+  *set_up |= 1u << v;
+  glUniformMatrix4fv(p["u_view"], 1, GL_FALSE, f.view.data());
+  glUniformMatrix4fv(p["u_proj"], 1, GL_FALSE, f.proj.data());
+  set3(p["u_cam_W"], f.cam_W);
+  set3(p["u_sun_dir_W"], world.sun.direction_W);
+  set3(p["u_E0"], world.sun.surface_irradiance);
+  glUniform1f(p["u_ambient"], static_cast<float>(world.sun.ambient_fraction));
+  glUniform1f(p["u_caustics"], options.caustics ? static_cast<float>(options.caustic_strength) : 0.0f);
+  glUniform1f(p["u_time"], static_cast<float>(std::fmod(stamp_s, 1.0e4)));
+  set3(p["u_Kd"], water.K_d);
+  set3(p["u_betaD"], water.beta_D);
+  glUniform1i(p["u_nlamps"], f.nl);
+  if (f.nl > 0) {
+    glUniform3fv(p["u_lamp_pos_W[0]"], f.nl, f.lamp_pos_W);
+    glUniform3fv(p["u_lamp_dir_W[0]"], f.nl, f.lamp_dir_W);
+    glUniform3fv(p["u_lamp_I[0]"], f.nl, f.lamp_I);
+    glUniform2fv(p["u_lamp_cos[0]"], f.nl, f.lamp_cos);
+  }
+  glUniform1i(p["u_shadows"], f.shadows ? 1 : 0);
+  glUniform1i(p["u_sun_shadow"], f.sun_shadow ? 1 : 0);
+  if (f.sun_shadow) glUniformMatrix4fv(p["u_sun_vp"], 1, GL_FALSE, f.sun_vp);
+  glUniform1i(p["u_shadow"], 5);
+  glUniform1i(p["u_sun_map"], 6);
+  if (f.shadows) {
+    glUniformMatrix4fv(p["u_shadow_vp[0]"], f.nl, GL_FALSE, f.shadow_vp_W);
+    glUniform1f(p["u_shadow_texel"], 1.0f / static_cast<float>(options.shadow_map_size));
+  }
+  glUniform1i(p["u_tex"], 0);
+  return p;
+}
+
 // Scene geometry into colour (direct signal), camera-space depth and segmentation.
 void Renderer::Impl::scene_pass(const Targets& t, const FrameSetup& f, double stamp_s) {
   glBindFramebuffer(GL_FRAMEBUFFER, t.scene_fbo);
@@ -621,47 +670,18 @@ void Renderer::Impl::scene_pass(const Targets& t, const FrameSetup& f, double st
   glDepthFunc(GL_LESS);
   glDisable(GL_CULL_FACE);
   glDisable(GL_BLEND);
-  scene.use();
-  glUniformMatrix4fv(scene["u_view"], 1, GL_FALSE, f.view.data());
-  glUniformMatrix4fv(scene["u_proj"], 1, GL_FALSE, f.proj.data());
-  set3(scene["u_cam_W"], f.cam_W);
-  set3(scene["u_sun_dir_W"], world.sun.direction_W);
-  set3(scene["u_E0"], world.sun.surface_irradiance);
-  glUniform1f(scene["u_ambient"], static_cast<float>(world.sun.ambient_fraction));
-  glUniform1f(scene["u_caustics"], options.caustics ? static_cast<float>(options.caustic_strength) : 0.0f);
-  glUniform1f(scene["u_time"], static_cast<float>(std::fmod(stamp_s, 1.0e4)));
-  set3(scene["u_Kd"], water.K_d);
-  set3(scene["u_betaD"], water.beta_D);
-  glUniform1i(scene["u_nlamps"], f.nl);
-  if (f.nl > 0) {
-    glUniform3fv(scene["u_lamp_pos_W[0]"], f.nl, f.lamp_pos_W);
-    glUniform3fv(scene["u_lamp_dir_W[0]"], f.nl, f.lamp_dir_W);
-    glUniform3fv(scene["u_lamp_I[0]"], f.nl, f.lamp_I);
-    glUniform2fv(scene["u_lamp_cos[0]"], f.nl, f.lamp_cos);
-  }
-  glUniform1i(scene["u_shadows"], f.shadows ? 1 : 0);
-  glUniform1i(scene["u_sun_shadow"], f.sun_shadow ? 1 : 0);
-  if (f.sun_shadow) glUniformMatrix4fv(scene["u_sun_vp"], 1, GL_FALSE, f.sun_vp);
-  glUniform1i(scene["u_shadow"], 5);
-  glUniform1i(scene["u_sun_map"], 6);
   glActiveTexture(GL_TEXTURE6);
   glBindTexture(GL_TEXTURE_2D, f.sun_shadow ? sun_tex : 0);
   glActiveTexture(GL_TEXTURE5);
   glBindTexture(GL_TEXTURE_2D_ARRAY, f.shadows ? shadow_tex : 0);
-  if (f.shadows) {
-    glUniformMatrix4fv(scene["u_shadow_vp[0]"], f.nl, GL_FALSE, f.shadow_vp_W);
-    glUniform1f(scene["u_shadow_texel"], 1.0f / static_cast<float>(options.shadow_map_size));
-  }
-  glUniform1i(scene["u_tex"], 0);
   glActiveTexture(GL_TEXTURE0);
   const Eigen::Matrix4f vp = f.proj * f.view;
+  unsigned set_up = 0;  // variants whose frame uniforms are set
   for (const GpuMesh& m : meshes) {
     if (!any_visible(m, vp)) continue;
+    Program& scene = scene_program(m, f, stamp_s, &set_up);
     set3(scene["u_albedo"], m.material.albedo);
     glUniform1f(scene["u_uv_scale"], static_cast<float>(m.material.uv_scale_m));
-    glUniform1i(scene["u_triplanar"], m.triplanar ? 1 : 0);
-    glUniform1i(scene["u_macro"], m.macro ? 1 : 0);
-    glUniform1i(scene["u_sections"], m.sections ? 1 : 0);
     glUniform1f(scene["u_seg"], static_cast<float>(m.seg_class));
     glBindTexture(GL_TEXTURE_2D, m.texture);
     glBindVertexArray(m.vao);
@@ -740,6 +760,9 @@ bool Renderer::Impl::inscatter_pass(const Targets& t, const FrameSetup& f, const
     glBindTexture(GL_TEXTURE_2D_ARRAY, f.shadows ? shadow_tex : 0);
     glActiveTexture(GL_TEXTURE0);
     if (f.shadows) glUniformMatrix4fv(inscatter["u_shadow_vp_C[0]"], f.nl, GL_FALSE, f.shadow_vp_C);
+    // The march's samples lie centimetres to metres apart and the result is upsampled: nearest
+    // depth tests instead of 2x2 PCF (a quarter of the cost of the pass's costliest lookup).
+    glBindSampler(5, shadow_nearest);
     set3(inscatter["u_b_scatter"], water.b_scatter);
     glUniform1f(inscatter["u_schlick_k"], static_cast<float>(water.schlick_k()));
     glUniform1f(inscatter["u_back_frac"], static_cast<float>(water.phase_backscatter_fraction));
@@ -747,6 +770,7 @@ bool Renderer::Impl::inscatter_pass(const Targets& t, const FrameSetup& f, const
     glUniform1f(inscatter["u_march_max_m"], march_max_m);
     glBindVertexArray(empty_vao);
     glDrawArrays(GL_TRIANGLES, 0, 3);
+    glBindSampler(5, 0);
   }
 
   if (options.forward_scatter) {
@@ -757,11 +781,30 @@ bool Renderer::Impl::inscatter_pass(const Targets& t, const FrameSetup& f, const
   return do_inscatter;
 }
 
+// The post program with these features compiled in (compiled on first use).
+Program& Renderer::Impl::post_program(const std::array<bool, 6>& features) {
+  static constexpr std::array<const char*, 6> kNames = {"DISTMAP",    "FWD",  "INSCATTER",
+                                                        "VIGNETTING", "SHOT", "READ_NOISE"};
+  unsigned key = 0;
+  std::string defines;
+  for (std::size_t i = 0; i < features.size(); ++i) {
+    key |= (features[i] ? 1u : 0u) << i;
+    defines += std::string("#define ") + kNames[i] + (features[i] ? " 1\n" : " 0\n");
+  }
+  auto it = post_variants.find(key);
+  if (it == post_variants.end())
+    it = post_variants.emplace(key, Program(detail::kPostVS, detail::kPostFS, "post", defines)).first;
+  return it->second;
+}
+
 // Post pass: forward scatter, backscatter, + in-scatter, distortion, noise, encoding.
 void Renderer::Impl::post_pass(const Targets& t, const FrameSetup& f, const CameraModel& c, std::uint64_t seq,
                                bool do_inscatter, float march_max_m) {
   glBindFramebuffer(GL_FRAMEBUFFER, t.post_fbo);
   glViewport(0, 0, t.out_width, t.out_height);
+  const bool shot = options.noise && c.shot_noise > 0.0, read_noise = options.noise && c.noise_stddev > 0.0;
+  Program& post =
+      post_program({t.distmap != 0, options.forward_scatter, do_inscatter, c.vignetting > 0.0, shot, read_noise});
   post.use();
   glActiveTexture(GL_TEXTURE0);
   glBindTexture(GL_TEXTURE_2D, t.scene_color);
@@ -776,9 +819,7 @@ void Renderer::Impl::post_pass(const Targets& t, const FrameSetup& f, const Came
   glUniform1i(post["u_depth"], 1);
   glUniform1i(post["u_distmap"], 2);
   glUniform1i(post["u_inscatter"], 3);
-  glUniform1i(post["u_nlamps_scatter"], do_inscatter ? f.nl : 0);
   glUniform1f(post["u_march_max_m"], march_max_m);
-  glUniform1i(post["u_use_distmap"], t.distmap ? 1 : 0);
   glUniform4f(post["u_K"], static_cast<float>(c.fx), static_cast<float>(c.fy), static_cast<float>(c.cx),
               static_cast<float>(c.cy));
   glUniform2i(post["u_size"], t.width, t.height);
@@ -788,7 +829,6 @@ void Renderer::Impl::post_pass(const Targets& t, const FrameSetup& f, const Came
   glUniform1f(post["u_veil_gradient"], static_cast<float>(water.veiling_light_gradient));
   const Eigen::Matrix3f R_WC = f.X_WC.linear().cast<float>();
   glUniformMatrix3fv(post["u_R_WC"], 1, GL_FALSE, R_WC.data());
-  glUniform1i(post["u_fwd"], options.forward_scatter ? 1 : 0);
   glUniform1f(post["u_fwd_per_m"], static_cast<float>(water.forward_scatter_per_m));
   glUniform1f(post["u_blur_px_per_m"], static_cast<float>(water.forward_blur_rad_per_m * c.fx));
   double gain = c.exposure;
@@ -923,10 +963,19 @@ Renderer::Renderer(World world, std::vector<CameraModel> cameras, RenderOptions 
   impl_->ctx = context ? std::move(context) : std::shared_ptr<EglContext>(EglContext::create(options.egl));
   impl_->ctx->make_current();
   glGenVertexArrays(1, &impl_->empty_vao);
+  glGenSamplers(1, &impl_->shadow_nearest);
+  glSamplerParameteri(impl_->shadow_nearest, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+  glSamplerParameteri(impl_->shadow_nearest, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+  glSamplerParameteri(impl_->shadow_nearest, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+  glSamplerParameteri(impl_->shadow_nearest, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+  glSamplerParameteri(impl_->shadow_nearest, GL_TEXTURE_COMPARE_MODE, GL_COMPARE_REF_TO_TEXTURE);
+  glSamplerParameteri(impl_->shadow_nearest, GL_TEXTURE_COMPARE_FUNC, GL_LEQUAL);
   impl_->self_test();
-  impl_->scene = Program(detail::kSceneVS, detail::kSceneFS, "scene");
+  // Scene programs are compiled per material variant on first use (scene_program()); the plain one now.
+  impl_->scene_variants[0] = Program(detail::kSceneVS, detail::kSceneFS, "scene",
+                                     "#define TRIPLANAR 0\n#define MACRO 0\n#define SECTIONS 0\n");
   impl_->snow = Program(detail::kSnowVS, detail::kSnowFS, "marine_snow");
-  impl_->post = Program(detail::kPostVS, detail::kPostFS, "post");
+  impl_->post_program({false, true, true, false, false, true});  // the common one; a shader error shows here
   impl_->inscatter = Program(detail::kPostVS, detail::kInscatterFS, "lamp_inscatter");
   impl_->shadow = Program(detail::kShadowVS, detail::kShadowFS, "lamp_shadow");
   impl_->upload_scene(geo);
@@ -985,13 +1034,15 @@ Renderer::~Renderer() {
   impl_->release_scene();
   for (auto& [name, t] : impl_->textures) glDeleteTextures(1, &t);
   glDeleteVertexArrays(1, &impl_->empty_vao);
-  glDeleteProgram(impl_->scene.id());
+  glDeleteSamplers(1, &impl_->shadow_nearest);
+  for (const Program& p : impl_->scene_variants)
+    if (p.id()) glDeleteProgram(p.id());
   glDeleteProgram(impl_->shadow.id());
   if (impl_->shadow_tex) glDeleteTextures(1, &impl_->shadow_tex);
   if (impl_->sun_tex) glDeleteTextures(1, &impl_->sun_tex);
   if (impl_->shadow_fbo) glDeleteFramebuffers(1, &impl_->shadow_fbo);
   glDeleteProgram(impl_->snow.id());
-  glDeleteProgram(impl_->post.id());
+  for (const auto& kv : impl_->post_variants) glDeleteProgram(kv.second.id());
   glDeleteProgram(impl_->inscatter.id());
 }
 

@@ -35,9 +35,17 @@ in float v_z_C;
 uniform sampler2D u_tex;
 uniform vec3 u_albedo;
 uniform float u_uv_scale;
-uniform bool u_triplanar;
-uniform bool u_macro;        // modulate with a low-frequency copy (breaks tiling)
-uniform bool u_sections;     // u along a pipe: each texture tile (coating section) turned differently
+// Material variants, compiled separately (Renderer picks one per mesh): a branch on a uniform
+// costs llvmpipe both sides, so each pixel would pay for every material's texturing.
+#ifndef TRIPLANAR
+#define TRIPLANAR 0  // rocks, meshes without UVs: three planar projections blended by the normal
+#endif
+#ifndef MACRO
+#define MACRO 0      // seabed: domain-warped UVs, modulated by a low-frequency copy (breaks tiling)
+#endif
+#ifndef SECTIONS
+#define SECTIONS 0   // u along a pipe: each texture tile (coating section) turned differently
+#endif
 uniform float u_seg;
 uniform vec3 u_cam_W;
 uniform vec3 u_sun_dir_W;    // direction the sunlight travels
@@ -108,22 +116,28 @@ void main() {
   V /= max(range, 1e-6);
   if (dot(n, V) < 0.0) n = -n;   // two-sided surfaces
   vec3 albedo;
-  if (u_triplanar) {
-    vec3 w = pow(abs(n), vec3(4.0));
-    w /= (w.x + w.y + w.z);
-    albedo = tex_at(v_pos_W.yz) * w.x + tex_at(v_pos_W.xz) * w.y + tex_at(v_pos_W.xy) * w.z;
-  } else {
-    vec2 uv = v_uv;
-    // Macro materials (the seabed) are domain-warped by low-frequency noise in world units, so
-    // the texture tile never repeats exactly: a seabed that looks the same every tile would
-    // alias visual place recognition.
-    if (u_macro) uv += u_uv_scale * 0.45 * (vec2(value_noise(v_uv / 1.7), value_noise(v_uv / 1.7 + vec2(41.3, 17.9))) - 0.5);
-    // Pipe coating sections are not copies of each other: each shows the texture turned by its
-    // own angle about the pipe (field joints stay at the section ends).
-    if (u_sections) uv.y += u_uv_scale * hash12(vec2(floor(uv.x / u_uv_scale), 7.0));
-    albedo = tex_at(uv);
-  }
-  if (u_macro) albedo *= 0.7 + 0.6 * texture(u_tex, v_uv / (u_uv_scale * 7.31) + vec2(0.37, 0.11)).g;
+#if TRIPLANAR
+  vec3 w = pow(abs(n), vec3(4.0));
+  w /= (w.x + w.y + w.z);
+  albedo = tex_at(v_pos_W.yz) * w.x + tex_at(v_pos_W.xz) * w.y + tex_at(v_pos_W.xy) * w.z;
+#else
+  vec2 uv = v_uv;
+#if MACRO
+  // Macro materials (the seabed) are domain-warped by low-frequency noise in world units, so
+  // the texture tile never repeats exactly: a seabed that looks the same every tile would
+  // alias visual place recognition.
+  uv += u_uv_scale * 0.45 * (vec2(value_noise(v_uv / 1.7), value_noise(v_uv / 1.7 + vec2(41.3, 17.9))) - 0.5);
+#endif
+#if SECTIONS
+  // Pipe coating sections are not copies of each other: each shows the texture turned by its
+  // own angle about the pipe (field joints stay at the section ends).
+  uv.y += u_uv_scale * hash12(vec2(floor(uv.x / u_uv_scale), 7.0));
+#endif
+  albedo = tex_at(uv);
+#endif
+#if MACRO
+  albedo *= 0.7 + 0.6 * texture(u_tex, v_uv / (u_uv_scale * 7.31) + vec2(0.37, 0.11)).g;
+#endif
   albedo *= u_albedo;
 
   // Sunlight at this depth: E0 exp(-K_d d); diffuse part from the upper hemisphere, direct
@@ -229,10 +243,29 @@ void main() {
 
 inline constexpr const char* kPostFS = R"GLSL(
 #version 330 core
+// Features compiled in or out (Renderer keeps one program per combination in use): llvmpipe
+// pays for both sides of a branch on a uniform.
+#ifndef DISTMAP
+#define DISTMAP 1     // distortion / port: each output pixel reads its source through u_distmap
+#endif
+#ifndef FWD
+#define FWD 1         // forward-scatter blur
+#endif
+#ifndef INSCATTER
+#define INSCATTER 1   // lamp in-scattering, upsampled from u_inscatter
+#endif
+#ifndef VIGNETTING
+#define VIGNETTING 1
+#endif
+#ifndef SHOT
+#define SHOT 1        // shot noise
+#endif
+#ifndef READ_NOISE
+#define READ_NOISE 1  // read noise
+#endif
 uniform sampler2D u_color;     // RGBA16F: D and seg
 uniform sampler2D u_depth;     // R32F: z_C
 uniform sampler2D u_distmap;   // RG32F: undistorted pixel for each output pixel
-uniform bool u_use_distmap;
 uniform vec4 u_K;              // fx, fy, cx, cy
 uniform ivec2 u_size;
 uniform vec3 u_betaD;
@@ -240,11 +273,9 @@ uniform vec3 u_betaB;
 uniform vec3 u_Binf;           // veiling light at the camera depth
 uniform float u_veil_gradient;
 uniform mat3 u_R_WC;           // optical -> world rotation
-uniform bool u_fwd;
 uniform float u_fwd_per_m;
 uniform float u_blur_px_per_m;
 uniform sampler2D u_inscatter; // RGBA16F, low resolution: lamp light scattered into the ray
-uniform int u_nlamps_scatter;
 uniform float u_march_max_m;
 uniform float u_gain;
 uniform float u_noise_std;
@@ -264,6 +295,14 @@ uint pcg(uint v) {
   return (word >> 22u) ^ word;
 }
 float u01(uint h) { return (float(h >> 8u) + 0.5) / 16777216.0; }
+// Two independent standard normal numbers (Box-Muller, both outputs used).
+vec2 gauss2(uint seed) {
+  uint h1 = pcg(seed);
+  uint h2 = pcg(h1);
+  float r = sqrt(-2.0 * log(u01(h1)));
+  float a = 2.0 * PI * u01(h2);
+  return r * vec2(cos(a), sin(a));
+}
 
 vec3 encode(vec3 x) {
   // Soft shoulder above 0.8 (identity below), then sRGB.
@@ -276,7 +315,11 @@ vec3 encode(vec3 x) {
 
 void main() {
   ivec2 pix = ivec2(gl_FragCoord.xy);
-  vec2 src = u_use_distmap ? texelFetch(u_distmap, pix, 0).xy : vec2(pix);
+#if DISTMAP
+  vec2 src = texelFetch(u_distmap, pix, 0).xy;
+#else
+  vec2 src = vec2(pix);
+#endif
   ivec2 si = ivec2(floor(src + 0.5));
   bool inside = si.x >= 0 && si.y >= 0 && si.x < u_size.x && si.y < u_size.y;
   vec2 uv = (src + 0.5) / vec2(u_size);
@@ -287,7 +330,11 @@ void main() {
     vec4 c = texelFetch(u_color, si, 0);
     seg = c.a;
     z = texelFetch(u_depth, si, 0).x;
-    D = u_use_distmap ? textureLod(u_color, uv, 0.0).rgb : c.rgb;
+#if DISTMAP
+    D = textureLod(u_color, uv, 0.0).rgb;
+#else
+    D = c.rgb;
+#endif
   }
   vec3 ray = vec3((src.x - u_K.z) / u_K.x, (src.y - u_K.w) / u_K.y, 1.0);
   float raylen = length(ray);
@@ -297,13 +344,15 @@ void main() {
 
   // Forward scattering: a share 1 - exp(-f z) of the direct signal spreads over a disc
   // whose radius grows with range (blur read from the mip chain: smooth, no ghost taps).
-  if (u_fwd && hit) {
+#if FWD
+  if (hit) {
     float w = 1.0 - exp(-u_fwd_per_m * range);
     float rad = clamp(u_blur_px_per_m * range, 0.0, 16.0);
     float lod = min(log2(max(rad, 1.0)), 4.0);
     vec3 blur = textureLod(u_color, uv, lod).rgb;   // trilinear mip sample: a smooth disc
     D = mix(D, blur, w);
   }
+#endif
 
   // Backscatter of ambient light towards the veiling light. The veiling light is brighter
   // looking up than down (downwelling radiance): factor 1 + gradient * up-component of the ray.
@@ -313,7 +362,8 @@ void main() {
   // Depth-aware upsampling of the low-resolution in-scatter: of the 4 nearest texels, trust
   // those whose marched length matches this pixel's (no halos at silhouettes).
   vec3 Ls = vec3(0.0);
-  if (u_nlamps_scatter > 0) {
+#if INSCATTER
+  {
     vec2 isz = vec2(textureSize(u_inscatter, 0));
     vec2 p = uv * isz - 0.5;
     vec2 f = fract(p);
@@ -331,33 +381,36 @@ void main() {
       }
     Ls /= max(wsum, 1e-9);
   }
+#endif
 
   vec3 I = (D + B + Ls) * u_gain;
-  if (u_vignetting > 0.0) {
-    // Natural vignetting: cos^4 of the in-air field angle (1 / (1 + |x|^2)^2 for the normalized x).
-    vec2 xn = (vec2(pix) - u_Kout.zw) / u_Kout.xy;
-    float c4 = 1.0 / ((1.0 + dot(xn, xn)) * (1.0 + dot(xn, xn)));
-    I *= 1.0 - u_vignetting * (1.0 - c4);
-  }
+#if VIGNETTING
+  // Natural vignetting: cos^4 of the in-air field angle (1 / (1 + |x|^2)^2 for the normalized x).
+  vec2 xn = (vec2(pix) - u_Kout.zw) / u_Kout.xy;
+  float c4 = 1.0 / ((1.0 + dot(xn, xn)) * (1.0 + dot(xn, xn)));
+  I *= 1.0 - u_vignetting * (1.0 - c4);
+#endif
+  // Six independent normal numbers at most, two per Box-Muller draw: shot noise takes the
+  // first three, read noise the next three.
   uint h = pcg(uint(pix.x) + 8192u * uint(pix.y) + pcg(u_seed));
-  if (u_shot > 0.0) {
-    // Shot noise on the linear signal (Poisson, Gaussian approximation): std sqrt(u_shot I).
-    for (int c = 0; c < 3; ++c) {
-      uint h1 = pcg(h + uint(c) * 0x85EBCA6Bu + 0x27D4EB2Fu);
-      uint h2 = pcg(h1);
-      float g = sqrt(-2.0 * log(u01(h1))) * cos(2.0 * PI * u01(h2));
-      I[c] = max(I[c] + sqrt(u_shot * max(I[c], 0.0)) * g, 0.0);
-    }
-  }
+#if SHOT || READ_NOISE
+  vec2 g01 = gauss2(h + 0x27D4EB2Fu);
+  vec2 g23 = gauss2(h + 0x85EBCA6Bu);
+#endif
+#if SHOT && READ_NOISE
+  vec2 g45 = gauss2(h + 0x9E3779B9u);
+  vec3 g_read = vec3(g23.y, g45);
+#elif READ_NOISE
+  vec3 g_read = vec3(g01, g23.x);
+#endif
+#if SHOT
+  // Shot noise on the linear signal (Poisson, Gaussian approximation): std sqrt(u_shot I).
+  I = max(I + sqrt(u_shot * max(I, 0.0)) * vec3(g01, g23.x), 0.0);
+#endif
   vec3 col = encode(I);
-  if (u_noise_std > 0.0) {
-    for (int c = 0; c < 3; ++c) {
-      uint h1 = pcg(h + uint(c) * 0x9E3779B9u);
-      uint h2 = pcg(h1);
-      float g = sqrt(-2.0 * log(u01(h1))) * cos(2.0 * PI * u01(h2));
-      col[c] = clamp(col[c] + u_noise_std * g, 0.0, 1.0);
-    }
-  }
+#if READ_NOISE
+  col = clamp(col + u_noise_std * g_read, 0.0, 1.0);
+#endif
   o_rgba = vec4(col, seg / 255.0);
   o_depth = hit ? z : uintBitsToFloat(0x7f800000u);
 }
@@ -407,7 +460,6 @@ void main() {
     float t = tmax * f * f;
     float dt = 2.0 * tmax * f / float(u_nsamples);
     vec3 x = d * t;
-    vec3 trans_cam = exp(-u_betaD * t);
     for (int i = 0; i < u_nlamps; ++i) {
       vec3 L = x - u_lamp_pos_C[i];
       float dl = max(length(L), 0.05);
@@ -424,7 +476,8 @@ void main() {
       float den = 1.0 - k * cth;
       float ph = (1.0 - u_back_frac) * (1.0 - k * k) / (4.0 * PI * den * den) +
                  u_back_frac * ((cth < 0.0) ? 1.0 / (2.0 * PI) : 0.0);
-      Ls += u_b_scatter * (ph * cone / (dl * dl) * dt) * u_lamp_I[i] * exp(-u_betaD * dl) * trans_cam;
+      // Attenuated lamp -> x (dl) and x -> camera (t): one exponential of the summed path.
+      Ls += u_b_scatter * (ph * cone / (dl * dl) * dt) * u_lamp_I[i] * exp(-u_betaD * (dl + t));
     }
   }
   o_Ls = vec4(Ls, tmax);   // alpha: marched length, for depth-aware upsampling
