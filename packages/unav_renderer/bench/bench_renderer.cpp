@@ -98,9 +98,10 @@ int main(int argc, char** argv) {
   RenderOptions prof = opt;
   prof.profile_passes = true;
   r.set_options(prof);
-  std::printf("\nper-pass time, median of %d frames [ms] (glFinish after each pass):\n", frames);
-  std::printf("%-20s %8s %8s %8s %10s %8s %10s\n", "camera", "shadows", "scene", "snow", "inscatter", "post",
-              "readback");
+  std::printf("\nper-pass time, median of %d frames [ms] (glFinish after each pass); wall, then process CPU time:\n",
+              frames);
+  std::printf("%-20s %8s %8s %8s %10s %8s %10s | %8s %8s %8s %10s %8s %9s\n", "camera", "shadows", "scene", "snow",
+              "inscatter", "post", "readback", "cpu shad", "scene", "snow", "inscatter", "post", "cpu sum");
   for (const char* cam : {"w320x180", "w640x480"}) {
     std::vector<RenderTimings> t;
     for (int i = 0; i < frames; ++i) {
@@ -114,10 +115,14 @@ int main(int argc, char** argv) {
       std::sort(v.begin(), v.end());
       return v[v.size() / 2];
     };
-    std::printf("%-20s %8.2f %8.2f %8.2f %10.2f %8.2f %10.2f\n", cam, med(&RenderTimings::shadow_pass_ms),
-                med(&RenderTimings::scene_pass_ms), med(&RenderTimings::snow_pass_ms),
-                med(&RenderTimings::inscatter_pass_ms), med(&RenderTimings::post_pass_ms),
-                med(&RenderTimings::readback_ms));
+    const double cpu[5] = {med(&RenderTimings::shadow_pass_cpu_ms), med(&RenderTimings::scene_pass_cpu_ms),
+                           med(&RenderTimings::snow_pass_cpu_ms), med(&RenderTimings::inscatter_pass_cpu_ms),
+                           med(&RenderTimings::post_pass_cpu_ms)};
+    std::printf("%-20s %8.2f %8.2f %8.2f %10.2f %8.2f %10.2f | %8.2f %8.2f %8.2f %10.2f %8.2f %9.2f\n", cam,
+                med(&RenderTimings::shadow_pass_ms), med(&RenderTimings::scene_pass_ms),
+                med(&RenderTimings::snow_pass_ms), med(&RenderTimings::inscatter_pass_ms),
+                med(&RenderTimings::post_pass_ms), med(&RenderTimings::readback_ms), cpu[0], cpu[1], cpu[2], cpu[3],
+                cpu[4], cpu[0] + cpu[1] + cpu[2] + cpu[3] + cpu[4]);
   }
   return 0;
 }

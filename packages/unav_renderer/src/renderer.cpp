@@ -9,6 +9,7 @@
 #include <array>
 #include <chrono>
 #include <cmath>
+#include <ctime>
 #include <deque>
 #include <limits>
 #include <map>
@@ -33,6 +34,13 @@ using gl::projection_from_K;
 using gl::set3;
 using Clock = std::chrono::steady_clock;
 double ms_since(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
+
+// CPU time of this process, all threads [ms] (llvmpipe's rasteriser threads included).
+double process_cpu_ms() {
+  timespec ts{};
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+  return static_cast<double>(ts.tv_sec) * 1e3 + static_cast<double>(ts.tv_nsec) * 1e-6;
+}
 
 // A spatially compact run of a mesh's triangles with its bounding box: passes skip the chunks
 // outside their view frustum (the seabed patch is ~29k triangles; a lamp sees a few metres).
@@ -856,23 +864,26 @@ void Renderer::Impl::draw(const Pose& X_WB, const CameraModel& out_cam, double s
   const CameraModel& c = t.internal;
   const FrameSetup f = setup_frame(X_WB, c);
   auto tp = Clock::now();
-  auto lap = [&](double* out) {
+  double cpu = options.profile_passes ? process_cpu_ms() : 0.0;
+  auto lap = [&](double* out, double* out_cpu) {
     if (!options.profile_passes) return;
     glFinish();
     *out = ms_since(tp);
+    *out_cpu = process_cpu_ms() - cpu;
     tp = Clock::now();
+    cpu = process_cpu_ms();
   };
   shadow_pass(f);
-  lap(&timings.shadow_pass_ms);
+  lap(&timings.shadow_pass_ms, &timings.shadow_pass_cpu_ms);
   scene_pass(t, f, stamp_s);
-  lap(&timings.scene_pass_ms);
+  lap(&timings.scene_pass_ms, &timings.scene_pass_cpu_ms);
   snow_pass(f, c, stamp_s);  // when marine snow is on
-  lap(&timings.snow_pass_ms);
+  lap(&timings.snow_pass_ms, &timings.snow_pass_cpu_ms);
   float march_max_m = 0.0f;
   const bool do_inscatter = inscatter_pass(t, f, c, &march_max_m);
-  lap(&timings.inscatter_pass_ms);
+  lap(&timings.inscatter_pass_ms, &timings.inscatter_pass_cpu_ms);
   post_pass(t, f, c, seq, do_inscatter, march_max_m);
-  lap(&timings.post_pass_ms);
+  lap(&timings.post_pass_ms, &timings.post_pass_cpu_ms);
 }
 
 void Renderer::Impl::start_readback(Slot& s, const Targets& t) {

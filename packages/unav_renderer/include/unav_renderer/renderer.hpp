@@ -77,8 +77,12 @@ struct Frame {
 struct RenderTimings {
   double render_ms = 0;    ///< submit(): issuing the passes and the readback
   double readback_ms = 0;  ///< collect(): waiting for the fence, PBO map, copy, split rgb/seg
-  // Only with RenderOptions::profile_passes:
+  // Only with RenderOptions::profile_passes: wall time of each pass, and the CPU time the process
+  // spent in it (all threads; on llvmpipe the rendering work itself, much less disturbed by
+  // other load on the machine than the wall time).
   double shadow_pass_ms = 0, scene_pass_ms = 0, snow_pass_ms = 0, inscatter_pass_ms = 0, post_pass_ms = 0;
+  double shadow_pass_cpu_ms = 0, scene_pass_cpu_ms = 0, snow_pass_cpu_ms = 0, inscatter_pass_cpu_ms = 0,
+         post_pass_cpu_ms = 0;
 };
 
 class Renderer {
