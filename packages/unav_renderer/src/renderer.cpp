@@ -260,7 +260,7 @@ struct Renderer::Impl {
   void shadow_pass(const FrameSetup& f);
   void scene_pass(const Targets& t, const FrameSetup& f, double stamp_s);
   Program& scene_program(const GpuMesh& m, const FrameSetup& f, double stamp_s, unsigned* set_up);
-  Program& post_program(const std::array<bool, 6>& features);
+  Program& post_program(const std::array<bool, 7>& features);
   void snow_pass(const FrameSetup& f, const CameraModel& c, double stamp_s);
   bool inscatter_pass(const Targets& t, const FrameSetup& f, const CameraModel& c, float* march_max_out);
   void post_pass(const Targets& t, const FrameSetup& f, const CameraModel& c, std::uint64_t seq, bool do_inscatter,
@@ -790,9 +790,9 @@ bool Renderer::Impl::inscatter_pass(const Targets& t, const FrameSetup& f, const
 }
 
 // The post program with these features compiled in (compiled on first use).
-Program& Renderer::Impl::post_program(const std::array<bool, 6>& features) {
-  static constexpr std::array<const char*, 6> kNames = {"DISTMAP",    "FWD",  "INSCATTER",
-                                                        "VIGNETTING", "SHOT", "READ_NOISE"};
+Program& Renderer::Impl::post_program(const std::array<bool, 7>& features) {
+  static constexpr std::array<const char*, 7> kNames = {"DISTMAP", "FWD",        "INSCATTER", "VIGNETTING",
+                                                        "SHOT",    "READ_NOISE", "SNELL"};
   unsigned key = 0;
   std::string defines;
   for (std::size_t i = 0; i < features.size(); ++i) {
@@ -811,8 +811,8 @@ void Renderer::Impl::post_pass(const Targets& t, const FrameSetup& f, const Came
   glBindFramebuffer(GL_FRAMEBUFFER, t.post_fbo);
   glViewport(0, 0, t.out_width, t.out_height);
   const bool shot = options.noise && c.shot_noise > 0.0, read_noise = options.noise && c.noise_stddev > 0.0;
-  Program& post =
-      post_program({t.distmap != 0, options.forward_scatter, do_inscatter, c.vignetting > 0.0, shot, read_noise});
+  Program& post = post_program({t.distmap != 0, options.forward_scatter, do_inscatter, c.vignetting > 0.0, shot,
+                                read_noise, options.snell_window});
   post.use();
   glActiveTexture(GL_TEXTURE0);
   glBindTexture(GL_TEXTURE_2D, t.scene_color);
@@ -855,6 +855,17 @@ void Renderer::Impl::post_pass(const Targets& t, const FrameSetup& f, const Came
   glUniform1ui(post["u_seed"], static_cast<GLuint>(noise::hash32(static_cast<std::uint32_t>(options.seed) ^
                                                                  static_cast<std::uint32_t>(seq * 2654435761ULL))));
   glUniform1i(post["u_srgb"], options.srgb_output ? 1 : 0);
+  if (options.snell_window) {
+    const double n = water.refractive_index;
+    const double t0 = 1.0 - std::pow((n - 1.0) / (n + 1.0), 2);  // Fresnel transmittance at normal incidence
+    const Eigen::Vector3d& E0 = world.sun.surface_irradiance;
+    const double amb = world.sun.ambient_fraction;
+    glUniform1f(post["u_cam_depth"], static_cast<float>(f.cam_W.z()));
+    glUniform1f(post["u_n_water"], static_cast<float>(n));
+    set3(post["u_sky"], n * n * amb / t0 * E0);
+    set3(post["u_sun_glow"], M_PI * (1.0 - amb) / t0 * E0);
+    set3(post["u_sun_dir_W"], world.sun.direction_W);
+  }
   glBindVertexArray(empty_vao);
   glDrawArrays(GL_TRIANGLES, 0, 3);
 }
@@ -986,7 +997,7 @@ Renderer::Renderer(World world, std::vector<CameraModel> cameras, RenderOptions 
   impl_->scene_variants[0] = Program(detail::kSceneVS, detail::kSceneFS, "scene",
                                      "#define TRIPLANAR 0\n#define MACRO 0\n#define SECTIONS 0\n");
   impl_->snow = Program(detail::kSnowVS, detail::kSnowFS, "marine_snow");
-  impl_->post_program({false, true, true, false, false, true});  // the common one; a shader error shows here
+  impl_->post_program({false, true, true, false, false, true, true});  // the common one; a shader error shows here
   impl_->inscatter = Program(detail::kPostVS, detail::kInscatterFS, "lamp_inscatter");
   impl_->shadow = Program(detail::kShadowVS, detail::kShadowFS, "lamp_shadow");
   impl_->upload_scene(geo);

@@ -263,6 +263,9 @@ inline constexpr const char* kPostFS = R"GLSL(
 #ifndef READ_NOISE
 #define READ_NOISE 1  // read noise
 #endif
+#ifndef SNELL
+#define SNELL 1       // Snell's window: sky and sun seen through the surface
+#endif
 uniform sampler2D u_color;     // RGBA16F: D and seg
 uniform sampler2D u_depth;     // R32F: z_C
 uniform sampler2D u_distmap;   // RG32F: undistorted pixel for each output pixel
@@ -282,6 +285,11 @@ uniform float u_noise_std;
 uniform float u_shot;          // shot noise: variance u_shot * I (linear signal)
 uniform float u_vignetting;    // share of the cos^4 falloff
 uniform vec4 u_Kout;           // output (in-air) camera fx, fy, cx, cy: field angle of a pixel
+uniform float u_cam_depth;     // camera depth below the surface [m]
+uniform float u_n_water;       // refractive index of the water
+uniform vec3 u_sky;            // radiance through the window's centre: n^2 ambient E0 / T(0)
+uniform vec3 u_sun_glow;       // pi (1 - ambient) E0 / T(0): the sun, spread over the glint kernel
+uniform vec3 u_sun_dir_W;      // direction the sunlight travels in the water
 uniform uint u_seed;
 uniform bool u_srgb;
 layout(location = 0) out vec4 o_rgba;   // rgb8 + seg id in alpha
@@ -357,7 +365,32 @@ void main() {
   // Backscatter of ambient light towards the veiling light. The veiling light is brighter
   // looking up than down (downwelling radiance): factor 1 + gradient * up-component of the ray.
   vec3 d_W = u_R_WC * d;
-  vec3 B = u_Binf * (1.0 + u_veil_gradient * (-d_W.z)) * (1.0 - exp(-u_betaB * range));
+  vec3 Bdir = u_Binf * (1.0 + u_veil_gradient * (-d_W.z));
+  vec3 B = Bdir * (1.0 - exp(-u_betaB * range));
+
+#if SNELL
+  // Snell's window: a water ray closer to the zenith than asin(1 / n) leaves through the surface,
+  // s = depth / cos(zenith angle) away, and brings the sky (and the sun's glint) from above,
+  // weighted by the Fresnel transmittance; the reflected share R continues in the water like a
+  // ray beyond the window (total internal reflection), which keeps the veiling light.
+  float up = -d_W.z;
+  if (!hit && up > 0.0 && u_cam_depth > 0.0) {
+    float sin_a = u_n_water * sqrt(max(1.0 - up * up, 0.0));
+    if (sin_a < 1.0) {
+      float cos_a = sqrt(1.0 - sin_a * sin_a);
+      float rs = (u_n_water * up - cos_a) / (u_n_water * up + cos_a);
+      float rp = (up - u_n_water * cos_a) / (up + u_n_water * cos_a);
+      float T = 1.0 - 0.5 * (rs * rs + rp * rp);
+      float s = u_cam_depth / up;
+      // Glint: the sun's image spread by surface waves, a normalised Gaussian of 2 deg.
+      const float SIG2 = 0.0012;
+      float a = acos(clamp(dot(d_W, -u_sun_dir_W), -1.0, 1.0));
+      float glint = exp(-a * a / SIG2) / (PI * SIG2);
+      D += T * (u_sky + u_sun_glow * glint) * exp(-u_betaD * s);   // D: marine snow in front
+      B = Bdir * (1.0 - T * exp(-u_betaB * s));
+    }
+  }
+#endif
 
   // Depth-aware upsampling of the low-resolution in-scatter: of the 4 nearest texels, trust
   // those whose marched length matches this pixel's (no halos at silhouettes).

@@ -179,3 +179,77 @@ TEST(CameraOptics, CentredDomeChangesNothingAndBadPortsAreErrors) {
   bad.port.glass_thickness_m = -0.01;
   EXPECT_THROW(Renderer(empty_world(), {bad}, exact_options()), ConfigError);
 }
+
+namespace {
+
+// A camera looking straight up (optical axis = -z of world_ned) on a level body.
+CameraModel up_camera(int w, int h, double f) {
+  CameraModel c = forward_camera(w, h, f);
+  c.X_BC.linear() = rotation_from_rpy(0.0, M_PI / 2, 0.0) * R_camera_body_to_optical();
+  return c;
+}
+
+// Zenith angle [rad] of pixel (u, v)'s ray for up_camera().
+double zenith_angle(const CameraModel& c, double u, double v) {
+  const double x = (u - c.cx) / c.fx, y = (v - c.cy) / c.fy;
+  return std::atan(std::sqrt(x * x + y * y));
+}
+
+}  // namespace
+
+TEST(CameraOptics, SnellsWindowEndsAtTheCriticalAngle) {
+  // Looking straight up from 5 m: water rays closer to the zenith than asin(1 / n) = 48.27 deg
+  // (n = 1.34) see the sky through the surface, the others are totally reflected and show only
+  // the veiling light, exactly as without the window. The transmittance falls to 0 at the
+  // critical angle, so the edge is bracketed: brighter 2 deg inside it, identical 0.5 deg outside.
+  World w = empty_world();
+  w.sun.direction_W = Eigen::Vector3d(std::sin(0.5), 0.0, std::cos(0.5));  // no glint near the edge row
+  const CameraModel cam = up_camera(321, 41, 80.0);                        // 127 deg across
+  RenderOptions off = exact_options();
+  off.snell_window = false;
+  Renderer on_r(w, {cam}, exact_options());
+  Renderer off_r(w, {cam}, off);
+  const Frame a = on_r.render(body_at({0, 0, 5.0}), "cam");
+  const Frame b = off_r.render(body_at({0, 0, 5.0}), "cam");
+  const double critical = std::asin(1.0 / 1.34);
+  int inside = 0, outside = 0;
+  double edge_in = 0.0, edge_out = M_PI;
+  for (int u = 0; u < cam.width; ++u) {
+    const double theta = zenith_angle(cam, u, 20);
+    const std::size_t i = 3 * (static_cast<std::size_t>(20) * cam.width + static_cast<std::size_t>(u)) + 1;  // green
+    if (a.rgb[i] > b.rgb[i]) edge_in = std::max(edge_in, theta);
+    if (a.rgb[i] == b.rgb[i]) edge_out = std::min(edge_out, theta);
+    if (theta < critical - 2.0 * M_PI / 180) {
+      EXPECT_GT(a.rgb[i], b.rgb[i] + 2) << "inside the window at " << theta * 180 / M_PI << " deg";
+      ++inside;
+    } else if (theta > critical + 0.5 * M_PI / 180) {
+      EXPECT_EQ(a.rgb[i], b.rgb[i]) << "beyond the window at " << theta * 180 / M_PI << " deg";
+      ++outside;
+    }
+  }
+  EXPECT_GT(inside, 100);
+  EXPECT_GT(outside, 40);
+  std::printf("Snell's window: brighter up to %.2f deg, unchanged from %.2f deg (critical angle %.2f deg)\n",
+              edge_in * 180 / M_PI, edge_out * 180 / M_PI, critical * 180 / M_PI);
+}
+
+TEST(CameraOptics, SnellsWindowCentreIsTheSkyAttenuatedOverTheDepth) {
+  // No veiling light (B_inf = 0), linear output, gain 1: the zenith pixel is the sky radiance
+  // through the window, n^2 x ambient x E0 (radiance n^2 law; Fresnel normalised at the zenith),
+  // attenuated over the depth, exp(-beta_D d) per channel (Beer-Lambert). 8-bit: +-1 level.
+  World w = empty_world();
+  w.sun.direction_W = Eigen::Vector3d(std::sin(0.6), 0.0, std::cos(0.6));  // glint 34 deg away
+  w.water.B_inf = Eigen::Vector3d::Zero();
+  w.water.beta_D = Eigen::Vector3d(0.3, 0.1, 0.05);
+  const CameraModel cam = up_camera(41, 41, 40.0);
+  Renderer r(w, {cam}, exact_options());
+  for (double depth : {2.0, 6.0}) {
+    const Frame f = r.render(body_at({0, 0, depth}), "cam");
+    const std::size_t i = 3 * (static_cast<std::size_t>(20) * cam.width + 20);
+    for (int k = 0; k < 3; ++k) {
+      const double expected = 1.34 * 1.34 * w.sun.ambient_fraction * std::exp(-w.water.beta_D[k] * depth);
+      EXPECT_NEAR(f.rgb[i + k], std::min(255.0, 255.0 * expected), 1.0) << "channel " << k << " at " << depth << " m";
+    }
+    std::printf("zenith at %.0f m: rgb %d %d %d\n", depth, f.rgb[i], f.rgb[i + 1], f.rgb[i + 2]);
+  }
+}

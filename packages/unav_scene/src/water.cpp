@@ -58,6 +58,9 @@ void WaterModel::validate(const std::string& where) const {
   check(B_inf, "B_inf");
   check(b_scatter, "b_scatter");
   if (!(phase_g > -1.0 && phase_g < 1.0)) throw ConfigError(where + ": water.phase_g must be in (-1, 1)");
+  if (!(refractive_index >= 1.0 && refractive_index <= 1.6))
+    throw ConfigError(where + ": water.refractive_index must be in [1, 1.6] (got " + std::to_string(refractive_index) +
+                      ")");
   if (!(phase_backscatter_fraction >= 0.0 && phase_backscatter_fraction <= 1.0))
     throw ConfigError(where + ": water.phase_backscatter_fraction must be in [0, 1]");
   if (!(veiling_light_gradient >= 0.0 && veiling_light_gradient < 1.0))
@@ -96,15 +99,16 @@ namespace detail {
 // Shared by load_water_file and the world loader: `node` is a water mapping.
 WaterModel parse_water(const YamlCtx& c, const YAML::Node& node, const std::string& path, bool in_world) {
   if (in_world)
-    check_keys(c, node, path,
-               {"preset", "name", "beta_D", "beta_B", "K_d", "B_inf", "b_scatter", "phase_g",
-                "phase_backscatter_fraction", "forward_scatter_per_m", "forward_blur_rad_per_m",
-                "veiling_light_gradient", "temperature_c", "salinity_psu", "ph", "file", "marine_snow", "description"});
+    check_keys(
+        c, node, path,
+        {"preset", "name", "beta_D", "beta_B", "K_d", "B_inf", "b_scatter", "phase_g", "phase_backscatter_fraction",
+         "forward_scatter_per_m", "forward_blur_rad_per_m", "veiling_light_gradient", "temperature_c", "salinity_psu",
+         "ph", "refractive_index", "file", "marine_snow", "description"});
   else
     check_keys(c, node, path,
                {"preset", "name", "beta_D", "beta_B", "K_d", "B_inf", "b_scatter", "phase_g",
                 "phase_backscatter_fraction", "forward_scatter_per_m", "forward_blur_rad_per_m",
-                "veiling_light_gradient", "temperature_c", "salinity_psu", "ph", "description"});
+                "veiling_light_gradient", "temperature_c", "salinity_psu", "ph", "refractive_index", "description"});
   WaterModel w;
   if (node["preset"]) {
     try {
@@ -132,6 +136,9 @@ WaterModel parse_water(const YamlCtx& c, const YAML::Node& node, const std::stri
   w.temperature_c = get_double(c, node, path, "temperature_c", w.temperature_c);
   w.salinity_psu = get_double(c, node, path, "salinity_psu", w.salinity_psu);
   w.ph = get_double(c, node, path, "ph", w.ph);
+  w.refractive_index = get_double(c, node, path, "refractive_index", w.refractive_index);
+  if (!(w.refractive_index >= 1.0 && w.refractive_index <= 1.6))
+    c.fail(join_key(path, "refractive_index"), "must be in [1, 1.6]");
   if (!(w.temperature_c >= -2.0 && w.temperature_c <= 40.0))
     c.fail(join_key(path, "temperature_c"), "must be in [-2, 40] deg C");
   if (!(w.salinity_psu >= 0.0 && w.salinity_psu <= 45.0)) c.fail(join_key(path, "salinity_psu"), "must be in [0, 45]");

@@ -49,6 +49,10 @@ struct RenderOptions {
   bool caustics = true;
   double caustic_strength = 0.8;  ///< edge [px] of each lamp's shadow map, 16..8192
   bool srgb_output = true;        ///< encode rgb8 as sRGB (false: linear 0..1 -> 0..255)
+  /// Snell's window: water rays within asin(1 / n) of the zenith leave through the surface and
+  /// see the sky (radiance n^2 x the diffuse share of E0, Fresnel-weighted) and the sun's glint,
+  /// attenuated over the path to the surface; beyond it total internal reflection (the veil).
+  bool snell_window = true;
   /// Deterministic metering of the ambient light at the camera depth: gain =
   /// clamp(0.45 / luminance(E0 exp(-K_d d)), 0.25, 5), times CameraModel::exposure.
   bool auto_exposure = true;

@@ -38,6 +38,9 @@ struct WaterModel {
   double temperature_c = 10.0;  ///< [deg C], -2..40
   double salinity_psu = 35.0;   ///< practical salinity, 0..45
   double ph = 8.0;              ///< 7..9
+  /// Refractive index of the water (Snell's window: the sky is seen within asin(1 / n) of the
+  /// zenith, total internal reflection beyond). 1.33 fresh .. 1.345 cold sea water.
+  double refractive_index = 1.34;
 
   /// Effective veiling light for a camera at depth `depth_m` with surface irradiance E0:
   /// B_inf * E0 * exp(-K_d depth) (the ambient light that backscatters also decays).
