@@ -223,6 +223,7 @@ struct Renderer::Impl {
   std::map<std::string, GLuint> textures;
   std::array<Program, 8> scene_variants;      // by material: triplanar | macro << 1 | sections << 2
   std::map<unsigned, Program> post_variants;  // by feature set (post_program())
+  BodyVelocity velocity;                      // of the frame being drawn (motion blur)
   Program snow, inscatter, shadow;
   GLuint shadow_tex = 0, shadow_fbo = 0;  // depth array, one layer per lamp
   GLuint shadow_nearest = 0;              // sampler: one depth test per lookup (the in-scatter march, smooth anyway)
@@ -260,7 +261,7 @@ struct Renderer::Impl {
   void shadow_pass(const FrameSetup& f);
   void scene_pass(const Targets& t, const FrameSetup& f, double stamp_s);
   Program& scene_program(const GpuMesh& m, const FrameSetup& f, double stamp_s, unsigned* set_up);
-  Program& post_program(const std::array<bool, 7>& features);
+  Program& post_program(const std::array<bool, 8>& features);
   void snow_pass(const FrameSetup& f, const CameraModel& c, double stamp_s);
   bool inscatter_pass(const Targets& t, const FrameSetup& f, const CameraModel& c, float* march_max_out);
   void post_pass(const Targets& t, const FrameSetup& f, const CameraModel& c, std::uint64_t seq, bool do_inscatter,
@@ -790,9 +791,9 @@ bool Renderer::Impl::inscatter_pass(const Targets& t, const FrameSetup& f, const
 }
 
 // The post program with these features compiled in (compiled on first use).
-Program& Renderer::Impl::post_program(const std::array<bool, 7>& features) {
-  static constexpr std::array<const char*, 7> kNames = {"DISTMAP", "FWD",        "INSCATTER", "VIGNETTING",
-                                                        "SHOT",    "READ_NOISE", "SNELL"};
+Program& Renderer::Impl::post_program(const std::array<bool, 8>& features) {
+  static constexpr std::array<const char*, 8> kNames = {"DISTMAP", "FWD",        "INSCATTER", "VIGNETTING",
+                                                        "SHOT",    "READ_NOISE", "SNELL",     "MOTION"};
   unsigned key = 0;
   std::string defines;
   for (std::size_t i = 0; i < features.size(); ++i) {
@@ -811,8 +812,15 @@ void Renderer::Impl::post_pass(const Targets& t, const FrameSetup& f, const Came
   glBindFramebuffer(GL_FRAMEBUFFER, t.post_fbo);
   glViewport(0, 0, t.out_width, t.out_height);
   const bool shot = options.noise && c.shot_noise > 0.0, read_noise = options.noise && c.noise_stddev > 0.0;
+  // Motion over the exposure (ending at the stamp), in the optical frame: a world point P (camera
+  // coordinates now) was at P + w x P + v when the shutter opened.
+  const Eigen::Matrix3d R_CB = c.X_BC.linear().transpose();
+  const Eigen::Vector3d v_C =
+      c.exposure_time_s * (R_CB * (velocity.linear + velocity.angular.cross(c.X_BC.translation())));
+  const Eigen::Vector3d w_C = c.exposure_time_s * (R_CB * velocity.angular);
+  const bool motion = c.exposure_time_s > 0.0 && (v_C.norm() > 1e-9 || w_C.norm() > 1e-9);
   Program& post = post_program({t.distmap != 0, options.forward_scatter, do_inscatter, c.vignetting > 0.0, shot,
-                                read_noise, options.snell_window});
+                                read_noise, options.snell_window, motion});
   post.use();
   glActiveTexture(GL_TEXTURE0);
   glBindTexture(GL_TEXTURE_2D, t.scene_color);
@@ -855,6 +863,10 @@ void Renderer::Impl::post_pass(const Targets& t, const FrameSetup& f, const Came
   glUniform1ui(post["u_seed"], static_cast<GLuint>(noise::hash32(static_cast<std::uint32_t>(options.seed) ^
                                                                  static_cast<std::uint32_t>(seq * 2654435761ULL))));
   glUniform1i(post["u_srgb"], options.srgb_output ? 1 : 0);
+  if (motion) {
+    set3(post["u_motion_v"], v_C);
+    set3(post["u_motion_w"], w_C);
+  }
   if (options.snell_window) {
     const double n = water.refractive_index;
     const double t0 = 1.0 - std::pow((n - 1.0) / (n + 1.0), 2);  // Fresnel transmittance at normal incidence
@@ -997,7 +1009,8 @@ Renderer::Renderer(World world, std::vector<CameraModel> cameras, RenderOptions 
   impl_->scene_variants[0] = Program(detail::kSceneVS, detail::kSceneFS, "scene",
                                      "#define TRIPLANAR 0\n#define MACRO 0\n#define SECTIONS 0\n");
   impl_->snow = Program(detail::kSnowVS, detail::kSnowFS, "marine_snow");
-  impl_->post_program({false, true, true, false, false, true, true});  // the common one; a shader error shows here
+  impl_->post_program(
+      {false, true, true, false, false, true, true, false});  // the common one; a shader error shows here
   impl_->inscatter = Program(detail::kPostVS, detail::kInscatterFS, "lamp_inscatter");
   impl_->shadow = Program(detail::kShadowVS, detail::kShadowFS, "lamp_shadow");
   impl_->upload_scene(geo);
@@ -1068,13 +1081,14 @@ Renderer::~Renderer() {
   glDeleteProgram(impl_->inscatter.id());
 }
 
-void Renderer::submit(const Pose& X_WB, const std::string& camera, double stamp_s) {
+void Renderer::submit(const Pose& X_WB, const std::string& camera, double stamp_s, const BodyVelocity& velocity) {
   Impl& I = *impl_;
   const CameraModel& c = I.cam(camera);
   I.ctx->make_current();
   if (I.in_flight.size() >= I.slots.size()) I.collect_oldest();
   const auto t0 = Clock::now();
   const std::uint64_t seq = I.sequence++;
+  I.velocity = velocity;
   I.draw(X_WB, c, stamp_s, seq);
   const std::size_t idx = I.next_slot;
   I.next_slot = (I.next_slot + 1) % I.slots.size();
@@ -1108,11 +1122,11 @@ std::optional<Frame> Renderer::collect() {
 
 std::size_t Renderer::in_flight() const { return impl_->in_flight.size() + impl_->done.size(); }
 
-Frame Renderer::render(const Pose& X_WB, const std::string& camera, double stamp_s) {
+Frame Renderer::render(const Pose& X_WB, const std::string& camera, double stamp_s, const BodyVelocity& velocity) {
   Impl& I = *impl_;
   I.ctx->make_current();
   while (!I.in_flight.empty()) I.collect_oldest();  // keep earlier async frames for collect()
-  submit(X_WB, camera, stamp_s);
+  submit(X_WB, camera, stamp_s, velocity);
   I.collect_oldest();
   Frame f = std::move(I.done.back());
   I.done.pop_back();

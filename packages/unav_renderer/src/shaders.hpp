@@ -266,6 +266,9 @@ inline constexpr const char* kPostFS = R"GLSL(
 #ifndef SNELL
 #define SNELL 1       // Snell's window: sky and sun seen through the surface
 #endif
+#ifndef MOTION
+#define MOTION 0      // motion blur over the exposure
+#endif
 uniform sampler2D u_color;     // RGBA16F: D and seg
 uniform sampler2D u_depth;     // R32F: z_C
 uniform sampler2D u_distmap;   // RG32F: undistorted pixel for each output pixel
@@ -290,6 +293,8 @@ uniform float u_n_water;       // refractive index of the water
 uniform vec3 u_sky;            // radiance through the window's centre: n^2 ambient E0 / T(0)
 uniform vec3 u_sun_glow;       // pi (1 - ambient) E0 / T(0): the sun, spread over the glint kernel
 uniform vec3 u_sun_dir_W;      // direction the sunlight travels in the water
+uniform vec3 u_motion_v;       // camera translation over the exposure, optical frame [m]
+uniform vec3 u_motion_w;       // camera rotation over the exposure (angle x axis), optical frame
 uniform uint u_seed;
 uniform bool u_srgb;
 layout(location = 0) out vec4 o_rgba;   // rgb8 + seg id in alpha
@@ -349,6 +354,25 @@ void main() {
   vec3 d = ray / raylen;
   bool hit = seg > 0.5;
   float range = hit ? z * raylen : 1.0e6;
+
+#if MOTION
+  // Motion blur: the point seen here (water: far away, so rotation only) was at
+  // P0 = P + w x P + v when the shutter opened; its image moved by g = here - there during the
+  // exposure, so this pixel gathers the sharp frame along +g (a box filter over the exposure).
+  // Depth and segmentation stay those of the stamp.
+  if (inside) {
+    vec3 P = ray * (hit ? z : 1.0e3);
+    vec3 P0 = P + cross(u_motion_w, P) + u_motion_v;
+    if (P0.z > 1e-3) {
+      vec2 g = src - (u_K.xy * P0.xy / P0.z + u_K.zw);
+      int n = int(clamp(ceil(length(g)), 1.0, 32.0));
+      vec3 acc = vec3(0.0);
+      for (int k = 0; k < n; ++k)
+        acc += textureLod(u_color, (src + ((float(k) + 0.5) / float(n)) * g + 0.5) / vec2(u_size), 0.0).rgb;
+      D = acc / float(n);
+    }
+  }
+#endif
 
   // Forward scattering: a share 1 - exp(-f z) of the direct signal spreads over a disc
   // whose radius grows with range (blur read from the mip chain: smooth, no ghost taps).

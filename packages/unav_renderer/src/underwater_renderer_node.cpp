@@ -149,17 +149,22 @@ void UnderwaterRendererNode::on_odom(const nav_msgs::msg::Odometry& odom) {
     next_frame_t_ = std::ceil((t - eps) / period_) * period_;
   }
   if (t + eps >= next_frame_t_) {
-    render_and_publish(unav::from_msg(odom.pose().pose()), odom.header());
+    // The twist is in the child frame (base_link_frd), as nav_msgs/Odometry defines it.
+    BodyVelocity velocity;
+    velocity.linear = unav::from_msg(odom.twist().twist().linear());
+    velocity.angular = unav::from_msg(odom.twist().twist().angular());
+    render_and_publish(unav::from_msg(odom.pose().pose()), velocity, odom.header());
     // Next frame instant: the next multiple of the period after t (no drift, no bursts).
     next_frame_t_ = (std::floor((t + eps) / period_) + 1.0) * period_;
   }
   if (acker_) acker_->ack(odom.header());
 }
 
-void UnderwaterRendererNode::render_and_publish(const Pose& X_WB, const std_msgs::msg::dds_::Header_& header) {
+void UnderwaterRendererNode::render_and_publish(const Pose& X_WB, const BodyVelocity& velocity,
+                                                const std_msgs::msg::dds_::Header_& header) {
   const double t = unav::Time::from_msg(header.stamp().sec(), header.stamp().nanosec()).seconds();
   for (auto& c : cameras_) {
-    Frame f = renderer_->render(X_WB, c.name, t);
+    Frame f = renderer_->render(X_WB, c.name, t, velocity);
     const std::string frame_id = c.name + "_optical";
     for (auto* m : {&c.image_msg, &c.depth_msg, &c.seg_msg}) {
       m->header().stamp() = header.stamp();

@@ -88,7 +88,7 @@ class UnderwaterRendererNode : public unav::Node {
     sensor_msgs::msg::CameraInfo info_msg;
   };
   void on_odom(const nav_msgs::msg::Odometry& odom);
-  void render_and_publish(const Pose& X_WB, const std_msgs::msg::dds_::Header_& header);
+  void render_and_publish(const Pose& X_WB, const BodyVelocity& velocity, const std_msgs::msg::dds_::Header_& header);
 
   std::unique_ptr<Renderer> renderer_;
   std::vector<CameraPorts> cameras_;

@@ -122,6 +122,8 @@ void CameraModel::validate(const std::string& where) const {
   if (!(exposure > 0.0)) throw ConfigError(pre + "exposure must be > 0");
   if (!(shot_noise >= 0.0 && shot_noise <= 1.0)) throw ConfigError(pre + "shot_noise must be in [0, 1]");
   if (!(vignetting >= 0.0 && vignetting <= 1.0)) throw ConfigError(pre + "vignetting must be in [0, 1]");
+  if (!(exposure_time_s >= 0.0 && exposure_time_s <= 1.0))
+    throw ConfigError(pre + "exposure_time_s must be in [0, 1] s");
   if (!(port.water_index >= 1.0 && port.water_index <= 2.0))
     throw ConfigError(pre + "port.water_index must be in [1, 2]");
   if (!(port.air_index >= 1.0 && port.air_index <= 2.0)) throw ConfigError(pre + "port.air_index must be in [1, 2]");
@@ -208,6 +210,7 @@ struct CameraSpec {
   double shot_noise = 0.0;
   double exposure = 1.0;
   double vignetting = 0.0;
+  double exposure_time_s = 0.0;
   PortSpec port;
   double near_m = 0.05, far_m = 200.0;
   template <class Archive>
@@ -226,6 +229,10 @@ struct CameraSpec {
         Field("shot_noise", &shot_noise).Range(0.0, 1.0).Doc("shot noise variance per unit signal (1 / full well)"));
     a->Visit(Field("exposure", &exposure).Above(0.0).Doc("linear gain before sRGB encoding"));
     a->Visit(Field("vignetting", &vignetting).Range(0.0, 1.0).Doc("share of the cos^4 falloff"));
+    a->Visit(Field("exposure_time_s", &exposure_time_s)
+                 .Range(0.0, 1.0)
+                 .Unit("s")
+                 .Doc("exposure ending at the stamp: motion blur from the vehicle's velocity; 0 = none"));
     a->Visit(Field("port", &port).Doc("housing port (flat / dome); K and distortion are in air"));
     a->Visit(Field("near_m", &near_m).Above(0.0).Unit("m").Doc("near clip plane"));
     a->Visit(Field("far_m", &far_m).Above(0.0).Unit("m").Doc("far clip plane"));
@@ -271,6 +278,7 @@ CameraModel make_camera(const CameraSpec& s, const std::string& file, const std:
   cam.shot_noise = s.shot_noise;
   cam.exposure = s.exposure;
   cam.vignetting = s.vignetting;
+  cam.exposure_time_s = s.exposure_time_s;
   cam.port.type = s.port.type == "flat"   ? CameraPort::Type::kFlat
                   : s.port.type == "dome" ? CameraPort::Type::kDome
                                           : CameraPort::Type::kNone;

@@ -154,7 +154,10 @@ void Episode::submit(const std::string& camera) {
   scene::Pose X_WB = scene::Pose::Identity();
   X_WB.linear() = x.q_WB.toRotationMatrix();
   X_WB.translation() = x.p_WB_W;
-  renderer_->submit(X_WB, camera, time());
+  unav::renderer::BodyVelocity velocity;  // motion blur of cameras with an exposure time, as over DDS
+  velocity.linear = x.v_WB_B;
+  velocity.angular = x.w_WB_B;
+  renderer_->submit(X_WB, camera, time(), velocity);
   timings_.render_s += seconds_since(t0);
 }
 

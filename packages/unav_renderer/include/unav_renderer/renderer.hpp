@@ -89,6 +89,13 @@ struct RenderTimings {
          post_pass_cpu_ms = 0;
 };
 
+/// The vehicle's velocity in base_link_frd (nav_msgs/Odometry's twist) at a frame's stamp: for
+/// motion blur over a camera's exposure_time_s (zero: a sharp frame).
+struct BodyVelocity {
+  Eigen::Vector3d linear = Eigen::Vector3d::Zero();   ///< [m/s]
+  Eigen::Vector3d angular = Eigen::Vector3d::Zero();  ///< [rad/s]
+};
+
 class Renderer {
  public:
   /// Creates the EGL context, compiles shaders, builds and uploads the scene geometry and
@@ -104,12 +111,13 @@ class Renderer {
 
   /// Render synchronously. X_WB: body (FRD) pose in world_ned. Throws std::invalid_argument
   /// for an unknown camera name.
-  Frame render(const Pose& X_WB, const std::string& camera, double stamp_s = 0.0);
+  /// `velocity`: the body's, for the motion blur of cameras with an exposure_time_s.
+  Frame render(const Pose& X_WB, const std::string& camera, double stamp_s = 0.0, const BodyVelocity& velocity = {});
 
   /// Asynchronous pipeline: submit() renders and starts a PBO readback, collect() returns the
   /// oldest submitted frame. With readback_slots = N, up to N frames are in flight; submit()
   /// on a full ring first completes the oldest (retrieve it with collect()).
-  void submit(const Pose& X_WB, const std::string& camera, double stamp_s = 0.0);
+  void submit(const Pose& X_WB, const std::string& camera, double stamp_s = 0.0, const BodyVelocity& velocity = {});
   std::optional<Frame> collect();
   std::size_t in_flight() const;
 

@@ -51,6 +51,9 @@ struct CameraModel {
   /// Natural vignetting: the image falls off as 1 - s (1 - cos^4 t), t the in-air field angle
   /// of the pixel; s in [0, 1] (1 = the full cos^4 law).
   double vignetting = 0.0;
+  /// Exposure time [s] ending at the frame's stamp: motion blur from the vehicle's velocity
+  /// over it (the renderer smears the image along each pixel's motion); 0 = none.
+  double exposure_time_s = 0.0;
   CameraPort port;  ///< K and distortion are the in-air camera's; the port refracts its rays
   double near_m = 0.05, far_m = 200.0;
 
