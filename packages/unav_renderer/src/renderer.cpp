@@ -790,6 +790,35 @@ bool Renderer::Impl::inscatter_pass(const Targets& t, const FrameSetup& f, const
   return do_inscatter;
 }
 
+namespace {
+
+// Largest upward component (-z in world_ned) of the unit view rays of a pinhole camera with
+// rotation R_WC: 1 when the zenith is in view, else the maximum along the image border (sampled
+// every few pixels; the function is smooth there).
+double max_up_component(const CameraModel& c, const Eigen::Matrix3d& R_WC) {
+  const Eigen::Vector3d zenith_C = R_WC.transpose() * Eigen::Vector3d(0.0, 0.0, -1.0);
+  if (zenith_C.z() > 0.0) {
+    const double u = c.fx * zenith_C.x() / zenith_C.z() + c.cx, v = c.fy * zenith_C.y() / zenith_C.z() + c.cy;
+    if (u >= -0.5 && v >= -0.5 && u <= c.width - 0.5 && v <= c.height - 0.5) return 1.0;
+  }
+  double best = -1.0;
+  auto up = [&](double u, double v) {
+    const Eigen::Vector3d d((u - c.cx) / c.fx, (v - c.cy) / c.fy, 1.0);
+    best = std::max(best, -(R_WC * d.normalized()).z());
+  };
+  const double w = c.width - 0.5, h = c.height - 0.5;
+  for (int k = 0; k <= 128; ++k) {
+    const double s = k / 128.0;
+    up(-0.5 + s * (w + 0.5), -0.5);
+    up(-0.5 + s * (w + 0.5), h);
+    up(-0.5, -0.5 + s * (h + 0.5));
+    up(w, -0.5 + s * (h + 0.5));
+  }
+  return best;
+}
+
+}  // namespace
+
 // The post program with these features compiled in (compiled on first use).
 Program& Renderer::Impl::post_program(const std::array<bool, 8>& features) {
   static constexpr std::array<const char*, 8> kNames = {"DISTMAP", "FWD",        "INSCATTER", "VIGNETTING",
@@ -819,8 +848,12 @@ void Renderer::Impl::post_pass(const Targets& t, const FrameSetup& f, const Came
       c.exposure_time_s * (R_CB * (velocity.linear + velocity.angular.cross(c.X_BC.translation())));
   const Eigen::Vector3d w_C = c.exposure_time_s * (R_CB * velocity.angular);
   const bool motion = c.exposure_time_s > 0.0 && (v_C.norm() > 1e-9 || w_C.norm() > 1e-9);
-  Program& post = post_program({t.distmap != 0, options.forward_scatter, do_inscatter, c.vignetting > 0.0, shot,
-                                read_noise, options.snell_window, motion});
+  // Snell's window costs every pixel once compiled in (llvmpipe): only when a ray can reach it.
+  const double critical_up = std::sqrt(1.0 - 1.0 / (water.refractive_index * water.refractive_index));
+  const bool window =
+      options.snell_window && f.cam_W.z() > 0.0 && max_up_component(c, f.X_WC.linear()) > critical_up - 1e-3;
+  Program& post = post_program(
+      {t.distmap != 0, options.forward_scatter, do_inscatter, c.vignetting > 0.0, shot, read_noise, window, motion});
   post.use();
   glActiveTexture(GL_TEXTURE0);
   glBindTexture(GL_TEXTURE_2D, t.scene_color);
@@ -867,7 +900,7 @@ void Renderer::Impl::post_pass(const Targets& t, const FrameSetup& f, const Came
     set3(post["u_motion_v"], v_C);
     set3(post["u_motion_w"], w_C);
   }
-  if (options.snell_window) {
+  if (window) {
     const double n = water.refractive_index;
     const double t0 = 1.0 - std::pow((n - 1.0) / (n + 1.0), 2);  // Fresnel transmittance at normal incidence
     const Eigen::Vector3d& E0 = world.sun.surface_irradiance;
