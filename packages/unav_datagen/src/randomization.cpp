@@ -438,7 +438,9 @@ YAML::Node draw(const KeyRule& k, const YAML::Node& leaf, Rng& rng) {
     return YAML::Node(lo + (hi - lo) * rng.uniform01());
   }
   if (kind == "int") {
-    const auto lo = a[0].as<int64_t>(), hi = a[1].as<int64_t>();
+    // The checker took integral numbers, also written as reals ("1.0"): read them as such.
+    const auto lo = static_cast<int64_t>(std::llround(a[0].as<double>()));
+    const auto hi = static_cast<int64_t>(std::llround(a[1].as<double>()));
     const auto span = static_cast<std::uint64_t>(hi - lo + 1);
     return YAML::Node(lo + static_cast<int64_t>(rng.next() % span));
   }

@@ -189,3 +189,14 @@ TEST(SampleWorld, PlacesMeshesFromTheObjectsFolder) {
     EXPECT_NE(std::string(e.what()).find("holds no mesh file"), std::string::npos) << e.what();
   }
 }
+
+// Found by fuzz_spec (scripts/fuzz.sh): {int: [1.0, 60]} passed the checker (1.0 is an integer)
+// and then threw YAML::TypedBadConversion out of sample(); integral reals now draw like integers.
+TEST(RandomizationSpec, IntRangeWrittenWithRealsDrawsIntegers) {
+  YAML::Node root = YAML::LoadFile(kSpec);
+  root["rocks"]["count"] = YAML::Load("{int: [1.0, 3.0]}");
+  const auto spec = RandomizationSpec::parse(root, kSpec);
+  std::set<int64_t> counts;
+  for (int k = 0; k < 200; ++k) counts.insert(spec.sample(k)["rocks"]["count"].as<int64_t>());
+  EXPECT_EQ(counts, (std::set<int64_t>{1, 2, 3}));
+}
