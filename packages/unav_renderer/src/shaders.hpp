@@ -512,19 +512,26 @@ void main() {
   float tmax = min(range, u_march_max_m);
   float k = u_schlick_k;
   vec3 Ls = vec3(0.0);
-  for (int s = 0; s < u_nsamples; ++s) {
-    float f = (float(s) + 0.5) / float(u_nsamples);
-    float t = tmax * f * f;
-    float dt = 2.0 * tmax * f / float(u_nsamples);
-    vec3 x = d * t;
-    for (int i = 0; i < u_nlamps; ++i) {
-      vec3 L = x - u_lamp_pos_C[i];
+  // Lamps outer, samples inner: what depends on the lamp and the ray only is computed once (the
+  // sample at t is x = d t, so its lamp-clip position is t M(d, 0) + M(0, 0, 0, 1)).
+  for (int i = 0; i < u_nlamps; ++i) {
+    vec4 Ad = u_shadow_vp_C[i] * vec4(d, 0.0);
+    vec4 A0 = u_shadow_vp_C[i][3];
+    vec3 lamp_p = u_lamp_pos_C[i];
+    vec3 lamp_dir = u_lamp_dir_C[i];
+    vec2 lamp_cos = u_lamp_cos[i];
+    vec3 Li = u_b_scatter * u_lamp_I[i];
+    for (int s = 0; s < u_nsamples; ++s) {
+      float f = (float(s) + 0.5) / float(u_nsamples);
+      float t = tmax * f * f;
+      float dt = 2.0 * tmax * f / float(u_nsamples);
+      vec3 L = d * t - lamp_p;
       float dl = max(length(L), 0.05);
       vec3 l = L / dl;   // propagation direction of the lamp light
-      float cone = smoothstep(u_lamp_cos[i].x, u_lamp_cos[i].y, dot(l, u_lamp_dir_C[i]));
+      float cone = smoothstep(lamp_cos.x, lamp_cos.y, dot(l, lamp_dir));
       if (cone <= 0.0) continue;
       if (u_shadows) {   // water behind an object, seen from the lamp, is not lit: shafts
-        vec4 c = u_shadow_vp_C[i] * vec4(x, 1.0);
+        vec4 c = t * Ad + A0;
         vec3 q = c.xyz / c.w * 0.5 + 0.5;
         if (c.w > 1e-4 && all(greaterThanEqual(q.xy, vec2(0.0))) && all(lessThanEqual(q.xy, vec2(1.0))) && q.z <= 1.0)
           cone *= texture(u_shadow, vec4(q.xy, float(i), q.z));
@@ -534,7 +541,7 @@ void main() {
       float ph = (1.0 - u_back_frac) * (1.0 - k * k) / (4.0 * PI * den * den) +
                  u_back_frac * ((cth < 0.0) ? 1.0 / (2.0 * PI) : 0.0);
       // Attenuated lamp -> x (dl) and x -> camera (t): one exponential of the summed path.
-      Ls += u_b_scatter * (ph * cone / (dl * dl) * dt) * u_lamp_I[i] * exp(-u_betaD * (dl + t));
+      Ls += Li * (ph * cone / (dl * dl) * dt) * exp(-u_betaD * (dl + t));
     }
   }
   o_Ls = vec4(Ls, tmax);   // alpha: marched length, for depth-aware upsampling
