@@ -221,7 +221,8 @@ struct Renderer::Impl {
   WaterModel water;
   std::vector<GpuMesh> meshes;
   std::map<std::string, GLuint> textures;
-  std::array<Program, 8> scene_variants;      // by material: triplanar | macro << 1 | sections << 2
+  // By material and lamp count: triplanar | macro << 1 | sections << 2 | lamps << 3 (0..4 lamps).
+  std::array<Program, 40> scene_variants;
   std::map<unsigned, Program> post_variants;  // by feature set (post_program())
   BodyVelocity velocity;                      // of the frame being drawn (motion blur)
   Program snow, inscatter, shadow;
@@ -260,7 +261,7 @@ struct Renderer::Impl {
   FrameSetup setup_frame(const Pose& X_WB, const CameraModel& c) const;
   void shadow_pass(const FrameSetup& f);
   void scene_pass(const Targets& t, const FrameSetup& f, double stamp_s);
-  Program& scene_program(const GpuMesh& m, const FrameSetup& f, double stamp_s, unsigned* set_up);
+  Program& scene_program(const GpuMesh& m, const FrameSetup& f, double stamp_s, std::uint64_t* set_up);
   Program& post_program(const std::array<bool, 8>& features);
   void snow_pass(const FrameSetup& f, const CameraModel& c, double stamp_s);
   bool inscatter_pass(const Targets& t, const FrameSetup& f, const CameraModel& c, float* march_max_out);
@@ -620,17 +621,19 @@ void Renderer::Impl::shadow_pass(const FrameSetup& f) {
 
 // The scene program of a material variant (compiled on first use), with this frame's uniforms
 // set the first time it is used in the pass.
-Program& Renderer::Impl::scene_program(const GpuMesh& m, const FrameSetup& f, double stamp_s, unsigned* set_up) {
-  const unsigned v = (m.triplanar ? 1u : 0u) | (m.macro ? 2u : 0u) | (m.sections ? 4u : 0u);
-  Program& p = scene_variants[v];
+Program& Renderer::Impl::scene_program(const GpuMesh& m, const FrameSetup& f, double stamp_s, std::uint64_t* set_up) {
+  const unsigned v =
+      (m.triplanar ? 1u : 0u) | (m.macro ? 2u : 0u) | (m.sections ? 4u : 0u) | (static_cast<unsigned>(f.nl) << 3);
+  Program& p = scene_variants.at(v);
   if (p.id() == 0) {
     const std::string defines = std::string("#define TRIPLANAR ") + ((v & 1u) ? "1" : "0") + "\n#define MACRO " +
-                                ((v & 2u) ? "1" : "0") + "\n#define SECTIONS " + ((v & 4u) ? "1" : "0") + "\n";
+                                ((v & 2u) ? "1" : "0") + "\n#define SECTIONS " + ((v & 4u) ? "1" : "0") +
+                                "\n#define NLAMPS " + std::to_string(f.nl) + "\n";
     p = Program(detail::kSceneVS, detail::kSceneFS, "scene", defines);
   }
   p.use();
-  if (*set_up & (1u << v)) return p;
-  *set_up |= 1u << v;
+  if (*set_up & (std::uint64_t{1} << v)) return p;
+  *set_up |= std::uint64_t{1} << v;
   glUniformMatrix4fv(p["u_view"], 1, GL_FALSE, f.view.data());
   glUniformMatrix4fv(p["u_proj"], 1, GL_FALSE, f.proj.data());
   set3(p["u_cam_W"], f.cam_W);
@@ -641,7 +644,6 @@ Program& Renderer::Impl::scene_program(const GpuMesh& m, const FrameSetup& f, do
   glUniform1f(p["u_time"], static_cast<float>(std::fmod(stamp_s, 1.0e4)));
   set3(p["u_Kd"], water.K_d);
   set3(p["u_betaD"], water.beta_D);
-  glUniform1i(p["u_nlamps"], f.nl);
   if (f.nl > 0) {
     glUniform3fv(p["u_lamp_pos_W[0]"], f.nl, f.lamp_pos_W);
     glUniform3fv(p["u_lamp_dir_W[0]"], f.nl, f.lamp_dir_W);
@@ -685,7 +687,7 @@ void Renderer::Impl::scene_pass(const Targets& t, const FrameSetup& f, double st
   glBindTexture(GL_TEXTURE_2D_ARRAY, f.shadows ? shadow_tex : 0);
   glActiveTexture(GL_TEXTURE0);
   const Eigen::Matrix4f vp = f.proj * f.view;
-  unsigned set_up = 0;  // variants whose frame uniforms are set
+  std::uint64_t set_up = 0;  // variants whose frame uniforms are set
   for (const GpuMesh& m : meshes) {
     if (!any_visible(m, vp)) continue;
     Program& scene = scene_program(m, f, stamp_s, &set_up);

@@ -46,6 +46,9 @@ uniform float u_uv_scale;
 #ifndef SECTIONS
 #define SECTIONS 0   // u along a pipe: each texture tile (coating section) turned differently
 #endif
+#ifndef NLAMPS
+#define NLAMPS 0     // lamps lighting the scene (0..4)
+#endif
 uniform float u_seg;
 uniform vec3 u_cam_W;
 uniform vec3 u_sun_dir_W;    // direction the sunlight travels
@@ -53,7 +56,6 @@ uniform vec3 u_E0;           // surface irradiance
 uniform float u_ambient;     // diffuse share of the downwelling light
 uniform vec3 u_Kd;
 uniform vec3 u_betaD;
-uniform int u_nlamps;
 uniform vec3 u_lamp_pos_W[4];
 uniform vec3 u_lamp_dir_W[4];
 uniform vec3 u_lamp_I[4];
@@ -159,13 +161,15 @@ void main() {
   vec3 E = Ed * (u_ambient * (0.5 + 0.5 * up) + (1.0 - u_ambient) * ndl);
 
   // Lamps: inverse square, cone, attenuated lamp -> surface (surface -> camera below).
-  for (int i = 0; i < u_nlamps; ++i) {
+  // NLAMPS is a compile-time count: the loop unrolls and the lamp arrays are read at constant
+  // indices (a loop-variable index makes llvmpipe gather every uniform per pixel).
+  for (int i = 0; i < NLAMPS; ++i) {
     vec3 L = u_lamp_pos_W[i] - v_pos_W;
     float dl = max(length(L), 0.05);
     vec3 l = L / dl;
     float cone = smoothstep(u_lamp_cos[i].x, u_lamp_cos[i].y, dot(-l, u_lamp_dir_W[i]));
-    if (cone <= 0.0) continue;
-    E += u_lamp_I[i] * cone * lamp_visibility(i, v_pos_W) * max(dot(n, l), 0.0) / (dl * dl) * exp(-u_betaD * dl);
+    if (cone > 0.0)
+      E += u_lamp_I[i] * cone * lamp_visibility(i, v_pos_W) * max(dot(n, l), 0.0) / (dl * dl) * exp(-u_betaD * dl);
   }
   vec3 J = albedo * E;
   o_color = vec4(J * exp(-u_betaD * range), u_seg);
