@@ -58,7 +58,7 @@ done
 sample
 {
   echo "soak: $minutes min, $(echo "$nodes" | wc -w) nodes"
-  episodes=$(grep -c "\] episode [0-9]*: the vehicle is at" "$out/launch.log" || true)
+  episodes=$(grep -c "]: episode [0-9]*: the vehicle is at" "$out/launch.log" || true)
   echo "episodes: $((episodes + 1)) ($resets resets sent, $episodes started)"
   [ "$episodes" -eq "$resets" ] || echo "FAIL: $resets resets sent but $episodes episodes started"
   echo "lockstep holds logged (a participant late by 3 s or more): $(grep -c "lockstep: holding at" "$out/launch.log" || true)"

@@ -199,13 +199,13 @@ VoSummary KltVo::ProcessFrame(const cv::Mat& gray, const cv::Mat& depth, Eigen::
     }
   }
   if (ok) {
-    T_C0C_ = T_C0K_ * X_cur_kf.inverse();
-    last_motion_ = previous.inverse() * T_C0C_;
+    T_C0C_ = Renormalized(T_C0K_ * X_cur_kf.inverse());
+    last_motion_ = Renormalized(previous.inverse() * T_C0C_);
     kf_points_ = obj;
     prev_pts_ = img;
     s.status = VoStatus::kTracking;
   } else {
-    T_C0C_ = T_C0C_ * last_motion_;  // constant-velocity prediction
+    T_C0C_ = Renormalized(T_C0C_ * last_motion_);  // constant-velocity prediction
     s.status = VoStatus::kLost;
     s.message = "no consistent PnP solution (" + std::to_string(s.tracked) + " tracks): constant-velocity prediction";
     prev_pts_.clear();
@@ -214,6 +214,13 @@ VoSummary KltVo::ProcessFrame(const cv::Mat& gray, const cv::Mat& depth, Eigen::
   prev_gray_ = gray.clone();
   if (T_C0C) *T_C0C = T_C0C_;
   return s;
+}
+
+Eigen::Isometry3d KltVo::Renormalized(const Eigen::Isometry3d& T) {
+  Eigen::Isometry3d out = Eigen::Isometry3d::Identity();
+  out.linear() = Eigen::Quaterniond(T.linear()).normalized().toRotationMatrix();
+  out.translation() = T.translation();
+  return out;
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -234,7 +234,7 @@ bool KltVo::mono_initialize(VoSummary* s) {
   const double scale = map_median_depth_ / median(z);
   Eigen::Isometry3d T_CR = best.T_CR;
   T_CR.translation() *= scale;
-  T_C0C_ = T_C0R_ * T_CR.inverse();
+  T_C0C_ = Renormalized(T_C0R_ * T_CR.inverse());
   for (size_t i = 0; i < tracks_.size(); ++i) {
     tracks_[i].T_C0B = T_C0R_;
     if (!best.good[i]) continue;
@@ -316,8 +316,8 @@ bool KltVo::mono_track(VoSummary* s) {
   for (size_t i = 0; i < tracks_.size(); ++i)
     if (!drop[i]) kept.push_back(tracks_[i]);
   tracks_.swap(kept);
-  last_motion_ = step;
-  T_C0C_ = T_C0C_new;
+  last_motion_ = Renormalized(step);
+  T_C0C_ = Renormalized(T_C0C_new);
   const double d = median_depth();
   if (std::isfinite(d) && d > 0) map_median_depth_ = d;
   return true;

@@ -118,6 +118,12 @@ class KltVo {
   void track_klt(const cv::Mat& gray, std::vector<Track>* tracks) const;
   double median_depth() const;
 
+  /// T with its rotation projected back onto SO(3) (normalised quaternion). Poses are chained
+  /// frame after frame, and Isometry3d::inverse() transposes the rotation: without this, the
+  /// rounding error of a chained rotation grew geometrically over a long run with lost frames
+  /// (an hour-long soak saw |q| reach 1.07, then 1e68, then NaN poses).
+  static Eigen::Isometry3d Renormalized(const Eigen::Isometry3d& T);
+
   cv::Matx33d K_;
   KltVoOptions options_;
   cv::Mat prev_gray_;
