@@ -64,21 +64,22 @@ SubscriptionBase::SubscriptionBase(Context& ctx, const std::string& topic, fdds:
 void SubscriptionBase::start(const QoS& qos) {
   auto* listener = new ReaderListener(weak_from_this());
   listener_ = std::unique_ptr<void, void (*)(void*)>(listener, [](void* p) { delete static_cast<ReaderListener*>(p); });
-  reader_ = ctx_.create_reader(dds_topic_, qos, static_cast<fdds::DataReaderListener*>(listener));
+  reader_.store(ctx_.create_reader(dds_topic_, qos, static_cast<fdds::DataReaderListener*>(listener)),
+                std::memory_order_release);
   // Samples that arrived before the listener was attached (transient local) are picked up here.
   ctx_.executor().notify(shared_from_this());
 }
 
 SubscriptionBase::~SubscriptionBase() {
-  if (reader_) {
-    reader_->set_listener(nullptr);
-    ctx_.delete_reader(reader_);
+  if (fdds::DataReader* r = reader_.load()) {
+    r->set_listener(nullptr);
+    ctx_.delete_reader(r);
   }
 }
 
 int SubscriptionBase::publisher_count() const {
   fdds::SubscriptionMatchedStatus status;
-  reader_->get_subscription_matched_status(status);
+  reader()->get_subscription_matched_status(status);
   return status.current_count;
 }
 
@@ -91,8 +92,13 @@ void SubscriptionBase::on_data() {
 }
 
 bool SubscriptionBase::take(void* sample) {
+  // The listener can call this (prefetch) while create_reader() is still running in start(): a
+  // transient-local sample arriving then found reader_ still null and crashed the process (seen
+  // twice in late-joiner /tf_static tests); the executor takes it after start() instead.
+  fdds::DataReader* r = reader();
+  if (r == nullptr) return false;
   fdds::SampleInfo info;
-  while (reader_->take_next_sample(sample, &info) == ReturnCode_t::RETCODE_OK) {
+  while (r->take_next_sample(sample, &info) == ReturnCode_t::RETCODE_OK) {
     if (info.valid_data) return true;
   }
   return false;

@@ -1,6 +1,7 @@
 // Typed publisher and subscription over Fast DDS.
 #pragma once
 
+#include <atomic>
 #include <cstdint>
 #include <functional>
 #include <memory>
@@ -95,7 +96,7 @@ class SubscriptionBase : public Waitable, public std::enable_shared_from_this<Su
   SubscriptionBase& operator=(const SubscriptionBase&) = delete;
   const std::string& topic_name() const { return topic_; }
   int publisher_count() const;
-  eprosima::fastdds::dds::DataReader* reader() const { return reader_; }
+  eprosima::fastdds::dds::DataReader* reader() const { return reader_.load(std::memory_order_acquire); }
   /// Creates the reader; called once by the node after construction (needs shared_from_this).
   void start(const QoS& qos);
   /// Listener thread entry: wakes the executor, then takes one sample ahead while it wakes up
@@ -116,7 +117,9 @@ class SubscriptionBase : public Waitable, public std::enable_shared_from_this<Su
   Context& ctx_;
   std::string topic_;
   eprosima::fastdds::dds::Topic* dds_topic_ = nullptr;
-  eprosima::fastdds::dds::DataReader* reader_ = nullptr;
+  // Set by start() once create_reader() returns; the listener (prefetch) may run before that,
+  // for a transient-local sample that arrives during the creation, and must then see null.
+  std::atomic<eprosima::fastdds::dds::DataReader*> reader_{nullptr};
   std::unique_ptr<void, void (*)(void*)> listener_{nullptr, [](void*) {}};
 };
 
