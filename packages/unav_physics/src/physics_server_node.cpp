@@ -10,6 +10,7 @@
 #include "unav_scene/world.hpp"
 
 #include "unav_runtime/conversions.hpp"
+#include "unav_runtime/lockstep_ack.hpp"
 
 namespace unav::physics {
 namespace {
@@ -120,7 +121,7 @@ PhysicsServer::PhysicsServer(const unav::NodeOptions& options) : Node("physics_s
       "sim/reset", unav::QoS::reliable(), [this](const geometry_msgs::msg::Pose& m) { on_reset(m); });
   if (lockstep_) {
     ack_sub_ = create_subscription<unav_msgs::msg::LockstepAck>(
-        "/lockstep/ack", unav::QoS::reliable(100), [this](const unav_msgs::msg::LockstepAck& m) { on_ack(m); });
+        "/lockstep/ack", unav::lockstep::ack_qos(), [this](const unav_msgs::msg::LockstepAck& m) { on_ack(m); });
     drop_sub_ = create_subscription<std_msgs::msg::String>(
         "/lockstep/drop", unav::QoS::reliable(), [this](const std_msgs::msg::String& m) { on_drop(m.data()); });
   }

@@ -7,6 +7,7 @@
 #include <fstream>
 
 #include "physics_server_node.hpp"
+#include "unav_runtime/lockstep_ack.hpp"
 #include "unav_runtime/testing.hpp"
 
 using namespace std::chrono_literals;
@@ -57,7 +58,7 @@ struct Harness {
     tf_sub = probe->create_subscription<tf2_msgs::msg::TFMessage>(
         "/tf", unav::QoS::reliable(100), [this](const tf2_msgs::msg::TFMessage& m) { tfs.push_back(m); });
     cmd_pub = probe->create_publisher<unav_msgs::msg::ThrusterCommand>("/rov/thrusters/command", unav::QoS::reliable());
-    ack_pub = probe->create_publisher<unav_msgs::msg::LockstepAck>("/lockstep/ack", unav::QoS::reliable(100));
+    ack_pub = probe->create_publisher<unav_msgs::msg::LockstepAck>("/lockstep/ack", unav::lockstep::ack_qos());
     // Both sides of every link matched before the test sends or counts anything (the server's
     // /lockstep/ack reader exists in lockstep mode only).
     std::vector<unav::testing::Link> links = {make_link(*cmd_pub, *server), make_link(*server, *odom_sub),
@@ -287,4 +288,28 @@ TEST(PhysicsServer, NodeParametersOverrideTheWorld) {
     PhysicsServer server(unav::NodeOptions{ctx.get()});
     EXPECT_DOUBLE_EQ(server.simulator().seabed()->depth_at(0.0, 0.0), 10.0);
   }
+}
+
+// An ack written before the physics server's reader exists (or has matched) still reaches it:
+// /lockstep/ack is transient local. With a volatile writer, a participant that acked its first
+// input during a slow start (16 processes on 2 cores) was never heard and the lockstep held at
+// t = 0 for ever (seen once in three vslam_benchmark runs).
+TEST(LockstepAck, AnAckWrittenBeforeTheServerMatchedStillArrives) {
+  unav::Context participant_ctx(unav::testing::test_context_options());
+  unav::Node participant("late_ack_participant", {&participant_ctx});
+  unav::lockstep::Acker acker(participant, "renderer");
+  std_msgs::msg::Header input;
+  input.stamp().sec(2);
+  input.stamp().nanosec(500000000);
+  acker.ack(input);  // nobody is listening yet
+  unav::Context server_ctx(unav::testing::test_context_options());
+  unav::Node server("late_ack_server", {&server_ctx});
+  std::vector<unav_msgs::msg::LockstepAck> got;
+  auto sub = server.create_subscription<unav_msgs::msg::LockstepAck>(
+      "/lockstep/ack", unav::lockstep::ack_qos(), [&](const unav_msgs::msg::LockstepAck& a) { got.push_back(a); });
+  ASSERT_TRUE(unav::testing::spin_until(
+      {&participant_ctx, &server_ctx}, [&] { return !got.empty(); }, std::chrono::seconds(20)));
+  EXPECT_EQ(got[0].participant(), "renderer");
+  EXPECT_EQ(got[0].header().stamp().sec(), 2);
+  EXPECT_EQ(got[0].header().stamp().nanosec(), 500000000u);
 }

@@ -18,6 +18,12 @@
 
 namespace unav::lockstep {
 
+/// QoS of /lockstep/ack, both sides: reliable, transient local, keep last 100. A participant
+/// acks an input once; an ack written before the physics server's reader matched its writer (16
+/// processes starting at once on 2 cores) was lost with a volatile writer, and the lockstep held
+/// at t = 0 for ever. Transient local hands it to the late reader.
+inline QoS ack_qos() { return {QoS::Reliability::kReliable, QoS::Durability::kTransientLocal, 100}; }
+
 class Acker {
  public:
   /// `name`: the participant name the physics server lists; `lead_s`: see Participant (0 for a
@@ -25,7 +31,7 @@ class Acker {
   Acker(unav::Node& node, std::string name, double lead_s = 0.0)
       : name_(std::move(name)),
         participant_(std::llround(lead_s * 1e9)),
-        pub_(node.create_publisher<unav_msgs::msg::LockstepAck>("/lockstep/ack", unav::QoS::reliable(100))) {}
+        pub_(node.create_publisher<unav_msgs::msg::LockstepAck>("/lockstep/ack", ack_qos())) {}
 
   /// Call once every output owed for the input with this header has been published.
   void ack(const std_msgs::msg::Header& input) {
