@@ -258,6 +258,7 @@ struct Renderer::Impl {
   GLuint texture(const std::string& name);
   Targets& targets_for(const CameraModel& c);
   struct FrameSetup;
+  void set_lamps_W(Program& p, const FrameSetup& f) const;
   FrameSetup setup_frame(const Pose& X_WB, const CameraModel& c) const;
   void shadow_pass(const FrameSetup& f);
   void scene_pass(const Targets& t, const FrameSetup& f, double stamp_s);
@@ -619,18 +620,23 @@ void Renderer::Impl::shadow_pass(const FrameSetup& f) {
   glDisable(GL_POLYGON_OFFSET_FILL);
 }
 
+namespace {
+
+// The defines of scene variant v (triplanar | macro << 1 | sections << 2 | lamps << 3).
+std::string scene_defines(unsigned v) {
+  return std::string("#define TRIPLANAR ") + ((v & 1u) ? "1" : "0") + "\n#define MACRO " + ((v & 2u) ? "1" : "0") +
+         "\n#define SECTIONS " + ((v & 4u) ? "1" : "0") + "\n#define NLAMPS " + std::to_string(v >> 3) + "\n";
+}
+
+}  // namespace
+
 // The scene program of a material variant (compiled on first use), with this frame's uniforms
 // set the first time it is used in the pass.
 Program& Renderer::Impl::scene_program(const GpuMesh& m, const FrameSetup& f, double stamp_s, std::uint64_t* set_up) {
   const unsigned v =
       (m.triplanar ? 1u : 0u) | (m.macro ? 2u : 0u) | (m.sections ? 4u : 0u) | (static_cast<unsigned>(f.nl) << 3);
   Program& p = scene_variants.at(v);
-  if (p.id() == 0) {
-    const std::string defines = std::string("#define TRIPLANAR ") + ((v & 1u) ? "1" : "0") + "\n#define MACRO " +
-                                ((v & 2u) ? "1" : "0") + "\n#define SECTIONS " + ((v & 4u) ? "1" : "0") +
-                                "\n#define NLAMPS " + std::to_string(f.nl) + "\n";
-    p = Program(detail::kSceneVS, detail::kSceneFS, "scene", defines);
-  }
+  if (p.id() == 0) p = Program(detail::kSceneVS, detail::kSceneFS, "scene", scene_defines(v));
   p.use();
   if (*set_up & (std::uint64_t{1} << v)) return p;
   *set_up |= std::uint64_t{1} << v;
@@ -644,12 +650,7 @@ Program& Renderer::Impl::scene_program(const GpuMesh& m, const FrameSetup& f, do
   glUniform1f(p["u_time"], static_cast<float>(std::fmod(stamp_s, 1.0e4)));
   set3(p["u_Kd"], water.K_d);
   set3(p["u_betaD"], water.beta_D);
-  if (f.nl > 0) {
-    glUniform3fv(p["u_lamp_pos_W[0]"], f.nl, f.lamp_pos_W);
-    glUniform3fv(p["u_lamp_dir_W[0]"], f.nl, f.lamp_dir_W);
-    glUniform3fv(p["u_lamp_I[0]"], f.nl, f.lamp_I);
-    glUniform2fv(p["u_lamp_cos[0]"], f.nl, f.lamp_cos);
-  }
+  set_lamps_W(p, f);
   glUniform1i(p["u_shadows"], f.shadows ? 1 : 0);
   glUniform1i(p["u_sun_shadow"], f.sun_shadow ? 1 : 0);
   if (f.sun_shadow) glUniformMatrix4fv(p["u_sun_vp"], 1, GL_FALSE, f.sun_vp);
@@ -661,6 +662,16 @@ Program& Renderer::Impl::scene_program(const GpuMesh& m, const FrameSetup& f, do
   }
   glUniform1i(p["u_tex"], 0);
   return p;
+}
+
+// The lamps' world-frame uniforms (position, beam axis, intensity, cone) of the scene and the
+// marine snow programs.
+void Renderer::Impl::set_lamps_W(Program& p, const FrameSetup& f) const {
+  if (f.nl == 0) return;
+  glUniform3fv(p["u_lamp_pos_W[0]"], f.nl, f.lamp_pos_W);
+  glUniform3fv(p["u_lamp_dir_W[0]"], f.nl, f.lamp_dir_W);
+  glUniform3fv(p["u_lamp_I[0]"], f.nl, f.lamp_I);
+  glUniform2fv(p["u_lamp_cos[0]"], f.nl, f.lamp_cos);
 }
 
 // Scene geometry into colour (direct signal), camera-space depth and segmentation.
@@ -715,12 +726,7 @@ void Renderer::Impl::snow_pass(const FrameSetup& f, const CameraModel& c, double
     set3(snow["u_Kd"], water.K_d);
     set3(snow["u_betaD"], water.beta_D);
     glUniform1i(snow["u_nlamps"], f.nl);
-    if (f.nl > 0) {
-      glUniform3fv(snow["u_lamp_pos_W[0]"], f.nl, f.lamp_pos_W);
-      glUniform3fv(snow["u_lamp_dir_W[0]"], f.nl, f.lamp_dir_W);
-      glUniform3fv(snow["u_lamp_I[0]"], f.nl, f.lamp_I);
-      glUniform2fv(snow["u_lamp_cos[0]"], f.nl, f.lamp_cos);
-    }
+    set_lamps_W(snow, f);
     glEnable(GL_PROGRAM_POINT_SIZE);
     glDepthMask(GL_FALSE);
     glEnablei(GL_BLEND, 0);
@@ -826,14 +832,14 @@ Program& Renderer::Impl::post_program(const std::array<bool, 8>& features) {
   static constexpr std::array<const char*, 8> kNames = {"DISTMAP", "FWD",        "INSCATTER", "VIGNETTING",
                                                         "SHOT",    "READ_NOISE", "SNELL",     "MOTION"};
   unsigned key = 0;
-  std::string defines;
-  for (std::size_t i = 0; i < features.size(); ++i) {
-    key |= (features[i] ? 1u : 0u) << i;
-    defines += std::string("#define ") + kNames[i] + (features[i] ? " 1\n" : " 0\n");
-  }
+  for (std::size_t i = 0; i < features.size(); ++i) key |= (features[i] ? 1u : 0u) << i;
   auto it = post_variants.find(key);
-  if (it == post_variants.end())
+  if (it == post_variants.end()) {  // the defines string only when compiling, not every frame
+    std::string defines;
+    for (std::size_t i = 0; i < features.size(); ++i)
+      defines += std::string("#define ") + kNames[i] + (features[i] ? " 1\n" : " 0\n");
     it = post_variants.emplace(key, Program(detail::kPostVS, detail::kPostFS, "post", defines)).first;
+  }
   return it->second;
 }
 
@@ -1041,8 +1047,7 @@ Renderer::Renderer(World world, std::vector<CameraModel> cameras, RenderOptions 
   glSamplerParameteri(impl_->shadow_nearest, GL_TEXTURE_COMPARE_FUNC, GL_LEQUAL);
   impl_->self_test();
   // Scene programs are compiled per material variant on first use (scene_program()); the plain one now.
-  impl_->scene_variants[0] = Program(detail::kSceneVS, detail::kSceneFS, "scene",
-                                     "#define TRIPLANAR 0\n#define MACRO 0\n#define SECTIONS 0\n");
+  impl_->scene_variants[0] = Program(detail::kSceneVS, detail::kSceneFS, "scene", scene_defines(0));
   impl_->snow = Program(detail::kSnowVS, detail::kSnowFS, "marine_snow");
   impl_->post_program(
       {false, true, true, false, false, true, true, false});  // the common one; a shader error shows here

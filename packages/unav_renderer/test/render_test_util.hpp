@@ -29,6 +29,17 @@ inline World empty_world() {
   return w;
 }
 
+// A horizontal plane `size_m` square at `depth_m` (seabed class, untextured albedo 0.5).
+inline Object floor_object(double depth_m, double size_m) {
+  Object f;
+  f.name = "floor";
+  f.shape = "plane";
+  f.size_m = {size_m, size_m, 1.0};
+  f.X_WO = pose_from_xyz_rpy({0.0, 0.0, depth_m}, {0.0, 0.0, 0.0});
+  f.seg_class = SegClass::kSeabed;
+  return f;
+}
+
 // A level body at p_W (world_ned).
 inline Pose body_at(const Eigen::Vector3d& p_W) { return pose_from_xyz_rpy(p_W, Eigen::Vector3d::Zero()); }
 

@@ -261,12 +261,7 @@ namespace {
 World floor_with_tile(bool tile) {
   World w = empty_world();
   w.water.B_inf.setZero();
-  Object f;
-  f.name = "floor";
-  f.shape = "plane";
-  f.size_m = {40.0, 40.0, 1.0};
-  f.X_WO = pose_from_xyz_rpy({0.0, 0.0, 10.0}, {0.0, 0.0, 0.0});
-  f.seg_class = SegClass::kSeabed;
+  Object f = unav::renderer::test::floor_object(10.0, 40.0);
   f.material.albedo = {0.2, 0.2, 0.2};
   w.objects.push_back(f);
   if (tile) {

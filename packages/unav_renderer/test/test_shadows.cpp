@@ -29,15 +29,7 @@ World scene(bool floor, bool tile, double tile_size = 0.4, double tile_depth = 8
   w.name = "shadows";
   w.file = "<test world>";
   w.seabed.enabled = false;
-  if (floor) {
-    Object f;
-    f.name = "floor";
-    f.shape = "plane";
-    f.size_m = {30.0, 30.0, 1.0};
-    f.X_WO = pose_from_xyz_rpy({0.0, 0.0, 10.0}, {0.0, 0.0, 0.0});
-    f.seg_class = SegClass::kSeabed;
-    w.objects.push_back(f);
-  }
+  if (floor) w.objects.push_back(unav::renderer::test::floor_object(10.0, 30.0));
   if (tile) {
     Object t;
     t.name = "tile";
@@ -176,13 +168,7 @@ std::vector<double> floor_levels(double floor_depth, const char* water, bool cau
   w.water = jerlov_preset(water);
   w.water.B_inf.setZero();  // the direct signal only
   w.sun.direction_W = {0.0, 0.0, 1.0};
-  Object f;
-  f.name = "floor";
-  f.shape = "plane";
-  f.size_m = {40.0, 40.0, 1.0};
-  f.X_WO = pose_from_xyz_rpy({0.0, 0.0, floor_depth}, {0.0, 0.0, 0.0});
-  f.seg_class = SegClass::kSeabed;
-  w.objects.push_back(f);
+  w.objects.push_back(unav::renderer::test::floor_object(floor_depth, 40.0));
   RenderOptions o = exact(false, false, 0);
   o.caustics = caustics;
   CameraModel cam = down_camera();
