@@ -22,7 +22,7 @@ trap cleanup EXIT
 
 unav launch "$ws/launch_scripts/physics.launch.yaml" >"$log" 2>&1 &
 launch_pid=$!
-unav topic list | grep -qx /rov/ground_truth/odom || fail "physics server not up"
+wait_for_topic "/rov/ground_truth/odom [nav_msgs/msg/Odometry]" >/dev/null || fail "physics server not up within 60 s"
 
 unav bag record -a -o "$out/mcap" --compression zstd >"$out/rec_mcap.log" 2>&1 &
 rec_pid=$!

@@ -17,3 +17,17 @@ unav_pick_test_domain() {
   export ROS_DOMAIN_ID=$((1 + start))
 }
 unav_pick_test_domain
+
+# wait_for_topic LINE [TIMEOUT_S]: polls `unav topic list -t` until it has the line LINE (e.g.
+# "/clock [rosgraph_msgs/msg/Clock]") and prints that listing. A process just launched may take
+# seconds to create its participant on a loaded machine (CI: the physics server had not announced
+# its topics within one 3 s listing); returns 1 with the last listing after TIMEOUT_S (60).
+wait_for_topic() {
+  local end=$((SECONDS + ${2:-60})) topics
+  while :; do
+    topics=$(unav topic list -t)
+    if grep -qxF -- "$1" <<<"$topics"; then printf '%s\n' "$topics"; return 0; fi
+    if [ $SECONDS -ge $end ]; then printf '%s\n' "$topics"; return 1; fi
+    sleep 0.5
+  done
+}

@@ -77,13 +77,17 @@ echo "renderer killed: respawned as pid $new_pid, rejoined lockstep, $(frames) f
 nan_odom='{header: {stamp: {sec: 900}, frame_id: world_ned}, pose: {pose: {position: {x: .nan}, orientation: {w: 1.0}}}}'
 # -w: publish once every reader matched (volatile: a reader matched later never gets it): the MPC,
 # waypoint follower, renderer, recorder and evaluator / the physics server.
-timeout 30 unav topic pub --once -w 5 /rov/ground_truth/odom nav_msgs/msg/Odometry "$nan_odom" >/dev/null \
-  || fail "could not publish the NaN odometry"
-timeout 30 unav topic pub --once -w 1 /rov/thrusters/command unav_msgs/msg/ThrusterCommand \
-  '{u: [.nan, 0, 0, 0, 0, 0, 0, 0]}' >/dev/null || fail "could not publish the NaN command"
+# The CI machine once took more than 30 s here (cause not seen: `unav topic pub -w` now says what
+# it waits for every 10 s, and its stderr goes into the failure message).
+pub_err="$out/pub.err"
+timeout 90 unav topic pub --once -w 5 /rov/ground_truth/odom nav_msgs/msg/Odometry "$nan_odom" >/dev/null 2>"$pub_err" \
+  || fail "could not publish the NaN odometry: $(cat "$pub_err")"
+timeout 90 unav topic pub --once -w 1 /rov/thrusters/command unav_msgs/msg/ThrusterCommand \
+  '{u: [.nan, 0, 0, 0, 0, 0, 0, 0]}' >/dev/null 2>"$pub_err" || fail "could not publish the NaN command: $(cat "$pub_err")"
 # A valid command stamped far ahead would answer every barrier up to its stamp: rejected.
-timeout 30 unav topic pub --once -w 1 /rov/thrusters/command unav_msgs/msg/ThrusterCommand \
-  '{header: {stamp: {sec: 900}}, u: [0, 0, 0, 0, 0, 0, 0, 0]}' >/dev/null || fail "could not publish the command"
+timeout 90 unav topic pub --once -w 1 /rov/thrusters/command unav_msgs/msg/ThrusterCommand \
+  '{header: {stamp: {sec: 900}}, u: [0, 0, 0, 0, 0, 0, 0, 0]}' >/dev/null 2>"$pub_err" \
+  || fail "could not publish the command: $(cat "$pub_err")"
 for who in underwater_renderer dataset_recorder mpc_controller; do
   for _ in $(seq 1 50); do grep -q "$who\]: message on 'rt/rov/ground_truth/odom' rejected: pose.pose.position.x = nan" "$log" && break; sleep 0.1; done
   grep -q "$who\]: message on 'rt/rov/ground_truth/odom' rejected: pose.pose.position.x = nan: must be finite (1 rejected" "$log" \
@@ -146,7 +150,8 @@ launch_pid=
 nf=$(frames)
 last=$(grep -v '^#' "$out/ds/rgb.txt" | sed -n "${n_before_drop}p" | cut -d' ' -f1)
 awk -v t="$last" -v n="$n_before_drop" 'BEGIN{exit !((t - (n - 1) * 0.1)^2 < 1e-12)}' \
-  || fail "frame stamps skip: frame $n_before_drop at $last s"
+  || fail "frame stamps skip: frame $n_before_drop at $last s; first gap or repeat: $(grep -v '^#' "$out/ds/rgb.txt" \
+    | awk '{e = (NR - 1) * 0.1; if (($1 - e)^2 > 1e-12) {print "frame " NR " at " $1 " s, expected " e; exit}}')"
 # Every frame up to the drop has its pose. After it the recorder is out of the lockstep: while it
 # was stopped the run went on, and what it missed beyond the writers' histories is gone.
 poses=$(awk -v t="$last" '!/^#/ && $1 <= t + 1e-9' "$out/ds/groundtruth.txt" | wc -l)

@@ -13,10 +13,10 @@ fail() { echo "FAIL: $*"; echo "--- launch log:"; cat "$log"; kill -INT "$launch
 unav launch "$ws/launch_scripts/physics.launch.yaml" >"$log" 2>&1 &
 launch_pid=$!
 trap 'kill -INT $launch_pid 2>/dev/null || true; wait $launch_pid 2>/dev/null || true' EXIT
-topics=$(unav topic list -t)
-grep -qx "/rov/ground_truth/odom \[nav_msgs/msg/Odometry\]" <<<"$topics" || fail "no odometry topic: $topics"
-grep -qx "/clock \[rosgraph_msgs/msg/Clock\]" <<<"$topics" || fail "no /clock: $topics"
-grep -qx "/rov/imu \[sensor_msgs/msg/Imu\]" <<<"$topics" || fail "no IMU: $topics"
+for line in "/rov/ground_truth/odom [nav_msgs/msg/Odometry]" "/clock [rosgraph_msgs/msg/Clock]" \
+  "/rov/imu [sensor_msgs/msg/Imu]"; do
+  topics=$(wait_for_topic "$line") || fail "no '$line' in 'unav topic list -t' within 60 s: $topics"
+done
 north() {  # x of the pose in one odometry message (read whole before parsing: no SIGPIPE)
   local msg
   msg=$(timeout -s INT 20 unav topic echo /rov/ground_truth/odom --once) || fail "no odometry message"

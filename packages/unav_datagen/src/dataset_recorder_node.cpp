@@ -13,10 +13,18 @@
 //                                      <camera>_optical, published by the renderer (unless
 //                                      cameras_config names a camera YAML)
 //   sub  imu                           sensor_msgs/Imu (sensor_data)
-//   pub  /lockstep/ack                 unav_msgs/LockstepAck (lockstep: true; acks every odometry,
-//                                      so the physics never outruns the recorder's ground truth)
+//   pub  /lockstep/ack                 unav_msgs/LockstepAck (lockstep: true). It acks the latest
+//                                      odometry, but never past the next rgb frame it has not
+//                                      written: min(odometry stamp, last frame + image_period -
+//                                      1 ms). The physics never outruns the recorder's ground truth,
+//                                      and a frame that was lost (published before this reader
+//                                      matched, or by a renderer killed before delivering it) holds
+//                                      the barrier until the renderer sends it (again).
+#include <chrono>
 #include <cmath>
+#include <cstdint>
 #include <deque>
+#include <optional>
 
 #include "nav_msgs/msg/odometry.hpp"
 #include "sensor_msgs/msg/camera_info.hpp"
@@ -52,6 +60,7 @@ struct DatasetRecorderParams {
   std::string body_frame = "base_link_frd";
   bool lockstep = false;
   std::string lockstep_name = "recorder";
+  double image_period = 0.1;
   std::string world;
 
   template <class Archive>
@@ -63,8 +72,12 @@ struct DatasetRecorderParams {
     a->Visit(Field("cameras_config", &cameras_config)
                  .Doc("camera YAML for the mount; empty: body_frame -> <camera>_optical from /tf_static"));
     a->Visit(Field("body_frame", &body_frame).Doc("vehicle body frame (tf parent of the camera)"));
-    a->Visit(Field("lockstep", &lockstep).Doc("ack every odometry on /lockstep/ack"));
+    a->Visit(Field("lockstep", &lockstep).Doc("ack odometry and frames on /lockstep/ack"));
     a->Visit(Field("lockstep_name", &lockstep_name).Doc("participant name in acks"));
+    a->Visit(Field("image_period", &image_period)
+                 .Range(1e-3, 10.0)
+                 .Unit("s")
+                 .Doc("the renderer's frame period (1 / its rate): lockstep acks wait for every frame"));
     a->Visit(Field("world", &world).Doc("world file of the run, recorded in manifest.json (not read)"));
   }
 };
@@ -111,16 +124,27 @@ class DatasetRecorder : public unav::Node {
       });
     }
     ack_name_ = prm.lockstep_name;
-    if (prm.lockstep) acker_ = std::make_unique<unav::lockstep::Acker>(*this, ack_name_);  // answers every state
+    if (prm.lockstep) {
+      acker_ = std::make_unique<unav::lockstep::Acker>(*this, ack_name_);
+      frame_lead_ns_ = std::llround(prm.image_period * 1e9) - 1000000;  // just under the next frame
+      stall_timer_ = create_wall_timer(std::chrono::seconds(1), [this] { check_frame_stall(); });
+    }
     const std::string base = "camera/" + camera_;
     const unav::QoS q = unav::QoS::reliable(5);
     const unav::QoS images = q.with_data_sharing();  // from the renderer's shared pool, on one host
     rgb_sub_ = create_subscription<sensor_msgs::msg::Image>(
         base + "/image_raw", images, [this](const sensor_msgs::msg::Image& m) {
-          if (!check(m, "rgb8", 3) || !fresh(last_rgb_t_, m)) return;
+          if (!check(m, "rgb8", 3)) return;
+          if (!fresh(last_rgb_t_, m)) {  // sent again while the lockstep held: acked again
+            ack();
+            return;
+          }
           const double t = stamp_of(m.header());
           writer_->write_rgb(t, static_cast<int>(m.width()), static_cast<int>(m.height()), m.data().data());
           pose_sync_.add_first(unav::nanoseconds(m.header()), t);
+          last_frame_ns_ = unav::nanoseconds(m.header());
+          stall_reported_ = false;
+          ack();
         });
     depth_sub_ = create_subscription<sensor_msgs::msg::Image>(
         base + "/depth/image_raw", images, [this](const sensor_msgs::msg::Image& m) {
@@ -156,7 +180,8 @@ class DatasetRecorder : public unav::Node {
             return;
           }
           pose_sync_.add_second(unav::nanoseconds(m.header()), unav::from_msg(m.pose().pose()));
-          if (acker_) acker_->ack(m.header());
+          latest_odom_ns_ = std::max(latest_odom_ns_, unav::nanoseconds(m.header()));
+          ack();
         });
     // Best effort to match the IMU publisher (sensor_data), but a deep history: physics runs in
     // bursts in lockstep and every sample belongs in the dataset.
@@ -189,6 +214,34 @@ class DatasetRecorder : public unav::Node {
   }
 
  private:
+  // Lockstep: acks the latest odometry, capped just under the first frame instant it has no rgb
+  // frame for. Nothing before the first frame (the barrier at the run's first instant waits for
+  // it); acks never go backwards (Participant); a repeated state is acked again.
+  void ack() {
+    if (!acker_ || latest_odom_ns_ == kNone || last_frame_ns_ == kNone) return;
+    acker_->ack(std::min(latest_odom_ns_, last_frame_ns_ + frame_lead_ns_));
+  }
+  // A state at (or past) the next frame instant with no frame for 5 s: the renderer is down, slow,
+  // or renders at another rate than image_period says. Said once per stall; the physics server
+  // names the recorder as the participant it waits for.
+  void check_frame_stall() {
+    const bool waiting =
+        latest_odom_ns_ != kNone && last_frame_ns_ != kNone && latest_odom_ns_ > last_frame_ns_ + frame_lead_ns_;
+    const auto now = std::chrono::steady_clock::now();
+    if (!waiting) {
+      waiting_since_.reset();
+      return;
+    }
+    if (!waiting_since_) waiting_since_ = now;
+    if (!stall_reported_ && now - *waiting_since_ >= std::chrono::seconds(5)) {
+      stall_reported_ = true;
+      logger()->warn(
+          "lockstep: no rgb frame after t = {:.3f} s on '{}' for 5 s, though odometry reached t = {:.3f} s: is the "
+          "renderer running, at 1 / image_period = {:.2f} Hz?",
+          static_cast<double>(last_frame_ns_) * 1e-9, rgb_sub_->topic_name(),
+          static_cast<double>(latest_odom_ns_) * 1e-9, 1e9 / static_cast<double>(frame_lead_ns_ + 1000000));
+    }
+  }
   // A frame at or before the stream's last one is not written twice: a renderer respawned while
   // the lockstep barrier held renders the held instant again.
   bool fresh(double& last_t, const sensor_msgs::msg::Image& m) {
@@ -231,6 +284,12 @@ class DatasetRecorder : public unav::Node {
       4000, [this](const double& t, const Eigen::Isometry3d& X_WB) { on_image_pose(t, X_WB); }};
   std::string ack_name_;
   std::unique_ptr<unav::lockstep::Acker> acker_;
+  static constexpr int64_t kNone = INT64_MIN;
+  int64_t latest_odom_ns_ = kNone, last_frame_ns_ = kNone;  ///< stamps for the lockstep acks
+  int64_t frame_lead_ns_ = 0;
+  std::shared_ptr<unav::Timer> stall_timer_;
+  std::optional<std::chrono::steady_clock::time_point> waiting_since_;
+  bool stall_reported_ = false;
   std::shared_ptr<unav::Subscription<sensor_msgs::msg::Image>> rgb_sub_, depth_sub_, seg_sub_;
   std::shared_ptr<unav::Subscription<sensor_msgs::msg::CameraInfo>> info_sub_;
   std::shared_ptr<unav::Subscription<nav_msgs::msg::Odometry>> odom_sub_;
@@ -242,4 +301,6 @@ class DatasetRecorder : public unav::Node {
 
 }  // namespace unav::datagen
 
+#ifndef UNAV_DATASET_RECORDER_NO_MAIN
 int main(int argc, char** argv) { return unav::run_node<unav::datagen::DatasetRecorder>(argc, argv); }
+#endif

@@ -18,7 +18,9 @@
 // every frame (a lost frame with a constant-velocity prediction); mode monocular publishes only
 // frames with an estimate (initialised or tracking), in arbitrary units (the first map's median
 // scene depth is 1): compare with ground truth after a Sim(3) alignment.
+#include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <map>
 
 #include <opencv2/imgproc.hpp>
@@ -113,6 +115,10 @@ class KltVoNode : public unav::Node {
     rgb_sub_ = create_subscription<sensor_msgs::msg::Image>(
         base + "/image_raw", unav::QoS::reliable(20).with_data_sharing(), [this](const sensor_msgs::msg::Image& m) {
           if (m.encoding() != "rgb8") return;
+          if (key(m.header()) <= done_ns_) {  // sent again (the lockstep held): processed already
+            ack(m.header());
+            return;
+          }
           cv::Mat rgb(static_cast<int>(m.height()), static_cast<int>(m.width()), CV_8UC3,
                       const_cast<uint8_t*>(m.data().data()));
           cv::Mat gray;
@@ -124,7 +130,7 @@ class KltVoNode : public unav::Node {
       depth_sub_ = create_subscription<sensor_msgs::msg::Image>(
           base + "/depth/image_raw", unav::QoS::reliable(20).with_data_sharing(),
           [this](const sensor_msgs::msg::Image& m) {
-            if (m.encoding() != "32FC1") return;
+            if (m.encoding() != "32FC1" || key(m.header()) <= done_ns_) return;
             depths_[key(m.header())] = cv::Mat(static_cast<int>(m.height()), static_cast<int>(m.width()), CV_32FC1,
                                                const_cast<uint8_t*>(m.data().data()))
                                            .clone();
@@ -156,6 +162,7 @@ class KltVoNode : public unav::Node {
       last_status_ = s.status;
       if (s.status == VoStatus::kInitialized || s.status == VoStatus::kTracking) publish(frame.header, T_C0C);
       ack(frame.header);
+      done_ns_ = std::max(done_ns_, key(frame.header));
     }
     grays_.clear();
   }
@@ -172,6 +179,7 @@ class KltVoNode : public unav::Node {
       if (d == depths_.end()) {
         if (depths_.empty() || depths_.rbegin()->first < it->first) return;  // its depth may still come
         ack(it->second.header);
+        done_ns_ = std::max(done_ns_, it->first);
         grays_.erase(it);  // depth lost: skip the frame
         continue;
       }
@@ -181,6 +189,7 @@ class KltVoNode : public unav::Node {
         logger()->warn("tracking lost ({}), predicting; re-initialising on new corners", s.message);
       publish(it->second.header, X_BC_ * T_C0C * X_BC_.inverse());
       ack(it->second.header);
+      done_ns_ = std::max(done_ns_, it->first);
       depths_.erase(depths_.begin(), std::next(d));
       grays_.erase(it);
     }
@@ -229,6 +238,9 @@ class KltVoNode : public unav::Node {
   bool lockstep_ = false;
   double image_period_ = 0.1;
   std::unique_ptr<unav::lockstep::Acker> acker_;
+  // The newest frame stamp processed (or skipped): a frame the renderer sends again while the
+  // lockstep holds is acked, not processed twice.
+  int64_t done_ns_ = INT64_MIN;
   KltVoOptions options_;
   std::unique_ptr<KltVo> vo_;
   VoStatus last_status_ = VoStatus::kInitializing;

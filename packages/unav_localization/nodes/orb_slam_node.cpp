@@ -15,7 +15,9 @@
 //   pub  /lockstep/ack                 unav_msgs/LockstepAck (lockstep: true): after processing the
 //                                      image at t, acks up to t + image_period (just under the next
 //                                      image), so a lockstep simulation waits for the SLAM
+#include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <deque>
 
 #include <opencv2/imgproc.hpp>
@@ -135,6 +137,13 @@ class OrbSlamNode : public unav::Node {
   }
 
   void on_image(const sensor_msgs::msg::Image& m) {
+    // A frame the renderer sends again while the lockstep holds: acked, not tracked twice.
+    const int64_t t_ns = unav::nanoseconds(m.header());
+    if (t_ns <= received_ns_) {
+      ack(m.header());
+      return;
+    }
+    received_ns_ = t_ns;
     if (!slam_) {
       pending_.push_back(m);
       if (pending_.size() > 100) pending_.pop_front();
@@ -228,6 +237,7 @@ class OrbSlamNode : public unav::Node {
   std::shared_ptr<unav::Publisher<nav_msgs::msg::Odometry>> odom_pub_;
   std::shared_ptr<unav::Publisher<nav_msgs::msg::Path>> path_pub_;
   std::unique_ptr<unav::lockstep::Acker> acker_;
+  int64_t received_ns_ = INT64_MIN;  ///< the newest image stamp received
   std::shared_ptr<unav::Subscription<sensor_msgs::msg::CameraInfo>> info_sub_;
   std::shared_ptr<unav::Subscription<sensor_msgs::msg::Image>> image_sub_;
 };

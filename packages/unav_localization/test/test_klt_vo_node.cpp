@@ -48,14 +48,17 @@ TEST(KltVoNode, TracksRenderedRgbdOverDdsKeepsABoundedPathAndAcksLockstep) {
   auto depth_pub =
       probe.create_publisher<sensor_msgs::msg::Image>("/rov/camera/down/depth/image_raw", unav::QoS::reliable(20));
   std::map<int64_t, Eigen::Vector3d> odom;
+  int odom_msgs = 0;
   nav_msgs::msg::Path last_path;
   int paths = 0;
   std::map<int64_t, int64_t> acks;  // acked stamp by image index
+  int ack_msgs = 0;
   auto odom_sub = probe.create_subscription<nav_msgs::msg::Odometry>(
       "/rov/localization/klt_vo/odom", unav::QoS::reliable(100), [&](const nav_msgs::msg::Odometry& m) {
         EXPECT_EQ(m.header().frame_id(), "klt_vo_odom");
         EXPECT_EQ(m.child_frame_id(), "base_link_frd");
         const auto& p = m.pose().pose().position();
+        ++odom_msgs;
         odom[unav::Time::from_msg(m.header().stamp().sec(), m.header().stamp().nanosec()).ns] =
             Eigen::Vector3d(p.x(), p.y(), p.z());
       });
@@ -69,6 +72,7 @@ TEST(KltVoNode, TracksRenderedRgbdOverDdsKeepsABoundedPathAndAcksLockstep) {
         EXPECT_EQ(m.participant(), "klt_vo");
         const int64_t ns = unav::Time::from_msg(m.header().stamp().sec(), m.header().stamp().nanosec()).ns;
         acks[ns / 100000000] = ns;
+        ++ack_msgs;
       });
   auto spin = [&](std::chrono::milliseconds d, const std::function<bool()>& done) {
     return unav::testing::spin_until({&node_ctx, &test_ctx}, done, d);
@@ -80,6 +84,7 @@ TEST(KltVoNode, TracksRenderedRgbdOverDdsKeepsABoundedPathAndAcksLockstep) {
   ASSERT_TRUE(unav::testing::wait_for_match({&node_ctx, &test_ctx}, links)) << unav::testing::describe(links);
 
   const int n = 40;
+  sensor_msgs::msg::Image last_img, last_depth;
   std::map<int64_t, Eigen::Vector3d> truth;  // body position in world_ned
   for (int k = 0; k < n; ++k) {
     Eigen::Isometry3d X_WB = Eigen::Isometry3d::Identity();
@@ -109,12 +114,24 @@ TEST(KltVoNode, TracksRenderedRgbdOverDdsKeepsABoundedPathAndAcksLockstep) {
     depth.data().resize(f.depth.size() * sizeof(float));
     std::memcpy(depth.data().data(), f.depth.data(), depth.data().size());
     depth_pub->publish(depth);
+    last_img = img;
+    last_depth = depth;
     // Lockstep: the node acks t + image_period - 1 ms once it has processed the frame.
     ASSERT_TRUE(spin(20s, [&] { return acks.count(k) > 0; })) << "no ack for frame " << k;
     EXPECT_EQ(acks[k], t.ns + 99000000);
   }
   ASSERT_TRUE(spin(5s, [&] { return odom.size() == static_cast<size_t>(n) && paths >= n / 10; }))
       << odom.size() << " odometry messages, " << paths << " paths";
+  // The last frame sent again (the renderer does so while the lockstep holds): acked again, not
+  // processed twice (no 41st odometry message).
+  const int acks_before = ack_msgs;
+  img_pub->publish(last_img);
+  depth_pub->publish(last_depth);
+  ASSERT_TRUE(spin(20s, [&] { return ack_msgs > acks_before; })) << "no ack for the repeated frame";
+  EXPECT_EQ(acks[n - 1], int64_t{n - 1} * 100000000 + 99000000);
+  spin(300ms, [] { return false; });  // a second odometry message would come with the ack
+  EXPECT_EQ(odom.size(), static_cast<size_t>(n));
+  EXPECT_EQ(odom_msgs, n);
   // Every 10th frame publishes the path: the last one (frame 39) holds the latest 8..10 poses
   // (trimmed in batches of a quarter), newest last.
   ASSERT_GE(last_path.poses().size(), 8u);

@@ -142,6 +142,13 @@ void UnderwaterRendererNode::on_odom(const nav_msgs::msg::Odometry& odom) {
     return;
   }
   const double t = unav::seconds(odom.header());
+  const std::int64_t t_ns = unav::nanoseconds(odom.header());
+  if (lockstep_ && t_ns == last_state_ns_ && t_ns == last_frame_ns_) {
+    republish_last_frame();  // the server repeats a held state: a reader may have missed the frame
+    if (acker_) acker_->ack(odom.header());
+    return;
+  }
+  last_state_ns_ = t_ns;
   const double eps = 1e-6;  // stamps are integer nanoseconds
   if (next_frame_t_ < 0.0) {
     // The first frame is on the grid of the period (k * period), also for a renderer that starts
@@ -154,6 +161,7 @@ void UnderwaterRendererNode::on_odom(const nav_msgs::msg::Odometry& odom) {
     velocity.linear = unav::from_msg(odom.twist().twist().linear());
     velocity.angular = unav::from_msg(odom.twist().twist().angular());
     render_and_publish(unav::from_msg(odom.pose().pose()), velocity, odom.header());
+    last_frame_ns_ = t_ns;
     // Next frame instant: the next multiple of the period after t (no drift, no bursts).
     next_frame_t_ = (std::floor((t + eps) / period_) + 1.0) * period_;
   }
@@ -186,6 +194,20 @@ void UnderwaterRendererNode::render_and_publish(const Pose& X_WB, const BodyVelo
     c.info->publish(c.info_msg);
   }
   ++frames_;
+}
+
+void UnderwaterRendererNode::republish_last_frame() {
+  for (auto& c : cameras_) {
+    c.image->publish(c.image_msg);
+    if (c.depth) c.depth->publish(c.depth_msg);
+    if (c.seg) c.seg->publish(c.seg_msg);
+    c.info->publish(c.info_msg);
+  }
+  if (republished_++ == 0)
+    logger()->info(
+        "lockstep: the state at t = {:.3f} s was sent again (the barrier holds): its frame published "
+        "again for readers that missed it (said once)",
+        static_cast<double>(last_frame_ns_) * 1e-9);
 }
 
 }  // namespace unav::renderer

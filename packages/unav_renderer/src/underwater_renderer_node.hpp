@@ -13,9 +13,14 @@
 // Images are stamped with the simulated time of the pose they show; frame_id <cam>_optical.
 // A frame is rendered for the first odometry at or after each multiple of 1/rate. In lockstep,
 // frame instants must be physics barriers (1/rate a multiple of the server's lockstep_period),
-// and every odometry message is acked after the frame due at its time has been published.
+// and every odometry message is acked after the frame due at its time has been published. A
+// state repeated by the physics server (it resends a held barrier's state every second) for the
+// instant of the last frame gets that frame published again, unchanged: a reader that matched
+// after it was sent (16 processes starting at once), or lost it, gets it then and the barrier
+// opens. Frame consumers therefore skip (and ack again) a frame stamp they already have.
 #pragma once
 
+#include <cstdint>
 #include <memory>
 #include <string>
 #include <vector>
@@ -78,6 +83,8 @@ class UnderwaterRendererNode : public unav::Node {
   explicit UnderwaterRendererNode(const unav::NodeOptions& options);
   ~UnderwaterRendererNode() override;
   std::uint64_t frames_published() const { return frames_; }
+  /// Frames published again for a repeated state (see above).
+  std::uint64_t frames_republished() const { return republished_; }
 
  private:
   struct CameraPorts {
@@ -89,6 +96,7 @@ class UnderwaterRendererNode : public unav::Node {
   };
   void on_odom(const nav_msgs::msg::Odometry& odom);
   void render_and_publish(const Pose& X_WB, const BodyVelocity& velocity, const std_msgs::msg::dds_::Header_& header);
+  void republish_last_frame();
 
   std::unique_ptr<Renderer> renderer_;
   std::vector<CameraPorts> cameras_;
@@ -97,7 +105,8 @@ class UnderwaterRendererNode : public unav::Node {
   bool lockstep_ = false;
   bool publish_depth_ = true, publish_seg_ = true;
   std::string ack_name_;
-  std::uint64_t frames_ = 0;
+  std::uint64_t frames_ = 0, republished_ = 0;
+  std::int64_t last_state_ns_ = INT64_MIN, last_frame_ns_ = INT64_MIN;
   std::shared_ptr<unav::Subscription<nav_msgs::msg::Odometry>> odom_sub_;
   std::unique_ptr<unav::lockstep::Acker> acker_;
   unav::RejectionCounter rejections_{logger()};  // ground_truth/odom with NaN/Inf or a non-rotation

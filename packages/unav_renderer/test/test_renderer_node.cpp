@@ -126,3 +126,69 @@ TEST(UnderwaterRendererNode, PublishesCameraMountsOnTfStaticForLateJoiners) {
   EXPECT_NEAR((X_BC.linear() * Eigen::Vector3d::UnitZ()).z(), 1.0, 1e-12);
   EXPECT_NEAR((X_BC.linear() * -Eigen::Vector3d::UnitY()).x(), 1.0, 1e-12);
 }
+
+// Lockstep start-up with many processes: the renderer publishes the first frame before a frame
+// consumer's reader matched (volatile: that reader never gets it), the consumer never acks, the
+// barrier holds and the physics server repeats the state every second. The repeated state gets
+// the same frame published again (not re-rendered): the late reader gets it, identical to the
+// one an early reader had. A repeat of a state with no frame at its instant publishes nothing.
+TEST(UnderwaterRendererNode, PublishesTheLastFrameAgainWhenTheLockstepRepeatsItsState) {
+  const std::string world = std::string("world:=") + UNAV_REPO_ROOT + "/worlds/pipe_inspection/world.yaml";
+  const std::string cams = "cameras_config:=" + small_cameras();
+  const char* argv[] = {
+      "underwater_renderer", "--ros-args", "-p",         world.c_str(), "-p",          cams.c_str(), "-p",
+      "lockstep:=true",      "-p",         "rate:=10.0", "-p",          "noise:=false"};
+  unav::Context node_ctx(12, argv, unav::testing::test_context_options());
+  unav::renderer::UnderwaterRendererNode node({&node_ctx});
+  unav::Context test_ctx(unav::testing::test_context_options());
+  unav::Node probe("probe", {&test_ctx});
+  auto odom_pub = probe.create_publisher<nav_msgs::msg::Odometry>("/rov/ground_truth/odom", unav::QoS::reliable());
+  std::vector<sensor_msgs::msg::Image> early, late;
+  std::vector<double> acks;
+  auto early_sub =
+      probe.create_subscription<sensor_msgs::msg::Image>("/rov/camera/down/image_raw", unav::QoS::reliable(),
+                                                         [&](const sensor_msgs::msg::Image& m) { early.push_back(m); });
+  auto ack_sub = probe.create_subscription<unav_msgs::msg::LockstepAck>(
+      "/lockstep/ack", unav::QoS::reliable(100), [&](const unav_msgs::msg::LockstepAck& a) {
+        acks.push_back(unav::Time::from_msg(a.header().stamp().sec(), a.header().stamp().nanosec()).seconds());
+      });
+  auto spin_until = [&](const std::function<bool()>& done) {
+    return unav::testing::spin_until({&node_ctx, &test_ctx}, done);
+  };
+  std::vector<unav::testing::Link> links = {make_link(*odom_pub, node), make_link(node, *early_sub),
+                                            make_link(node, *ack_sub)};
+  ASSERT_TRUE(unav::testing::wait_for_match({&node_ctx, &test_ctx}, links)) << unav::testing::describe(links);
+  auto send = [&](double t) {
+    nav_msgs::msg::Odometry o;
+    const unav::Time s{std::llround(t * 1e9)};
+    o.header().stamp().sec(s.sec());
+    o.header().stamp().nanosec(s.nanosec());
+    o.pose().pose().position().z(8.0);
+    odom_pub->publish(o);
+  };
+  send(0.0);
+  ASSERT_TRUE(spin_until([&] { return acks.size() == 1 && early.size() == 1; }));
+  // The consumer's reader matches only now.
+  auto late_sub =
+      probe.create_subscription<sensor_msgs::msg::Image>("/rov/camera/down/image_raw", unav::QoS::reliable(),
+                                                         [&](const sensor_msgs::msg::Image& m) { late.push_back(m); });
+  links.push_back(make_link(node, *late_sub));
+  ASSERT_TRUE(unav::testing::wait_for_match({&node_ctx, &test_ctx}, links)) << unav::testing::describe(links);
+  send(0.0);  // the held state, repeated
+  ASSERT_TRUE(spin_until([&] { return acks.size() == 2 && late.size() == 1 && early.size() == 2; }))
+      << acks.size() << " acks, " << late.size() << " late images, " << early.size() << " early images";
+  EXPECT_EQ(unav::nanoseconds(late[0].header()), 0);
+  EXPECT_EQ(late[0].data(), early[0].data());  // the same frame, not a new render (noise is off anyway)
+  EXPECT_EQ(early[1].data(), early[0].data());
+  EXPECT_EQ(node.frames_published(), 1u);
+  EXPECT_EQ(node.frames_republished(), 1u);
+  // 0.05 s: no frame due at 10 Hz; its repeat publishes nothing either. 0.1: a new frame.
+  send(0.05);
+  send(0.05);
+  send(0.1);
+  ASSERT_TRUE(spin_until([&] { return acks.size() == 5 && late.size() == 2; }));
+  EXPECT_EQ(acks, (std::vector<double>{0.0, 0.0, 0.05, 0.05, 0.1}));
+  EXPECT_EQ(unav::nanoseconds(late[1].header()), 100000000);
+  EXPECT_EQ(node.frames_published(), 2u);
+  EXPECT_EQ(node.frames_republished(), 1u);
+}

@@ -204,9 +204,16 @@ int topic_pub(const std::string& topic_in, const std::string& type_name, const s
   if (!(rate > 0.0) || !std::isfinite(rate)) throw UsageError("--rate " + std::to_string(rate) + ": must be > 0");
   Graph g;
   RawPublisher pub(g.context(), unav::to_dds_topic(topic), unav::dds_type_from_ros(type_name), unav::QoS::reliable());
-  if (wait_matching > 0 || once || times > 0)
-    g.context().spin_until([&] { return pub.subscription_count() >= std::max(1, wait_matching); },
-                           wait_matching > 0 ? std::chrono::milliseconds(3600000) : default_spin_time());
+  if (wait_matching > 0) {
+    // -w N waits as long as it takes (ros2 topic pub does), saying every 10 s what it waits for.
+    const int want = wait_matching;
+    while (g.context().ok() &&
+           !g.context().spin_until([&] { return pub.subscription_count() >= want; }, std::chrono::seconds(10)))
+      std::cerr << "unav topic pub: waiting for " << want << " matching subscription(s) on " << topic << ", "
+                << pub.subscription_count() << " so far" << std::endl;
+  } else if (once || times > 0) {
+    g.context().spin_until([&] { return pub.subscription_count() >= 1; }, default_spin_time());
+  }
   std::cout << "publisher: beginning loop" << std::endl;
   YAML::Emitter flow;
   flow << YAML::Flow << intro::decode(*type, sample.bytes.data(), sample.bytes.size());

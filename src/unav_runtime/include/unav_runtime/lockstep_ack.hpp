@@ -34,9 +34,11 @@ class Acker {
         pub_(node.create_publisher<unav_msgs::msg::LockstepAck>("/lockstep/ack", ack_qos())) {}
 
   /// Call once every output owed for the input with this header has been published.
-  void ack(const std_msgs::msg::Header& input) {
+  void ack(const std_msgs::msg::Header& input) { ack(nanoseconds(input)); }
+  /// The same for an input instant in nanoseconds (a participant that computes what it owes).
+  void ack(int64_t input_ns) {
     unav_msgs::msg::LockstepAck a;
-    a.header().stamp() = to_msg(Time{participant_.ack_for(nanoseconds(input))});
+    a.header().stamp() = to_msg(Time{participant_.ack_for(input_ns)});
     a.participant(name_);
     pub_->publish(a);
   }
