@@ -40,6 +40,12 @@ bool MonoSlamOptions::IsValid(std::string* msg) const {
   if (global_ba_iterations < 1)
     return fail("global_ba_iterations must be >= 1, got " + std::to_string(global_ba_iterations));
   if (relocalize_frames < 0) return fail("relocalize_frames must be >= 0, got " + std::to_string(relocalize_frames));
+  if (!(reloc_gate_speed_factor >= 0 && std::isfinite(reloc_gate_speed_factor)))
+    return fail("reloc_gate_speed_factor must be >= 0 (0: no gate), got " + std::to_string(reloc_gate_speed_factor));
+  if (!(reloc_gate_min_radius >= 0 && std::isfinite(reloc_gate_min_radius)))
+    return fail("reloc_gate_min_radius must be >= 0, got " + std::to_string(reloc_gate_min_radius));
+  if (!(reloc_gate_deg_per_frame > 0 && reloc_gate_deg_per_frame <= 180))
+    return fail("reloc_gate_deg_per_frame must be in (0, 180], got " + std::to_string(reloc_gate_deg_per_frame));
   return true;
 }
 
@@ -100,6 +106,7 @@ auto MonoSlam::Impl::ResetForReinitialization() -> void {
   recent_points.clear();
   consistent_groups.clear();
   lost_frames_in_row = 0;
+  recent_steps.clear();
 }
 
 auto MonoSlam::Impl::Track(const cv::Mat& gray, double stamp) -> SlamFrameSummary {
@@ -169,7 +176,7 @@ auto MonoSlam::Impl::Track(const cv::Mat& gray, double stamp) -> SlamFrameSummar
       s.reinitialized = true;
     } else {
       s.message = "tracking lost; relocalising (" + std::to_string(lost_frames_in_row) + "/" +
-                  std::to_string(opt.relocalize_frames) + ")";
+                  std::to_string(opt.relocalize_frames) + ")" + reloc_rejection;
       last_tracked = false;
     }
     const Eigen::Isometry3d pred = has_velocity ? velocity * last.T_cw : last.T_cw;
@@ -179,6 +186,10 @@ auto MonoSlam::Impl::Track(const cv::Mat& gray, double stamp) -> SlamFrameSummar
   }
   lost_frames_in_row = 0;
   ++stats.tracked_frames;
+  if (last_tracked && cur.index > last.index) {  // frame-to-frame motion, for the relocalisation gate
+    recent_steps.push_back((CameraCentre(cur.T_cw) - CameraCentre(last.T_cw)).norm() / (cur.index - last.index));
+    if (recent_steps.size() > 20) recent_steps.pop_front();
+  }
   velocity = cur.T_cw * last.T_cw.inverse();
   has_velocity = last_tracked;
   s.tracking_ms = Ms(t0);

@@ -9,6 +9,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <deque>
 #include <functional>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/core/eigen.hpp>
@@ -89,6 +90,8 @@ struct MonoSlam::Impl {
   int frame_index = 0;
   int ref_kf = -1, last_kf_frame = -1, last_reloc_frame = -1000;
   int lost_frames_in_row = 0;
+  std::deque<double> recent_steps;  ///< camera-centre motion per frame, last 20 tracked frames
+  std::string reloc_rejection;      ///< why the gate rejected this frame's relocalisation ("" if not)
   std::vector<int> local_kfs, local_points;
   std::vector<int> recent_points;
   std::vector<std::pair<std::set<int>, int>> consistent_groups;
@@ -158,6 +161,11 @@ struct MonoSlam::Impl {
   int TrackLocalMap();
 
   bool Relocalize();
+  /// The relocalisation gate (MonoSlamOptions::reloc_gate_*): cur.T_cw against last.T_cw.
+  bool PlausibleRelocalization(std::string* why) const;
+  static Eigen::Vector3d CameraCentre(const Eigen::Isometry3d& T_cw) {
+    return -(T_cw.linear().transpose() * T_cw.translation());
+  }
 
   // --------------------------------------------------------------------- mapping
   bool NeedKeyFrame(int inliers) const;

@@ -151,7 +151,38 @@ auto MonoSlam::Impl::TrackLocalMap() -> int {
   return inliers;
 }
 
+auto MonoSlam::Impl::PlausibleRelocalization(std::string* why) const -> bool {
+  if (opt.reloc_gate_speed_factor <= 0) return true;
+  const int frames = std::max(1, cur.index - last.index);
+  const double step = recent_steps.empty() ? 0.0 : *std::max_element(recent_steps.begin(), recent_steps.end());
+  const double depth = map->MedianDepth(ref_kf);
+  const double radius =
+      opt.reloc_gate_speed_factor * step * frames + opt.reloc_gate_min_radius * (depth > 0 ? depth : 1.0);
+  const double dist = (CameraCentre(cur.T_cw) - CameraCentre(last.T_cw)).norm();
+  const double turn_deg = Eigen::AngleAxisd(cur.T_cw.linear() * last.T_cw.linear().transpose()).angle() * 180.0 / M_PI;
+  const double max_turn_deg = std::min(180.0, opt.reloc_gate_deg_per_frame * frames);
+  char buf[200];
+  if (dist > radius) {
+    std::snprintf(
+        buf, sizeof buf,
+        "; a relocalisation %.3g (map units) from the last tracked pose after %d frame(s) rejected (gate %.3g)", dist,
+        frames, radius);
+    *why = buf;
+    return false;
+  }
+  if (turn_deg > max_turn_deg) {
+    std::snprintf(
+        buf, sizeof buf,
+        "; a relocalisation turned %.1f deg from the last tracked pose after %d frame(s) rejected (gate %.1f)",
+        turn_deg, frames, max_turn_deg);
+    *why = buf;
+    return false;
+  }
+  return true;
+}
+
 auto MonoSlam::Impl::Relocalize() -> bool {
+  reloc_rejection.clear();
   if (!voc) return false;
   ComputeBow(&cur.f);
   const auto cands = db.Query(cur.f.bow, 0.0, {}, 10);
@@ -193,9 +224,19 @@ auto MonoSlam::Impl::Relocalize() -> bool {
       cur.points[static_cast<size_t>(m[static_cast<size_t>(k)].second)] =
           kf.points[static_cast<size_t>(m[static_cast<size_t>(k)].first)];
     if (Optimize(&cur) < 10) continue;
+    const int ref_before = ref_kf;
     ref_kf = kid;
+    if (TrackLocalMap() < 50) {
+      ref_kf = ref_before;
+      continue;
+    }
+    if (!PlausibleRelocalization(&reloc_rejection)) {
+      ++stats.relocalizations_rejected;
+      ref_kf = ref_before;
+      continue;
+    }
     last_reloc_frame = cur.index;
-    if (TrackLocalMap() >= 50) return true;
+    return true;
   }
   std::fill(cur.points.begin(), cur.points.end(), -1);
   return false;

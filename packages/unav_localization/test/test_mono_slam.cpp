@@ -331,6 +331,51 @@ TEST(MonoSlam, SaysWhenTrackingIsLostAndRelocalises) {
   EXPECT_LT(ape, 0.01 * path);
 }
 
+// The relocalisation plausibility gate: after two blank frames at frame 60 the video jumps back
+// to frame 5, 3.3 m behind (1.1 m a frame would be needed: 18x the run's 6 cm). The map has that
+// place, so bag of words + PnP find it; a continuous video cannot be there, so the gate rejects
+// it (as it would a repetitive seabed aliasing) and the SLAM re-initialises a new map instead:
+// the gate (3x the fastest recent motion per frame lost) would admit the place only after ~14
+// frames, relocalisation gives up after 10. With the gate off (a kidnapped camera) the same
+// frames relocalise at once.
+TEST(MonoSlam, RelocalisationGateRejectsAPoseTheCameraCannotHaveReached) {
+  const RenderedRun& run = StraightRun();
+  std::vector<int> order;
+  for (int k = 0; k < 60; ++k) order.push_back(k);
+  order.push_back(-1);
+  order.push_back(-1);
+  for (int k = 5; k < 35; ++k) order.push_back(k);
+  auto fly = [&](const ul::MonoSlamOptions& o, int* relocalized_at, std::string* message) {
+    ul::MonoSlam slam(Pinhole(run.K), {}, o, Vocabulary());
+    *relocalized_at = -1;
+    for (size_t i = 0; i < order.size(); ++i) {
+      const int k = order[i];
+      const cv::Mat img = k < 0 ? cv::Mat(480, 640, CV_8UC1, cv::Scalar(70)) : run.gray[static_cast<size_t>(k)];
+      // Stamps keep increasing through the jump (the video goes on).
+      const auto s = slam.Track(img, 0.1 * static_cast<double>(i));
+      if (s.state == ul::SlamState::kRelocalized && *relocalized_at < 0) *relocalized_at = static_cast<int>(i);
+      if (s.message.find("rejected") != std::string::npos && message->empty()) *message = s.message;
+    }
+    return slam.stats();
+  };
+  int reloc_gated = -1, reloc_open = -1;
+  std::string msg_gated, msg_open;
+  const ul::SlamStats gated = fly(ul::MonoSlamOptions{}, &reloc_gated, &msg_gated);
+  ul::MonoSlamOptions off;
+  off.reloc_gate_speed_factor = 0.0;
+  const ul::SlamStats open = fly(off, &reloc_open, &msg_open);
+  std::printf(
+      "jump of 3.3 m after 2 blank frames: gate on: %d rejected, relocalised at %d, %d re-initialisations (%s); "
+      "gate off: relocalised at %d\n",
+      gated.relocalizations_rejected, reloc_gated, gated.reinitializations, msg_gated.c_str(), reloc_open);
+  EXPECT_EQ(reloc_open, 62);  // the first frame after the jump: the place is in the map
+  EXPECT_EQ(open.relocalizations_rejected, 0);
+  EXPECT_EQ(reloc_gated, -1);
+  EXPECT_GE(gated.relocalizations_rejected, 1);
+  EXPECT_EQ(gated.reinitializations, 1);
+  EXPECT_NE(msg_gated.find("from the last tracked pose"), std::string::npos) << msg_gated;
+}
+
 TEST(MonoSlam, ReinitialisesWhenItCannotRelocalise) {
   // Without a vocabulary there is no relocalisation: after a blank gap the SLAM starts a new map
   // that continues from the last good pose (map index 1) and tracks again.

@@ -49,6 +49,16 @@ struct MonoSlamOptions {
   bool global_ba_after_loop = true;
   int global_ba_iterations = 15;
   int relocalize_frames = 10;  ///< frames of relocalisation attempts before re-initialising
+  /// Relocalisation plausibility gate. Video is continuous: a relocalised camera lies within
+  /// reloc_gate_speed_factor x (the fastest of the last 20 frame-to-frame motions) x (frames
+  /// since the last tracked one), plus reloc_gate_min_radius x the map's median depth, of the
+  /// last tracked pose, and has turned by at most reloc_gate_deg_per_frame per frame. A pose
+  /// beyond that is taken for perceptual aliasing (a repetitive seabed, a pipe that looks the
+  /// same along its length) and rejected. reloc_gate_speed_factor = 0: no gate (a kidnapped
+  /// camera may relocalise anywhere in the map).
+  double reloc_gate_speed_factor = 3.0;
+  double reloc_gate_min_radius = 0.1;
+  double reloc_gate_deg_per_frame = 15.0;
   /// Contrast-limited adaptive histogram equalisation before feature extraction (underwater
   /// footage: uneven artificial light, low contrast); clip limit, 0 = off. Tiles of ~40 px.
   double clahe_clip = 0.0;
@@ -74,6 +84,7 @@ struct SlamFrameSummary {
 struct SlamStats {
   int frames = 0, tracked_frames = 0, lost_frames = 0, keyframes = 0, points = 0;
   int loops = 0, relocalizations = 0, reinitializations = 0, maps = 1;
+  int relocalizations_rejected = 0;  ///< by the plausibility gate
 };
 
 class MonoSlam {
