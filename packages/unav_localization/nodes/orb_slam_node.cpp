@@ -51,10 +51,11 @@ struct OrbSlamNodeParams {
     a->Visit(Field("camera", &camera).Doc("camera name (topics camera/<camera>/...; intrinsics from camera_info)"));
     a->Visit(Field("vocabulary", &vocabulary)
                  .Doc("bag-of-words vocabulary (unav_train_vocabulary); empty: no loop closing or relocalisation"));
-    a->Visit(Field("features", &features).Range(100, 10000).Doc("ORB features per image"));
+    a->Visit(Field("features", &features).Range(100, 10000).Doc("ORB features per 640x480 of image"));
     a->Visit(Field("loop_closing", &loop_closing).Doc("detect and close loops"));
-    a->Visit(
-        Field("clahe_clip", &clahe_clip).Range(0.0, 40.0).Doc("CLAHE clip limit before feature extraction, 0 = off"));
+    a->Visit(Field("clahe_clip", &clahe_clip)
+                 .Range(0.0, 40.0)
+                 .Doc("CLAHE clip limit before feature extraction (low-contrast frames only), 0 = off"));
     a->Visit(Field("lockstep", &lockstep).Doc("ack every processed image on /lockstep/ack"));
     a->Visit(Field("lockstep_name", &lockstep_name).Doc("participant name in acks"));
     a->Visit(

@@ -17,9 +17,15 @@ bool MonoSlamOptions::IsValid(std::string* msg) const {
   if (!(init_min_parallax_deg > 0 && init_min_parallax_deg < 30))
     return fail("init_min_parallax_deg must be in (0, 30), got " + std::to_string(init_min_parallax_deg));
   if (init_min_points < 20) return fail("init_min_points must be >= 20, got " + std::to_string(init_min_points));
+  if (!(init_min_good_ratio >= 0 && init_min_good_ratio <= 1))
+    return fail("init_min_good_ratio must be in [0, 1], got " + std::to_string(init_min_good_ratio));
+  if (!(init_homography_ratio >= 0 && init_homography_ratio <= 1))
+    return fail("init_homography_ratio must be in [0, 1], got " + std::to_string(init_homography_ratio));
   if (init_max_frames < 2) return fail("init_max_frames must be >= 2, got " + std::to_string(init_max_frames));
   if (!(clahe_clip >= 0.0 && clahe_clip <= 40.0))
     return fail("clahe_clip must be in [0, 40], got " + std::to_string(clahe_clip));
+  if (!(clahe_max_stddev > 0.0 && clahe_max_stddev <= 256.0))
+    return fail("clahe_max_stddev must be in (0, 256], got " + std::to_string(clahe_max_stddev));
   if (min_tracked_inliers < 10)
     return fail("min_tracked_inliers must be >= 10, got " + std::to_string(min_tracked_inliers));
   if (keyframe_min_gap < 0 || keyframe_max_gap < 1 || keyframe_min_gap > keyframe_max_gap)
@@ -123,6 +129,16 @@ auto MonoSlam::Impl::Track(const cv::Mat& gray, double stamp) -> SlamFrameSummar
   cur.index = frame_index++;
   cur.stamp = stamp;
   if (opt.clahe_clip > 0.0) {
+    // Only on low-contrast footage (turbid water, weak lamps), with hysteresis so that a scene
+    // near the threshold does not flip between frames.
+    cv::Scalar mean, stddev;
+    cv::meanStdDev(gray, mean, stddev);
+    if (stddev[0] < opt.clahe_max_stddev)
+      clahe_on = true;
+    else if (stddev[0] > 1.25 * opt.clahe_max_stddev)
+      clahe_on = false;
+  }
+  if (clahe_on) {
     if (!clahe)
       clahe = cv::createCLAHE(opt.clahe_clip, cv::Size(std::max(2, cam.width / 40), std::max(2, cam.height / 40)));
     clahe->apply(gray, equalized);
@@ -237,8 +253,13 @@ MonoSlam::MonoSlam(const PinholeCamera& camera, const std::vector<double>& disto
   bool any = false;
   for (double d : distortion) any = any || d != 0.0;
   if (any) m.D = cv::Mat(distortion, true).reshape(1, 1);
-  m.orb = std::make_unique<OrbExtractor>(options.orb);
-  OrbOptions init = options.orb;
+  OrbOptions orb = options.orb;
+  if (options.features_scale_with_area) {
+    const double area_ratio = static_cast<double>(camera.width) * camera.height / (640.0 * 480.0);
+    orb.features = static_cast<int>(std::lround(orb.features * std::clamp(area_ratio, 1.0, 4.0)));
+  }
+  m.orb = std::make_unique<OrbExtractor>(orb);
+  OrbOptions init = orb;
   init.features *= options.init_orb_features_factor;
   m.orb_init = std::make_unique<OrbExtractor>(init);
   if (vocabulary && !vocabulary->empty()) m.voc = std::move(vocabulary);

@@ -34,7 +34,8 @@ auto MonoSlam::Impl::PredictLevel(const MapPoint& p, double dist) const -> int {
 }
 
 auto MonoSlam::Impl::MatchByAppearance(const Features& a, const std::function<bool(int)>& use_a, const Features& b,
-                                       const std::function<bool(int)>& use_b, int th, double ratio) const
+                                       const std::function<bool(int)>& use_b, int th, double ratio,
+                                       const std::function<bool(int, int)>& pair_ok) const
     -> std::vector<std::pair<int, int>> {
   std::vector<std::pair<int, int>> out;
   std::vector<int> best_for_b(b.size(), -1), best_dist_b(b.size(), 256);
@@ -43,7 +44,7 @@ auto MonoSlam::Impl::MatchByAppearance(const Features& a, const std::function<bo
       if (!use_a(i)) continue;
       BestTwo m;
       for (int j : ib)
-        if (use_b(j)) m.Add(DescriptorDistance(a.desc(i), b.desc(j)), j);
+        if (use_b(j) && (!pair_ok || pair_ok(i, j))) m.Add(DescriptorDistance(a.desc(i), b.desc(j)), j);
       const int best = m.best, bj = m.index;
       if (bj < 0 || best > th || best >= ratio * m.second) continue;
       if (best < best_dist_b[static_cast<size_t>(bj)]) {

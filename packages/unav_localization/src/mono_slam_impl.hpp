@@ -75,7 +75,9 @@ struct MonoSlam::Impl {
   BowDatabase db;
   bool initialized = false;
   std::unique_ptr<Frame> init_ref;
-  cv::Ptr<cv::CLAHE> clahe;  ///< when options.clahe_clip > 0
+  std::vector<Eigen::Vector2d> init_prev;  ///< per reference feature: where it was matched last
+  cv::Ptr<cv::CLAHE> clahe;                ///< when options.clahe_clip > 0
+  bool clahe_on = false;                   ///< the current frames are low-contrast (options.clahe_max_stddev)
   cv::Mat equalized;
   /// Feature-count thresholds scale with the image: 1 at 640x480 and above, sqrt(area ratio)
   /// below (a 320x180 camera holds ~0.43 of the features of a 640x480 one), at least 0.35.
@@ -116,10 +118,13 @@ struct MonoSlam::Impl {
 
   // Matches features of a (filtered) to features of b (filtered) by appearance: within the same
   // vocabulary node when both have feature vectors, else all pairs. Best distance <= th and a
-  // ratio test against the second best.
+  // ratio test against the second best. `pair_ok` (optional) admits a pair before it competes
+  // (e.g. the epipolar constraint: the ratio test then runs among geometrically possible pairs,
+  // which a repetitive texture — a facade, a road, a pipe — otherwise fails).
   std::vector<std::pair<int, int>> MatchByAppearance(const Features& a, const std::function<bool(int)>& use_a,
                                                      const Features& b, const std::function<bool(int)>& use_b, int th,
-                                                     double ratio) const;
+                                                     double ratio,
+                                                     const std::function<bool(int, int)>& pair_ok = nullptr) const;
 
   // --------------------------------------------------------------- initialisation
   struct Reconstruction {
@@ -127,6 +132,8 @@ struct MonoSlam::Impl {
     Eigen::Vector3d t;
     std::vector<std::pair<int, Eigen::Vector3d>> points;  ///< match index -> X in camera 1
     double parallax_deg = 0;
+    int inliers = 0;  ///< the model's RANSAC inliers
+    int good = 0;     ///< inliers in front of both cameras and reprojected well (any parallax)
   };
 
   static bool Triangulate(const Eigen::Matrix<double, 3, 4>& P1, const Eigen::Matrix<double, 3, 4>& P2,

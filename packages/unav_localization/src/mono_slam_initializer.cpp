@@ -33,6 +33,7 @@ auto MonoSlam::Impl::CheckMotion(const Eigen::Matrix3d& R, const Eigen::Vector3d
   std::vector<double> parallaxes;
   for (size_t m = 0; m < matches.size(); ++m) {
     if (!inlier[m]) continue;
+    ++rec.inliers;
     const auto& x1 = f1.un[static_cast<size_t>(matches[m].first)];
     const auto& x2 = f2.un[static_cast<size_t>(matches[m].second)];
     Eigen::Vector3d X;
@@ -42,12 +43,16 @@ auto MonoSlam::Impl::CheckMotion(const Eigen::Matrix3d& R, const Eigen::Vector3d
     const double cos_par = X.normalized().dot((X - O2).normalized());
     if ((cam.Project(X) - x1).squaredNorm() > 4.0 * kChi2Mono) continue;
     if ((cam.Project(X2) - x2).squaredNorm() > 4.0 * kChi2Mono) continue;
+    ++rec.good;
     parallaxes.push_back(std::acos(std::clamp(cos_par, -1.0, 1.0)) * 180.0 / M_PI);
     if (cos_par < 0.99998) rec.points.emplace_back(static_cast<int>(m), X);
   }
   if (!parallaxes.empty()) {
-    std::sort(parallaxes.begin(), parallaxes.end());
-    rec.parallax_deg = parallaxes[parallaxes.size() / 2];
+    // The parallax of the k-th most parallax-rich point (k = 50, as ORB-SLAM), not the median:
+    // under forward motion (driving, a vehicle flying along a pipe) the points near the focus of
+    // expansion have almost none however far the camera moved, and a median waits for ever.
+    std::sort(parallaxes.begin(), parallaxes.end(), std::greater<>());
+    rec.parallax_deg = parallaxes[std::min<size_t>(50, parallaxes.size() - 1)];
   }
   return rec;
 }
@@ -55,21 +60,27 @@ auto MonoSlam::Impl::CheckMotion(const Eigen::Matrix3d& R, const Eigen::Vector3d
 auto MonoSlam::Impl::TryInitialize(SlamFrameSummary s) -> SlamFrameSummary {
   s.state = SlamState::kInitializing;
   const int min_ref_features = scaled(100), min_points = scaled(opt.init_min_points);
+  auto set_reference = [this] {
+    init_ref = std::make_unique<Frame>(cur);
+    init_prev = cur.f.un;
+  };
   if (!init_ref || static_cast<int>(cur.f.size()) < min_ref_features ||
       cur.index - init_ref->index > opt.init_max_frames) {
     if (static_cast<int>(cur.f.size()) >= min_ref_features)
-      init_ref = std::make_unique<Frame>(cur);
+      set_reference();
     else
       init_ref.reset();
     s.message = "waiting for a reference frame with enough features";
     return s;
   }
-  // Window search around the same pixel: the camera moved little.
+  // Window search around where each reference feature was matched last (its own pixel at first):
+  // the window follows the features frame by frame, so the flow may grow large over the frames
+  // it takes to gather parallax (forward motion: ~100 px a frame at the image border).
   std::vector<std::pair<int, int>> matches;
   std::vector<int> taken(cur.f.size(), -1), taken_dist(cur.f.size(), 256);
   for (size_t i = 0; i < init_ref->f.size(); ++i) {
     if (init_ref->f.keypoints[i].octave > 1) continue;
-    const auto cands = cur.f.InArea(init_ref->f.un[i], 0.15 * cam.width, 0, 2);
+    const auto cands = cur.f.InArea(init_prev[i], 0.15 * cam.width, 0, 2);
     BestTwo m;
     for (int j : cands) m.Add(DescriptorDistance(init_ref->f.desc(static_cast<int>(i)), cur.f.desc(j)), j);
     const int best = m.best, bj = m.index;
@@ -80,10 +91,13 @@ auto MonoSlam::Impl::TryInitialize(SlamFrameSummary s) -> SlamFrameSummary {
     }
   }
   for (size_t j = 0; j < taken.size(); ++j)
-    if (taken[j] >= 0) matches.emplace_back(taken[j], static_cast<int>(j));
+    if (taken[j] >= 0) {
+      matches.emplace_back(taken[j], static_cast<int>(j));
+      init_prev[static_cast<size_t>(taken[j])] = cur.f.un[j];
+    }
   s.inliers = static_cast<int>(matches.size());
   if (static_cast<int>(matches.size()) < min_points) {
-    if (static_cast<int>(matches.size()) < scaled(40)) init_ref = std::make_unique<Frame>(cur);  // lost the reference
+    if (static_cast<int>(matches.size()) < scaled(40)) set_reference();  // lost the reference
     s.message = "initialisation: " + std::to_string(matches.size()) + " matches";
     return s;
   }
@@ -101,8 +115,9 @@ auto MonoSlam::Impl::TryInitialize(SlamFrameSummary s) -> SlamFrameSummary {
     std::sort(flow.begin(), flow.end());
     median_flow = flow[flow.size() / 2];
   }
-  if (median_flow < 0.03 * cam.width) {
-    s.message = "initialisation: waiting for parallax";
+  if (median_flow < 0.005 * cam.width) {  // too little motion to try (the parallax test decides)
+    s.message = "initialisation: waiting for parallax (" + std::to_string(matches.size()) + " matches, median flow " +
+                std::to_string(static_cast<int>(median_flow)) + " px)";
     return s;
   }
   std::vector<Reconstruction> candidates;
@@ -112,25 +127,67 @@ auto MonoSlam::Impl::TryInitialize(SlamFrameSummary s) -> SlamFrameSummary {
   cv::Matx33d K;
   for (int r = 0; r < 3; ++r)
     for (int c = 0; c < 3; ++c) K(r, c) = Km(r, c);
-  for (const TwoViewCandidate& c : TwoViewCandidates(p1, p2, K, two_view))
-    candidates.push_back(CheckMotion(c.R, c.t.normalized(), init_ref->f, cur.f, matches, c.inliers));
-  std::sort(candidates.begin(), candidates.end(),
-            [](const auto& a, const auto& b) { return a.points.size() > b.points.size(); });
-  if (candidates.empty() || static_cast<int>(candidates[0].points.size()) < min_points ||
-      candidates[0].parallax_deg < opt.init_min_parallax_deg) {
-    s.message = "initialisation: not enough parallax or points";
+  // Model selection as ORB-SLAM: a (nearly) planar view — the seabed — makes the essential
+  // matrix ill-conditioned, and RANSAC then returns a wrong motion that fits well (a rippled
+  // seabed ahead gave an 8 deg pitch where the camera did not turn); a 3-D scene makes the
+  // homography fit only part of it. Only the better model's motions compete.
+  const std::vector<TwoViewCandidate> motions = TwoViewCandidates(p1, p2, K, two_view);
+  const bool planar = HomographyRatio(motions) > opt.init_homography_ratio;
+  for (const TwoViewCandidate& c : motions)
+    if ((c.model == TwoViewCandidate::Model::kHomography) == planar)
+      candidates.push_back(CheckMotion(c.R, c.t.normalized(), init_ref->f, cur.f, matches, c.inliers));
+  // Ranked by the correspondences they reconstruct at all (ORB-SLAM's nGood): a wrong twin of the
+  // true motion triangulates far points with a little more parallax, so counting only points
+  // with parallax favoured it.
+  std::sort(candidates.begin(), candidates.end(), [](const auto& a, const auto& b) {
+    return a.good != b.good ? a.good > b.good : a.points.size() > b.points.size();
+  });
+  if (candidates.empty()) {
+    s.message = "initialisation: no two-view motion";
     return s;
   }
-  // A second, different motion explaining almost as many points: ambiguous, wait.
+  // A second, different motion reconstructing almost as many correspondences. A plane seen from
+  // two views has two exact motions: the true one and a twin whose translation is the plane's
+  // normal and which turns the camera (the seabed ahead: the twin turned 12 deg over 5 frames
+  // where the camera turned < 1 deg). With init_prefer_smaller_rotation the one that turns at
+  // least twice as much, and 1 deg more, gives way (a vehicle or a car translates more than it
+  // turns between nearby frames); any other ambiguity waits for more frames.
+  size_t chosen = 0;
+  std::vector<size_t> rivals;
   for (size_t k = 1; k < candidates.size(); ++k) {
     const double dR = Eigen::AngleAxisd(candidates[k].R.transpose() * candidates[0].R).angle();
     const double dt = std::acos(std::clamp(candidates[k].t.dot(candidates[0].t), -1.0, 1.0));
-    if ((dR > 0.05 || dt > 0.2) && candidates[k].points.size() > 0.75 * candidates[0].points.size()) {
+    if ((dR > 0.05 || dt > 0.2) && candidates[k].good > 0.75 * candidates[0].good) rivals.push_back(k);
+  }
+  if (!rivals.empty()) {
+    bool resolved = false;
+    if (opt.init_prefer_smaller_rotation && rivals.size() == 1) {
+      const double a0 = Eigen::AngleAxisd(candidates[0].R).angle(),
+                   a1 = Eigen::AngleAxisd(candidates[rivals[0]].R).angle();
+      const double one_deg = M_PI / 180.0;
+      if (2 * a1 <= a0 && a0 - a1 >= one_deg) {
+        chosen = rivals[0];
+        resolved = true;
+      } else if (2 * a0 <= a1 && a1 - a0 >= one_deg) {
+        resolved = true;
+      }
+    }
+    if (!resolved) {
       s.message = "initialisation: ambiguous two-view motion";
       return s;
     }
   }
-  CreateInitialMap(candidates[0], matches);
+  const Reconstruction& best = candidates[chosen];
+  // As ORB-SLAM: nearly every inlier of the chosen model must reconstruct (in front of both
+  // cameras, reprojecting well); a motion that explains only part of them is a wrong one.
+  if (static_cast<int>(best.points.size()) < min_points || best.parallax_deg < opt.init_min_parallax_deg ||
+      best.good < opt.init_min_good_ratio * best.inliers) {
+    s.message = "initialisation: not enough parallax or points (" + std::to_string(best.points.size()) + " points, " +
+                std::to_string(best.good) + " of " + std::to_string(best.inliers) + " inliers good, parallax " +
+                std::to_string(best.parallax_deg).substr(0, 4) + " deg)";
+    return s;
+  }
+  CreateInitialMap(best, matches);
   if (!initialized) {
     s.message = "initialisation: map rejected after bundle adjustment";
     return s;

@@ -79,9 +79,21 @@ auto MonoSlam::Impl::CreateNewMapPoints(int kf_id) -> void {
     tx << 0, -t.z(), t.y(), t.z(), 0, -t.x(), -t.y(), t.x(), 0;
     const Eigen::Matrix3d F12 = Km.transpose().inverse() * tx * T12.linear() * Km.inverse();
     const Eigen::Vector2d ep2 = cam.Project(k2.T_cw * O1);  // epipole of camera 1 in image 2
+    // Candidates must lie on the epipolar line (and away from the epipole) before they compete
+    // by appearance; the ratio test then runs among them.
+    auto epipolar_ok = [&](int i, int j) {
+      const auto& x1 = k1.f.un[static_cast<size_t>(i)];
+      const auto& x2 = k2.f.un[static_cast<size_t>(j)];
+      const int l2 = k2.f.keypoints[static_cast<size_t>(j)].octave;
+      if ((x2 - ep2).norm() < 10 * scales[static_cast<size_t>(l2)]) return false;
+      const Eigen::Vector3d line = F12.transpose() * Eigen::Vector3d(x1.x(), x1.y(), 1.0);  // in image 2
+      const double num = line.dot(Eigen::Vector3d(x2.x(), x2.y(), 1.0));
+      const double den = line.head<2>().squaredNorm();
+      return den >= 1e-12 && num * num / den <= 3.84 * sigma2[static_cast<size_t>(l2)];
+    };
     const auto matches = MatchByAppearance(
         k1.f, [&](int i) { return k1.points[static_cast<size_t>(i)] < 0; }, k2.f,
-        [&](int j) { return k2.points[static_cast<size_t>(j)] < 0; }, kThLow, 0.6);
+        [&](int j) { return k2.points[static_cast<size_t>(j)] < 0; }, kThLow, 0.6, epipolar_ok);
     Eigen::Matrix<double, 3, 4> P1, P2;
     P1 << Km * k1.T_cw.linear(), Km * k1.T_cw.translation();
     P2 << Km * k2.T_cw.linear(), Km * k2.T_cw.translation();
@@ -90,12 +102,6 @@ auto MonoSlam::Impl::CreateNewMapPoints(int kf_id) -> void {
       const auto& x1 = k1.f.un[static_cast<size_t>(i)];
       const auto& x2 = k2.f.un[static_cast<size_t>(j)];
       const int l1 = k1.f.keypoints[static_cast<size_t>(i)].octave, l2 = k2.f.keypoints[static_cast<size_t>(j)].octave;
-      if ((x2 - ep2).norm() < 10 * scales[static_cast<size_t>(l2)]) continue;
-      // Epipolar line in image 2: l = F12^T x1.
-      const Eigen::Vector3d line = F12.transpose() * Eigen::Vector3d(x1.x(), x1.y(), 1.0);
-      const double num = line.dot(Eigen::Vector3d(x2.x(), x2.y(), 1.0));
-      const double den = line.head<2>().squaredNorm();
-      if (den < 1e-12 || num * num / den > 3.84 * sigma2[static_cast<size_t>(l2)]) continue;
       const Eigen::Vector3d r1 = k1.T_cw.linear().transpose() * cam.Unproject(x1);
       const Eigen::Vector3d r2 = k2.T_cw.linear().transpose() * cam.Unproject(x2);
       const double cos_par = r1.normalized().dot(r2.normalized());

@@ -61,7 +61,7 @@ int main(int argc, char** argv) {
   std::string images, camera_path, method = "orb_slam", vocabulary, output, groundtruth;
   int max_frames = 0;
   double fps = 10.0;
-  bool quiet = false, no_loops = false;
+  bool quiet = false, verbose = false, no_loops = false;
   double clahe = 3.0;
   int features = 1000;
   app.add_option("--images", images, "image folder (TUM RGB-D dataset folder or .png/.jpg files)")->required();
@@ -76,9 +76,14 @@ int main(int argc, char** argv) {
   app.add_option("--max-frames", max_frames, "process at most N frames (0: all)")->check(CLI::NonNegativeNumber);
   app.add_option("--fps", fps, "frame rate for images not named by time")->check(CLI::PositiveNumber);
   app.add_flag("--quiet", quiet, "no per-frame lines");
+  app.add_flag("--verbose", verbose,
+               "orb_slam: a line for every frame (features, inliers, keyframe), not only for events");
   app.add_flag("--no-loop-closing", no_loops, "orb_slam: do not detect loops");
-  app.add_option("--features", features, "orb_slam: ORB features per image")->check(CLI::Range(100, 10000));
-  app.add_option("--clahe", clahe, "orb_slam: CLAHE clip limit before feature extraction (default 3; 0 = off)")
+  app.add_option("--features", features, "orb_slam: ORB features per 640x480 of image (more on a larger image)")
+      ->check(CLI::Range(100, 10000));
+  app.add_option("--clahe", clahe,
+                 "orb_slam: CLAHE clip limit before feature extraction, on low-contrast frames (grey std < 30) only "
+                 "(default 3; 0 = off)")
       ->check(CLI::Range(0.0, 40.0));
   CLI11_PARSE(app, argc, argv);
   if (output.empty()) output = method + "_trajectory.txt";
@@ -136,7 +141,12 @@ int main(int argc, char** argv) {
         track_ms.push_back(s.tracking_ms);
         total_ms.push_back(s.tracking_ms + s.mapping_ms);
         if (s.state == ul::SlamState::kLost) ++lost;
-        if (!quiet && (s.state != ul::SlamState::kTracking || s.loop_closed || s.reinitialized || !s.message.empty()))
+        if (verbose)
+          std::printf("%.3f %s%s%s%s features %d inliers %d %s\n", im.stamp, ul::to_string(s.state),
+                      s.keyframe ? " keyframe" : "", s.loop_closed ? " loop closed" : "",
+                      s.reinitialized ? " re-initialised" : "", s.features, s.inliers, s.message.c_str());
+        else if (!quiet &&
+                 (s.state != ul::SlamState::kTracking || s.loop_closed || s.reinitialized || !s.message.empty()))
           std::printf("%.3f %s%s%s %s\n", im.stamp, ul::to_string(s.state), s.loop_closed ? " loop closed" : "",
                       s.reinitialized ? " re-initialised" : "", s.message.c_str());
       } else {

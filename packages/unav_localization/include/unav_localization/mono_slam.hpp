@@ -26,9 +26,16 @@ namespace unav::localization {
 
 struct MonoSlamOptions {
   OrbOptions orb;
-  int init_orb_features_factor = 2;     ///< more features while initialising
-  double init_min_parallax_deg = 1.0;   ///< triangulated points need this much parallax
-  int init_min_points = 60;             ///< triangulated points to accept an initial map
+  int init_orb_features_factor = 2;    ///< more features while initialising
+  double init_min_parallax_deg = 1.0;  ///< triangulated points need this much parallax
+  int init_min_points = 60;            ///< triangulated points to accept an initial map
+  double init_min_good_ratio = 0.9;    ///< share of the motion's inliers that must reconstruct
+  /// Homography ratio S_H / (S_H + S_E) above which the view is taken as planar and only the
+  /// homography's motions are tried (ORB-SLAM: 0.40-0.45); below, only the essential matrix's.
+  double init_homography_ratio = 0.45;
+  /// Two motions reconstruct the views about equally well (a plane's twin solutions): take the
+  /// one that turns the camera at most half as much (and 1 deg less), instead of waiting.
+  bool init_prefer_smaller_rotation = true;
   int init_max_frames = 30;             ///< a reference frame older than this is replaced
   int min_tracked_inliers = 30;         ///< fewer after pose optimisation: tracking lost
   int keyframe_max_gap = 10;            ///< frames between keyframes at most
@@ -62,6 +69,14 @@ struct MonoSlamOptions {
   /// Contrast-limited adaptive histogram equalisation before feature extraction (underwater
   /// footage: uneven artificial light, low contrast); clip limit, 0 = off. Tiles of ~40 px.
   double clahe_clip = 0.0;
+  /// CLAHE applies to low-contrast frames only: grey-level standard deviation below this (turbid
+  /// rendered water: ~12), off again above 1.25x it. A well-contrasted frame (daylight driving:
+  /// ~58, a lit pool: ~45) is left alone: there its tiles make features that change from frame
+  /// to frame as the scene moves across them (KITTI-like driving lost tracking with it).
+  double clahe_max_stddev = 30.0;
+  /// orb.features is per 640x480 of image: a larger image gets proportionally more (at most 4x;
+  /// 1000 -> 1478 at 1226x370, 3000 at 1280x720); a smaller one keeps orb.features.
+  bool features_scale_with_area = true;
   bool IsValid(std::string* msg) const;
 };
 

@@ -29,7 +29,18 @@ struct TwoViewCandidate {
   /// RANSAC inliers of the model, one per correspondence (essential: after recoverPose's
   /// cheirality check).
   std::vector<std::uint8_t> inliers;
+  /// ORB-SLAM's model score of this candidate's model over all correspondences (1 px noise):
+  /// homography: sum over both transfer directions of (5.991 - e^2) where e^2 < 5.991;
+  /// essential: sum over both epipolar distances of (5.991 - d^2) where d^2 < 3.841.
+  double model_score = 0.0;
 };
+
+/// ORB-SLAM's homography ratio S_H / (S_H + S_E) of a candidate set (0 when there is no
+/// homography candidate, 1 when there is no essential one). Above ~0.45 the scene is (nearly)
+/// planar or the motion a rotation: the essential matrix is then ill-conditioned (RANSAC finds
+/// a wrong motion with a good fit: seen as a wrong ~8 deg pitch with the rippled seabed ahead),
+/// and the homography's decompositions should be used.
+double HomographyRatio(const std::vector<struct TwoViewCandidate>& candidates);
 
 /// The candidates for pixel correspondences p1[i] <-> p2[i] of a camera with matrix K:
 /// the essential-matrix motion first (absent when RANSAC or recoverPose finds none), then the
