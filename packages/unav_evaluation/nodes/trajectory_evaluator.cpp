@@ -191,6 +191,18 @@ TrajectoryEvaluator::TrajectoryEvaluator(const unav::NodeOptions& options)
           }
         });
   }
+  for (const std::string& entry : prm.estimate_alignments) {
+    const size_t eq = entry.find('=');
+    const std::string what = "node '" + name() + "': parameter 'estimate_alignments': '" + entry + "': ";
+    if (eq == std::string::npos || eq == 0) throw unav::ParameterError(what + "expected NAME=none|se3|sim3|scale");
+    const std::string n = entry.substr(0, eq);
+    if (!estimates_.count(n)) throw unav::ParameterError(what + "'" + n + "' is not in estimates or inputs");
+    try {
+      estimate_alignment_[n] = alignment_from_string(entry.substr(eq + 1));
+    } catch (const TrajectoryError& e) {
+      throw unav::ParameterError(what + e.what());
+    }
+  }
   logger()->info("evaluating {} estimator(s) against ground truth; results in {}", estimates_.size(), output_dir_);
 }
 
@@ -253,9 +265,9 @@ std::vector<AlgorithmResult> TrajectoryEvaluator::write_outputs() {
     }
     const Trajectory& ref_truth = input_frames_.count(name) ? mapped : truth;
     try {
-      results.push_back(evaluate(ref_truth, traj, trajectory_name_, name, alignment_, rpe_, max_diff_));
+      results.push_back(evaluate(ref_truth, traj, trajectory_name_, name, alignment_for(name), rpe_, max_diff_));
       auto [ref, est] = associate(ref_truth, traj, max_diff_);
-      align(est, ref, alignment_);
+      align(est, ref, alignment_for(name));
       aligned.emplace_back(name, est);
       logger()->info("{}: APE {:.4f} m, RPE {:.4f} m, APE {:.4f} rad, RPE {:.4f} rad ({} poses)", name,
                      results.back().ape_m.rmse, results.back().rpe_m.rmse, results.back().ape_rad.rmse,

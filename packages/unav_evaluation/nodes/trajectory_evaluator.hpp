@@ -19,7 +19,9 @@
 //        entry ends with @FRAME (the frame mapping): then FRAME, a frame on the vehicle (body_frame
 //        itself, or any frame the vehicle's /tf_static reaches from body_frame).
 // Params: estimates (names), output_dir, trajectory_name (table row label), alignment
-//         (none|se3|sim3|scale), rpe_delta (frames), max_time_diff (s, association),
+//         (none|se3|sim3|scale), estimate_alignments (NAME=ALIGNMENT entries overriding
+//         `alignment` for one estimate: a metric RGB-D VO and a monocular SLAM in one run, SE(3)
+//         and Sim(3)), rpe_delta (frames), max_time_diff (s, association),
 //         camera (estimators report that camera's optical frame, as monocular ones do: ground
 //         truth is moved from body_frame to it before comparing; the mount body_frame ->
 //         <camera>_optical is looked up on /tf_static, where the renderer publishes it, or read
@@ -57,6 +59,7 @@ struct TrajectoryEvaluatorParams {
   std::string output_dir = "out/evaluation";
   std::string trajectory_name = "run";
   std::string alignment = "sim3";
+  std::vector<std::string> estimate_alignments;
   int64_t rpe_delta = 1;
   double max_time_diff = 0.02;
   bool combine = false;
@@ -76,6 +79,8 @@ struct TrajectoryEvaluatorParams {
     a->Visit(Field("output_dir", &output_dir).Doc("results folder"));
     a->Visit(Field("trajectory_name", &trajectory_name).Doc("row label, e.g. linear"));
     a->Visit(Field("alignment", &alignment).OneOf({"none", "se3", "sim3", "scale"}).Doc("trajectory alignment"));
+    a->Visit(Field("estimate_alignments", &estimate_alignments)
+                 .Doc("NAME=none|se3|sim3|scale: another alignment for one estimate"));
     a->Visit(Field("rpe_delta", &rpe_delta).Min(1.0).Doc("RPE delta [frames]"));
     a->Visit(Field("max_time_diff", &max_time_diff).Range(1e-6, 10.0).Unit("s").Doc("association max time difference"));
     a->Visit(Field("combine", &combine).Doc("share output_dir with other runs (prefixed files, one combined table)"));
@@ -111,6 +116,11 @@ class TrajectoryEvaluator : public unav::Node {
  private:
   std::string output_dir_, trajectory_name_;
   Alignment alignment_ = Alignment::kSim3;
+  std::map<std::string, Alignment> estimate_alignment_;  ///< overrides of alignment_ by name
+  Alignment alignment_for(const std::string& name) const {
+    const auto it = estimate_alignment_.find(name);
+    return it == estimate_alignment_.end() ? alignment_ : it->second;
+  }
   RpeOptions rpe_;
   double max_diff_ = 0.02;
   bool written_ = false, combine_ = false;

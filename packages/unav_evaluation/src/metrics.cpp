@@ -59,6 +59,20 @@ Alignment alignment_from_string(const std::string& name) {
   throw TrajectoryError("alignment '" + name + "' is unknown (known: none, se3, sim3, scale)");
 }
 
+const char* alignment_name(Alignment a) {
+  switch (a) {
+    case Alignment::kNone:
+      return "none";
+    case Alignment::kSE3:
+      return "se3";
+    case Alignment::kSim3:
+      return "sim3";
+    case Alignment::kScaleOnly:
+      return "scale";
+  }
+  return "none";
+}
+
 Sim3 align(Trajectory& est, const Trajectory& ref, Alignment mode, int n) {
   require_same_size(ref, est);
   Sim3 T;

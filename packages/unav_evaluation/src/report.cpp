@@ -21,6 +21,7 @@ AlgorithmResult evaluate(const Trajectory& gt, const Trajectory& est, const std:
   r.trajectory = trajectory;
   r.algorithm = algorithm;
   r.poses = ref.size();
+  r.alignment = alignment;
   r.scale = align(aligned, ref, alignment).s;
   r.ape_m = statistics(ape(ref, aligned, PoseRelation::kTranslation));
   r.ape_rad = statistics(ape(ref, aligned, PoseRelation::kRotationAngleRad));
@@ -53,10 +54,16 @@ void write_results(const std::string& stem, const std::vector<AlgorithmResult>& 
     md << "| " << r.trajectory << " | " << r.algorithm << " | " << std::setprecision(3) << r.ape_m.rmse << " | "
        << r.rpe_m.rmse << " | " << r.ape_rad.rmse << " | " << r.rpe_rad.rmse << " | " << r.poses << " | "
        << std::setprecision(4) << r.scale << " |\n";
-  const char* how = alignment == Alignment::kSim3        ? "Sim(3) Umeyama alignment"
-                    : alignment == Alignment::kSE3       ? "SE(3) Umeyama alignment"
-                    : alignment == Alignment::kScaleOnly ? "scale-only alignment"
-                                                         : "no alignment";
+  auto describe = [](Alignment a) {
+    return a == Alignment::kSim3        ? "Sim(3) Umeyama alignment"
+           : a == Alignment::kSE3       ? "SE(3) Umeyama alignment"
+           : a == Alignment::kScaleOnly ? "scale-only alignment"
+                                        : "no alignment";
+  };
+  std::string how = describe(alignment);
+  // Rows aligned otherwise than the table's default (an estimate_alignments entry) say so.
+  for (const auto& r : results)
+    if (r.alignment != alignment) how += std::string(", ") + describe(r.alignment) + " for " + r.algorithm;
   md << "\nRMSE values; " << how
      << "; metrics as evo defines them (APE: pose error after "
         "alignment; RPE: relative motion error between consecutive pose pairs).\n";
@@ -71,6 +78,7 @@ void write_results(const std::string& stem, const std::vector<AlgorithmResult>& 
                  {"algorithm", r.algorithm},
                  {"poses", r.poses},
                  {"scale", r.scale},
+                 {"alignment", alignment_name(r.alignment)},
                  {"ape_m", stats_json(r.ape_m)},
                  {"rpe_m", stats_json(r.rpe_m)},
                  {"ape_rad", stats_json(r.ape_rad)},

@@ -213,8 +213,10 @@ TEST(TrajectoryEvaluator, TakesPoseStampedAndTfInputs) {
   const std::string out = ::testing::TempDir() + "eval_node_inputs";
   std::filesystem::remove_all(out);
   const std::string p_out = "output_dir:=" + out;
-  const char* argv[] = {"trajectory_evaluator", "--ros-args", "-p", p_out.c_str(), "-p", kInputs.c_str()};
-  unav::Context node_ctx(6, argv, o);
+  // One estimate aligned otherwise (estimate_alignments): SE(3) leaves its scale of 2 in the error.
+  const char* argv[] = {"trajectory_evaluator", "--ros-args",   "-p", p_out.c_str(), "-p", kInputs.c_str(),
+                        "-p",                   "estimate_alignments:=[ext_tf=se3]"};
+  unav::Context node_ctx(8, argv, o);
   auto node = std::make_unique<unav::evaluation::TrajectoryEvaluator>(unav::NodeOptions{&node_ctx});
   unav::Context test_ctx(o);
   unav::Node probe("probe", {&test_ctx});
@@ -313,10 +315,20 @@ TEST(TrajectoryEvaluator, TakesPoseStampedAndTfInputs) {
   ASSERT_EQ(j.size(), 3u);
   for (const auto& row : j) {
     EXPECT_EQ(row["poses"], 80) << row["algorithm"];
+    if (row["algorithm"] == "ext_tf") {
+      EXPECT_EQ(row["alignment"], "se3");
+      EXPECT_DOUBLE_EQ(row["scale"].get<double>(), 1.0);
+      EXPECT_GT(row["ape_m"]["rmse"].get<double>(), 1.0);  // twice the size of a path of ~4 m radius
+      continue;
+    }
+    EXPECT_EQ(row["alignment"], "sim3");
     EXPECT_LT(row["ape_m"]["rmse"].get<double>(), 1e-6) << row["algorithm"];
     EXPECT_LT(row["ape_rad"]["rmse"].get<double>(), 1e-6) << row["algorithm"];  // the mapped frame's attitude
     EXPECT_NEAR(row["scale"].get<double>(), 0.5, 1e-6) << row["algorithm"];
   }
+  std::ifstream md(out + "/results.md");
+  const std::string table((std::istreambuf_iterator<char>(md)), std::istreambuf_iterator<char>());
+  EXPECT_NE(table.find("Sim(3) Umeyama alignment, SE(3) Umeyama alignment for ext_tf"), std::string::npos) << table;
   EXPECT_TRUE(std::filesystem::exists(out + "/ext_pose.tum"));
   EXPECT_TRUE(std::filesystem::exists(out + "/ext_tf.tum"));
 }
@@ -332,6 +344,21 @@ TEST(TrajectoryEvaluator, RejectsMalformedInputs) {
       ADD_FAILURE() << bad << " accepted";
     } catch (const unav::ParameterError& e) {
       EXPECT_NE(std::string(e.what()).find("parameter 'inputs'"), std::string::npos) << e.what();
+    }
+  }
+}
+
+TEST(TrajectoryEvaluator, RejectsBadEstimateAlignments) {
+  const unav::ContextOptions o = unav::testing::test_context_options();
+  for (const char* bad : {"estimate_alignments:=[ghost=se3]", "estimate_alignments:=[orb_slam=warp]",
+                          "estimate_alignments:=[orb_slam]"}) {
+    const char* argv[] = {"trajectory_evaluator", "--ros-args", "-p", "estimates:=[orb_slam]", "-p", bad};
+    unav::Context ctx(6, argv, o);
+    try {
+      unav::evaluation::TrajectoryEvaluator node(unav::NodeOptions{&ctx});
+      ADD_FAILURE() << bad << " accepted";
+    } catch (const unav::ParameterError& e) {
+      EXPECT_NE(std::string(e.what()).find("parameter 'estimate_alignments'"), std::string::npos) << e.what();
     }
   }
 }

@@ -35,7 +35,7 @@ auto MonoSlam::Impl::PredictLevel(const MapPoint& p, double dist) const -> int {
 
 auto MonoSlam::Impl::MatchByAppearance(const Features& a, const std::function<bool(int)>& use_a, const Features& b,
                                        const std::function<bool(int)>& use_b, int th, double ratio,
-                                       const std::function<bool(int, int)>& pair_ok) const
+                                       const std::function<bool(int, int)>& pair_ok, double off_pair_ratio) const
     -> std::vector<std::pair<int, int>> {
   std::vector<std::pair<int, int>> out;
   std::vector<int> best_for_b(b.size(), -1), best_dist_b(b.size(), 256);
@@ -43,10 +43,18 @@ auto MonoSlam::Impl::MatchByAppearance(const Features& a, const std::function<bo
     for (int i : ia) {
       if (!use_a(i)) continue;
       BestTwo m;
-      for (int j : ib)
-        if (use_b(j) && (!pair_ok || pair_ok(i, j))) m.Add(DescriptorDistance(a.desc(i), b.desc(j)), j);
+      int off_pair = 256;  // the nearest candidate pair_ok refused
+      for (int j : ib) {
+        if (!use_b(j)) continue;
+        const int d = DescriptorDistance(a.desc(i), b.desc(j));
+        if (!pair_ok || pair_ok(i, j))
+          m.Add(d, j);
+        else
+          off_pair = std::min(off_pair, d);
+      }
       const int best = m.best, bj = m.index;
       if (bj < 0 || best > th || best >= ratio * m.second) continue;
+      if (off_pair_ratio > 0 && best >= off_pair_ratio * off_pair) continue;
       if (best < best_dist_b[static_cast<size_t>(bj)]) {
         best_dist_b[static_cast<size_t>(bj)] = best;
         best_for_b[static_cast<size_t>(bj)] = i;

@@ -120,11 +120,14 @@ struct MonoSlam::Impl {
   // vocabulary node when both have feature vectors, else all pairs. Best distance <= th and a
   // ratio test against the second best. `pair_ok` (optional) admits a pair before it competes
   // (e.g. the epipolar constraint: the ratio test then runs among geometrically possible pairs,
-  // which a repetitive texture — a facade, a road, a pipe — otherwise fails).
+  // which a repetitive texture — a facade, a road, a pipe — otherwise fails); `off_pair_ratio`
+  // (> 0) still asks the match to beat the nearest refused candidate by that ratio (a look-alike
+  // elsewhere in the image: sand ripples).
   std::vector<std::pair<int, int>> MatchByAppearance(const Features& a, const std::function<bool(int)>& use_a,
                                                      const Features& b, const std::function<bool(int)>& use_b, int th,
                                                      double ratio,
-                                                     const std::function<bool(int, int)>& pair_ok = nullptr) const;
+                                                     const std::function<bool(int, int)>& pair_ok = nullptr,
+                                                     double off_pair_ratio = 0.0) const;
 
   // --------------------------------------------------------------- initialisation
   struct Reconstruction {

@@ -80,7 +80,11 @@ auto MonoSlam::Impl::CreateNewMapPoints(int kf_id) -> void {
     const Eigen::Matrix3d F12 = Km.transpose().inverse() * tx * T12.linear() * Km.inverse();
     const Eigen::Vector2d ep2 = cam.Project(k2.T_cw * O1);  // epipole of camera 1 in image 2
     // Candidates must lie on the epipolar line (and away from the epipole) before they compete
-    // by appearance; the ratio test then runs among them.
+    // by appearance; the ratio test then runs among them, and the match must also beat the
+    // nearest look-alike off the line by 0.7. Without the line first, repetitive daylight texture
+    // failed the ratio test (KITTI-like driving lost tracking at frame 29 of 51); without the
+    // look-alike test, sand ripples gave wrong points (the demo's pipe flight: APE 0.10 -> 0.20 m).
+    // With both: 51 / 51 frames, APE 0.096 m; the demo 0.10 m.
     auto epipolar_ok = [&](int i, int j) {
       const auto& x1 = k1.f.un[static_cast<size_t>(i)];
       const auto& x2 = k2.f.un[static_cast<size_t>(j)];
@@ -93,7 +97,7 @@ auto MonoSlam::Impl::CreateNewMapPoints(int kf_id) -> void {
     };
     const auto matches = MatchByAppearance(
         k1.f, [&](int i) { return k1.points[static_cast<size_t>(i)] < 0; }, k2.f,
-        [&](int j) { return k2.points[static_cast<size_t>(j)] < 0; }, kThLow, 0.6, epipolar_ok);
+        [&](int j) { return k2.points[static_cast<size_t>(j)] < 0; }, kThLow, 0.6, epipolar_ok, 0.7);
     Eigen::Matrix<double, 3, 4> P1, P2;
     P1 << Km * k1.T_cw.linear(), Km * k1.T_cw.translation();
     P2 << Km * k2.T_cw.linear(), Km * k2.T_cw.translation();

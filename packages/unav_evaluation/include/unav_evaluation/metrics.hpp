@@ -20,6 +20,8 @@ Sim3 umeyama(const Eigen::Matrix3Xd& src, const Eigen::Matrix3Xd& dst, bool with
 enum class Alignment { kNone, kSE3, kSim3, kScaleOnly };
 /// Parses "none", "se3", "sim3", "scale"; throws TrajectoryError otherwise.
 Alignment alignment_from_string(const std::string& name);
+/// The name alignment_from_string() reads ("none", "se3", "sim3", "scale").
+const char* alignment_name(Alignment a);
 
 /// Aligns `est` to `ref` (already associated, same size) as evo's `align` does, using the
 /// first `n` poses (all when n < 0): positions are scaled by s, then T = (R, t) is applied on

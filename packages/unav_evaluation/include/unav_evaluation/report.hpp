@@ -15,6 +15,7 @@ struct AlgorithmResult {
   Statistics ape_m, rpe_m, ape_rad, rpe_rad;
   std::size_t poses = 0;  ///< associated poses
   double scale = 1.0;     ///< Sim(3) scale applied to the estimate
+  Alignment alignment = Alignment::kSim3;
 };
 
 /// Evaluates one estimate against ground truth: association (max_diff), alignment, APE and RPE
