@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Physics (lockstep) + renderer + dataset recorder as three processes: the dataset has one
+# The pipe-inspection launch (physics in lockstep, renderer, recorder, VO, SLAM, evaluator): the dataset has one
 # ground-truth pose per frame, every rendered frame (10 Hz of simulated time, none skipped),
 # every IMU sample (200 Hz), depth in TUM units, and nothing is lost on Ctrl-C.
 set -euo pipefail
@@ -42,5 +42,19 @@ first_depth="$out/ds/$(grep -v '^#' "$out/ds/depth.txt" | head -1 | cut -d' ' -f
 [ -s "$first_depth" ] || fail "no depth PNG"
 ls "$out/ds/segmentation" | grep -q png || fail "no segmentation PNG"
 grep -q "^fx: 160" "$out/ds/camera.yaml" || fail "camera.yaml lacks the intrinsics"
+# The monocular ORB SLAM on the 320x180 down camera initialises within the first frames and
+# tracks the rest (Sim(3)-aligned), beside the metric RGB-D VO (SE(3)). Seen: 37 of 39 frames,
+# APE 0.015 m over the first ~4 s; 10 cm would be a broken map (the pipe is 1.5 m below).
+python3 - "$out/ds/evaluation/results.json" "$frames" <<'PY' || fail "estimates out of bounds: $(cat "$out/ds/evaluation/results.md")"
+import json, sys
+rows = {r["algorithm"]: r for r in json.load(open(sys.argv[1]))}
+frames = int(sys.argv[2])
+slam, vo = rows["orb_slam"], rows["klt_vo"]
+print("orb_slam: %d poses of %d frames, APE %.4f m (Sim(3)); klt_vo APE %.4f m (SE(3))"
+      % (slam["poses"], frames, slam["ape_m"]["rmse"], vo["ape_m"]["rmse"]))
+assert slam["alignment"] == "sim3" and vo["alignment"] == "se3"
+assert slam["poses"] >= frames - 10, "orb_slam initialised late or lost frames"
+assert slam["ape_m"]["rmse"] < 0.1
+PY
 rm -rf "$out"
 echo "1 passed, 0 failed"
