@@ -214,8 +214,14 @@ TEST(TrajectoryEvaluator, TakesPoseStampedAndTfInputs) {
   std::filesystem::remove_all(out);
   const std::string p_out = "output_dir:=" + out;
   // One estimate aligned otherwise (estimate_alignments): SE(3) leaves its scale of 2 in the error.
-  const char* argv[] = {"trajectory_evaluator", "--ros-args",   "-p", p_out.c_str(), "-p", kInputs.c_str(),
-                        "-p",                   "estimate_alignments:=[ext_tf=se3]"};
+  const char* argv[] = {"trajectory_evaluator",
+                        "--ros-args",
+                        "-p",
+                        p_out.c_str(),
+                        "-p",
+                        kInputs.c_str(),
+                        "-p",
+                        "estimate_alignments:=[ext_tf=se3]"};
   unav::Context node_ctx(8, argv, o);
   auto node = std::make_unique<unav::evaluation::TrajectoryEvaluator>(unav::NodeOptions{&node_ctx});
   unav::Context test_ctx(o);

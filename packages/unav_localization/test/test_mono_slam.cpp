@@ -388,6 +388,7 @@ TEST(MonoSlam, SaysWhenTrackingIsLostAndRelocalises) {
 TEST(MonoSlam, RelocalisationGateRejectsAPoseTheCameraCannotHaveReached) {
   const RenderedRun& run = StraightRun();
   std::vector<int> order;
+  order.reserve(92);
   for (int k = 0; k < 60; ++k) order.push_back(k);
   order.push_back(-1);
   order.push_back(-1);

@@ -94,6 +94,7 @@ TEST(TwoView, HomographyRatioTellsAPlaneFromA3DScene) {
   const Eigen::Vector3d t(0.1, -0.4, 0.2);
   auto ratio = [&](bool plane) {
     std::vector<Eigen::Vector3d> pts;
+    pts.reserve(200);
     for (int i = 0; i < 200; ++i) pts.emplace_back(xy(rng), xy(rng), plane ? 4.0 : depth(rng));
     std::vector<cv::Point2f> p1, p2;
     views(pts, R, t, &p1, &p2);
