@@ -86,7 +86,7 @@ TEST(DatasetRecorderNode, LockstepAcksWaitForEveryFrameAndAFrameSentAgainIsNotWr
       m.height(6);
       m.encoding("rgb8");
       m.step(24);
-      m.data(std::vector<uint8_t>(size_t{8 * 6 * 3}, static_cast<uint8_t>(ms / 10)));
+      m.data(std::vector<uint8_t>(size_t{8} * 6 * 3, static_cast<uint8_t>(ms / 10)));
       rgb_pub->publish(m);
     };
     constexpr int64_t kMs = 1000000;
