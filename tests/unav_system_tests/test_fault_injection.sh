@@ -75,13 +75,24 @@ echo "renderer killed: respawned as pid $new_pid, rejoined lockstep, $(frames) f
 
 # 3. An outsider publishes NaN odometry and a NaN thruster command: rejected, counted, not acked.
 nan_odom='{header: {stamp: {sec: 900}, frame_id: world_ned}, pose: {pose: {position: {x: .nan}, orientation: {w: 1.0}}}}'
-# -w: publish once every reader matched (volatile: a reader matched later never gets it): the MPC,
-# waypoint follower, renderer, recorder and evaluator / the physics server.
-# The CI machine once took more than 30 s here (cause not seen: `unav topic pub -w` now says what
-# it waits for every 10 s, and its stderr goes into the failure message).
+# Published twice a second until the renderer, the recorder and the MPC have each rejected it (a
+# volatile reader that matches later gets a later copy). Waiting for all five readers to match a
+# one-shot publisher (-w 5) failed on a loaded machine: one of them had not matched the new
+# publisher after 90 s ("waiting for 5 matching subscription(s), 4 so far"; which one is not known).
 pub_err="$out/pub.err"
-timeout 90 unav topic pub --once -w 5 /rov/ground_truth/odom nav_msgs/msg/Odometry "$nan_odom" >/dev/null 2>"$pub_err" \
-  || fail "could not publish the NaN odometry: $(cat "$pub_err")"
+unav topic pub --rate 2 -w 1 /rov/ground_truth/odom nav_msgs/msg/Odometry "$nan_odom" >/dev/null 2>"$pub_err" &
+nan_pub=$!
+for _ in $(seq 1 120); do
+  rejected=0
+  for who in underwater_renderer dataset_recorder mpc_controller; do
+    grep -q "$who\]: message on 'rt/rov/ground_truth/odom' rejected: pose.pose.position.x = nan" "$log" && rejected=$((rejected + 1))
+  done
+  [ "$rejected" -eq 3 ] && break
+  sleep 0.5
+done
+kill "$nan_pub" 2>/dev/null || true
+wait "$nan_pub" 2>/dev/null || true
+[ "$rejected" -eq 3 ] || fail "the NaN odometry was not rejected by all three readers within 60 s ($rejected): $(cat "$pub_err")"
 timeout 90 unav topic pub --once -w 1 /rov/thrusters/command unav_msgs/msg/ThrusterCommand \
   '{u: [.nan, 0, 0, 0, 0, 0, 0, 0]}' >/dev/null 2>"$pub_err" || fail "could not publish the NaN command: $(cat "$pub_err")"
 # A valid command stamped far ahead would answer every barrier up to its stamp: rejected.
