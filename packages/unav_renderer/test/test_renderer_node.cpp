@@ -22,62 +22,80 @@ std::string small_cameras() {
   return p;
 }
 
-}  // namespace
-
-TEST(UnderwaterRendererNode, PublishesImagesStampedWithThePoseTimeAndAcks) {
-  const std::string world = std::string("world:=") + UNAV_REPO_ROOT + "/worlds/pipe_inspection/world.yaml";
-  const std::string cams = "cameras_config:=" + small_cameras();
-  const char* argv[] = {
-      "underwater_renderer", "--ros-args", "-p",         world.c_str(), "-p",          cams.c_str(), "-p",
-      "lockstep:=true",      "-p",         "rate:=10.0", "-p",          "noise:=false"};
-  unav::Context node_ctx(12, argv, unav::testing::test_context_options());
-  unav::renderer::UnderwaterRendererNode node({&node_ctx});
-  unav::Context test_ctx(unav::testing::test_context_options());
-  unav::Node probe("probe", {&test_ctx});
-  auto odom_pub = probe.create_publisher<nav_msgs::msg::Odometry>("/rov/ground_truth/odom", unav::QoS::reliable());
-  std::vector<sensor_msgs::msg::Image> images, depths, segs;
+// The renderer node in lockstep at 10 Hz (one small down camera, no noise) and a probe that sends
+// it odometry and records its lockstep acks [s]; the tests add their own image readers.
+struct LockstepRenderer {
+  std::string world_arg = std::string("world:=") + UNAV_REPO_ROOT + "/worlds/pipe_inspection/world.yaml";
+  std::string cams_arg = "cameras_config:=" + small_cameras();
+  std::vector<const char*> argv = {"underwater_renderer",
+                                   "--ros-args",
+                                   "-p",
+                                   world_arg.c_str(),
+                                   "-p",
+                                   cams_arg.c_str(),
+                                   "-p",
+                                   "lockstep:=true",
+                                   "-p",
+                                   "rate:=10.0",
+                                   "-p",
+                                   "noise:=false"};
+  unav::Context node_ctx{static_cast<int>(argv.size()), argv.data(), unav::testing::test_context_options()};
+  unav::renderer::UnderwaterRendererNode node{{&node_ctx}};
+  unav::Context test_ctx{unav::testing::test_context_options()};
+  unav::Node probe{"probe", {&test_ctx}};
+  std::shared_ptr<unav::Publisher<nav_msgs::msg::Odometry>> odom_pub =
+      probe.create_publisher<nav_msgs::msg::Odometry>("/rov/ground_truth/odom", unav::QoS::reliable());
   std::vector<double> acks;
-  auto img_sub = probe.create_subscription<sensor_msgs::msg::Image>(
-      "/rov/camera/down/image_raw", unav::QoS::reliable(),
-      [&](const sensor_msgs::msg::Image& m) { images.push_back(m); });
-  auto depth_sub = probe.create_subscription<sensor_msgs::msg::Image>(
-      "/rov/camera/down/depth/image_raw", unav::QoS::reliable(),
-      [&](const sensor_msgs::msg::Image& m) { depths.push_back(m); });
-  auto seg_sub = probe.create_subscription<sensor_msgs::msg::Image>(
-      "/rov/camera/down/segmentation/image_raw", unav::QoS::reliable(),
-      [&](const sensor_msgs::msg::Image& m) { segs.push_back(m); });
-  auto ack_sub = probe.create_subscription<unav_msgs::msg::LockstepAck>(
-      "/lockstep/ack", unav::QoS::reliable(100), [&](const unav_msgs::msg::LockstepAck& a) {
-        acks.push_back(unav::Time::from_msg(a.header().stamp().sec(), a.header().stamp().nanosec()).seconds());
-      });
-  auto spin_until = [&](const std::function<bool()>& done) {
-    return unav::testing::spin_until({&node_ctx, &test_ctx}, done);
-  };
-  // Every link matched on BOTH sides before the first odometry. This test used to wait for the
-  // probe's side only (its readers counting the node's writers): the node's ack and image writers
-  // could still be unaware of the probe's readers, and what a volatile writer writes before it
-  // knows a reader is never sent to it. On a slow machine the acks of 1.5 and 1.55 (and their
-  // images) were lost that way: "1 of 3" answers. With all links matched on both sides, reliable
-  // delivery within the history depths (odometry 10, images 5, acks 100) loses nothing.
-  const std::vector<unav::testing::Link> links = {make_link(*odom_pub, node), make_link(node, *img_sub),
-                                                  make_link(node, *depth_sub), make_link(node, *seg_sub),
-                                                  make_link(node, *ack_sub)};
-  ASSERT_TRUE(unav::testing::wait_for_match({&node_ctx, &test_ctx}, links)) << unav::testing::describe(links);
+  std::shared_ptr<unav::Subscription<unav_msgs::msg::LockstepAck>> ack_sub =
+      probe.create_subscription<unav_msgs::msg::LockstepAck>(
+          "/lockstep/ack", unav::QoS::reliable(100), [this](const unav_msgs::msg::LockstepAck& a) {
+            acks.push_back(unav::Time::from_msg(a.header().stamp().sec(), a.header().stamp().nanosec()).seconds());
+          });
+
+  std::shared_ptr<unav::Subscription<sensor_msgs::msg::Image>> image_reader(const std::string& topic,
+                                                                            std::vector<sensor_msgs::msg::Image>* out) {
+    return probe.create_subscription<sensor_msgs::msg::Image>(
+        topic, unav::QoS::reliable(), [out](const sensor_msgs::msg::Image& m) { out->push_back(m); });
+  }
+  bool spin_until(const std::function<bool()>& done) { return unav::testing::spin_until({&node_ctx, &test_ctx}, done); }
+  bool matched(const std::vector<unav::testing::Link>& links) {
+    return unav::testing::wait_for_match({&node_ctx, &test_ctx}, links);
+  }
   // 2 m above the 10 m deep seabed, over the pipe's first point (north 0, east 0 of the world).
-  auto send = [&](double t) {
+  void send(double t) {
     nav_msgs::msg::Odometry o;
     const unav::Time s{std::llround(t * 1e9)};
     o.header().stamp().sec(s.sec());
     o.header().stamp().nanosec(s.nanosec());
     o.pose().pose().position().z(8.0);
     odom_pub->publish(o);
-  };
-  send(1.5);   // a frame is due (first odometry)
-  send(1.55);  // not due at 10 Hz: ack only
-  send(1.6);   // due
-  ASSERT_TRUE(spin_until([&] {
-    return acks.size() == 3 && images.size() == 2 && depths.size() == 2 && segs.size() == 2;
-  })) << acks.size()
+  }
+};
+
+}  // namespace
+
+TEST(UnderwaterRendererNode, PublishesImagesStampedWithThePoseTimeAndAcks) {
+  LockstepRenderer r;
+  std::vector<sensor_msgs::msg::Image> images, depths, segs;
+  auto img_sub = r.image_reader("/rov/camera/down/image_raw", &images);
+  auto depth_sub = r.image_reader("/rov/camera/down/depth/image_raw", &depths);
+  auto seg_sub = r.image_reader("/rov/camera/down/segmentation/image_raw", &segs);
+  // Every link matched on BOTH sides before the first odometry. This test used to wait for the
+  // probe's side only (its readers counting the node's writers): the node's ack and image writers
+  // could still be unaware of the probe's readers, and what a volatile writer writes before it
+  // knows a reader is never sent to it. On a slow machine the acks of 1.5 and 1.55 (and their
+  // images) were lost that way: "1 of 3" answers. With all links matched on both sides, reliable
+  // delivery within the history depths (odometry 10, images 5, acks 100) loses nothing.
+  const std::vector<unav::testing::Link> links = {make_link(*r.odom_pub, r.node), make_link(r.node, *img_sub),
+                                                  make_link(r.node, *depth_sub), make_link(r.node, *seg_sub),
+                                                  make_link(r.node, *r.ack_sub)};
+  ASSERT_TRUE(r.matched(links)) << unav::testing::describe(links);
+  r.send(1.5);   // a frame is due (first odometry)
+  r.send(1.55);  // not due at 10 Hz: ack only
+  r.send(1.6);   // due
+  ASSERT_TRUE(r.spin_until([&] {
+    return r.acks.size() == 3 && images.size() == 2 && depths.size() == 2 && segs.size() == 2;
+  })) << r.acks.size()
       << " acks, " << images.size() << " images";
   const auto& img = images[0];
   EXPECT_EQ(unav::Time::from_msg(img.header().stamp().sec(), img.header().stamp().nanosec()).seconds(), 1.5);
@@ -87,7 +105,7 @@ TEST(UnderwaterRendererNode, PublishesImagesStampedWithThePoseTimeAndAcks) {
   EXPECT_EQ(img.data().size(), 80u * 48u * 3u);
   EXPECT_NEAR(unav::Time::from_msg(images[1].header().stamp().sec(), images[1].header().stamp().nanosec()).seconds(),
               1.6, 1e-9);
-  EXPECT_EQ(acks, (std::vector<double>{1.5, 1.55, 1.6}));
+  EXPECT_EQ(r.acks, (std::vector<double>{1.5, 1.55, 1.6}));
   // Depth at the image centre, looking straight down from 8 m over a 10 m seabed: the optical
   // axis meets sand (or the pipe top, radius <= 0.5 m) between 1.4 and 2.05 m away.
   float centre = 0.0f;
@@ -133,62 +151,33 @@ TEST(UnderwaterRendererNode, PublishesCameraMountsOnTfStaticForLateJoiners) {
 // the same frame published again (not re-rendered): the late reader gets it, identical to the
 // one an early reader had. A repeat of a state with no frame at its instant publishes nothing.
 TEST(UnderwaterRendererNode, PublishesTheLastFrameAgainWhenTheLockstepRepeatsItsState) {
-  const std::string world = std::string("world:=") + UNAV_REPO_ROOT + "/worlds/pipe_inspection/world.yaml";
-  const std::string cams = "cameras_config:=" + small_cameras();
-  const char* argv[] = {
-      "underwater_renderer", "--ros-args", "-p",         world.c_str(), "-p",          cams.c_str(), "-p",
-      "lockstep:=true",      "-p",         "rate:=10.0", "-p",          "noise:=false"};
-  unav::Context node_ctx(12, argv, unav::testing::test_context_options());
-  unav::renderer::UnderwaterRendererNode node({&node_ctx});
-  unav::Context test_ctx(unav::testing::test_context_options());
-  unav::Node probe("probe", {&test_ctx});
-  auto odom_pub = probe.create_publisher<nav_msgs::msg::Odometry>("/rov/ground_truth/odom", unav::QoS::reliable());
+  LockstepRenderer r;
   std::vector<sensor_msgs::msg::Image> early, late;
-  std::vector<double> acks;
-  auto early_sub =
-      probe.create_subscription<sensor_msgs::msg::Image>("/rov/camera/down/image_raw", unav::QoS::reliable(),
-                                                         [&](const sensor_msgs::msg::Image& m) { early.push_back(m); });
-  auto ack_sub = probe.create_subscription<unav_msgs::msg::LockstepAck>(
-      "/lockstep/ack", unav::QoS::reliable(100), [&](const unav_msgs::msg::LockstepAck& a) {
-        acks.push_back(unav::Time::from_msg(a.header().stamp().sec(), a.header().stamp().nanosec()).seconds());
-      });
-  auto spin_until = [&](const std::function<bool()>& done) {
-    return unav::testing::spin_until({&node_ctx, &test_ctx}, done);
-  };
-  std::vector<unav::testing::Link> links = {make_link(*odom_pub, node), make_link(node, *early_sub),
-                                            make_link(node, *ack_sub)};
-  ASSERT_TRUE(unav::testing::wait_for_match({&node_ctx, &test_ctx}, links)) << unav::testing::describe(links);
-  auto send = [&](double t) {
-    nav_msgs::msg::Odometry o;
-    const unav::Time s{std::llround(t * 1e9)};
-    o.header().stamp().sec(s.sec());
-    o.header().stamp().nanosec(s.nanosec());
-    o.pose().pose().position().z(8.0);
-    odom_pub->publish(o);
-  };
-  send(0.0);
-  ASSERT_TRUE(spin_until([&] { return acks.size() == 1 && early.size() == 1; }));
+  auto early_sub = r.image_reader("/rov/camera/down/image_raw", &early);
+  std::vector<unav::testing::Link> links = {make_link(*r.odom_pub, r.node), make_link(r.node, *early_sub),
+                                            make_link(r.node, *r.ack_sub)};
+  ASSERT_TRUE(r.matched(links)) << unav::testing::describe(links);
+  r.send(0.0);
+  ASSERT_TRUE(r.spin_until([&] { return r.acks.size() == 1 && early.size() == 1; }));
   // The consumer's reader matches only now.
-  auto late_sub =
-      probe.create_subscription<sensor_msgs::msg::Image>("/rov/camera/down/image_raw", unav::QoS::reliable(),
-                                                         [&](const sensor_msgs::msg::Image& m) { late.push_back(m); });
-  links.push_back(make_link(node, *late_sub));
-  ASSERT_TRUE(unav::testing::wait_for_match({&node_ctx, &test_ctx}, links)) << unav::testing::describe(links);
-  send(0.0);  // the held state, repeated
-  ASSERT_TRUE(spin_until([&] { return acks.size() == 2 && late.size() == 1 && early.size() == 2; }))
-      << acks.size() << " acks, " << late.size() << " late images, " << early.size() << " early images";
+  auto late_sub = r.image_reader("/rov/camera/down/image_raw", &late);
+  links.push_back(make_link(r.node, *late_sub));
+  ASSERT_TRUE(r.matched(links)) << unav::testing::describe(links);
+  r.send(0.0);  // the held state, repeated
+  ASSERT_TRUE(r.spin_until([&] { return r.acks.size() == 2 && late.size() == 1 && early.size() == 2; }))
+      << r.acks.size() << " acks, " << late.size() << " late images, " << early.size() << " early images";
   EXPECT_EQ(unav::nanoseconds(late[0].header()), 0);
   EXPECT_EQ(late[0].data(), early[0].data());  // the same frame, not a new render (noise is off anyway)
   EXPECT_EQ(early[1].data(), early[0].data());
-  EXPECT_EQ(node.frames_published(), 1u);
-  EXPECT_EQ(node.frames_republished(), 1u);
+  EXPECT_EQ(r.node.frames_published(), 1u);
+  EXPECT_EQ(r.node.frames_republished(), 1u);
   // 0.05 s: no frame due at 10 Hz; its repeat publishes nothing either. 0.1: a new frame.
-  send(0.05);
-  send(0.05);
-  send(0.1);
-  ASSERT_TRUE(spin_until([&] { return acks.size() == 5 && late.size() == 2; }));
-  EXPECT_EQ(acks, (std::vector<double>{0.0, 0.0, 0.05, 0.05, 0.1}));
+  r.send(0.05);
+  r.send(0.05);
+  r.send(0.1);
+  ASSERT_TRUE(r.spin_until([&] { return r.acks.size() == 5 && late.size() == 2; }));
+  EXPECT_EQ(r.acks, (std::vector<double>{0.0, 0.0, 0.05, 0.05, 0.1}));
   EXPECT_EQ(unav::nanoseconds(late[1].header()), 100000000);
-  EXPECT_EQ(node.frames_published(), 2u);
-  EXPECT_EQ(node.frames_republished(), 1u);
+  EXPECT_EQ(r.node.frames_published(), 2u);
+  EXPECT_EQ(r.node.frames_republished(), 1u);
 }
