@@ -99,8 +99,7 @@ timeout 90 unav topic pub --once -w 1 /rov/thrusters/command unav_msgs/msg/Thrus
 timeout 90 unav topic pub --once -w 1 /rov/thrusters/command unav_msgs/msg/ThrusterCommand \
   '{header: {stamp: {sec: 900}}, u: [0, 0, 0, 0, 0, 0, 0, 0]}' >/dev/null 2>"$pub_err" \
   || fail "could not publish the command: $(cat "$pub_err")"
-for who in underwater_renderer dataset_recorder mpc_controller; do
-  for _ in $(seq 1 50); do grep -q "$who\]: message on 'rt/rov/ground_truth/odom' rejected: pose.pose.position.x = nan" "$log" && break; sleep 0.1; done
+for who in underwater_renderer dataset_recorder mpc_controller; do  # each has logged it (waited for above)
   grep -q "$who\]: message on 'rt/rov/ground_truth/odom' rejected: pose.pose.position.x = nan: must be finite (1 rejected" "$log" \
     || fail "$who did not reject the NaN odometry"
 done

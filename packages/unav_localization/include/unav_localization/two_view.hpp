@@ -40,7 +40,7 @@ struct TwoViewCandidate {
 /// planar or the motion a rotation: the essential matrix is then ill-conditioned (RANSAC finds
 /// a wrong motion with a good fit: seen as a wrong ~8 deg pitch with the rippled seabed ahead),
 /// and the homography's decompositions should be used.
-double HomographyRatio(const std::vector<struct TwoViewCandidate>& candidates);
+double HomographyRatio(const std::vector<TwoViewCandidate>& candidates);
 
 /// The candidates for pixel correspondences p1[i] <-> p2[i] of a camera with matrix K:
 /// the essential-matrix motion first (absent when RANSAC or recoverPose finds none), then the
