@@ -113,7 +113,8 @@ struct Stats {
   size_t n;
 };
 
-// --- raw Fast DDS (same QoS: reliable keep last 10, SHM 32 MiB + UDPv4, data-sharing as the row says) ---
+// --- raw Fast DDS (same QoS and transports as the runtime: reliable keep last 10, UDPv4, + SHM 32 MiB
+// with UNAV_TRANSPORT=shm; data-sharing as the row says) ---
 struct RawListener : fdds::DataReaderListener {
   std::vector<int64_t> lat;
   size_t bytes = 0;
@@ -131,9 +132,11 @@ struct RawListener : fdds::DataReaderListener {
 fdds::DomainParticipant* raw_participant(int domain) {
   fdds::DomainParticipantQos q;
   q.transport().use_builtin_transports = false;
-  auto shm = std::make_shared<eprosima::fastdds::rtps::SharedMemTransportDescriptor>();
-  shm->segment_size(32u * 1024u * 1024u);
-  q.transport().user_transports.push_back(shm);
+  if (unav::shm_transport_from_environment()) {
+    auto shm = std::make_shared<eprosima::fastdds::rtps::SharedMemTransportDescriptor>();
+    shm->segment_size(32u * 1024u * 1024u);
+    q.transport().user_transports.push_back(shm);
+  }
   q.transport().user_transports.push_back(std::make_shared<eprosima::fastdds::rtps::UDPv4TransportDescriptor>());
   return fdds::DomainParticipantFactory::get_instance()->create_participant(domain, q);
 }
@@ -285,6 +288,9 @@ int main(int argc, char** argv) {
   const size_t n_small = argc > 1 ? std::strtoul(argv[1], nullptr, 10) : 2000;
   const size_t n_image = argc > 2 ? std::strtoul(argv[2], nullptr, 10) : 300;
   const int domain = 200 + static_cast<int>(getpid() % 30);
+  std::printf("transports: %s\n\n", unav::shm_transport_from_environment()
+                                         ? "UDPv4 + shared memory (UNAV_TRANSPORT=shm)"
+                                         : "UDPv4 (the default; UNAV_TRANSPORT=shm adds shared memory)");
   std::printf("| message | path | samples | rate | p50 [ms] | p99 [ms] | received MB/s |\n");
   std::printf("|---|---|---|---|---|---|---|\n");
   struct Case {

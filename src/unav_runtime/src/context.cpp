@@ -71,6 +71,14 @@ void apply_qos(const QoS& q, fdds::ReliabilityQosPolicy& rel, fdds::DurabilityQo
 
 }  // namespace
 
+bool shm_transport_from_environment() {
+  const char* env = std::getenv("UNAV_TRANSPORT");
+  const std::string v = env ? env : "";
+  if (v.empty() || v == "udp") return false;
+  if (v == "shm") return true;
+  throw ConfigError("environment UNAV_TRANSPORT='" + v + "': expected udp (the default) or shm");
+}
+
 QoS QoS::from_name(const std::string& name) {
   if (name == "sensor_data") return sensor_data();
   if (name == "default" || name == "reliable") return reliable();
@@ -110,8 +118,7 @@ Context::Context(int argc, const char* const* argv, const ContextOptions& option
       throw ConfigError("environment UNAV_DATA_SHARING='" + v + "': expected on or off");
     }
   }
-  if (const char* transport = std::getenv("UNAV_TRANSPORT"); transport && std::string(transport) == "udp")
-    data_sharing_ = false;  // no shared memory at all
+  use_shm_transport_ = shm_transport_from_environment();
 
   handle_signals_ = options.handle_signals;
   if (handle_signals_) {
@@ -171,9 +178,15 @@ void Context::create_participant(
   const std::string user_data = "enclave=" + enclave + ";";
   pqos.user_data().data_vec(std::vector<eprosima::fastrtps::rtps::octet>(user_data.begin(), user_data.end()));
   pqos.transport().use_builtin_transports = false;
-  // UNAV_TRANSPORT=udp turns shared memory off (debugging, containers without /dev/shm).
-  const char* transport = std::getenv("UNAV_TRANSPORT");
-  if (!transport || std::string(transport) != "udp") {
+  // UDPv4 (loopback between the processes of one host), plus data-sharing for the endpoints that
+  // ask for it (images): no transport port in shared memory. Fast DDS 2.9's shared-memory
+  // transport is opt-in (UNAV_TRANSPORT=shm) because it cannot survive a SIGKILLed peer: the next
+  // participant on the host takes the dead one's port number, finds the port "zombie" and
+  // recreates its segment, while the processes that had talked to the dead one keep writing into
+  // the old, unlinked segment and never reach the newcomer (fixed upstream after 2.9:
+  // eProsima/Fast-DDS PR #4728). Seen here as a respawned renderer that never rejoined lockstep
+  // and a `unav topic pub` that one running node never heard, in 2 of 4 fault-injection runs.
+  if (use_shm_transport_) {
     auto shm = std::make_shared<eprosima::fastdds::rtps::SharedMemTransportDescriptor>();
     shm->segment_size(options.shm_segment_bytes);
     pqos.transport().user_transports.push_back(shm);

@@ -283,3 +283,30 @@ TEST(PubSub, StaticTransformListenerGetsLatchedMountsAsALateJoiner) {
   EXPECT_TRUE(tf.lookup("down_optical", "base_link_frd")->isApprox((X_BL * X_LO).inverse(), 1e-12));
   EXPECT_FALSE(tf.lookup("base_link_frd", "front_optical").has_value());
 }
+
+// UNAV_TRANSPORT picks the transports: UDPv4 by default, shared memory only when asked for (Fast
+// DDS 2.9 cannot reach a participant that reuses the shared-memory port of a SIGKILLed one), and
+// a typo is an error naming the variable, the value and the choices, not a silent default.
+TEST(PubSub, TransportComesFromTheEnvironmentAndATypoIsAnError) {
+  const char* saved = std::getenv("UNAV_TRANSPORT");
+  const std::string restore = saved ? saved : "";
+  ::unsetenv("UNAV_TRANSPORT");
+  EXPECT_FALSE(shm_transport_from_environment());
+  ::setenv("UNAV_TRANSPORT", "udp", 1);
+  EXPECT_FALSE(shm_transport_from_environment());
+  ::setenv("UNAV_TRANSPORT", "shm", 1);
+  EXPECT_TRUE(shm_transport_from_environment());
+  ::setenv("UNAV_TRANSPORT", "tcp", 1);
+  try {
+    Context ctx(test_context_options());
+    ADD_FAILURE() << "a Context was made with UNAV_TRANSPORT=tcp";
+  } catch (const ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("UNAV_TRANSPORT='tcp': expected udp (the default) or shm"), std::string::npos)
+        << e.what();
+  }
+  if (saved) {
+    ::setenv("UNAV_TRANSPORT", restore.c_str(), 1);
+  } else {
+    ::unsetenv("UNAV_TRANSPORT");
+  }
+}

@@ -43,11 +43,11 @@ struct ContextOptions {
   /// Block SIGINT/SIGTERM and turn them into shutdown() (the first) and _exit(130) (another one
   /// more than 2 s later, when a clean shutdown hangs).
   bool handle_signals = true;
-  /// Shared-memory segment per participant: larger than the biggest sample (a 640x480 rgb8
-  /// image is 0.9 MB), so same-host images travel through shared memory in one piece.
+  /// With UNAV_TRANSPORT=shm (see shm_transport_from_environment): the shared-memory segment per
+  /// participant, larger than the biggest sample (a 640x480 rgb8 image is 0.9 MB).
   uint32_t shm_segment_bytes = 32u * 1024u * 1024u;
   /// Data-sharing delivery for endpoints whose QoS asks for it (QoS::data_sharing);
-  /// UNAV_DATA_SHARING=off or UNAV_TRANSPORT=udp turn it off for the process.
+  /// UNAV_DATA_SHARING=off turns it off for the process.
   bool data_sharing = true;
   /// Participant name shown by DDS tools; defaults to argv[0]'s base name.
   std::string participant_name;
@@ -59,6 +59,13 @@ struct ContextOptions {
   /// Attached at creation so no discovery event is missed (tools listing the graph).
   eprosima::fastdds::dds::DomainParticipantListener* participant_listener = nullptr;
 };
+
+/// The transports a participant uses, from UNAV_TRANSPORT: unset, "" or "udp": UDPv4 only (the
+/// default; same-host images still go by data-sharing); "shm": Fast DDS' shared-memory transport
+/// too (lower latency for large samples outside data-sharing, but Fast DDS 2.9 loses a peer that
+/// restarts after another process on the host was SIGKILLed: context.cpp). Anything else is a
+/// ConfigError naming the variable, its value and the choices.
+bool shm_transport_from_environment();
 
 class Context {
  public:
@@ -122,6 +129,7 @@ class Context {
   std::mutex mutex_;
   std::mutex endpoint_mutex_;  // a type's bound is set for one endpoint creation at a time
   bool data_sharing_ = true;
+  bool use_shm_transport_ = false;
   std::map<std::string, eprosima::fastdds::dds::Topic*> topics_;
   std::vector<std::unique_ptr<eprosima::fastdds::dds::TopicDataType>> owned_types_;
   std::vector<Node*> nodes_;
