@@ -39,6 +39,8 @@ n=$(ls "$k/sequences/00/image_0" | grep -c '\.png$')
 head -1 "$k/poses/00.txt" | awk '{split("1 0 0 0 0 1 0 0 0 0 1 0", e, " "); for (i = 1; i <= 12; i++) if (($i - e[i])^2 > 1e-18) exit 1}' \
   || fail "the first KITTI pose is not the identity"
 grep -q "^P0: 1.600000000000e+02 " "$k/sequences/00/calib.txt" || fail "calib.txt P0"
-grep -q "warn\|WARN" "$log" && grep -i "poses\|calib" "$log" && fail "the KITTI writer reported a problem"
+# The recorder's own warnings and errors only: another node's warning (orb_slam losing track) next
+# to the evaluator's "(31 poses)" line is not the writer's problem.
+grep -E "^\[dataset_recorder-[0-9]+\] \[(WARN|ERROR)\]" "$log" && fail "the KITTI writer reported a problem"
 rm -rf "$out"
 echo "1 passed, 0 failed"

@@ -64,6 +64,11 @@ RenderedRun Render(const std::vector<Eigen::Isometry3d>& X_WB, int width = 640, 
   unav::renderer::RenderOptions ro;
   ro.noise = noise > 0.0;
   ro.marine_snow = false;  // particles move on their own: not part of the static scene
+  // The images these tests were written against: Lambertian, flat, clean. With the renderer's
+  // materials (relief shaded under the vehicle's moving lamps, highlights, sediment) the forward-
+  // looking case loses track once and drifts 6 % (measured; vslam benchmark in the README): a
+  // harder image the SLAM does not handle yet, not what these geometry tests are about.
+  ro.materials = false;
   unav::renderer::Renderer renderer(world, {cam}, ro);
   RenderedRun run;
   run.K = cam.K();

@@ -76,6 +76,9 @@ int main(int argc, char** argv) {
   std::vector<Config> configs;
   configs.push_back({"full (default options)", opt});
   RenderOptions o = opt;
+  o.materials = false;
+  configs.push_back({"no materials (flat Lambertian)", o});
+  o = opt;
   o.shadows = false;
   configs.push_back({"no lamp shadows", o});
   o = opt;

@@ -13,6 +13,7 @@
 #include <deque>
 #include <limits>
 #include <map>
+#include <set>
 #include <stdexcept>
 #include <unordered_map>
 
@@ -58,7 +59,12 @@ struct GpuMesh {
   bool triplanar = false;
   bool macro = false;
   bool sections = false;  ///< pipe coating: each section shows another part of the texture
+  bool bump = false;      ///< relief_m > 0: shaded by the texture's height field
+  bool specular = false;  ///< GGX highlights (metals, smooth surfaces; see scene_program())
+  bool sediment = false;  ///< sand settled on its upward faces and near the seabed
+  float roughness = 0.6f, metallic = 0.0f, relief_m = 0.0f, sediment_cover = 0.0f;
   GLuint texture = 0;
+  GLuint gradient = 0;  ///< the relief's slope (make_relief_gradient), for bump mapping
 };
 
 struct Targets {
@@ -221,8 +227,10 @@ struct Renderer::Impl {
   WaterModel water;
   std::vector<GpuMesh> meshes;
   std::map<std::string, GLuint> textures;
-  // By material and lamp count: triplanar | macro << 1 | sections << 2 | lamps << 3 (0..4 lamps).
-  std::array<Program, 40> scene_variants;
+  std::map<std::string, GLuint> gradients;          // relief slopes by texture name
+  Eigen::Vector3d sediment_albedo{0.7, 0.64, 0.5};  // the seabed's mean albedo (linear): settled sand
+  // By material and lamp count (scene_variant()); compiled on first use.
+  std::map<unsigned, Program> scene_variants;
   std::map<unsigned, Program> post_variants;  // by feature set (post_program())
   BodyVelocity velocity;                      // of the frame being drawn (motion blur)
   Program snow, inscatter, shadow;
@@ -256,13 +264,14 @@ struct Renderer::Impl {
   void upload_snow();
   void release_scene();  // meshes and marine-snow buffers (set_world, destructor)
   GLuint texture(const std::string& name);
+  GLuint gradient(const std::string& name);
   Targets& targets_for(const CameraModel& c);
   struct FrameSetup;
   void set_lamps_W(Program& p, const FrameSetup& f) const;
   FrameSetup setup_frame(const Pose& X_WB, const CameraModel& c) const;
   void shadow_pass(const FrameSetup& f);
   void scene_pass(const Targets& t, const FrameSetup& f, double stamp_s);
-  Program& scene_program(const GpuMesh& m, const FrameSetup& f, double stamp_s, std::uint64_t* set_up);
+  Program& scene_program(const GpuMesh& m, const FrameSetup& f, double stamp_s, std::set<unsigned>* set_up);
   Program& post_program(const std::array<bool, 8>& features);
   void snow_pass(const FrameSetup& f, const CameraModel& c, double stamp_s);
   bool inscatter_pass(const Targets& t, const FrameSetup& f, const CameraModel& c, float* march_max_out);
@@ -314,7 +323,8 @@ GLuint Renderer::Impl::texture(const std::string& name) {
   glGenTextures(1, &t);
   glBindTexture(GL_TEXTURE_2D, t);
   glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
-  glTexImage2D(GL_TEXTURE_2D, 0, GL_SRGB8, size, size, 0, GL_RGB, GL_UNSIGNED_BYTE, px.data());
+  // Albedo in sRGB, the relief height (alpha) linear.
+  glTexImage2D(GL_TEXTURE_2D, 0, GL_SRGB8_ALPHA8, size, size, 0, GL_RGBA, GL_UNSIGNED_BYTE, px.data());
   glGenerateMipmap(GL_TEXTURE_2D);
   glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR_MIPMAP_LINEAR);
   glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
@@ -324,8 +334,37 @@ GLuint Renderer::Impl::texture(const std::string& name) {
   return t;
 }
 
+GLuint Renderer::Impl::gradient(const std::string& name) {
+  auto it = gradients.find(name);
+  if (it != gradients.end()) return it->second;
+  const int size = name == "none" ? 1 : std::max(16, options.texture_size);
+  const auto g = detail::make_relief_gradient(name, size);
+  GLuint t = 0;
+  glGenTextures(1, &t);
+  glBindTexture(GL_TEXTURE_2D, t);
+  glTexImage2D(GL_TEXTURE_2D, 0, GL_RG16F, size, size, 0, GL_RG, GL_FLOAT, g.data());
+  glGenerateMipmap(GL_TEXTURE_2D);  // a footprint's mean slope
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR_MIPMAP_LINEAR);
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_REPEAT);
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_REPEAT);
+  gradients[name] = t;
+  return t;
+}
+
 void Renderer::Impl::upload_scene(const SceneGeometry& geo) {
   triangles = geo.triangle_count();
+  {  // Sediment is the seabed's own sand: its texture's mean (linear) times its albedo.
+    const auto px = detail::make_texture(world.seabed.material.texture, 64);
+    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+    const std::size_t n = px.size() / 4;
+    for (std::size_t i = 0; i < n; ++i)
+      for (int c = 0; c < 3; ++c) {
+        const double e = px[i * 4 + c] / 255.0;
+        sum[c] += e <= 0.04045 ? e / 12.92 : std::pow((e + 0.055) / 1.055, 2.4);
+      }
+    sediment_albedo = (sum / static_cast<double>(n)).cwiseProduct(world.seabed.material.albedo);
+  }
   for (const auto& sm : geo.meshes) {
     GpuMesh g;
     g.seg_class = sm.seg_class;
@@ -334,6 +373,16 @@ void Renderer::Impl::upload_scene(const SceneGeometry& geo) {
     g.macro = (sm.name == "seabed" || sm.name == "seabed_far") && sm.material.texture != "none";
     g.sections = sm.material.texture == "pipe_coating" && !sm.triplanar;
     g.texture = texture(sm.material.texture);
+    g.roughness = static_cast<float>(material_roughness(sm.material));
+    g.metallic = static_cast<float>(sm.material.metallic);
+    g.relief_m = static_cast<float>(material_relief_m(sm.material));
+    g.bump = options.materials && g.relief_m > 0.0f && sm.material.texture != "none";
+    if (g.bump) g.gradient = gradient(sm.material.texture);
+    // A dielectric's highlight in water is faint (F0 = 0.0032 for index 1.5 against 1.34): only
+    // smooth ones show it (roughness 0.45: +4..30 % over the diffuse at the peak; 0.8: < 1 %).
+    g.specular = options.materials && (g.metallic > 0.0f || g.roughness < 0.7f);
+    g.sediment_cover = static_cast<float>(material_sediment(sm.material));
+    g.sediment = options.materials && !g.macro && sm.seg_class != SegClass::kSeabed && g.sediment_cover > 0.0f;
     glGenVertexArrays(1, &g.vao);
     glBindVertexArray(g.vao);
     glGenBuffers(3, g.vbo);
@@ -622,24 +671,27 @@ void Renderer::Impl::shadow_pass(const FrameSetup& f) {
 
 namespace {
 
-// The defines of scene variant v (triplanar | macro << 1 | sections << 2 | lamps << 3).
+// Scene variant bits: triplanar 1, macro 2, sections 4, bump 8, specular 16, sediment 32, lamps << 6.
+constexpr unsigned kLampShift = 6;
 std::string scene_defines(unsigned v) {
-  return std::string("#define TRIPLANAR ") + ((v & 1u) ? "1" : "0") + "\n#define MACRO " + ((v & 2u) ? "1" : "0") +
-         "\n#define SECTIONS " + ((v & 4u) ? "1" : "0") + "\n#define NLAMPS " + std::to_string(v >> 3) + "\n";
+  const auto bit = [v](unsigned b) { return (v & b) ? "1" : "0"; };
+  return std::string("#define TRIPLANAR ") + bit(1) + "\n#define MACRO " + bit(2) + "\n#define SECTIONS " + bit(4) +
+         "\n#define BUMP " + bit(8) + "\n#define SPECULAR " + bit(16) + "\n#define SEDIMENT " + bit(32) +
+         "\n#define NLAMPS " + std::to_string(v >> kLampShift) + "\n";
 }
 
 }  // namespace
 
 // The scene program of a material variant (compiled on first use), with this frame's uniforms
 // set the first time it is used in the pass.
-Program& Renderer::Impl::scene_program(const GpuMesh& m, const FrameSetup& f, double stamp_s, std::uint64_t* set_up) {
-  const unsigned v =
-      (m.triplanar ? 1u : 0u) | (m.macro ? 2u : 0u) | (m.sections ? 4u : 0u) | (static_cast<unsigned>(f.nl) << 3);
-  Program& p = scene_variants.at(v);
+Program& Renderer::Impl::scene_program(const GpuMesh& m, const FrameSetup& f, double stamp_s,
+                                       std::set<unsigned>* set_up) {
+  const unsigned v = (m.triplanar ? 1u : 0u) | (m.macro ? 2u : 0u) | (m.sections ? 4u : 0u) | (m.bump ? 8u : 0u) |
+                     (m.specular ? 16u : 0u) | (m.sediment ? 32u : 0u) | (static_cast<unsigned>(f.nl) << kLampShift);
+  Program& p = scene_variants[v];
   if (p.id() == 0) p = Program(detail::kSceneVS, detail::kSceneFS, "scene", scene_defines(v));
   p.use();
-  if (*set_up & (std::uint64_t{1} << v)) return p;
-  *set_up |= std::uint64_t{1} << v;
+  if (!set_up->insert(v).second) return p;
   glUniformMatrix4fv(p["u_view"], 1, GL_FALSE, f.view.data());
   glUniformMatrix4fv(p["u_proj"], 1, GL_FALSE, f.proj.data());
   set3(p["u_cam_W"], f.cam_W);
@@ -661,6 +713,12 @@ Program& Renderer::Impl::scene_program(const GpuMesh& m, const FrameSetup& f, do
     glUniform1f(p["u_shadow_texel"], 1.0f / static_cast<float>(options.shadow_map_size));
   }
   glUniform1i(p["u_tex"], 0);
+  if (v & 8u) glUniform1i(p["u_grad"], 1);
+  if (v & 32u) {
+    set3(p["u_sediment_albedo"], sediment_albedo);
+    // No seabed: nothing is buried.
+    glUniform1f(p["u_seabed_z"], world.seabed.enabled ? static_cast<float>(world.seabed.depth_m) : 1e9f);
+  }
   return p;
 }
 
@@ -698,13 +756,24 @@ void Renderer::Impl::scene_pass(const Targets& t, const FrameSetup& f, double st
   glBindTexture(GL_TEXTURE_2D_ARRAY, f.shadows ? shadow_tex : 0);
   glActiveTexture(GL_TEXTURE0);
   const Eigen::Matrix4f vp = f.proj * f.view;
-  std::uint64_t set_up = 0;  // variants whose frame uniforms are set
+  std::set<unsigned> set_up;  // variants whose frame uniforms are set
   for (const GpuMesh& m : meshes) {
     if (!any_visible(m, vp)) continue;
     Program& scene = scene_program(m, f, stamp_s, &set_up);
     set3(scene["u_albedo"], m.material.albedo);
     glUniform1f(scene["u_uv_scale"], static_cast<float>(m.material.uv_scale_m));
+    if (m.bump) glUniform1f(scene["u_relief"], m.relief_m);
+    if (m.specular) {
+      glUniform1f(scene["u_roughness"], m.roughness);
+      glUniform1f(scene["u_metallic"], m.metallic);
+    }
+    if (m.sediment) glUniform1f(scene["u_sediment"], m.sediment_cover);
     glUniform1f(scene["u_seg"], static_cast<float>(m.seg_class));
+    if (m.bump) {
+      glActiveTexture(GL_TEXTURE1);
+      glBindTexture(GL_TEXTURE_2D, m.gradient);
+      glActiveTexture(GL_TEXTURE0);
+    }
     glBindTexture(GL_TEXTURE_2D, m.texture);
     glBindVertexArray(m.vao);
     draw_visible(m, vp);
@@ -1048,6 +1117,8 @@ Renderer::Renderer(World world, std::vector<CameraModel> cameras, RenderOptions 
   impl_->self_test();
   // Scene programs are compiled per material variant on first use (scene_program()); the plain one now.
   impl_->scene_variants[0] = Program(detail::kSceneVS, detail::kSceneFS, "scene", scene_defines(0));
+  impl_->scene_variants[8u | 16u | 32u] =  // every material feature: a shader error shows here
+      Program(detail::kSceneVS, detail::kSceneFS, "scene", scene_defines(8u | 16u | 32u));
   impl_->snow = Program(detail::kSnowVS, detail::kSnowFS, "marine_snow");
   impl_->post_program(
       {false, true, true, false, false, true, true, false});  // the common one; a shader error shows here
@@ -1108,9 +1179,10 @@ Renderer::~Renderer() {
   }
   impl_->release_scene();
   for (auto& [name, t] : impl_->textures) glDeleteTextures(1, &t);
+  for (auto& [name, t] : impl_->gradients) glDeleteTextures(1, &t);
   glDeleteVertexArrays(1, &impl_->empty_vao);
   glDeleteSamplers(1, &impl_->shadow_nearest);
-  for (const Program& p : impl_->scene_variants)
+  for (const auto& [v, p] : impl_->scene_variants)
     if (p.id()) glDeleteProgram(p.id());
   glDeleteProgram(impl_->shadow.id());
   if (impl_->shadow_tex) glDeleteTextures(1, &impl_->shadow_tex);

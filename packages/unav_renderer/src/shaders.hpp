@@ -46,9 +46,25 @@ uniform float u_uv_scale;
 #ifndef SECTIONS
 #define SECTIONS 0   // u along a pipe: each texture tile (coating section) turned differently
 #endif
+#ifndef BUMP
+#define BUMP 0       // the texture's relief (height in alpha x u_relief) shades by bump mapping
+#endif
+#ifndef SPECULAR
+#define SPECULAR 0   // GGX highlights (metals, smooth surfaces)
+#endif
+#ifndef SEDIMENT
+#define SEDIMENT 0   // sand settled on upward faces and near the seabed
+#endif
 #ifndef NLAMPS
 #define NLAMPS 0     // lamps lighting the scene (0..4)
 #endif
+uniform float u_relief;          // peak-to-trough height of the texture's relief [m]
+uniform sampler2D u_grad;        // the relief height's slope per unit of texture coordinate
+uniform float u_roughness;       // perceptual (alpha = roughness^2)
+uniform float u_metallic;
+uniform float u_sediment;        // cover [0, 1]
+uniform vec3 u_sediment_albedo;  // the seabed's mean albedo
+uniform float u_seabed_z;        // mean seabed depth [m]
 uniform float u_seg;
 uniform vec3 u_cam_W;
 uniform vec3 u_sun_dir_W;    // direction the sunlight travels
@@ -72,7 +88,7 @@ uniform sampler2DShadow u_sun_map;
 layout(location = 0) out vec4 o_color;   // rgb: direct signal D = J exp(-beta_D z); a: seg id
 layout(location = 1) out float o_depth;  // z along the optical axis [m]
 
-vec3 tex_at(vec2 uv) { return texture(u_tex, uv / u_uv_scale).rgb; }
+vec4 tex_at(vec2 uv) { return texture(u_tex, uv / u_uv_scale); }  // rgb albedo, a relief height
 
 // Zero-mean caustic network at horizontal position p [m], time t [s]: two domain-warped,
 // drifting layers of sin x sin cells, sharpened into thin bright lines (g |g| keeps the mean 0).
@@ -111,17 +127,41 @@ float value_noise(vec2 p) {
   return mix(mix(hash12(i), hash12(i + vec2(1.0, 0.0)), u.x), mix(hash12(i + vec2(0.0, 1.0)), hash12(i + vec2(1.0, 1.0)), u.x), u.y);
 }
 
+#if SPECULAR
+// pi x the Cook-Torrance specular lobe (GGX D, Smith-Schlick G with k = (r + 1)^2 / 8, Schlick F):
+// J is pi x radiance here (albedo E is Lambert's), so J += specular() x the source's irradiance.
+vec3 specular(vec3 n, vec3 V, vec3 l, vec3 F0) {
+  float ndl = dot(n, l);
+  if (ndl <= 0.0) return vec3(0.0);
+  float ndv = max(dot(n, V), 1e-3);
+  vec3 H = normalize(l + V);
+  float ndh = max(dot(n, H), 0.0), vdh = max(dot(V, H), 0.0);
+  float a2 = u_roughness * u_roughness * u_roughness * u_roughness;
+  float d = ndh * ndh * (a2 - 1.0) + 1.0;
+  float k = (u_roughness + 1.0) * (u_roughness + 1.0) / 8.0;
+  float G = ndl / (ndl * (1.0 - k) + k) * ndv / (ndv * (1.0 - k) + k);
+  vec3 F = F0 + (1.0 - F0) * pow(1.0 - vdh, 5.0);
+  return a2 / (d * d) * G * F / (4.0 * ndl * ndv);   // pi D = a2 / d^2
+}
+#endif
+
 void main() {
   vec3 n = normalize(v_nrm_W);
   vec3 V = u_cam_W - v_pos_W;
   float range = length(V);
   V /= max(range, 1e-6);
   if (dot(n, V) < 0.0) n = -n;   // two-sided surfaces
-  vec3 albedo;
+  vec4 t;
 #if TRIPLANAR
   vec3 w = pow(abs(n), vec3(4.0));
   w /= (w.x + w.y + w.z);
-  albedo = tex_at(v_pos_W.yz) * w.x + tex_at(v_pos_W.xz) * w.y + tex_at(v_pos_W.xy) * w.z;
+  t = tex_at(v_pos_W.yz) * w.x + tex_at(v_pos_W.xz) * w.y + tex_at(v_pos_W.xy) * w.z;
+#if BUMP
+  // World gradient of the blended height: each projection's slope along its two world axes.
+  vec2 gx = texture(u_grad, v_pos_W.yz / u_uv_scale).rg, gy = texture(u_grad, v_pos_W.xz / u_uv_scale).rg,
+       gz = texture(u_grad, v_pos_W.xy / u_uv_scale).rg;
+  vec3 grad_W = (w.x * vec3(0.0, gx) + w.y * vec3(gy.x, 0.0, gy.y) + w.z * vec3(gz, 0.0)) / u_uv_scale;
+#endif
 #else
   vec2 uv = v_uv;
 #if MACRO
@@ -135,12 +175,50 @@ void main() {
   // own angle about the pipe (field joints stay at the section ends).
   uv.y += u_uv_scale * hash12(vec2(floor(uv.x / u_uv_scale), 7.0));
 #endif
-  albedo = tex_at(uv);
+  t = tex_at(uv);
 #endif
+  vec3 albedo = t.rgb;
+  float relief = u_relief;
 #if MACRO
   albedo *= 0.7 + 0.6 * texture(u_tex, v_uv / (u_uv_scale * 7.31) + vec2(0.37, 0.11)).g;
 #endif
   albedo *= u_albedo;
+#if SEDIMENT
+  // Sand settles where the surface faces up (faces steeper than ~55 deg shed it), in patches
+  // (value noise over 0.25 m), and buries what lies within 0.3 m of the mean seabed; it fills the
+  // relief it covers.
+  float cover = smoothstep(0.55, 0.9, -n.z) * (0.3 + 0.7 * value_noise(v_pos_W.xy * 4.0)) +
+                smoothstep(u_seabed_z - 0.3, u_seabed_z, v_pos_W.z);
+  cover = clamp(u_sediment * cover, 0.0, 1.0);
+  albedo = mix(albedo, u_sediment_albedo, cover);
+  relief *= 1.0 - cover;
+#endif
+#if BUMP
+  // Bump mapping: the normal tilted against the surface gradient of the relief height. Its slope
+  // comes from a texture (per pixel, filtered), not from screen-space derivatives of the height
+  // (constant over 2x2 pixels: blocky and grid-locked). UV mappings turn the texture-space slope
+  // into screen derivatives by the (per-triangle exact) derivatives of uv and of the position
+  // (Mikkelsen 2010: no tangents, so the macro warp and pipe sections need none either).
+  {
+#if TRIPLANAR
+    vec3 G = relief * grad_W;
+    vec3 nb = n - (G - n * dot(n, G));
+#else
+    vec2 tuv = uv / u_uv_scale;
+    vec2 g = relief * texture(u_grad, tuv).rg;
+    vec3 dpdx = dFdx(v_pos_W), dpdy = dFdy(v_pos_W);
+    vec3 r1 = cross(dpdy, n), r2 = cross(n, dpdx);
+    float det = dot(dpdx, r1);
+    vec3 nb = abs(det) * n - sign(det) * (dot(g, dFdx(tuv)) * r1 + dot(g, dFdy(tuv)) * r2);
+#endif
+    if (dot(nb, nb) > 1e-30) nb = normalize(nb);
+    if (dot(nb, V) > 0.02) n = nb;   // never turned away from the camera
+  }
+#endif
+#if SPECULAR
+  vec3 F0 = mix(vec3(0.0032), albedo, u_metallic);   // ((1.5 - 1.34) / (1.5 + 1.34))^2 for dielectrics
+  vec3 Jspec = vec3(0.0);
+#endif
 
   // Sunlight at this depth: E0 exp(-K_d d); diffuse part from the upper hemisphere, direct
   // part with the cosine law. A surface facing straight up under a vertical sun gets E(d).
@@ -158,7 +236,11 @@ void main() {
     float A = u_caustics * exp(-depth * (2.0 * Kd + 1.0 / 15.0));
     ndl *= max(1.0 + A * caustic_pattern(v_pos_W.xy, u_time), 0.0);
   }
-  vec3 E = Ed * (u_ambient * (0.5 + 0.5 * up) + (1.0 - u_ambient) * ndl);
+  vec3 Eamb = Ed * u_ambient * (0.5 + 0.5 * up);   // diffuse skylight: no highlight
+  vec3 E = Ed * (1.0 - u_ambient) * ndl;             // direct: sun, then lamps
+#if SPECULAR
+  Jspec += specular(n, V, -u_sun_dir_W, F0) * E;
+#endif
 
   // Lamps: inverse square, cone, attenuated lamp -> surface (surface -> camera below).
   // NLAMPS is a compile-time count: the loop unrolls and the lamp arrays are read at constant
@@ -168,10 +250,21 @@ void main() {
     float dl = max(length(L), 0.05);
     vec3 l = L / dl;
     float cone = smoothstep(u_lamp_cos[i].x, u_lamp_cos[i].y, dot(-l, u_lamp_dir_W[i]));
-    if (cone > 0.0)
-      E += u_lamp_I[i] * cone * lamp_visibility(i, v_pos_W) * max(dot(n, l), 0.0) / (dl * dl) * exp(-u_betaD * dl);
+    if (cone > 0.0) {
+      vec3 Ei = u_lamp_I[i] * cone * lamp_visibility(i, v_pos_W) * max(dot(n, l), 0.0) / (dl * dl) * exp(-u_betaD * dl);
+      E += Ei;
+#if SPECULAR
+      Jspec += specular(n, V, l, F0) * Ei;
+#endif
+    }
   }
-  vec3 J = albedo * E;
+  // A metal has no diffuse term under direct light; under the diffuse skylight a rough one
+  // returns about its albedo, as a Lambertian surface would.
+#if SPECULAR
+  vec3 J = albedo * (Eamb + (1.0 - u_metallic) * E) + Jspec;
+#else
+  vec3 J = albedo * (Eamb + E);
+#endif
   o_color = vec4(J * exp(-u_betaD * range), u_seg);
   o_depth = v_z_C;
 }

@@ -59,6 +59,7 @@ UnderwaterRendererNode::UnderwaterRendererNode(const unav::NodeOptions& options)
   ro.forward_scatter = prm.forward_scatter;
   ro.shadows = prm.shadows;
   ro.caustics = prm.caustics;
+  ro.materials = prm.materials;
   ro.seed = static_cast<std::uint64_t>(prm.seed);
   period_ = 1.0 / rate;
   if (world_path.empty() || cameras_path.empty())

@@ -53,6 +53,7 @@ struct UnderwaterRendererParams {
   bool forward_scatter = true;
   bool shadows = true;
   bool caustics = true;
+  bool materials = true;
   int64_t seed = 1;
   std::string body_frame = "base_link_frd";
 
@@ -73,6 +74,7 @@ struct UnderwaterRendererParams {
     a->Visit(Field("forward_scatter", &forward_scatter).Doc("range-dependent blur"));
     a->Visit(Field("shadows", &shadows).Doc("lamp and sun shadow maps"));
     a->Visit(Field("caustics", &caustics).Doc("animated sunlight caustics"));
+    a->Visit(Field("materials", &materials).Doc("relief (bump), GGX highlights, sediment (RenderOptions::materials)"));
     a->Visit(Field("seed", &seed).Min(0.0).Doc("noise seed"));
     a->Visit(Field("body_frame", &body_frame).Doc("vehicle body frame (tf parent of the cameras)"));
   }

@@ -5,7 +5,8 @@
 
 namespace unav::renderer::test {
 
-// Exact optics: no blur, snow, caustics, noise, lamps, auto exposure; linear 8-bit output.
+// Exact optics: no blur, snow, caustics, noise, lamps, auto exposure, material effects; linear
+// 8-bit output.
 inline RenderOptions exact_options() {
   RenderOptions o;
   o.forward_scatter = false;
@@ -16,6 +17,7 @@ inline RenderOptions exact_options() {
   o.auto_exposure = false;
   o.srgb_output = false;
   o.texture_size = 64;
+  o.materials = false;  // Lambertian, flat, clean (test_materials.cpp tests them)
   return o;
 }
 

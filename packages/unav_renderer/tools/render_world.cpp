@@ -1,6 +1,6 @@
 // Render one frame per camera of a world to PNG (gallery, quick looks):
 //   unav_render_world WORLD.yaml CAMERAS.yaml OUT_PREFIX [--water NAME|FILE.yaml]
-//       [--pose N E D YAW_DEG] [--camera NAME] [--no-snow] [--no-noise] [--no-shadows] [--samples N]
+//       [--pose N E D YAW_DEG] [--camera NAME] [--no-snow] [--no-noise] [--no-shadows] [--no-materials] [--samples N]
 // Writes OUT_PREFIX_<camera>.png and prints timings.
 #include <cstdlib>
 #include <cstring>
@@ -13,7 +13,8 @@ using namespace unav::renderer;
 int main(int argc, char** argv) {
   if (argc < 4) {
     std::cerr << "usage: unav_render_world WORLD.yaml CAMERAS.yaml OUT_PREFIX [--water NAME|FILE] "
-                 "[--pose N E D YAW_DEG] [--camera NAME] [--no-snow] [--no-noise] [--no-shadows] [--samples N]\n";
+                 "[--pose N E D YAW_DEG] [--camera NAME] [--no-snow] [--no-noise] [--no-shadows] [--no-materials] "
+                 "[--samples N]\n";
     return 2;
   }
   try {
@@ -33,6 +34,8 @@ int main(int argc, char** argv) {
         only = argv[++i];
       } else if (a == "--no-snow") {
         opt.marine_snow = false;
+      } else if (a == "--no-materials") {
+        opt.materials = false;
       } else if (a == "--no-shadows") {
         opt.shadows = false;
       } else if (a == "--no-noise") {

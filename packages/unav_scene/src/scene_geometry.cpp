@@ -1,8 +1,8 @@
 #include "unav_scene/scene_geometry.hpp"
 
-#include <assimp/Importer.hpp>
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
+#include <assimp/Importer.hpp>
 
 #include <algorithm>
 #include <array>
@@ -10,8 +10,8 @@
 #include <fstream>
 #include <map>
 
-#include "unav_scene/noise.hpp"
 #include "unav_scene/errors.hpp"
+#include "unav_scene/noise.hpp"
 
 namespace unav::scene {
 
@@ -55,11 +55,12 @@ void push3(std::vector<float>& v, const Eigen::Vector3d& p) {
 void compute_smooth_normals(MeshData& m) {
   std::vector<Eigen::Vector3d> acc(m.vertex_count(), Eigen::Vector3d::Zero());
   auto P = [&](std::uint32_t i) {
-    return Eigen::Vector3d(m.positions[3 * i], m.positions[3 * i + 1], m.positions[3 * i + 2]);
+    const std::size_t k = 3 * std::size_t{i};
+    return Eigen::Vector3d(m.positions[k], m.positions[k + 1], m.positions[k + 2]);
   };
   for (std::size_t t = 0; t < m.triangle_count(); ++t) {
     const auto a = m.indices[3 * t], b = m.indices[3 * t + 1], c = m.indices[3 * t + 2];
-    const Eigen::Vector3d n = (P(b) - P(a)).cross(P(c) - P(a));   // area weighted
+    const Eigen::Vector3d n = (P(b) - P(a)).cross(P(c) - P(a));  // area weighted
     acc[a] += n;
     acc[b] += n;
     acc[c] += n;
@@ -71,14 +72,13 @@ void compute_smooth_normals(MeshData& m) {
 // Unit icosphere with `subdiv` subdivisions (shared vertices).
 MeshData icosphere(int subdiv) {
   const double t = (1.0 + std::sqrt(5.0)) / 2.0;
-  std::vector<Eigen::Vector3d> v = {{-1, t, 0}, {1, t, 0}, {-1, -t, 0}, {1, -t, 0},
-                                    {0, -1, t}, {0, 1, t}, {0, -1, -t}, {0, 1, -t},
-                                    {t, 0, -1}, {t, 0, 1}, {-t, 0, -1}, {-t, 0, 1}};
+  std::vector<Eigen::Vector3d> v = {{-1, t, 0},  {1, t, 0},  {-1, -t, 0}, {1, -t, 0}, {0, -1, t},  {0, 1, t},
+                                    {0, -1, -t}, {0, 1, -t}, {t, 0, -1},  {t, 0, 1},  {-t, 0, -1}, {-t, 0, 1}};
   for (auto& p : v) p.normalize();
-  std::vector<std::array<std::uint32_t, 3>> f = {
-      {0, 11, 5}, {0, 5, 1}, {0, 1, 7}, {0, 7, 10}, {0, 10, 11}, {1, 5, 9}, {5, 11, 4},
-      {11, 10, 2}, {10, 7, 6}, {7, 1, 8}, {3, 9, 4}, {3, 4, 2}, {3, 2, 6}, {3, 6, 8},
-      {3, 8, 9}, {4, 9, 5}, {2, 4, 11}, {6, 2, 10}, {8, 6, 7}, {9, 8, 1}};
+  std::vector<std::array<std::uint32_t, 3>> f = {{0, 11, 5}, {0, 5, 1},  {0, 1, 7},   {0, 7, 10}, {0, 10, 11},
+                                                 {1, 5, 9},  {5, 11, 4}, {11, 10, 2}, {10, 7, 6}, {7, 1, 8},
+                                                 {3, 9, 4},  {3, 4, 2},  {3, 2, 6},   {3, 6, 8},  {3, 8, 9},
+                                                 {4, 9, 5},  {2, 4, 11}, {6, 2, 10},  {8, 6, 7},  {9, 8, 1}};
   for (int s = 0; s < subdiv; ++s) {
     std::map<std::pair<std::uint32_t, std::uint32_t>, std::uint32_t> mid;
     auto midpoint = [&](std::uint32_t a, std::uint32_t b) {
@@ -128,7 +128,7 @@ MeshData make_rock_mesh(std::uint32_t seed, const Eigen::Vector3d& radii_m, int 
     const double n2 = noise::value_noise3(4.1 * p.x(), 4.1 * p.y(), 4.1 * p.z(), seed + 7U);
     double r = 1.0 + 0.45 * (n1 - 0.5) + 0.15 * (n2 - 0.5);
     Eigen::Vector3d q = r * p;
-    if (q.z() > 0.35) q.z() = 0.35 + 0.3 * (q.z() - 0.35);   // flattened underside (NED z down)
+    if (q.z() > 0.35) q.z() = 0.35 + 0.3 * (q.z() - 0.35);  // flattened underside (NED z down)
     q = q.cwiseProduct(radii_m);
     for (int k = 0; k < 3; ++k) m.positions[3 * i + k] = static_cast<float>(q[k]);
   }
@@ -180,7 +180,8 @@ MeshData make_tube_mesh(const std::vector<Eigen::Vector3d>& C, double radius_m, 
   // Parallel-transport frames: no twist along the bends.
   std::vector<Eigen::Vector3d> T(C.size());
   for (std::size_t i = 0; i < C.size(); ++i) {
-    const Eigen::Vector3d a = C[i == 0 ? 0 : i - 1], b = C[std::min(i + 1, C.size() - 1)];
+    const Eigen::Vector3d& a = C[i == 0 ? 0 : i - 1];
+    const Eigen::Vector3d& b = C[std::min(i + 1, C.size() - 1)];
     T[i] = (b - a).normalized();
   }
   Eigen::Vector3d N = T[0].cross(Eigen::Vector3d::UnitZ());
@@ -221,7 +222,9 @@ MeshData make_tube_mesh(const std::vector<Eigen::Vector3d>& C, double radius_m, 
     const std::uint32_t first = static_cast<std::uint32_t>(i) * ring;
     for (int s = 0; s <= sides; ++s) {
       const std::uint32_t src = first + s;
-      m.positions.insert(m.positions.end(), m.positions.begin() + 3 * src, m.positions.begin() + 3 * src + 3);
+      const std::size_t at = 3 * std::size_t{src};
+      const float p[3] = {m.positions[at], m.positions[at + 1], m.positions[at + 2]};  // not a range of itself
+      m.positions.insert(m.positions.end(), p, p + 3);
       push3(m.normals, n);
       m.uvs.insert(m.uvs.end(), {static_cast<float>(radius_m * std::cos(2 * M_PI * s / sides)),
                                  static_cast<float>(radius_m * std::sin(2 * M_PI * s / sides))});
@@ -265,9 +268,9 @@ MeshData load_mesh_file(const std::string& path) {
     if (!f.good()) throw ConfigError(path + ": mesh file not found or not readable");
   }
   Assimp::Importer importer;
-  const aiScene* scene = importer.ReadFile(
-      path, aiProcess_Triangulate | aiProcess_GenSmoothNormals | aiProcess_JoinIdenticalVertices |
-                aiProcess_PreTransformVertices | aiProcess_SortByPType);
+  const aiScene* scene =
+      importer.ReadFile(path, aiProcess_Triangulate | aiProcess_GenSmoothNormals | aiProcess_JoinIdenticalVertices |
+                                  aiProcess_PreTransformVertices | aiProcess_SortByPType);
   if (!scene || !scene->mRootNode || (scene->mFlags & AI_SCENE_FLAGS_INCOMPLETE))
     throw ConfigError(path + ": cannot load mesh: " + importer.GetErrorString());
   MeshData out;
@@ -317,7 +320,8 @@ SceneGeometry build_scene_geometry(const World& w) {
     g.meshes.push_back({"seabed", make_seabed_mesh(w.seabed), SegClass::kSeabed, w.seabed.material, false});
   }
   for (const auto& p : w.pipelines)
-    g.meshes.push_back({"pipeline:" + p.name, make_tube_mesh(p.centerline_W, p.radius_m, 16), SegClass::kPipeline, p.material, false});
+    g.meshes.push_back(
+        {"pipeline:" + p.name, make_tube_mesh(p.centerline_W, p.radius_m, 16), SegClass::kPipeline, p.material, false});
   // Rocks sharing a material are merged into one draw.
   std::vector<SceneMesh> rock_groups;
   for (const auto& r : w.rocks) {
@@ -325,9 +329,7 @@ SceneGeometry build_scene_geometry(const World& w) {
     m.transform(pose_from_xyz_rpy(r.p_W, {0, 0, r.yaw_rad}));
     SceneMesh* grp = nullptr;
     for (auto& gm : rock_groups)
-      if (gm.material.texture == r.material.texture && gm.material.albedo == r.material.albedo &&
-          gm.material.uv_scale_m == r.material.uv_scale_m)
-        grp = &gm;
+      if (same_look(gm.material, r.material)) grp = &gm;
     if (!grp) {
       rock_groups.push_back({"rocks", {}, SegClass::kRock, r.material, true});
       grp = &rock_groups.back();

@@ -26,6 +26,30 @@ using detail::get_vec;
 using detail::join_key;
 using detail::YamlCtx;
 
+double material_roughness(const Material& m) {
+  if (!std::isnan(m.roughness)) return m.roughness;
+  if (m.texture == "sand") return 0.9;
+  if (m.texture == "rock") return 0.8;
+  if (m.texture == "pipe_coating") return 0.45;
+  return 0.6;
+}
+
+double material_relief_m(const Material& m) {
+  if (!std::isnan(m.relief_m)) return m.relief_m;
+  if (m.texture == "sand") return 0.02;
+  if (m.texture == "rock") return 0.03;
+  if (m.texture == "pipe_coating") return 0.006;
+  return 0.0;
+}
+
+double material_sediment(const Material& m) { return std::isnan(m.sediment) ? 0.5 : m.sediment; }
+
+bool same_look(const Material& a, const Material& b) {
+  return a.texture == b.texture && a.albedo == b.albedo && a.uv_scale_m == b.uv_scale_m &&
+         material_roughness(a) == material_roughness(b) && a.metallic == b.metallic &&
+         material_relief_m(a) == material_relief_m(b) && material_sediment(a) == material_sediment(b);
+}
+
 double acoustic_reflectivity_db(SegClass seg_class) {
   switch (seg_class) {
     case SegClass::kSeabed:
@@ -121,7 +145,9 @@ namespace {
 
 Material parse_material(const YamlCtx& c, const YAML::Node& n, const std::string& path, Material def) {
   if (!n) return def;
-  check_keys(c, n, path, {"texture", "albedo", "uv_scale_m", "acoustic_reflectivity_db"});
+  check_keys(
+      c, n, path,
+      {"texture", "albedo", "uv_scale_m", "acoustic_reflectivity_db", "roughness", "metallic", "relief_m", "sediment"});
   def.texture = get_string(c, n, path, "texture", def.texture);
   static const char* kTextures[] = {"none", "sand", "rock", "pipe_coating", "checker"};
   bool ok = false;
@@ -134,6 +160,21 @@ Material parse_material(const YamlCtx& c, const YAML::Node& n, const std::string
     if (!(def.albedo[i] >= 0.0 && def.albedo[i] <= 1.0)) c.fail(join_key(path, "albedo"), "values must be in [0, 1]");
   def.uv_scale_m = get_double(c, n, path, "uv_scale_m", def.uv_scale_m);
   if (!(def.uv_scale_m > 0.0)) c.fail(join_key(path, "uv_scale_m"), "must be > 0");
+  if (n["roughness"]) {
+    def.roughness = get_double(c, n, path, "roughness", 0.0);
+    if (!(def.roughness >= 0.05 && def.roughness <= 1.0)) c.fail(join_key(path, "roughness"), "must be in [0.05, 1]");
+  }
+  def.metallic = get_double(c, n, path, "metallic", def.metallic);
+  if (!(def.metallic >= 0.0 && def.metallic <= 1.0)) c.fail(join_key(path, "metallic"), "must be in [0, 1]");
+  if (n["relief_m"]) {
+    def.relief_m = get_double(c, n, path, "relief_m", 0.0);
+    if (!(def.relief_m >= 0.0 && def.relief_m <= 0.5 * def.uv_scale_m))
+      c.fail(join_key(path, "relief_m"), "must be in [0, uv_scale_m / 2] (a relief taller than half its tile)");
+  }
+  if (n["sediment"]) {
+    def.sediment = get_double(c, n, path, "sediment", 0.0);
+    if (!(def.sediment >= 0.0 && def.sediment <= 1.0)) c.fail(join_key(path, "sediment"), "must be in [0, 1]");
+  }
   if (n["acoustic_reflectivity_db"]) {
     def.acoustic_reflectivity_db = get_double(c, n, path, "acoustic_reflectivity_db", 0.0);
     if (!(def.acoustic_reflectivity_db >= -80.0 && def.acoustic_reflectivity_db <= 0.0))

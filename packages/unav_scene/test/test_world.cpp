@@ -149,6 +149,34 @@ TEST(WorldErrors, BadValuesNameTheKey) {
                       {"seabed.material.texture", "marble"});
 }
 
+// Physically based material keys: each out-of-range value names its key and rule; defaults come
+// from the texture (sand rough and rippled, the pipe coating smooth, an untextured object flat).
+TEST(WorldErrors, MaterialKeysAreCheckedAndDefaultByTexture) {
+  const auto d = temp_dir("material_keys");
+  const auto bad = [&](const std::string& name, const std::string& material) {
+    return write_file(d / name, "seabed: {material: " + material + "}\n");
+  };
+  std::string f = bad("r.yaml", "{texture: sand, roughness: 0}");
+  expect_config_error([&] { load_world(f); }, {f, "seabed.material.roughness", "[0.05, 1]"});
+  f = bad("m.yaml", "{texture: sand, metallic: 1.5}");
+  expect_config_error([&] { load_world(f); }, {f, "seabed.material.metallic", "[0, 1]"});
+  f = bad("h.yaml", "{texture: sand, uv_scale_m: 0.1, relief_m: 0.2}");
+  expect_config_error([&] { load_world(f); }, {f, "seabed.material.relief_m", "uv_scale_m / 2"});
+  f = bad("s.yaml", "{texture: rock, sediment: .nan}");
+  expect_config_error([&] { load_world(f); }, {f, "seabed.material.sediment"});
+  const World w = load_world(write_file(d / "ok.yaml", "seabed: {material: {texture: sand, metallic: 0.25}}\n"));
+  EXPECT_DOUBLE_EQ(material_roughness(w.seabed.material), 0.9);
+  EXPECT_DOUBLE_EQ(material_relief_m(w.seabed.material), 0.02);
+  EXPECT_DOUBLE_EQ(w.seabed.material.metallic, 0.25);
+  Material coat{"pipe_coating", {1, 1, 1}, 3.0};
+  EXPECT_DOUBLE_EQ(material_roughness(coat), 0.45);
+  coat.roughness = 0.2;
+  EXPECT_DOUBLE_EQ(material_roughness(coat), 0.2);
+  EXPECT_DOUBLE_EQ(material_relief_m(Material{}), 0.0);
+  EXPECT_DOUBLE_EQ(material_sediment(Material{}), 0.5);
+  EXPECT_FALSE(same_look(coat, Material{"pipe_coating", {1, 1, 1}, 3.0}));
+}
+
 // The seabed as a depth grid on the render mesh's nodes (what the physics server interpolates).
 TEST(World, SeabedGridSamplesTheReliefOnTheMeshNodes) {
   const World w = load_world(kRoot + "/worlds/pipe_inspection/world.yaml");

@@ -74,6 +74,7 @@ EpisodeSetup load_episode_setup(const EpisodeParams& params) {
   s.render.marine_snow = params.marine_snow;
   s.render.forward_scatter = params.forward_scatter;
   s.render.noise = params.camera_noise;
+  s.render.materials = params.materials;
   s.render.lamp_scatter_samples = params.lamp_scatter_samples;
   s.render.readback_slots = 1;
   return s;

@@ -289,8 +289,8 @@ int main(int argc, char** argv) {
   const size_t n_image = argc > 2 ? std::strtoul(argv[2], nullptr, 10) : 300;
   const int domain = 200 + static_cast<int>(getpid() % 30);
   std::printf("transports: %s\n\n", unav::shm_transport_from_environment()
-                                         ? "UDPv4 + shared memory (UNAV_TRANSPORT=shm)"
-                                         : "UDPv4 (the default; UNAV_TRANSPORT=shm adds shared memory)");
+                                        ? "UDPv4 + shared memory (UNAV_TRANSPORT=shm)"
+                                        : "UDPv4 (the default; UNAV_TRANSPORT=shm adds shared memory)");
   std::printf("| message | path | samples | rate | p50 [ms] | p99 [ms] | received MB/s |\n");
   std::printf("|---|---|---|---|---|---|---|\n");
   struct Case {

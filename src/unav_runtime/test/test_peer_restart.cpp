@@ -39,6 +39,7 @@ pid_t spawn_peer(int domain, int id) {
   env_strings.push_back("UNAV_TEST_DOMAIN=" + std::to_string(domain));
   env_strings.push_back("UNAV_PEER_ID=" + std::to_string(id));
   std::vector<char*> envp;
+  envp.reserve(env_strings.size() + 1);
   for (auto& s : env_strings) envp.push_back(s.data());
   envp.push_back(nullptr);
   std::string exe = "/proc/self/exe", filter = "--gtest_filter=PeerRestart.DISABLED_Peer",
@@ -97,8 +98,9 @@ TEST(PeerRestart, ANewPeerIsHeardAndHearsAfterOneWasKilled) {
     const bool spoke = said.count("peer " + std::to_string(id)) || said.count(heard);
     ::kill(peer, SIGKILL);
     ::waitpid(peer, nullptr, 0);
-    ASSERT_TRUE(said.count(heard)) << "peer " << id << (spoke ? " was heard but never heard the survivor"
-                                                              : " and the survivor never heard each other")
+    ASSERT_TRUE(said.count(heard)) << "peer " << id
+                                   << (spoke ? " was heard but never heard the survivor"
+                                             : " and the survivor never heard each other")
                                    << " within 30 s (peers 1.." << id - 1 << " were SIGKILLed before it)";
     const auto resume = std::chrono::steady_clock::now() + 500ms;
     while (std::chrono::steady_clock::now() < resume) {

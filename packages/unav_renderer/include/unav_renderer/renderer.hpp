@@ -53,6 +53,12 @@ struct RenderOptions {
   /// see the sky (radiance n^2 x the diffuse share of E0, Fresnel-weighted) and the sun's glint,
   /// attenuated over the path to the surface; beyond it total internal reflection (the veil).
   bool snell_window = true;
+  /// Physically based materials (world Material keys roughness, metallic, relief_m, sediment):
+  /// the texture's relief shaded by bump mapping (height in its alpha, screen-space surface
+  /// gradient: any UV or triplanar mapping), GGX specular (Cook-Torrance, Smith-Schlick G, Schlick
+  /// F, F0 = mix(0.0032: index 1.5 in water, albedo, metallic)) from the sun and the lamps, and
+  /// sand settled on upward faces and near the seabed. false: Lambertian, flat, clean.
+  bool materials = true;
   /// Deterministic metering of the ambient light at the camera depth: gain =
   /// clamp(0.45 / luminance(E0 exp(-K_d d)), 0.25, 5), times CameraModel::exposure.
   bool auto_exposure = true;

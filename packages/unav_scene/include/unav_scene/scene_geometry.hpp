@@ -11,10 +11,10 @@
 namespace unav::scene {
 
 struct MeshData {
-  std::vector<float> positions;   ///< xyz per vertex
-  std::vector<float> normals;     ///< xyz per vertex (unit)
-  std::vector<float> uvs;         ///< uv per vertex (metres / arc length based)
-  std::vector<std::uint32_t> indices;   ///< triangles
+  std::vector<float> positions;        ///< xyz per vertex
+  std::vector<float> normals;          ///< xyz per vertex (unit)
+  std::vector<float> uvs;              ///< uv per vertex (metres / arc length based)
+  std::vector<std::uint32_t> indices;  ///< triangles
   std::size_t vertex_count() const { return positions.size() / 3; }
   std::size_t triangle_count() const { return indices.size() / 3; }
   /// Apply a pose and per-axis scale (normals transformed with the inverse transpose).
@@ -27,7 +27,7 @@ struct SceneMesh {
   MeshData mesh;
   SegClass seg_class = SegClass::kOther;
   Material material;
-  bool triplanar = false;   ///< texture by world position (meshes without UVs: rocks, files)
+  bool triplanar = false;  ///< texture by world position (meshes without UVs: rocks, files)
 };
 
 struct SceneGeometry {
@@ -46,11 +46,11 @@ MeshData load_mesh_file(const std::string& path);
 /// Procedural rock: icosphere (subdivisions) displaced by seeded noise, radii per axis.
 MeshData make_rock_mesh(std::uint32_t seed, const Eigen::Vector3d& radii_m, int subdivisions = 2);
 MeshData make_box_mesh(const Eigen::Vector3d& size_m);
-MeshData make_plane_mesh(double size_x_m, double size_y_m);   ///< in local xy, normal -z (up in NED)
+MeshData make_plane_mesh(double sx, double sy);  ///< sx x sy [m] in local xy, normal -z (up in NED)
 MeshData make_sphere_mesh(double radius_m, int subdivisions = 3);
 /// Tube of `radius_m` along a centre line (parallel-transport frames), uv = (arc/circumference).
 MeshData make_tube_mesh(const std::vector<Eigen::Vector3d>& centerline_W, double radius_m, int sides = 16);
-MeshData make_seabed_mesh(const Seabed& seabed);
+MeshData make_seabed_mesh(const Seabed& sb);
 
 /// Write a mesh as Wavefront OBJ (v, vn, f). Throws ConfigError when the file cannot be written.
 void write_obj(const MeshData& mesh, const std::string& path);

@@ -26,7 +26,29 @@ struct Material {
   /// Acoustic backscatter: Lambert's parameter mu [dB] (the surface returns mu cos^2(incidence)
   /// per unit area and solid angle). NaN = the class default (acoustic_reflectivity_db()).
   double acoustic_reflectivity_db = std::numeric_limits<double>::quiet_NaN();
+  /// Physically based shading (metal/roughness, GGX). NaN = the texture's default
+  /// (material_roughness()); 0.05..1, perceptual (alpha = roughness^2).
+  double roughness = std::numeric_limits<double>::quiet_NaN();
+  double metallic = 0.0;  ///< 0 dielectric (F0 of a 1.5-index surface in water), 1 metal (F0 = albedo)
+  /// Relief of the texture's height field, peak to trough [m], shaded by bump mapping (sand
+  /// ripples, rock cracks, growth on the coating). NaN = the texture's default (material_relief_m()).
+  double relief_m = std::numeric_limits<double>::quiet_NaN();
+  /// Settled sediment [0, 1]: the share of upward-facing surface (and of surface within 0.3 m of
+  /// the mean seabed: burial) covered by sand. NaN = the default (material_sediment()): 0.5,
+  /// none on the seabed itself.
+  double sediment = std::numeric_limits<double>::quiet_NaN();
 };
+
+/// Roughness of `m`: its own, else by texture: sand 0.9, rock 0.8, pipe_coating 0.45 (a wet,
+/// smooth polymer coat), none / checker 0.6.
+double material_roughness(const Material& m);
+/// Relief of `m` [m]: its own, else by texture (at its uv_scale_m): sand 0.02 (ripples of a
+/// 2 m tile, wavelength 0.14 m), rock 0.03, pipe_coating 0.006, none / checker 0.
+double material_relief_m(const Material& m);
+/// Sediment cover of `m`: its own, else 0.5.
+double material_sediment(const Material& m);
+/// Same appearance (everything the renderer draws by): meshes that share it may be merged.
+bool same_look(const Material& a, const Material& b);
 
 /// Lambert mu [dB] of a class when its material gives none: seabed (sand) -27, pipeline (coated
 /// steel) -12, rock -17, other -20 (APL-UW high-frequency handbook ranges: sand -25..-30 dB,

@@ -50,6 +50,7 @@ struct EpisodeParams {
   bool marine_snow = true;
   bool forward_scatter = true;
   bool camera_noise = true;
+  bool materials = true;  ///< RenderOptions::materials: relief, highlights, sediment
   int lamp_scatter_samples = 8;
 
   template <class Archive>
@@ -72,6 +73,7 @@ struct EpisodeParams {
     a->Visit(Field("marine_snow", &marine_snow));
     a->Visit(Field("forward_scatter", &forward_scatter));
     a->Visit(Field("camera_noise", &camera_noise));
+    a->Visit(Field("materials", &materials).Doc("relief (bump), GGX highlights and sediment in the images"));
     a->Visit(Field("lamp_scatter_samples", &lamp_scatter_samples).Range(0, 64).Doc("0 = no lamp in-scattering"));
   }
 };

@@ -1,0 +1,179 @@
+// Physically based materials (RenderOptions::materials): GGX highlights, bump-mapped relief and
+// settled sediment, each against what geometry predicts (llvmpipe).
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+
+#include "render_test_util.hpp"
+#include "unav_renderer/renderer.hpp"
+
+using namespace unav::renderer;
+using unav::renderer::test::exact_options;
+
+namespace {
+
+RenderOptions with_materials(bool lamps) {
+  RenderOptions o = exact_options();
+  o.materials = true;
+  o.lamps = lamps;
+  o.shadows = false;
+  o.lamp_scatter_samples = 0;
+  return o;
+}
+
+CameraModel down_camera(int size = 160) {
+  CameraModel c = CameraModel::from_hfov("down", size, size, 100.0 * M_PI / 180.0);
+  c.X_BC.linear() = rotation_from_rpy(0, -M_PI / 2, 0) * R_camera_body_to_optical();
+  return c;
+}
+
+// Clear water (Jerlov I), a lamp 1.5 m to starboard of the camera pointing down with a wide beam
+// (83 deg half angle) of the given intensity; a floor at 10 m of the given material. No sunlight:
+// the lamp is the only light.
+World lamp_over_floor(const Material& m, double intensity, const Eigen::Vector3d& lamp_B = {0.0, 1.5, 0.0}) {
+  World w = unav::renderer::test::empty_world();
+  w.water = jerlov_preset("I");
+  w.sun.surface_irradiance = {0.0, 0.0, 0.0};
+  Object floor = unav::renderer::test::floor_object(10.0, 30.0);
+  floor.seg_class = SegClass::kOther;
+  floor.material = m;
+  w.objects.push_back(floor);
+  Lamp l;
+  l.name = "lamp";
+  l.X_BL = pose_from_xyz_rpy(lamp_B, {0.0, -M_PI / 2, 0.0});
+  l.cone_half_angle_rad = 1.45;
+  l.intensity = {intensity, intensity, intensity};
+  w.lamps.push_back(l);
+  return w;
+}
+
+const Pose kBody = pose_from_xyz_rpy({0.0, 0.0, 6.0}, {0.0, 0.0, 0.0});
+
+int green(const Frame& f, int u, int v) {
+  return f.rgb[3 * (static_cast<std::size_t>(v) * static_cast<std::size_t>(f.width) + static_cast<std::size_t>(u)) + 1];
+}
+
+}  // namespace
+
+TEST(Materials, MetalHighlightLiesWhereTheLampIsMirroredByTheFloor) {
+  // A smooth metal floor (roughness 0.15): its highlight is the lamp's mirror image, where the
+  // line from the camera to the lamp mirrored below the floor (z = 14 m) crosses it: (0, 0.75, 10),
+  // i.e. on the image's centre column, 0.75 / 4 x fx right of the centre. A rougher metal spreads
+  // the same light: a lower, wider peak. The lamp is dim (0.06) so that the sharp peak (~460 x a
+  // Lambertian floor's radiance) stays below white.
+  Material metal{"none", {0.9, 0.9, 0.9}, 1.0};
+  metal.metallic = 1.0;
+  metal.roughness = 0.15;
+  const CameraModel cam = down_camera();
+  const Frame f = Renderer(lamp_over_floor(metal, 0.06), {cam}, with_materials(true)).render(kBody, "down");
+  int best = -1, bu = 0, bv = 0;
+  for (int v = 0; v < f.height; ++v)
+    for (int u = 0; u < f.width; ++u)
+      if (green(f, u, v) > best) best = green(f, u, v), bu = u, bv = v;
+  // Predicted pixel of the mirror point (the camera's optical frame: x = body y (starboard) for a
+  // down camera whose image x points to starboard).
+  const Eigen::Vector3d p = f.X_WC.inverse() * Eigen::Vector3d(0.0, 0.75, 10.0);
+  const double pu = f.K(0, 0) * p.x() / p.z() + f.K(0, 2), pv = f.K(1, 1) * p.y() / p.z() + f.K(1, 2);
+  metal.roughness = 0.5;
+  const Frame rough = Renderer(lamp_over_floor(metal, 0.06), {cam}, with_materials(true)).render(kBody, "down");
+  int rough_best = 0;
+  for (std::size_t i = 1; i < rough.rgb.size(); i += 3) rough_best = std::max(rough_best, int{rough.rgb[i]});
+  std::printf("highlight at (%d, %d), level %d; mirror point predicted at (%.1f, %.1f); roughness 0.5 peak %d\n", bu,
+              bv, best, pu, pv, rough_best);
+  // 1.5 px: the lobe (alpha 0.0225) is sharp, the 1/d^2 and beam falloff shift its maximum by
+  // less than a pixel at this geometry (1 px = 6 cm on the floor), plus rounding to the pixel.
+  EXPECT_NEAR(bu, pu, 1.5);
+  EXPECT_NEAR(bv, pv, 1.5);
+  EXPECT_GT(best, 100);
+  EXPECT_LT(best, 255);
+  EXPECT_LT(rough_best, best - 20);
+  // Without materials the same floor is Lambertian: no peak away from the lamp's own footprint.
+  const Frame flat = Renderer(lamp_over_floor(metal, 0.06), {cam},
+                              [] {
+                                RenderOptions o = with_materials(true);
+                                o.materials = false;
+                                return o;
+                              }())
+                         .render(kBody, "down");
+  EXPECT_LT(green(flat, bu, bv), best - 20);
+}
+
+TEST(Materials, ReliefShadesOnlyWhereTheHeightVaries) {
+  // A constant height field (the checker texture's) has no slope: any relief leaves the image
+  // unchanged, bit for bit. Sand seen from 0.7 m (14 px per ripple) under the grazing light (65 deg
+  // from the vertical) of a lamp 1.5 m ahead, across the ripples' crests (which run east-west):
+  // their faces turned to the lamp brighten, the others darken: more contrast, about the same mean.
+  const Pose low = pose_from_xyz_rpy({0.0, 0.0, 9.3}, {0.0, 0.0, 0.0});
+  Material checker{"checker", {1.0, 1.0, 1.0}, 1.0};
+  checker.roughness = 0.9;
+  checker.sediment = 0.0;
+  const CameraModel cam = down_camera();
+  checker.relief_m = 0.0;
+  const Frame a = Renderer(lamp_over_floor(checker, 2.0), {cam}, with_materials(true)).render(low, "down");
+  checker.relief_m = 0.2;
+  const Frame b = Renderer(lamp_over_floor(checker, 2.0), {cam}, with_materials(true)).render(low, "down");
+  EXPECT_EQ(a.rgb, b.rgb);
+
+  Material sand{"sand", {1.0, 1.0, 1.0}, 2.0};
+  sand.relief_m = 0.0;
+  // Mean and local contrast (mean absolute difference of vertically adjacent pixels: across the
+  // crests, which an image row of this camera runs along), over the lit middle of the image.
+  const auto stats = [&](const Material& m) {
+    const Frame f = Renderer(lamp_over_floor(m, 6.0, {1.5, 0.0, 0.0}), {cam}, with_materials(true)).render(low, "down");
+    double sum = 0, contrast = 0;
+    int n = 0;
+    for (int v = 40; v < 120; ++v)
+      for (int u = 40; u < 120; ++u) {
+        sum += green(f, u, v);
+        contrast += std::abs(green(f, u, v + 1) - green(f, u, v));
+        ++n;
+      }
+    return std::make_pair(sum / n, contrast / n);
+  };
+  const auto [flat_mean, flat_contrast] = stats(sand);
+  sand.relief_m = 0.03;
+  const auto [bump_mean, bump_contrast] = stats(sand);
+  std::printf("sand under the lamp: mean %.1f -> %.1f, local contrast %.2f -> %.2f levels\n", flat_mean, bump_mean,
+              flat_contrast, bump_contrast);
+  EXPECT_NEAR(bump_mean, flat_mean, 0.1 * flat_mean);
+  EXPECT_GT(bump_contrast, 1.5 * flat_contrast);
+}
+
+TEST(Materials, SedimentSettlesOnTopsNotOnWalls) {
+  // A black box (albedo 0, so it returns nothing of its own) 1 m on a side, 2 m above the empty
+  // sea: with sediment 1 its top turns towards the sand colour (at least the 0.3 share of the
+  // patchy cover), its walls stay black. Sunlight only (down from the zenith, ambient 0.35).
+  World w = unav::renderer::test::empty_world();
+  w.water = jerlov_preset("I");
+  Object box;
+  box.name = "box";
+  box.shape = "box";
+  box.size_m = {1.0, 1.0, 1.0};
+  box.X_WO = pose_from_xyz_rpy({0.0, 0.0, 8.0}, {0.0, 0.0, 0.3});
+  box.material = Material{"none", {0.0, 0.0, 0.0}, 1.0};
+  box.material.roughness = 0.9;  // no highlight
+  box.material.sediment = 1.0;
+  w.objects.push_back(box);
+  const CameraModel cam = down_camera();
+  // Seen from 1.5 m above the top, 0.8 m to the side: the top and one wall.
+  const Pose X_WB = pose_from_xyz_rpy({-0.8, 0.0, 6.0}, {0.0, 0.0, 0.0});
+  const Frame with = Renderer(w, {cam}, with_materials(false)).render(X_WB, "down");
+  w.objects[0].material.sediment = 0.0;
+  const Frame without = Renderer(w, {cam}, with_materials(false)).render(X_WB, "down");
+  const auto level_at = [&](const Frame& f, const Eigen::Vector3d& p_W) {
+    const Eigen::Vector3d p = f.X_WC.inverse() * p_W;
+    return green(f, static_cast<int>(std::lround(f.K(0, 0) * p.x() / p.z() + f.K(0, 2))),
+                 static_cast<int>(std::lround(f.K(1, 1) * p.y() / p.z() + f.K(1, 2))));
+  };
+  const Eigen::Vector3d top(0.0, 0.0, 7.5), wall(-0.5 * std::cos(0.3), -0.5 * std::sin(0.3), 8.2);
+  const Eigen::Vector3d p = with.X_WC.inverse() * top;
+  const std::size_t i = 3 * (static_cast<std::size_t>(std::lround(with.K(1, 1) * p.y() / p.z() + with.K(1, 2))) *
+                                 static_cast<std::size_t>(with.width) +
+                             static_cast<std::size_t>(std::lround(with.K(0, 0) * p.x() / p.z() + with.K(0, 2))));
+  std::printf("top: %d (clean %d), rgb (%d, %d, %d) under 7.5 m of water; wall: %d (clean %d)\n", level_at(with, top),
+              level_at(without, top), with.rgb[i], with.rgb[i + 1], with.rgb[i + 2], level_at(with, wall),
+              level_at(without, wall));
+  EXPECT_GT(level_at(with, top), level_at(without, top) + 8);
+  EXPECT_NEAR(level_at(with, wall), level_at(without, wall), 1);
+}
