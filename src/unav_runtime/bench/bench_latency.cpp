@@ -137,7 +137,9 @@ fdds::DomainParticipant* raw_participant(int domain) {
     shm->segment_size(32u * 1024u * 1024u);
     q.transport().user_transports.push_back(shm);
   }
-  q.transport().user_transports.push_back(std::make_shared<eprosima::fastdds::rtps::UDPv4TransportDescriptor>());
+  auto udp = std::make_shared<eprosima::fastdds::rtps::UDPv4TransportDescriptor>();
+  udp->receiveBufferSize = udp->sendBufferSize = 4u * 1024u * 1024u;  // as the runtime's (context.cpp)
+  q.transport().user_transports.push_back(udp);
   return fdds::DomainParticipantFactory::get_instance()->create_participant(domain, q);
 }
 
