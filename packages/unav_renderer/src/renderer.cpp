@@ -227,8 +227,10 @@ struct Renderer::Impl {
   WaterModel water;
   std::vector<GpuMesh> meshes;
   std::map<std::string, GLuint> textures;
-  std::map<std::string, GLuint> gradients;          // relief slopes by texture name
-  Eigen::Vector3d sediment_albedo{0.7, 0.64, 0.5};  // the seabed's mean albedo (linear): settled sand
+  std::map<std::string, GLuint> gradients;                       // relief slopes by texture name
+  std::map<const TextureImage*, GLuint> image_textures;          // mesh files' own base-colour maps
+  std::vector<std::shared_ptr<const TextureImage>> base_colors;  // keeps image_textures' keys alive
+  Eigen::Vector3d sediment_albedo{0.7, 0.64, 0.5};               // the seabed's mean albedo (linear): settled sand
   // By material and lamp count (scene_variant()); compiled on first use.
   std::map<unsigned, Program> scene_variants;
   std::map<unsigned, Program> post_variants;  // by feature set (post_program())
@@ -265,6 +267,7 @@ struct Renderer::Impl {
   void release_scene();  // meshes and marine-snow buffers (set_world, destructor)
   GLuint texture(const std::string& name);
   GLuint gradient(const std::string& name);
+  GLuint image_texture(const TextureImage& image);
   Targets& targets_for(const CameraModel& c);
   struct FrameSetup;
   void set_lamps_W(Program& p, const FrameSetup& f) const;
@@ -352,6 +355,26 @@ GLuint Renderer::Impl::gradient(const std::string& name) {
   return t;
 }
 
+GLuint Renderer::Impl::image_texture(const TextureImage& image) {
+  auto it = image_textures.find(&image);
+  if (it != image_textures.end()) return it->second;
+  std::vector<std::uint8_t> rgba(static_cast<std::size_t>(image.width) * image.height * 4, 128);  // flat relief
+  for (std::size_t i = 0, n = rgba.size() / 4; i < n; ++i)
+    for (int c = 0; c < 3; ++c) rgba[4 * i + c] = image.rgb[3 * i + c];
+  GLuint t = 0;
+  glGenTextures(1, &t);
+  glBindTexture(GL_TEXTURE_2D, t);
+  glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
+  glTexImage2D(GL_TEXTURE_2D, 0, GL_SRGB8_ALPHA8, image.width, image.height, 0, GL_RGBA, GL_UNSIGNED_BYTE, rgba.data());
+  glGenerateMipmap(GL_TEXTURE_2D);
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR_MIPMAP_LINEAR);
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_REPEAT);
+  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_REPEAT);
+  image_textures[&image] = t;
+  return t;
+}
+
 void Renderer::Impl::upload_scene(const SceneGeometry& geo) {
   triangles = geo.triangle_count();
   {  // Sediment is the seabed's own sand: its texture's mean (linear) times its albedo.
@@ -373,10 +396,17 @@ void Renderer::Impl::upload_scene(const SceneGeometry& geo) {
     g.macro = (sm.name == "seabed" || sm.name == "seabed_far") && sm.material.texture != "none";
     g.sections = sm.material.texture == "pipe_coating" && !sm.triplanar;
     g.texture = texture(sm.material.texture);
+    if (sm.base_color) {  // the mesh file's own map, by its UVs (one repeat per unit)
+      base_colors.push_back(sm.base_color);
+      g.texture = image_texture(*sm.base_color);
+      g.material.uv_scale_m = 1.0;
+      g.macro = g.sections = false;
+    }
     g.roughness = static_cast<float>(material_roughness(sm.material));
     g.metallic = static_cast<float>(sm.material.metallic);
     g.relief_m = static_cast<float>(material_relief_m(sm.material));
     g.bump = options.materials && g.relief_m > 0.0f && sm.material.texture != "none";
+    if (sm.base_color) g.bump = false;  // no relief in a mesh file's colour map
     if (g.bump) g.gradient = gradient(sm.material.texture);
     // A dielectric's highlight in water is faint (F0 = 0.0032 for index 1.5 against 1.34): only
     // smooth ones show it (roughness 0.45: +4..30 % over the diffuse at the peak; 0.8: < 1 %).
@@ -1131,6 +1161,9 @@ Renderer::Renderer(World world, std::vector<CameraModel> cameras, RenderOptions 
 }
 
 void Renderer::Impl::release_scene() {
+  for (auto& [image, t] : image_textures) glDeleteTextures(1, &t);
+  image_textures.clear();
+  base_colors.clear();
   for (auto& m : meshes) {
     glDeleteBuffers(3, m.vbo);
     glDeleteBuffers(1, &m.ebo);

@@ -2,10 +2,17 @@
 // settled sediment, each against what geometry predicts (llvmpipe).
 #include <gtest/gtest.h>
 
+#include <unistd.h>
+
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
 
 #include "render_test_util.hpp"
+#include "unav_renderer/errors.hpp"
 #include "unav_renderer/renderer.hpp"
 
 using namespace unav::renderer;
@@ -176,4 +183,73 @@ TEST(Materials, SedimentSettlesOnTopsNotOnWalls) {
               level_at(without, wall));
   EXPECT_GT(level_at(with, top), level_at(without, top) + 8);
   EXPECT_NEAR(level_at(with, wall), level_at(without, wall), 1);
+}
+
+namespace {
+
+// A 2 m square quad at the origin of its frame (normal along z) with UVs u = (x + 1) / 2,
+// v = (y + 1) / 2, its material's diffuse map `texture` (OBJ + MTL, as exporters write them).
+std::string write_textured_quad(const std::filesystem::path& dir, const std::string& texture) {
+  std::filesystem::create_directories(dir);
+  std::ofstream(dir / "quad.mtl") << "newmtl painted\nKd 1 1 1\nmap_Kd " << texture << "\n";
+  std::ofstream(dir / "quad.obj") << "mtllib quad.mtl\nv -1 -1 0\nv 1 -1 0\nv 1 1 0\nv -1 1 0\n"
+                                     "vt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\nvn 0 0 -1\nusemtl painted\n"
+                                     "f 1/1/1 2/2/1 3/3/1\nf 1/1/1 3/3/1 4/4/1\n";
+  return (dir / "quad.obj").string();
+}
+
+}  // namespace
+
+TEST(Materials, MeshFileTextureIsDrawnByItsUvsTheRightWayUp) {
+  // The quad's map is 2 x 2 texels: top row red, green; bottom row blue, white. By the UVs
+  // (v = 0 is the image's bottom, as OBJ, glTF and FBX mean it), the quad's south-west quarter
+  // (u, v < 0.5) is blue, south-east (x > 0: u > 0.5) white, north-west red, north-east green.
+  // Seen from 1 m above in clear water at 2 m depth, each quarter's own colour dominates.
+  const auto dir = std::filesystem::temp_directory_path() / ("unav_mesh_texture_" + std::to_string(::getpid()));
+  cv::Mat tex(2, 2, CV_8UC3);
+  tex.at<cv::Vec3b>(0, 0) = {0, 0, 255};      // BGR: red
+  tex.at<cv::Vec3b>(0, 1) = {0, 255, 0};      // green
+  tex.at<cv::Vec3b>(1, 0) = {255, 0, 0};      // blue
+  tex.at<cv::Vec3b>(1, 1) = {255, 255, 255};  // white
+  std::filesystem::create_directories(dir);
+  ASSERT_TRUE(cv::imwrite((dir / "paint.png").string(), tex));
+  World w = unav::renderer::test::empty_world();
+  w.water = jerlov_preset("I");
+  Object quad;
+  quad.name = "painted_quad";
+  quad.mesh_file = write_textured_quad(dir, "paint.png");
+  quad.X_WO = pose_from_xyz_rpy({0.0, 0.0, 2.0}, {0.0, 0.0, 0.0});
+  quad.material = Material{"none", {1.0, 1.0, 1.0}, 1.0};
+  w.objects.push_back(quad);
+  RenderOptions o = exact_options();
+  o.texture_size = 64;
+  const Frame f = Renderer(w, {down_camera()}, o).render(pose_from_xyz_rpy({0, 0, 1.0}, {0, 0, 0}), "down");
+  const auto rgb_at = [&](double x, double y) {
+    const Eigen::Vector3d p = f.X_WC.inverse() * Eigen::Vector3d(x, y, 2.0);
+    const std::size_t i = 3 * (static_cast<std::size_t>(std::lround(f.K(1, 1) * p.y() / p.z() + f.K(1, 2))) * f.width +
+                               static_cast<std::size_t>(std::lround(f.K(0, 0) * p.x() / p.z() + f.K(0, 2))));
+    return Eigen::Vector3i(f.rgb[i], f.rgb[i + 1], f.rgb[i + 2]);
+  };
+  const Eigen::Vector3i sw = rgb_at(-0.5, -0.5), se = rgb_at(0.5, -0.5), nw = rgb_at(-0.5, 0.5), ne = rgb_at(0.5, 0.5);
+  std::printf(
+      "quad quarters: south-west (%d %d %d), south-east (%d %d %d), north-west (%d %d %d), north-east (%d %d %d)\n",
+      sw.x(), sw.y(), sw.z(), se.x(), se.y(), se.z(), nw.x(), nw.y(), nw.z(), ne.x(), ne.y(), ne.z());
+  EXPECT_GT(sw.z(), 3 * std::max(sw.x(), sw.y()) + 10);                                   // blue
+  EXPECT_GT(nw.x(), 3 * std::max(nw.y(), nw.z()) + 10);                                   // red
+  EXPECT_GT(ne.y(), 3 * std::max(ne.x(), ne.z()) + 10);                                   // green
+  EXPECT_GT(std::min({se.x(), se.y(), se.z()}), 2 * std::max({sw.x(), nw.y(), ne.z()}));  // white
+
+  // A map that is not there: the error names the world object, the mesh file and the texture.
+  World bad = w;
+  bad.objects[0].mesh_file = write_textured_quad(dir / "bad", "missing.png");
+  try {
+    Renderer r(bad, {down_camera()}, o);
+    ADD_FAILURE() << "a mesh with a missing texture was accepted";
+  } catch (const ConfigError& e) {
+    const std::string m = e.what();
+    EXPECT_NE(m.find("painted_quad"), std::string::npos) << m;
+    EXPECT_NE(m.find("quad.obj"), std::string::npos) << m;
+    EXPECT_NE(m.find("missing.png"), std::string::npos) << m;
+  }
+  std::filesystem::remove_all(dir);
 }

@@ -3,10 +3,13 @@
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
 #include <assimp/Importer.hpp>
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
 
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <map>
 
@@ -262,38 +265,129 @@ MeshData make_seabed_mesh(const Seabed& sb) {
   return m;
 }
 
-MeshData load_mesh_file(const std::string& path) {
+namespace {
+
+// The triangles of one assimp mesh, in the file's frame.
+MeshData mesh_of(const aiMesh* am) {
+  MeshData m;
+  for (unsigned v = 0; v < am->mNumVertices; ++v) {
+    const auto& p = am->mVertices[v];
+    m.positions.insert(m.positions.end(), {p.x, p.y, p.z});
+    const aiVector3D n = am->HasNormals() ? am->mNormals[v] : aiVector3D(0, 0, -1);
+    m.normals.insert(m.normals.end(), {n.x, n.y, n.z});
+    const aiVector3D t = am->HasTextureCoords(0) ? am->mTextureCoords[0][v] : aiVector3D(0, 0, 0);
+    m.uvs.insert(m.uvs.end(), {t.x, t.y});
+  }
+  for (unsigned f = 0; f < am->mNumFaces; ++f) {
+    const aiFace& face = am->mFaces[f];
+    if (face.mNumIndices != 3) continue;
+    m.indices.insert(m.indices.end(), {face.mIndices[0], face.mIndices[1], face.mIndices[2]});
+  }
+  return m;
+}
+
+// Decoded rgb8, rows bottom first, from an OpenCV grey, BGR or BGRA image (8 or 16 bits).
+std::shared_ptr<const TextureImage> to_texture(const cv::Mat& decoded, const std::string& source) {
+  cv::Mat img = decoded;
+  if (img.depth() == CV_16U) decoded.convertTo(img, CV_8U, 1.0 / 257.0);
+  if (img.depth() != CV_8U || (img.channels() != 1 && img.channels() != 3 && img.channels() != 4))
+    throw ConfigError(source + ": unsupported image format (expected 8 or 16-bit grey, RGB or RGBA)");
+  const int ch = img.channels();
+  auto t = std::make_shared<TextureImage>();
+  t->width = img.cols;
+  t->height = img.rows;
+  t->source = source;
+  t->rgb.resize(static_cast<std::size_t>(img.cols) * img.rows * 3);
+  for (int r = 0; r < img.rows; ++r) {
+    const auto* src = img.ptr<std::uint8_t>(img.rows - 1 - r);
+    auto* dst = &t->rgb[static_cast<std::size_t>(r) * img.cols * 3];
+    for (int c = 0; c < img.cols; ++c) {
+      const std::uint8_t* px = src + static_cast<std::ptrdiff_t>(c) * ch;
+      std::uint8_t* out = dst + static_cast<std::ptrdiff_t>(c) * 3;
+      out[0] = ch == 1 ? px[0] : px[2];
+      out[1] = ch == 1 ? px[0] : px[1];
+      out[2] = px[0];
+    }
+  }
+  return t;
+}
+
+// The base-colour texture of material `mi` (glTF base colour, else diffuse); null when it has none.
+std::shared_ptr<const TextureImage> base_color_of(const aiScene* scene, unsigned mi, const std::string& mesh_path) {
+  if (mi >= scene->mNumMaterials) return nullptr;
+  const aiMaterial* mat = scene->mMaterials[mi];
+  aiString tex;
+  if (mat->GetTexture(aiTextureType_BASE_COLOR, 0, &tex) != AI_SUCCESS &&
+      mat->GetTexture(aiTextureType_DIFFUSE, 0, &tex) != AI_SUCCESS)
+    return nullptr;
+  const std::string name = tex.C_Str();
+  if (const aiTexture* embedded = scene->GetEmbeddedTexture(tex.C_Str())) {
+    const std::string source = mesh_path + " (embedded texture '" + name + "')";
+    if (embedded->mHeight == 0) {  // compressed (PNG, JPEG, ...): mWidth bytes
+      const cv::Mat bytes(1, static_cast<int>(embedded->mWidth), CV_8U, const_cast<aiTexel*>(embedded->pcData));
+      const cv::Mat img = cv::imdecode(bytes, cv::IMREAD_UNCHANGED);
+      if (img.empty()) throw ConfigError(source + ": cannot decode the image");
+      return to_texture(img, source);
+    }
+    cv::Mat bgra(static_cast<int>(embedded->mHeight), static_cast<int>(embedded->mWidth), CV_8UC4,
+                 const_cast<aiTexel*>(embedded->pcData));  // aiTexel is b, g, r, a
+    return to_texture(bgra.clone(), source);
+  }
+  const std::filesystem::path file = std::filesystem::path(mesh_path).parent_path() / name;
+  const std::string source = mesh_path + ": texture '" + file.string() + "'";
+  if (!std::filesystem::exists(file)) throw ConfigError(source + " not found");
+  const cv::Mat img = cv::imread(file.string(), cv::IMREAD_UNCHANGED);
+  if (img.empty()) throw ConfigError(source + ": cannot read or decode the image");
+  return to_texture(img, file.string());
+}
+
+const aiScene* read_mesh_file(Assimp::Importer& importer, const std::string& path) {
   {
     std::ifstream f(path, std::ios::binary);
     if (!f.good()) throw ConfigError(path + ": mesh file not found or not readable");
   }
-  Assimp::Importer importer;
   const aiScene* scene =
       importer.ReadFile(path, aiProcess_Triangulate | aiProcess_GenSmoothNormals | aiProcess_JoinIdenticalVertices |
                                   aiProcess_PreTransformVertices | aiProcess_SortByPType);
   if (!scene || !scene->mRootNode || (scene->mFlags & AI_SCENE_FLAGS_INCOMPLETE))
     throw ConfigError(path + ": cannot load mesh: " + importer.GetErrorString());
-  MeshData out;
+  return scene;
+}
+
+}  // namespace
+
+std::vector<MeshPart> load_mesh_parts(const std::string& path) {
+  Assimp::Importer importer;
+  const aiScene* scene = read_mesh_file(importer, path);
+  std::map<unsigned, std::size_t> part_of_material;  // textured materials -> part
+  std::vector<MeshPart> parts(1);                    // parts[0]: untextured
+  std::map<unsigned, std::shared_ptr<const TextureImage>> textures;
   for (unsigned mi = 0; mi < scene->mNumMeshes; ++mi) {
     const aiMesh* am = scene->mMeshes[mi];
     if (!(am->mPrimitiveTypes & aiPrimitiveType_TRIANGLE)) continue;
-    MeshData m;
-    for (unsigned v = 0; v < am->mNumVertices; ++v) {
-      const auto& p = am->mVertices[v];
-      m.positions.insert(m.positions.end(), {p.x, p.y, p.z});
-      const aiVector3D n = am->HasNormals() ? am->mNormals[v] : aiVector3D(0, 0, -1);
-      m.normals.insert(m.normals.end(), {n.x, n.y, n.z});
-      const aiVector3D t = am->HasTextureCoords(0) ? am->mTextureCoords[0][v] : aiVector3D(0, 0, 0);
-      m.uvs.insert(m.uvs.end(), {t.x, t.y});
+    const unsigned mat = am->mMaterialIndex;
+    if (!textures.count(mat)) textures[mat] = am->HasTextureCoords(0) ? base_color_of(scene, mat, path) : nullptr;
+    std::size_t part = 0;
+    if (textures[mat]) {
+      auto [it, added] = part_of_material.emplace(mat, parts.size());
+      if (added) parts.push_back({MeshData{}, textures[mat]});
+      part = it->second;
     }
-    for (unsigned f = 0; f < am->mNumFaces; ++f) {
-      const aiFace& face = am->mFaces[f];
-      if (face.mNumIndices != 3) continue;
-      m.indices.insert(m.indices.end(), {face.mIndices[0], face.mIndices[1], face.mIndices[2]});
-    }
-    out.append(m);
+    parts[part].mesh.append(mesh_of(am));
   }
-  if (out.triangle_count() == 0) throw ConfigError(path + ": mesh file contains no triangles");
+  std::vector<MeshPart> out;
+  std::size_t triangles = 0;
+  for (auto& p : parts) {
+    triangles += p.mesh.triangle_count();
+    if (p.mesh.triangle_count() > 0) out.push_back(std::move(p));
+  }
+  if (triangles == 0) throw ConfigError(path + ": mesh file contains no triangles");
+  return out;
+}
+
+MeshData load_mesh_file(const std::string& path) {
+  MeshData out;
+  for (const MeshPart& p : load_mesh_parts(path)) out.append(p.mesh);
   return out;
 }
 
@@ -317,11 +411,11 @@ void write_obj(const MeshData& m, const std::string& path) {
 SceneGeometry build_scene_geometry(const World& w) {
   SceneGeometry g;
   if (w.seabed.enabled) {
-    g.meshes.push_back({"seabed", make_seabed_mesh(w.seabed), SegClass::kSeabed, w.seabed.material, false});
+    g.meshes.push_back({"seabed", make_seabed_mesh(w.seabed), SegClass::kSeabed, w.seabed.material, false, nullptr});
   }
   for (const auto& p : w.pipelines)
-    g.meshes.push_back(
-        {"pipeline:" + p.name, make_tube_mesh(p.centerline_W, p.radius_m, 16), SegClass::kPipeline, p.material, false});
+    g.meshes.push_back({"pipeline:" + p.name, make_tube_mesh(p.centerline_W, p.radius_m, 16), SegClass::kPipeline,
+                        p.material, false, nullptr});
   // Rocks sharing a material are merged into one draw.
   std::vector<SceneMesh> rock_groups;
   for (const auto& r : w.rocks) {
@@ -331,7 +425,7 @@ SceneGeometry build_scene_geometry(const World& w) {
     for (auto& gm : rock_groups)
       if (same_look(gm.material, r.material)) grp = &gm;
     if (!grp) {
-      rock_groups.push_back({"rocks", {}, SegClass::kRock, r.material, true});
+      rock_groups.push_back({"rocks", {}, SegClass::kRock, r.material, true, nullptr});
       grp = &rock_groups.back();
     }
     grp->mesh.append(m);
@@ -347,16 +441,23 @@ SceneGeometry build_scene_geometry(const World& w) {
     far.hm_width = far.hm_height = 0;
     far.hm_values.clear();
     far.depth_m = w.seabed.depth_m + w.seabed.relief_amplitude_m + 0.2;
-    g.meshes.push_back({"seabed_far", make_seabed_mesh(far), SegClass::kSeabed, w.seabed.material, false});
+    g.meshes.push_back({"seabed_far", make_seabed_mesh(far), SegClass::kSeabed, w.seabed.material, false, nullptr});
   }
   for (const auto& o : w.objects) {
     MeshData m;
     if (!o.mesh_file.empty()) {
+      std::vector<MeshPart> parts;
       try {
-        m = load_mesh_file(o.mesh_file);
+        parts = load_mesh_parts(o.mesh_file);
       } catch (const ConfigError& e) {
         throw ConfigError(w.file + ": object '" + o.name + "': " + e.what());
       }
+      for (MeshPart& p : parts) {  // textured parts by their UVs, the rest triplanar
+        p.mesh.transform(o.X_WO, o.scale);
+        g.meshes.push_back(
+            {"object:" + o.name, std::move(p.mesh), o.seg_class, o.material, !p.base_color, p.base_color});
+      }
+      continue;
     } else if (o.shape == "box") {
       m = make_box_mesh(o.size_m);
     } else if (o.shape == "sphere") {
@@ -365,7 +466,7 @@ SceneGeometry build_scene_geometry(const World& w) {
       m = make_plane_mesh(o.size_m.x(), o.size_m.y());
     }
     m.transform(o.X_WO, o.scale);
-    g.meshes.push_back({"object:" + o.name, std::move(m), o.seg_class, o.material, o.shape != "plane"});
+    g.meshes.push_back({"object:" + o.name, std::move(m), o.seg_class, o.material, o.shape != "plane", nullptr});
   }
   return g;
 }

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -22,13 +23,34 @@ struct MeshData {
   void append(const MeshData& other);
 };
 
+/// A texture image of a mesh file (its base colour), decoded: rgb8, rows bottom first (texture
+/// coordinate v = 0 is the image's bottom, as assimp gives UVs). `source` names it in messages.
+struct TextureImage {
+  int width = 0, height = 0;
+  std::vector<std::uint8_t> rgb;
+  std::string source;
+};
+
 struct SceneMesh {
   std::string name;
   MeshData mesh;
   SegClass seg_class = SegClass::kOther;
   Material material;
   bool triplanar = false;  ///< texture by world position (meshes without UVs: rocks, files)
+  /// The mesh file's own base-colour texture (by its UVs, times material.albedo); null: the
+  /// material's procedural texture.
+  std::shared_ptr<const TextureImage> base_color;
 };
+
+/// A mesh file's triangles grouped by their base-colour texture: one part per textured material
+/// (glTF baseColorTexture, FBX/OBJ diffuse map; files next to the mesh or embedded, e.g. GLB),
+/// and one part with every untextured triangle. Throws ConfigError naming the mesh file and the
+/// texture when a texture is missing or cannot be decoded.
+struct MeshPart {
+  MeshData mesh;
+  std::shared_ptr<const TextureImage> base_color;
+};
+std::vector<MeshPart> load_mesh_parts(const std::string& path);
 
 struct SceneGeometry {
   std::vector<SceneMesh> meshes;
