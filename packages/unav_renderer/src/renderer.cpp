@@ -64,7 +64,7 @@ struct GpuMesh {
   bool sediment = false;  ///< sand settled on its upward faces and near the seabed
   float roughness = 0.6f, metallic = 0.0f, relief_m = 0.0f, sediment_cover = 0.0f;
   GLuint texture = 0;
-  GLuint gradient = 0;  ///< the relief's slope (make_relief_gradient), for bump mapping
+  GLuint gradient = 0;  ///< the relief's slope (ProceduralTexture::gradient), for bump mapping
 };
 
 struct Targets {
@@ -226,8 +226,10 @@ struct Renderer::Impl {
   RenderOptions options;
   WaterModel water;
   std::vector<GpuMesh> meshes;
-  std::map<std::string, GLuint> textures;
-  std::map<std::string, GLuint> gradients;                       // relief slopes by texture name
+  struct SurfaceMaps {
+    GLuint colour = 0, slope = 0;  // albedo + relief height; the relief's gradient
+  };
+  std::map<std::string, SurfaceMaps> textures;                   // procedural, by name
   std::map<const TextureImage*, GLuint> image_textures;          // mesh files' own base-colour maps
   std::vector<std::shared_ptr<const TextureImage>> base_colors;  // keeps image_textures' keys alive
   Eigen::Vector3d sediment_albedo{0.7, 0.64, 0.5};               // the seabed's mean albedo (linear): settled sand
@@ -265,8 +267,7 @@ struct Renderer::Impl {
   void upload_scene(const SceneGeometry& geo);
   void upload_snow();
   void release_scene();  // meshes and marine-snow buffers (set_world, destructor)
-  GLuint texture(const std::string& name);
-  GLuint gradient(const std::string& name);
+  const SurfaceMaps& texture(const std::string& name);
   GLuint image_texture(const TextureImage& image);
   Targets& targets_for(const CameraModel& c);
   struct FrameSetup;
@@ -317,68 +318,30 @@ void Renderer::Impl::self_test() {
                   std::to_string(b) + ") instead of (64, 128, 191)");
 }
 
-GLuint Renderer::Impl::texture(const std::string& name) {
+const Renderer::Impl::SurfaceMaps& Renderer::Impl::texture(const std::string& name) {
   auto it = textures.find(name);
   if (it != textures.end()) return it->second;
   const int size = name == "none" ? 1 : std::max(16, options.texture_size);
-  const auto px = detail::make_texture(name, size);
-  GLuint t = 0;
-  glGenTextures(1, &t);
-  glBindTexture(GL_TEXTURE_2D, t);
-  glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
-  // Albedo in sRGB, the relief height (alpha) linear.
-  glTexImage2D(GL_TEXTURE_2D, 0, GL_SRGB8_ALPHA8, size, size, 0, GL_RGBA, GL_UNSIGNED_BYTE, px.data());
-  glGenerateMipmap(GL_TEXTURE_2D);
-  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR_MIPMAP_LINEAR);
-  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
-  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_REPEAT);
-  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_REPEAT);
-  textures[name] = t;
-  return t;
+  const auto tex = detail::make_texture(name, size);
+  SurfaceMaps& maps = textures[name];
+  // Albedo in sRGB, the relief height (alpha) linear; its slope mipmapped: a footprint's mean.
+  maps.colour = gl::make_tiled_tex(GL_SRGB8_ALPHA8, size, size, GL_RGBA, GL_UNSIGNED_BYTE, tex.rgba.data());
+  maps.slope = gl::make_tiled_tex(GL_RG16F, size, size, GL_RG, GL_FLOAT, tex.gradient.data());
+  return maps;
 }
 
-GLuint Renderer::Impl::gradient(const std::string& name) {
-  auto it = gradients.find(name);
-  if (it != gradients.end()) return it->second;
-  const int size = name == "none" ? 1 : std::max(16, options.texture_size);
-  const auto g = detail::make_relief_gradient(name, size);
-  GLuint t = 0;
-  glGenTextures(1, &t);
-  glBindTexture(GL_TEXTURE_2D, t);
-  glTexImage2D(GL_TEXTURE_2D, 0, GL_RG16F, size, size, 0, GL_RG, GL_FLOAT, g.data());
-  glGenerateMipmap(GL_TEXTURE_2D);  // a footprint's mean slope
-  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR_MIPMAP_LINEAR);
-  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
-  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_REPEAT);
-  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_REPEAT);
-  gradients[name] = t;
-  return t;
-}
-
+// Alpha reads 1 (a relief is never drawn from a mesh file's map: GpuMesh::bump is off).
 GLuint Renderer::Impl::image_texture(const TextureImage& image) {
   auto it = image_textures.find(&image);
   if (it != image_textures.end()) return it->second;
-  std::vector<std::uint8_t> rgba(static_cast<std::size_t>(image.width) * image.height * 4, 128);  // flat relief
-  for (std::size_t i = 0, n = rgba.size() / 4; i < n; ++i)
-    for (int c = 0; c < 3; ++c) rgba[4 * i + c] = image.rgb[3 * i + c];
-  GLuint t = 0;
-  glGenTextures(1, &t);
-  glBindTexture(GL_TEXTURE_2D, t);
-  glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
-  glTexImage2D(GL_TEXTURE_2D, 0, GL_SRGB8_ALPHA8, image.width, image.height, 0, GL_RGBA, GL_UNSIGNED_BYTE, rgba.data());
-  glGenerateMipmap(GL_TEXTURE_2D);
-  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR_MIPMAP_LINEAR);
-  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
-  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_REPEAT);
-  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_REPEAT);
-  image_textures[&image] = t;
-  return t;
+  return image_textures[&image] =
+             gl::make_tiled_tex(GL_SRGB8, image.width, image.height, GL_RGB, GL_UNSIGNED_BYTE, image.rgb.data());
 }
 
 void Renderer::Impl::upload_scene(const SceneGeometry& geo) {
   triangles = geo.triangle_count();
   {  // Sediment is the seabed's own sand: its texture's mean (linear) times its albedo.
-    const auto px = detail::make_texture(world.seabed.material.texture, 64);
+    const auto px = detail::make_texture(world.seabed.material.texture, 64).rgba;
     Eigen::Vector3d sum = Eigen::Vector3d::Zero();
     const std::size_t n = px.size() / 4;
     for (std::size_t i = 0; i < n; ++i)
@@ -395,7 +358,7 @@ void Renderer::Impl::upload_scene(const SceneGeometry& geo) {
     g.triplanar = sm.triplanar;
     g.macro = (sm.name == "seabed" || sm.name == "seabed_far") && sm.material.texture != "none";
     g.sections = sm.material.texture == "pipe_coating" && !sm.triplanar;
-    g.texture = texture(sm.material.texture);
+    g.texture = texture(sm.material.texture).colour;
     if (sm.base_color) {  // the mesh file's own map, by its UVs (one repeat per unit)
       base_colors.push_back(sm.base_color);
       g.texture = image_texture(*sm.base_color);
@@ -407,7 +370,7 @@ void Renderer::Impl::upload_scene(const SceneGeometry& geo) {
     g.relief_m = static_cast<float>(material_relief_m(sm.material));
     g.bump = options.materials && g.relief_m > 0.0f && sm.material.texture != "none";
     if (sm.base_color) g.bump = false;  // no relief in a mesh file's colour map
-    if (g.bump) g.gradient = gradient(sm.material.texture);
+    if (g.bump) g.gradient = texture(sm.material.texture).slope;
     // A dielectric's highlight in water is faint (F0 = 0.0032 for index 1.5 against 1.34): only
     // smooth ones show it (roughness 0.45: +4..30 % over the diffuse at the peak; 0.8: < 1 %).
     g.specular = options.materials && (g.metallic > 0.0f || g.roughness < 0.7f);
@@ -1147,8 +1110,6 @@ Renderer::Renderer(World world, std::vector<CameraModel> cameras, RenderOptions 
   impl_->self_test();
   // Scene programs are compiled per material variant on first use (scene_program()); the plain one now.
   impl_->scene_variants[0] = Program(detail::kSceneVS, detail::kSceneFS, "scene", scene_defines(0));
-  impl_->scene_variants[8u | 16u | 32u] =  // every material feature: a shader error shows here
-      Program(detail::kSceneVS, detail::kSceneFS, "scene", scene_defines(8u | 16u | 32u));
   impl_->snow = Program(detail::kSnowVS, detail::kSnowFS, "marine_snow");
   impl_->post_program(
       {false, true, true, false, false, true, true, false});  // the common one; a shader error shows here
@@ -1211,8 +1172,10 @@ Renderer::~Renderer() {
     glDeleteTextures(7, texs);
   }
   impl_->release_scene();
-  for (auto& [name, t] : impl_->textures) glDeleteTextures(1, &t);
-  for (auto& [name, t] : impl_->gradients) glDeleteTextures(1, &t);
+  for (auto& [name, maps] : impl_->textures) {
+    glDeleteTextures(1, &maps.colour);
+    glDeleteTextures(1, &maps.slope);
+  }
   glDeleteVertexArrays(1, &impl_->empty_vao);
   glDeleteSamplers(1, &impl_->shadow_nearest);
   for (const auto& [v, p] : impl_->scene_variants)

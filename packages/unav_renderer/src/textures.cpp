@@ -118,40 +118,35 @@ TexelFn texel_function(const std::string& name) {
 
 }  // namespace
 
-std::vector<std::uint8_t> make_texture(const std::string& name, int size) {
-  if (name == "none") return {255, 255, 255, 128};
+ProceduralTexture make_texture(const std::string& name, int size) {
+  if (name == "none") return {{255, 255, 255, 128}, {0.0f, 0.0f}};
   const TexelFn fn = texel_function(name);
-  std::vector<std::uint8_t> px(static_cast<std::size_t>(size) * size * 4);
+  ProceduralTexture out;
+  out.rgba.resize(static_cast<std::size_t>(size) * size * 4);
+  std::vector<double> h(static_cast<std::size_t>(size) * size);  // before 8-bit rounding
   for (int j = 0; j < size; ++j)
     for (int i = 0; i < size; ++i) {
       const Texel t = fn((i + 0.5) / size, (j + 0.5) / size);
-      auto* p = &px[(static_cast<std::size_t>(j) * size + i) * 4];
+      const std::size_t k = static_cast<std::size_t>(j) * size + i;
+      auto* p = &out.rgba[k * 4];
       p[0] = to8(t.c.r);
       p[1] = to8(t.c.g);
       p[2] = to8(t.c.b);
       p[3] = to8(t.h);
+      h[k] = t.h;
     }
-  return px;
-}
-
-std::vector<float> make_relief_gradient(const std::string& name, int size) {
-  if (name == "none") return {0.0f, 0.0f};
-  const TexelFn fn = texel_function(name);
-  std::vector<double> h(static_cast<std::size_t>(size) * size);
-  for (int j = 0; j < size; ++j)
-    for (int i = 0; i < size; ++i) h[static_cast<std::size_t>(j) * size + i] = fn((i + 0.5) / size, (j + 0.5) / size).h;
   // Central differences over the periodic tile, per unit of texture coordinate (one tile = 1).
   const auto at = [&](int i, int j) {
     return h[static_cast<std::size_t>((j + size) % size) * size + (i + size) % size];
   };
-  std::vector<float> g(h.size() * 2);
+  out.gradient.resize(h.size() * 2);
   for (int j = 0; j < size; ++j)
     for (int i = 0; i < size; ++i) {
       const std::size_t k = (static_cast<std::size_t>(j) * size + i) * 2;
-      g[k] = static_cast<float>((at(i + 1, j) - at(i - 1, j)) * 0.5 * size);
-      g[k + 1] = static_cast<float>((at(i, j + 1) - at(i, j - 1)) * 0.5 * size);
+      out.gradient[k] = static_cast<float>((at(i + 1, j) - at(i - 1, j)) * 0.5 * size);
+      out.gradient[k + 1] = static_cast<float>((at(i, j + 1) - at(i, j - 1)) * 0.5 * size);
     }
-  return g;
+  return out;
 }
 
 }  // namespace unav::renderer::detail

@@ -359,21 +359,19 @@ const aiScene* read_mesh_file(Assimp::Importer& importer, const std::string& pat
 std::vector<MeshPart> load_mesh_parts(const std::string& path) {
   Assimp::Importer importer;
   const aiScene* scene = read_mesh_file(importer, path);
-  std::map<unsigned, std::size_t> part_of_material;  // textured materials -> part
-  std::vector<MeshPart> parts(1);                    // parts[0]: untextured
-  std::map<unsigned, std::shared_ptr<const TextureImage>> textures;
+  std::vector<MeshPart> parts(1);           // parts[0]: untextured
+  std::map<unsigned, std::size_t> part_of;  // material -> its part (0: none of its own)
   for (unsigned mi = 0; mi < scene->mNumMeshes; ++mi) {
     const aiMesh* am = scene->mMeshes[mi];
     if (!(am->mPrimitiveTypes & aiPrimitiveType_TRIANGLE)) continue;
-    const unsigned mat = am->mMaterialIndex;
-    if (!textures.count(mat)) textures[mat] = am->HasTextureCoords(0) ? base_color_of(scene, mat, path) : nullptr;
-    std::size_t part = 0;
-    if (textures[mat]) {
-      auto [it, added] = part_of_material.emplace(mat, parts.size());
-      if (added) parts.push_back({MeshData{}, textures[mat]});
-      part = it->second;
+    auto [it, first] = part_of.emplace(am->mMaterialIndex, 0);
+    if (first && am->HasTextureCoords(0)) {
+      if (auto base_color = base_color_of(scene, am->mMaterialIndex, path)) {
+        it->second = parts.size();
+        parts.push_back({MeshData{}, std::move(base_color)});
+      }
     }
-    parts[part].mesh.append(mesh_of(am));
+    parts[it->second].mesh.append(mesh_of(am));
   }
   std::vector<MeshPart> out;
   std::size_t triangles = 0;

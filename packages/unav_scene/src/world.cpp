@@ -26,20 +26,34 @@ using detail::get_vec;
 using detail::join_key;
 using detail::YamlCtx;
 
+namespace {
+
+// The procedural textures and what their materials look like unless told: roughness, relief [m].
+struct TextureLook {
+  const char* name;
+  double roughness, relief_m;
+};
+constexpr TextureLook kTextureLooks[] = {
+    {"none", 0.6, 0.0}, {"sand", 0.9, 0.02}, {"rock", 0.8, 0.03}, {"pipe_coating", 0.45, 0.006}, {"checker", 0.6, 0.0}};
+
+const TextureLook* texture_look(const std::string& texture) {
+  for (const TextureLook& t : kTextureLooks)
+    if (texture == t.name) return &t;
+  return nullptr;
+}
+
+}  // namespace
+
 double material_roughness(const Material& m) {
   if (!std::isnan(m.roughness)) return m.roughness;
-  if (m.texture == "sand") return 0.9;
-  if (m.texture == "rock") return 0.8;
-  if (m.texture == "pipe_coating") return 0.45;
-  return 0.6;
+  const TextureLook* t = texture_look(m.texture);
+  return t ? t->roughness : 0.6;
 }
 
 double material_relief_m(const Material& m) {
   if (!std::isnan(m.relief_m)) return m.relief_m;
-  if (m.texture == "sand") return 0.02;
-  if (m.texture == "rock") return 0.03;
-  if (m.texture == "pipe_coating") return 0.006;
-  return 0.0;
+  const TextureLook* t = texture_look(m.texture);
+  return t ? t->relief_m : 0.0;
 }
 
 double material_sediment(const Material& m) { return std::isnan(m.sediment) ? 0.5 : m.sediment; }
@@ -149,10 +163,7 @@ Material parse_material(const YamlCtx& c, const YAML::Node& n, const std::string
       c, n, path,
       {"texture", "albedo", "uv_scale_m", "acoustic_reflectivity_db", "roughness", "metallic", "relief_m", "sediment"});
   def.texture = get_string(c, n, path, "texture", def.texture);
-  static const char* kTextures[] = {"none", "sand", "rock", "pipe_coating", "checker"};
-  bool ok = false;
-  for (const char* t : kTextures) ok = ok || def.texture == t;
-  if (!ok)
+  if (!texture_look(def.texture))
     c.fail(join_key(path, "texture"),
            "unknown texture '" + def.texture + "' (valid: none, sand, rock, pipe_coating, checker)");
   def.albedo = get_vec<3>(c, n, path, "albedo", def.albedo, true);

@@ -120,7 +120,6 @@ Context::Context(int argc, const char* const* argv, const ContextOptions& option
       throw ConfigError("environment UNAV_DATA_SHARING='" + v + "': expected on or off");
     }
   }
-  use_shm_transport_ = shm_transport_from_environment();
 
   handle_signals_ = options.handle_signals;
   if (handle_signals_) {
@@ -188,7 +187,7 @@ void Context::create_participant(
   // the old, unlinked segment and never reach the newcomer (fixed upstream after 2.9:
   // eProsima/Fast-DDS PR #4728). Seen here as a respawned renderer that never rejoined lockstep
   // and a `unav topic pub` that one running node never heard, in 2 of 4 fault-injection runs.
-  if (use_shm_transport_) {
+  if (shm_transport_from_environment()) {
     auto shm = std::make_shared<eprosima::fastdds::rtps::SharedMemTransportDescriptor>();
     shm->segment_size(options.shm_segment_bytes);
     pqos.transport().user_transports.push_back(shm);

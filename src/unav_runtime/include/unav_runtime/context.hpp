@@ -129,7 +129,6 @@ class Context {
   std::mutex mutex_;
   std::mutex endpoint_mutex_;  // a type's bound is set for one endpoint creation at a time
   bool data_sharing_ = true;
-  bool use_shm_transport_ = false;
   std::map<std::string, eprosima::fastdds::dds::Topic*> topics_;
   std::vector<std::unique_ptr<eprosima::fastdds::dds::TopicDataType>> owned_types_;
   std::vector<Node*> nodes_;
