@@ -79,6 +79,9 @@ int main(int argc, char** argv) {
   o.materials = false;
   configs.push_back({"no materials (flat Lambertian)", o});
   o = opt;
+  o.shadow_receiver_culling = false;
+  configs.push_back({"no shadow receiver culling", o});
+  o = opt;
   o.shadows = false;
   configs.push_back({"no lamp shadows", o});
   o = opt;
@@ -105,6 +108,7 @@ int main(int argc, char** argv) {
               frames);
   std::printf("%-20s %8s %8s %8s %10s %8s %10s | %8s %8s %8s %10s %8s %9s\n", "camera", "shadows", "scene", "snow",
               "inscatter", "post", "readback", "cpu shad", "scene", "snow", "inscatter", "post", "cpu sum");
+  std::vector<std::string> lookups;
   for (const char* cam : {"w320x180", "w640x480"}) {
     std::vector<RenderTimings> t;
     for (int i = 0; i < frames; ++i) {
@@ -118,6 +122,13 @@ int main(int argc, char** argv) {
       std::sort(v.begin(), v.end());
       return v[v.size() / 2];
     };
+    auto medz = [&](std::size_t RenderTimings::*m) {
+      std::vector<double> v;
+      v.reserve(t.size());
+      for (const auto& x : t) v.push_back(static_cast<double>(x.*m));
+      std::sort(v.begin(), v.end());
+      return v[v.size() / 2];
+    };
     const double cpu[5] = {med(&RenderTimings::shadow_pass_cpu_ms), med(&RenderTimings::scene_pass_cpu_ms),
                            med(&RenderTimings::snow_pass_cpu_ms), med(&RenderTimings::inscatter_pass_cpu_ms),
                            med(&RenderTimings::post_pass_cpu_ms)};
@@ -126,6 +137,16 @@ int main(int argc, char** argv) {
                 med(&RenderTimings::snow_pass_ms), med(&RenderTimings::inscatter_pass_ms),
                 med(&RenderTimings::post_pass_ms), med(&RenderTimings::readback_ms), cpu[0], cpu[1], cpu[2], cpu[3],
                 cpu[4], cpu[0] + cpu[1] + cpu[2] + cpu[3] + cpu[4]);
+    char line[200];
+    std::snprintf(line, sizeof line, "%-20s %10.0f %10.0f (%4.1f %%) %10.0f (%4.1f %%)", cam,
+                  medz(&RenderTimings::scene_fragments), medz(&RenderTimings::sun_lookup_fragments),
+                  100.0 * medz(&RenderTimings::sun_lookup_fragments) / medz(&RenderTimings::scene_fragments),
+                  medz(&RenderTimings::lamp_lookup_fragments),
+                  100.0 * medz(&RenderTimings::lamp_lookup_fragments) / medz(&RenderTimings::scene_fragments));
+    lookups.emplace_back(line);
   }
+  std::printf("\nscene fragments per frame (median) and those with shadow lookups (receiver culling on):\n");
+  std::printf("%-20s %10s %19s %19s\n", "camera", "fragments", "sun lookups", "lamp lookups");
+  for (const auto& l : lookups) std::puts(l.c_str());
   return 0;
 }

@@ -48,7 +48,51 @@ double process_cpu_ms() {
 struct Chunk {
   GLsizei first = 0, count = 0;  // in indices
   Eigen::Vector3f lo, hi;
+  bool sun_free = false;  ///< terrain that nothing can shadow from the sun (mark_sun_free())
 };
+
+// A box as seen from a lamp: its azimuths (mid, half-width; all of them when the lamp stands over
+// it) and depression angles below the horizontal (z down), in radians.
+struct LampCaster {
+  std::size_t mesh = 0;
+  float az_mid = 0.0f, az_half = 4.0f, dep_lo = 0.0f, dep_hi = 0.0f;
+  float top_z = 0.0f, bottom_z = 0.0f;  // the box's shallowest and deepest z
+};
+
+LampCaster seen_from(const Eigen::Vector3f& L, std::size_t mesh, const Eigen::Vector3f& lo, const Eigen::Vector3f& hi) {
+  LampCaster a;
+  a.mesh = mesh;
+  a.top_z = lo.z();
+  a.bottom_z = hi.z();
+  const float cx = std::clamp(L.x(), lo.x(), hi.x()), cy = std::clamp(L.y(), lo.y(), hi.y());
+  const float h_near = std::hypot(cx - L.x(), cy - L.y());
+  const float h_far = std::hypot(std::max(L.x() - lo.x(), hi.x() - L.x()), std::max(L.y() - lo.y(), hi.y() - L.y()));
+  // Steepest below the lamp: deep and near; flattest: shallow and far (above the lamp: near).
+  const float top = lo.z() - L.z(), bottom = hi.z() - L.z();
+  a.dep_lo = std::atan2(top, top >= 0.0f ? h_far : h_near);
+  a.dep_hi = std::atan2(bottom, bottom >= 0.0f ? h_near : h_far);
+  if (h_near > 0.0f) {  // the lamp outside the box's footprint: its corners span less than pi
+    const float mid = std::atan2(0.5f * (lo.y() + hi.y()) - L.y(), 0.5f * (lo.x() + hi.x()) - L.x());
+    float d_lo = 0.0f, d_hi = 0.0f;
+    for (int k = 0; k < 4; ++k) {
+      const float x = (k & 1 ? hi.x() : lo.x()) - L.x(), y = (k & 2 ? hi.y() : lo.y()) - L.y();
+      const float d = std::remainder(std::atan2(y, x) - mid, 2.0f * static_cast<float>(M_PI));
+      d_lo = std::min(d_lo, d);
+      d_hi = std::max(d_hi, d);
+    }
+    a.az_mid = mid + 0.5f * (d_lo + d_hi);
+    a.az_half = 0.5f * (d_hi - d_lo);
+  }
+  return a;
+}
+
+// Whether caster c can stand on a lamp's ray to some point of receiver r: in azimuth and in
+// depression angle, and reaching above r's deepest point (the lamp is above the terrain).
+bool may_shadow(const LampCaster& c, const LampCaster& r) {
+  if (c.top_z > r.bottom_z) return false;
+  if (c.dep_hi < r.dep_lo || r.dep_hi < c.dep_lo) return false;
+  return std::abs(std::remainder(c.az_mid - r.az_mid, 2.0f * static_cast<float>(M_PI))) <= c.az_half + r.az_half;
+}
 
 struct GpuMesh {
   GLuint vao = 0, vbo[3] = {0, 0, 0}, ebo = 0;
@@ -56,6 +100,10 @@ struct GpuMesh {
   std::vector<Chunk> chunks;
   SegClass seg_class = SegClass::kOther;
   Material material;
+  /// A height field (the seabed patch, the far seabed): it can shadow itself only where the light
+  /// comes in flatter than its steepest slope, tan_slope (shadow receiver culling).
+  bool terrain = false;
+  float tan_slope = 0.0f;
   bool triplanar = false;
   bool macro = false;
   bool sections = false;  ///< pipe coating: each section shows another part of the texture
@@ -112,8 +160,27 @@ constexpr double kSunShadowHalfM = 12.0;  // the sun's shadow map covers 24 m x 
 constexpr double kSunSnapM = 2.0;         // its centre moves in 2 m steps: the map is reused in between
 constexpr int kSunMapScale = 4;           // its edge: 4 x shadow_map_size (1024 px: 2 cm texels)
 
+// The steepest slope of a mesh's faces, as tan(angle from horizontal) (world_ned, z down).
+float steepest_slope(const MeshData& mesh) {
+  float best = 0.0f;
+  const auto& P = mesh.positions;
+  for (std::size_t t = 0; t < mesh.triangle_count(); ++t) {
+    Eigen::Vector3f p[3];
+    for (int k = 0; k < 3; ++k) {
+      const std::size_t b = std::size_t{3} * mesh.indices[3 * t + static_cast<std::size_t>(k)];
+      p[k] = Eigen::Vector3f(P[b], P[b + 1], P[b + 2]);
+    }
+    const Eigen::Vector3f n = (p[1] - p[0]).cross(p[2] - p[0]);
+    const float horizontal = std::hypot(n.x(), n.y());
+    if (horizontal == 0.0f) continue;
+    if (std::abs(n.z()) < 1e-9f * horizontal) return std::numeric_limits<float>::infinity();
+    best = std::max(best, horizontal / std::abs(n.z()));
+  }
+  return best;
+}
+
 // Triangles of a mesh reordered into chunks of about kChunkM x kChunkM (x, y) each.
-constexpr double kChunkM = 4.0;
+constexpr double kChunkM = 2.0;
 std::vector<std::uint32_t> chunked_indices(const MeshData& mesh, std::vector<Chunk>* chunks) {
   const std::size_t nt = mesh.triangle_count();
   const auto& P = mesh.positions;
@@ -131,7 +198,7 @@ std::vector<std::uint32_t> chunked_indices(const MeshData& mesh, std::vector<Chu
     }
   int n[2] = {1, 1};
   if (nt > 2000)
-    for (int a = 0; a < 2; ++a) n[a] = std::clamp(static_cast<int>(std::ceil((hi[a] - lo[a]) / kChunkM)), 1, 32);
+    for (int a = 0; a < 2; ++a) n[a] = std::clamp(static_cast<int>(std::ceil((hi[a] - lo[a]) / kChunkM)), 1, 64);
   std::vector<std::vector<std::size_t>> cells(static_cast<std::size_t>(n[0] * n[1]));
   for (std::size_t t = 0; t < nt; ++t) {
     int c[2];
@@ -165,11 +232,10 @@ std::vector<std::uint32_t> chunked_indices(const MeshData& mesh, std::vector<Chu
 }
 
 // False when the box lies entirely outside one plane of the clip volume of vp (conservative).
-bool in_frustum(const Eigen::Matrix4f& vp, const Chunk& ch) {
+bool in_frustum(const Eigen::Matrix4f& vp, const Eigen::Vector3f& lo, const Eigen::Vector3f& hi) {
   int outside[6] = {0, 0, 0, 0, 0, 0};
   for (int i = 0; i < 8; ++i) {
-    const Eigen::Vector4f p(i & 1 ? ch.hi.x() : ch.lo.x(), i & 2 ? ch.hi.y() : ch.lo.y(), i & 4 ? ch.hi.z() : ch.lo.z(),
-                            1.0f);
+    const Eigen::Vector4f p(i & 1 ? hi.x() : lo.x(), i & 2 ? hi.y() : lo.y(), i & 4 ? hi.z() : lo.z(), 1.0f);
     const Eigen::Vector4f c = vp * p;
     outside[0] += c.x() < -c.w();
     outside[1] += c.x() > c.w();
@@ -182,6 +248,7 @@ bool in_frustum(const Eigen::Matrix4f& vp, const Chunk& ch) {
     if (k == 8) return false;
   return true;
 }
+bool in_frustum(const Eigen::Matrix4f& vp, const Chunk& ch) { return in_frustum(vp, ch.lo, ch.hi); }
 
 // Draws the chunks of m inside vp's frustum (neighbouring visible chunks in one call).
 void draw_visible(const GpuMesh& m, const Eigen::Matrix4f& vp) {
@@ -209,10 +276,26 @@ void draw_visible(const GpuMesh& m, const Eigen::Matrix4f& vp) {
   flush();
 }
 
-bool any_visible(const GpuMesh& m, const Eigen::Matrix4f& vp) {
-  for (const Chunk& ch : m.chunks)
-    if (in_frustum(vp, ch)) return true;
-  return false;
+// Draws the listed chunks (in mesh order; neighbours in one call).
+void draw_chunks(const std::vector<const Chunk*>& chunks) {
+  GLsizei first = 0, count = 0;
+  auto flush = [&] {
+    if (count > 0)
+      glDrawElements(GL_TRIANGLES, count, GL_UNSIGNED_INT,
+                     // NOLINTNEXTLINE(performance-no-int-to-ptr): GL takes a buffer offset as a pointer
+                     reinterpret_cast<const void*>(static_cast<std::uintptr_t>(first) * sizeof(std::uint32_t)));
+    count = 0;
+  };
+  for (const Chunk* ch : chunks) {
+    if (count > 0 && first + count == ch->first) {
+      count += ch->count;
+    } else {
+      flush();
+      first = ch->first;
+      count = ch->count;
+    }
+  }
+  flush();
 }
 
 double luminance(const Eigen::Vector3d& c) { return 0.2126 * c.x() + 0.7152 * c.y() + 0.0722 * c.z(); }
@@ -246,6 +329,7 @@ struct Renderer::Impl {
   GLuint snow_vao = 0, snow_vbo = 0;
   GLsizei snow_count = 0;
   GLuint empty_vao = 0;
+  GLuint fragment_query = 0;  // GL_SAMPLES_PASSED, for the profile's fragment counts
   std::map<std::string, Targets> targets;
   std::vector<Slot> slots;
   std::deque<std::size_t> in_flight;  // slot indices, oldest first
@@ -275,7 +359,19 @@ struct Renderer::Impl {
   FrameSetup setup_frame(const Pose& X_WB, const CameraModel& c) const;
   void shadow_pass(const FrameSetup& f);
   void scene_pass(const Targets& t, const FrameSetup& f, double stamp_s);
-  Program& scene_program(const GpuMesh& m, const FrameSetup& f, double stamp_s, std::set<unsigned>* set_up);
+  Program& scene_program(const GpuMesh& m, unsigned shadow_bits, const FrameSetup& f, double stamp_s,
+                         std::set<unsigned>* set_up);
+  // Shadow receiver culling (mark_sun_free(), lamp_shadow_bits()): boxes around what can cast a
+  // shadow, by mesh: 1 m cells of objects, rocks and pipes; the chunks of the terrain.
+  struct CasterBox {
+    std::size_t mesh;
+    Eigen::Vector3f lo, hi;
+  };
+  std::vector<CasterBox> caster_boxes;
+  void build_caster_boxes(const SceneGeometry& geo);
+  void mark_sun_free();
+  unsigned lamp_shadow_bits(std::size_t mesh, const Chunk& ch, const FrameSetup& f,
+                            const std::vector<std::vector<LampCaster>>& casters) const;
   Program& post_program(const std::array<bool, 8>& features);
   void snow_pass(const FrameSetup& f, const CameraModel& c, double stamp_s);
   bool inscatter_pass(const Targets& t, const FrameSetup& f, const CameraModel& c, float* march_max_out);
@@ -356,7 +452,9 @@ void Renderer::Impl::upload_scene(const SceneGeometry& geo) {
     g.seg_class = sm.seg_class;
     g.material = sm.material;
     g.triplanar = sm.triplanar;
-    g.macro = (sm.name == "seabed" || sm.name == "seabed_far") && sm.material.texture != "none";
+    g.terrain = sm.name == "seabed" || sm.name == "seabed_far";
+    if (g.terrain) g.tan_slope = steepest_slope(sm.mesh);
+    g.macro = g.terrain && sm.material.texture != "none";
     g.sections = sm.material.texture == "pipe_coating" && !sm.triplanar;
     g.texture = texture(sm.material.texture).colour;
     if (sm.base_color) {  // the mesh file's own map, by its UVs (one repeat per unit)
@@ -397,8 +495,88 @@ void Renderer::Impl::upload_scene(const SceneGeometry& geo) {
     glBindVertexArray(0);
     meshes.push_back(g);
   }
+  build_caster_boxes(geo);
+  mark_sun_free();
   check_gl("scene upload");
 }
+
+namespace {
+
+constexpr double kCasterCellM = 0.5;  // caster boxes of objects, rocks and pipes: 0.5 m cells
+
+// The box's extent along the unit axis a.
+std::pair<float, float> box_interval(const Eigen::Vector3f& lo, const Eigen::Vector3f& hi, const Eigen::Vector3f& a) {
+  const Eigen::Vector3f mid = 0.5f * (lo + hi), half = 0.5f * (hi - lo);
+  const float m = a.dot(mid), r = half.dot(a.cwiseAbs());
+  return {m - r, m + r};
+}
+
+}  // namespace
+
+void Renderer::Impl::build_caster_boxes(const SceneGeometry& geo) {
+  caster_boxes.clear();
+  for (std::size_t mi = 0; mi < meshes.size(); ++mi) {
+    if (meshes[mi].terrain) {  // the terrain casts on other terrain only (the patch's edge on the far seabed)
+      for (const Chunk& c : meshes[mi].chunks) caster_boxes.push_back({mi, c.lo, c.hi});
+      continue;
+    }
+    const MeshData& mesh = geo.meshes[mi].mesh;
+    std::map<std::pair<long, long>, std::size_t> cell_box;
+    for (std::size_t t = 0; t < mesh.triangle_count(); ++t) {
+      Eigen::Vector3f p[3];
+      for (int k = 0; k < 3; ++k) {
+        const std::size_t b = std::size_t{3} * mesh.indices[3 * t + static_cast<std::size_t>(k)];
+        p[k] = Eigen::Vector3f(mesh.positions[b], mesh.positions[b + 1], mesh.positions[b + 2]);
+      }
+      const Eigen::Vector3f c = (p[0] + p[1] + p[2]) / 3.0f;
+      const std::pair<long, long> key{std::lround(std::floor(c.x() / kCasterCellM)),
+                                      std::lround(std::floor(c.y() / kCasterCellM))};
+      auto [it, fresh] = cell_box.try_emplace(key, caster_boxes.size());
+      if (fresh) caster_boxes.push_back({mi, p[0], p[0]});
+      CasterBox& box = caster_boxes[it->second];
+      for (const auto& q : p) {
+        box.lo = box.lo.cwiseMin(q);
+        box.hi = box.hi.cwiseMax(q);
+      }
+    }
+  }
+}
+
+// Shadow receiver culling for the sun (static scene, fixed sun): a terrain chunk needs the sun's
+// shadow lookup only if a caster can stand between it and the sun: a caster box of another mesh
+// whose extent, seen along the sunlight, overlaps the chunk's and lies up-sun of some of it; or
+// the terrain itself, when its steepest slope is at least the sun's elevation (from any point of a
+// height field whose slopes are all flatter than the light, the ray to the sun rises faster than
+// the ground can).
+void Renderer::Impl::mark_sun_free() {
+  // Casters grow by two texels of the sun's map: the PCF lookup reads the next texel too.
+  const float pad = 4.0f * static_cast<float>(kSunShadowHalfM) /
+                    static_cast<float>(std::min(4096, kSunMapScale * options.shadow_map_size));
+  const Eigen::Vector3f s = world.sun.direction_W.normalized().cast<float>();
+  const Eigen::Vector3f a = std::abs(s.x()) < 0.9f ? Eigen::Vector3f::UnitX() : Eigen::Vector3f::UnitY();
+  const Eigen::Vector3f u = (a - s * a.dot(s)).normalized(), v = s.cross(u);
+  const float tan_elevation = s.z() > 1e-6f ? s.z() / std::hypot(s.x(), s.y()) : 0.0f;  // inf overhead
+  for (std::size_t mi = 0; mi < meshes.size(); ++mi) {
+    GpuMesh& m = meshes[mi];
+    for (Chunk& r : m.chunks) r.sun_free = false;
+    if (!m.terrain || !(m.tan_slope < tan_elevation)) continue;
+    for (Chunk& r : m.chunks) {
+      const auto ru = box_interval(r.lo, r.hi, u), rv = box_interval(r.lo, r.hi, v), rs = box_interval(r.lo, r.hi, s);
+      bool blocked = false;
+      for (const CasterBox& c : caster_boxes) {
+        if (c.mesh == mi) continue;
+        const auto cu = box_interval(c.lo, c.hi, u), cv = box_interval(c.lo, c.hi, v), cs = box_interval(c.lo, c.hi, s);
+        if (cu.first <= ru.second + pad && ru.first <= cu.second + pad && cv.first <= rv.second + pad &&
+            rv.first <= cv.second + pad && cs.first < rs.second + pad && c.lo.z() - pad <= r.hi.z()) {
+          blocked = true;
+          break;
+        }
+      }
+      r.sun_free = !blocked;
+    }
+  }
+}
+
 
 void Renderer::Impl::upload_snow() {
   const auto& ms = world.marine_snow;
@@ -524,6 +702,7 @@ struct Renderer::Impl::FrameSetup {
   float lamp_pos_W[12], lamp_dir_W[12], lamp_pos_C[12], lamp_dir_C[12], lamp_I[12], lamp_cos[8];
   bool shadows = false;
   float shadow_vp_W[64], shadow_vp_C[64];  // per lamp: world -> lamp clip, optical -> lamp clip
+  float lamp_texel_per_m[4];                // per lamp: its shadow map's texel at 1 m [m]
   bool sun_shadow = false;
   float sun_vp[16];  // world -> sun clip (orthographic)
 };
@@ -556,6 +735,7 @@ Renderer::Impl::FrameSetup Renderer::Impl::setup_frame(const Pose& X_WB, const C
     CameraModel lc;
     lc.width = lc.height = std::max(16, options.shadow_map_size);
     const double half = std::min(1.05 * L.cone_half_angle_rad + 0.02, 1.45);
+    f.lamp_texel_per_m[i] = static_cast<float>(2.0 * std::tan(half) / std::max(16, options.shadow_map_size));
     lc.fx = lc.fy = 0.5 * lc.width / std::tan(half);
     lc.cx = lc.cy = 0.5 * lc.width - 0.5;
     lc.near_m = 0.05;
@@ -664,12 +844,14 @@ void Renderer::Impl::shadow_pass(const FrameSetup& f) {
 
 namespace {
 
-// Scene variant bits: triplanar 1, macro 2, sections 4, bump 8, specular 16, sediment 32, lamps << 6.
-constexpr unsigned kLampShift = 6;
+// Scene variant bits: triplanar 1, macro 2, sections 4, bump 8, specular 16, sediment 32, sun shadow 64,
+// lamp shadows 128, lamps << 8. The shadow bits come per chunk (shadow receiver culling).
+constexpr unsigned kSunShadowBit = 64, kLampShadowBit = 128, kShadowShift = 6, kLampShift = 8;
 std::string scene_defines(unsigned v) {
   const auto bit = [v](unsigned b) { return (v & b) ? "1" : "0"; };
   return std::string("#define TRIPLANAR ") + bit(1) + "\n#define MACRO " + bit(2) + "\n#define SECTIONS " + bit(4) +
          "\n#define BUMP " + bit(8) + "\n#define SPECULAR " + bit(16) + "\n#define SEDIMENT " + bit(32) +
+         "\n#define SUN_SHADOW " + bit(kSunShadowBit) + "\n#define LAMP_SHADOWS " + bit(kLampShadowBit) +
          "\n#define NLAMPS " + std::to_string(v >> kLampShift) + "\n";
 }
 
@@ -677,10 +859,12 @@ std::string scene_defines(unsigned v) {
 
 // The scene program of a material variant (compiled on first use), with this frame's uniforms
 // set the first time it is used in the pass.
-Program& Renderer::Impl::scene_program(const GpuMesh& m, const FrameSetup& f, double stamp_s,
+// shadow_bits: 1 the sun's shadow map, 2 the lamps'.
+Program& Renderer::Impl::scene_program(const GpuMesh& m, unsigned shadow_bits, const FrameSetup& f, double stamp_s,
                                        std::set<unsigned>* set_up) {
   const unsigned v = (m.triplanar ? 1u : 0u) | (m.macro ? 2u : 0u) | (m.sections ? 4u : 0u) | (m.bump ? 8u : 0u) |
-                     (m.specular ? 16u : 0u) | (m.sediment ? 32u : 0u) | (static_cast<unsigned>(f.nl) << kLampShift);
+                     (m.specular ? 16u : 0u) | (m.sediment ? 32u : 0u) | (shadow_bits << kShadowShift) |
+                     (static_cast<unsigned>(f.nl) << kLampShift);
   Program& p = scene_variants[v];
   if (p.id() == 0) p = Program(detail::kSceneVS, detail::kSceneFS, "scene", scene_defines(v));
   p.use();
@@ -696,14 +880,13 @@ Program& Renderer::Impl::scene_program(const GpuMesh& m, const FrameSetup& f, do
   set3(p["u_Kd"], water.K_d);
   set3(p["u_betaD"], water.beta_D);
   set_lamps_W(p, f);
-  glUniform1i(p["u_shadows"], f.shadows ? 1 : 0);
-  glUniform1i(p["u_sun_shadow"], f.sun_shadow ? 1 : 0);
-  if (f.sun_shadow) glUniformMatrix4fv(p["u_sun_vp"], 1, GL_FALSE, f.sun_vp);
-  glUniform1i(p["u_shadow"], 5);
-  glUniform1i(p["u_sun_map"], 6);
-  if (f.shadows) {
+  if (v & kSunShadowBit) {
+    glUniformMatrix4fv(p["u_sun_vp"], 1, GL_FALSE, f.sun_vp);
+    glUniform1i(p["u_sun_map"], 6);
+  }
+  if (v & kLampShadowBit) {
     glUniformMatrix4fv(p["u_shadow_vp[0]"], f.nl, GL_FALSE, f.shadow_vp_W);
-    glUniform1f(p["u_shadow_texel"], 1.0f / static_cast<float>(options.shadow_map_size));
+    glUniform1i(p["u_shadow"], 5);
   }
   glUniform1i(p["u_tex"], 0);
   if (v & 8u) glUniform1i(p["u_grad"], 1);
@@ -723,6 +906,27 @@ void Renderer::Impl::set_lamps_W(Program& p, const FrameSetup& f) const {
   glUniform3fv(p["u_lamp_dir_W[0]"], f.nl, f.lamp_dir_W);
   glUniform3fv(p["u_lamp_I[0]"], f.nl, f.lamp_I);
   glUniform2fv(p["u_lamp_cos[0]"], f.nl, f.lamp_cos);
+}
+
+
+// Shadow receiver culling for the lamps (per frame): bit 2 when some lamp's shadow map can darken
+// the terrain chunk ch of meshes[mesh]: it lies in the lamp's shadow frustum, and either the
+// terrain itself can cut the lamp's rays to it (the flattest ray from the lamp to the chunk is not
+// steeper than the terrain's steepest slope), or a caster box of another mesh overlaps it as seen
+// from the lamp, in azimuth and in depression angle (a ray through both needs both).
+unsigned Renderer::Impl::lamp_shadow_bits(std::size_t mesh, const Chunk& ch, const FrameSetup& f,
+                                          const std::vector<std::vector<LampCaster>>& casters) const {
+  const GpuMesh& m = meshes[mesh];
+  for (int i = 0; i < f.nl; ++i) {
+    const Eigen::Map<const Eigen::Matrix4f> vp(f.shadow_vp_W + std::ptrdiff_t{16} * i);
+    if (!in_frustum(vp, ch)) continue;
+    const Eigen::Vector3f L(f.lamp_pos_W[3 * i], f.lamp_pos_W[3 * i + 1], f.lamp_pos_W[3 * i + 2]);
+    const LampCaster r = seen_from(L, mesh, ch.lo, ch.hi);
+    if (!(std::tan(r.dep_lo) > m.tan_slope)) return 2u;
+    for (const LampCaster& c : casters[static_cast<std::size_t>(i)])
+      if (c.mesh != mesh && may_shadow(c, r)) return 2u;
+  }
+  return 0u;
 }
 
 // Scene geometry into colour (direct signal), camera-space depth and segmentation.
@@ -750,26 +954,75 @@ void Renderer::Impl::scene_pass(const Targets& t, const FrameSetup& f, double st
   glActiveTexture(GL_TEXTURE0);
   const Eigen::Matrix4f vp = f.proj * f.view;
   std::set<unsigned> set_up;  // variants whose frame uniforms are set
-  for (const GpuMesh& m : meshes) {
-    if (!any_visible(m, vp)) continue;
-    Program& scene = scene_program(m, f, stamp_s, &set_up);
-    set3(scene["u_albedo"], m.material.albedo);
-    glUniform1f(scene["u_uv_scale"], static_cast<float>(m.material.uv_scale_m));
-    if (m.bump) glUniform1f(scene["u_relief"], m.relief_m);
-    if (m.specular) {
-      glUniform1f(scene["u_roughness"], m.roughness);
-      glUniform1f(scene["u_metallic"], m.metallic);
+  const unsigned all_shadows = (f.sun_shadow ? 1u : 0u) | (f.shadows ? 2u : 0u);
+  // Shadow receiver culling: the terrain's visible chunks by the shadow lookups they need (llvmpipe
+  // pays for a lookup on every pixel of a draw that compiles it, lit or not).
+  const bool cull = options.shadow_receiver_culling && all_shadows != 0;
+  std::vector<std::vector<LampCaster>> casters;  // per lamp: the caster boxes in its frustum, seen from it
+  if (cull && f.shadows) {
+    casters.resize(static_cast<std::size_t>(f.nl));
+    for (int i = 0; i < f.nl; ++i) {
+      const Eigen::Map<const Eigen::Matrix4f> lvp(f.shadow_vp_W + std::ptrdiff_t{16} * i);
+      const Eigen::Vector3f L(f.lamp_pos_W[3 * i], f.lamp_pos_W[3 * i + 1], f.lamp_pos_W[3 * i + 2]);
+      for (const CasterBox& c : caster_boxes) {
+        if (!in_frustum(lvp, c.lo, c.hi)) continue;
+        // Grown by two texels of the lamp's map at the box's far side (PCF reads the next texel).
+        const float far = (c.lo - L).cwiseAbs().cwiseMax((c.hi - L).cwiseAbs()).norm();
+        const float pad = 2.0f * f.lamp_texel_per_m[i] * far + 0.01f;
+        casters[static_cast<std::size_t>(i)].push_back(
+            seen_from(L, c.mesh, c.lo.array() - pad, c.hi.array() + pad));
+      }
     }
-    if (m.sediment) glUniform1f(scene["u_sediment"], m.sediment_cover);
-    glUniform1f(scene["u_seg"], static_cast<float>(m.seg_class));
-    if (m.bump) {
-      glActiveTexture(GL_TEXTURE1);
-      glBindTexture(GL_TEXTURE_2D, m.gradient);
-      glActiveTexture(GL_TEXTURE0);
+  }
+  std::vector<const Chunk*> bins[4];
+  timings.shadow_lookups_drawn = timings.shadow_lookups_skipped = 0;
+  timings.scene_fragments = timings.sun_lookup_fragments = timings.lamp_lookup_fragments = 0;
+  if (options.profile_passes && fragment_query == 0) glGenQueries(1, &fragment_query);
+  for (std::size_t mi = 0; mi < meshes.size(); ++mi) {
+    const GpuMesh& m = meshes[mi];
+    for (auto& b : bins) b.clear();
+    for (const Chunk& ch : m.chunks) {
+      if (!in_frustum(vp, ch)) continue;
+      unsigned bits = all_shadows;
+      if (cull && m.terrain) {
+        bits = (f.sun_shadow && !ch.sun_free ? 1u : 0u) | (f.shadows ? lamp_shadow_bits(mi, ch, f, casters) : 0u);
+        for (unsigned b : {1u, 2u}) {
+          if (!(all_shadows & b)) continue;
+          ++((bits & b) ? timings.shadow_lookups_drawn : timings.shadow_lookups_skipped);
+        }
+      }
+      bins[bits].push_back(&ch);
     }
-    glBindTexture(GL_TEXTURE_2D, m.texture);
-    glBindVertexArray(m.vao);
-    draw_visible(m, vp);
+    for (unsigned bits = 0; bits < 4; ++bits) {
+      if (bins[bits].empty()) continue;
+      Program& scene = scene_program(m, bits, f, stamp_s, &set_up);
+      set3(scene["u_albedo"], m.material.albedo);
+      glUniform1f(scene["u_uv_scale"], static_cast<float>(m.material.uv_scale_m));
+      if (m.bump) glUniform1f(scene["u_relief"], m.relief_m);
+      if (m.specular) {
+        glUniform1f(scene["u_roughness"], m.roughness);
+        glUniform1f(scene["u_metallic"], m.metallic);
+      }
+      if (m.sediment) glUniform1f(scene["u_sediment"], m.sediment_cover);
+      glUniform1f(scene["u_seg"], static_cast<float>(m.seg_class));
+      if (m.bump) {
+        glActiveTexture(GL_TEXTURE1);
+        glBindTexture(GL_TEXTURE_2D, m.gradient);
+        glActiveTexture(GL_TEXTURE0);
+      }
+      glBindTexture(GL_TEXTURE_2D, m.texture);
+      glBindVertexArray(m.vao);
+      if (options.profile_passes) glBeginQuery(GL_SAMPLES_PASSED, fragment_query);
+      draw_chunks(bins[bits]);
+      if (options.profile_passes) {  // fragments shaded (the depth test passed) with and without lookups
+        glEndQuery(GL_SAMPLES_PASSED);
+        GLuint n = 0;
+        glGetQueryObjectuiv(fragment_query, GL_QUERY_RESULT, &n);
+        timings.scene_fragments += n;
+        if (bits & 1u) timings.sun_lookup_fragments += n;
+        if (bits & 2u) timings.lamp_lookup_fragments += n;
+      }
+    }
   }
 }
 
@@ -1178,6 +1431,7 @@ Renderer::~Renderer() {
   }
   glDeleteVertexArrays(1, &impl_->empty_vao);
   glDeleteSamplers(1, &impl_->shadow_nearest);
+  if (impl_->fragment_query) glDeleteQueries(1, &impl_->fragment_query);
   for (const auto& [v, p] : impl_->scene_variants)
     if (p.id()) glDeleteProgram(p.id());
   glDeleteProgram(impl_->shadow.id());

@@ -58,6 +58,13 @@ uniform float u_uv_scale;
 #ifndef NLAMPS
 #define NLAMPS 0     // lamps lighting the scene (0..4)
 #endif
+// Shadow lookups, per draw: off for the terrain chunks nothing can shadow (Renderer culls them).
+#ifndef SUN_SHADOW
+#define SUN_SHADOW 0  // the sun's shadow map
+#endif
+#ifndef LAMP_SHADOWS
+#define LAMP_SHADOWS 0  // the lamps' shadow maps
+#endif
 uniform float u_relief;          // peak-to-trough height of the texture's relief [m]
 uniform sampler2D u_grad;        // the relief height's slope per unit of texture coordinate
 uniform float u_roughness;       // perceptual (alpha = roughness^2)
@@ -76,13 +83,10 @@ uniform vec3 u_lamp_pos_W[4];
 uniform vec3 u_lamp_dir_W[4];
 uniform vec3 u_lamp_I[4];
 uniform vec2 u_lamp_cos[4];  // cos(outer), cos(inner)
-uniform bool u_shadows;
 uniform sampler2DArrayShadow u_shadow;  // one depth layer per lamp
 uniform mat4 u_shadow_vp[4];            // world -> lamp clip
-uniform float u_shadow_texel;           // 1 / shadow map size
 uniform float u_caustics;               // caustic_strength (0 = off)
 uniform float u_time;                   // frame stamp [s]
-uniform bool u_sun_shadow;
 uniform mat4 u_sun_vp;                  // world -> sun clip (orthographic)
 uniform sampler2DShadow u_sun_map;
 layout(location = 0) out vec4 o_color;   // rgb: direct signal D = J exp(-beta_D z); a: seg id
@@ -106,7 +110,9 @@ float caustic_pattern(vec2 p, float t) {
 
 // Share of lamp i's light reaching world point p (percentage-closer filtered); 1 outside the map.
 float lamp_visibility(int i, vec3 p) {
-  if (!u_shadows) return 1.0;
+#if !LAMP_SHADOWS
+  return 1.0;
+#endif
   vec4 c = u_shadow_vp[i] * vec4(p, 1.0);
   if (c.w <= 1e-4) return 1.0;
   vec3 q = c.xyz / c.w * 0.5 + 0.5;
@@ -226,11 +232,13 @@ void main() {
   vec3 Ed = u_E0 * exp(-u_Kd * depth);
   float up = -n.z;
   float ndl = max(dot(n, -u_sun_dir_W), 0.0);
-  if (u_sun_shadow && ndl > 0.0) {   // the direct part is blocked by what lies up-sun
+#if SUN_SHADOW
+  if (ndl > 0.0) {   // the direct part is blocked by what lies up-sun
     vec3 q = (u_sun_vp * vec4(v_pos_W, 1.0)).xyz * 0.5 + 0.5;
     if (all(greaterThanEqual(q, vec3(0.0))) && all(lessThanEqual(q, vec3(1.0))))
       ndl *= texture(u_sun_map, q);
   }
+#endif
   if (u_caustics > 0.0 && ndl > 0.0) {
     float Kd = u_Kd.g;
     float A = u_caustics * exp(-depth * (2.0 * Kd + 1.0 / 15.0));

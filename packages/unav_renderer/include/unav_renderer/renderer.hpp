@@ -42,6 +42,10 @@ struct RenderOptions {
   /// by objects). The sun's shadow removes its direct share (1 - ambient_fraction) only.
   bool shadows = true;
   int shadow_map_size = 256;
+  /// Shadow receiver culling: terrain chunks that nothing can shadow (no caster between them and
+  /// the light, and the light steeper than the terrain's steepest slope) are drawn without the
+  /// shadow lookups. Same image (conservative tests); false only to measure or to check that.
+  bool shadow_receiver_culling = true;
   /// Caustics: the sun's direct light on the seabed is focused by the moving surface into a
   /// drifting network of bright lines, modulation 1 + A g(x, t) with g of mean ~0 and
   /// A = caustic_strength exp(-d (2 K_d + 1 / 15 m)) at depth d (green K_d): clear shallow water
@@ -93,6 +97,12 @@ struct RenderTimings {
   double shadow_pass_ms = 0, scene_pass_ms = 0, snow_pass_ms = 0, inscatter_pass_ms = 0, post_pass_ms = 0;
   double shadow_pass_cpu_ms = 0, scene_pass_cpu_ms = 0, snow_pass_cpu_ms = 0, inscatter_pass_cpu_ms = 0,
          post_pass_cpu_ms = 0;
+  /// Shadow receiver culling in the last frame: visible terrain chunks times the shadow maps in
+  /// use (sun, lamps), drawn with the lookup and drawn without it (nothing can shadow them).
+  std::size_t shadow_lookups_drawn = 0, shadow_lookups_skipped = 0;
+  /// Only with profile_passes (occlusion queries): fragments the scene pass shaded, and how many
+  /// of them looked up the sun's shadow map and the lamps' (a deterministic measure of the work).
+  std::size_t scene_fragments = 0, sun_lookup_fragments = 0, lamp_lookup_fragments = 0;
 };
 
 /// The vehicle's velocity in base_link_frd (nav_msgs/Odometry's twist) at a frame's stamp: for
