@@ -113,6 +113,8 @@ struct GpuMesh {
   float roughness = 0.6f, metallic = 0.0f, relief_m = 0.0f, sediment_cover = 0.0f;
   GLuint texture = 0;
   GLuint gradient = 0;  ///< the relief's slope (ProceduralTexture::gradient), for bump mapping
+  GLuint normal_map = 0;  ///< a mesh file's tangent-space normal map (by UVs); 0: none
+  GLuint orm_map = 0;     ///< a mesh file's occlusion-roughness-metallic map (by UVs); 0: none
 };
 
 struct Targets {
@@ -313,8 +315,8 @@ struct Renderer::Impl {
     GLuint colour = 0, slope = 0;  // albedo + relief height; the relief's gradient
   };
   std::map<std::string, SurfaceMaps> textures;                   // procedural, by name
-  std::map<const TextureImage*, GLuint> image_textures;          // mesh files' own base-colour maps
-  std::vector<std::shared_ptr<const TextureImage>> base_colors;  // keeps image_textures' keys alive
+  std::map<std::pair<const TextureImage*, bool>, GLuint> image_textures;  // mesh files' own maps (image, sRGB)
+  std::vector<std::shared_ptr<const TextureImage>> mesh_images;           // keeps image_textures' keys alive
   Eigen::Vector3d sediment_albedo{0.7, 0.64, 0.5};               // the seabed's mean albedo (linear): settled sand
   // By material and lamp count (scene_variant()); compiled on first use.
   std::map<unsigned, Program> scene_variants;
@@ -352,7 +354,7 @@ struct Renderer::Impl {
   void upload_snow();
   void release_scene();  // meshes and marine-snow buffers (set_world, destructor)
   const SurfaceMaps& texture(const std::string& name);
-  GLuint image_texture(const TextureImage& image);
+  GLuint image_texture(const std::shared_ptr<const TextureImage>& image, bool srgb);
   Targets& targets_for(const CameraModel& c);
   struct FrameSetup;
   void set_lamps_W(Program& p, const FrameSetup& f) const;
@@ -427,11 +429,14 @@ const Renderer::Impl::SurfaceMaps& Renderer::Impl::texture(const std::string& na
 }
 
 // Alpha reads 1 (a relief is never drawn from a mesh file's map: GpuMesh::bump is off).
-GLuint Renderer::Impl::image_texture(const TextureImage& image) {
-  auto it = image_textures.find(&image);
+// A mesh file's map as a mipmapped, repeating texture: sRGB (base colour) or linear (normal, ORM).
+GLuint Renderer::Impl::image_texture(const std::shared_ptr<const TextureImage>& image, bool srgb) {
+  const std::pair<const TextureImage*, bool> key{image.get(), srgb};
+  auto it = image_textures.find(key);
   if (it != image_textures.end()) return it->second;
-  return image_textures[&image] =
-             gl::make_tiled_tex(GL_SRGB8, image.width, image.height, GL_RGB, GL_UNSIGNED_BYTE, image.rgb.data());
+  mesh_images.push_back(image);
+  return image_textures[key] = gl::make_tiled_tex(srgb ? GL_SRGB8 : GL_RGB8, image->width, image->height, GL_RGB,
+                                                  GL_UNSIGNED_BYTE, image->rgb.data());
 }
 
 void Renderer::Impl::upload_scene(const SceneGeometry& geo) {
@@ -457,21 +462,29 @@ void Renderer::Impl::upload_scene(const SceneGeometry& geo) {
     g.macro = g.terrain && sm.material.texture != "none";
     g.sections = sm.material.texture == "pipe_coating" && !sm.triplanar;
     g.texture = texture(sm.material.texture).colour;
-    if (sm.base_color) {  // the mesh file's own map, by its UVs (one repeat per unit)
-      base_colors.push_back(sm.base_color);
-      g.texture = image_texture(*sm.base_color);
-      g.material.uv_scale_m = 1.0;
-      g.macro = g.sections = false;
-    }
     g.roughness = static_cast<float>(material_roughness(sm.material));
     g.metallic = static_cast<float>(sm.material.metallic);
     g.relief_m = static_cast<float>(material_relief_m(sm.material));
     g.bump = options.materials && g.relief_m > 0.0f && sm.material.texture != "none";
-    if (sm.base_color) g.bump = false;  // no relief in a mesh file's colour map
+    if (sm.maps.any()) {  // the mesh file's own maps, by its UVs (one repeat per unit)
+      g.texture = sm.maps.base_color ? image_texture(sm.maps.base_color, true) : texture("none").colour;
+      g.material.uv_scale_m = 1.0;
+      g.macro = g.sections = false;
+      g.bump = false;  // the file's normal map, if any, instead of the procedural relief
+      if (options.materials && sm.maps.normal) g.normal_map = image_texture(sm.maps.normal, false);
+      if (options.materials && sm.maps.orm) {
+        // The map times the factors: the world's roughness / metallic when it sets them, else the file's.
+        g.orm_map = image_texture(sm.maps.orm, false);
+        g.roughness = static_cast<float>(std::isnan(sm.material.roughness) ? sm.maps.roughness_factor
+                                                                            : sm.material.roughness);
+        g.metallic = static_cast<float>(sm.material.metallic > 0.0 ? sm.material.metallic : sm.maps.metallic_factor);
+      }
+    }
     if (g.bump) g.gradient = texture(sm.material.texture).slope;
     // A dielectric's highlight in water is faint (F0 = 0.0032 for index 1.5 against 1.34): only
-    // smooth ones show it (roughness 0.45: +4..30 % over the diffuse at the peak; 0.8: < 1 %).
-    g.specular = options.materials && (g.metallic > 0.0f || g.roughness < 0.7f);
+    // smooth ones show it (roughness 0.45: +4..30 % over the diffuse at the peak; 0.8: < 1 %). An
+    // ORM map varies both per pixel.
+    g.specular = options.materials && (g.metallic > 0.0f || g.roughness < 0.7f || g.orm_map != 0);
     g.sediment_cover = static_cast<float>(material_sediment(sm.material));
     g.sediment = options.materials && !g.macro && sm.seg_class != SegClass::kSeabed && g.sediment_cover > 0.0f;
     glGenVertexArrays(1, &g.vao);
@@ -845,13 +858,16 @@ void Renderer::Impl::shadow_pass(const FrameSetup& f) {
 namespace {
 
 // Scene variant bits: triplanar 1, macro 2, sections 4, bump 8, specular 16, sediment 32, sun shadow 64,
-// lamp shadows 128, lamps << 8. The shadow bits come per chunk (shadow receiver culling).
-constexpr unsigned kSunShadowBit = 64, kLampShadowBit = 128, kShadowShift = 6, kLampShift = 8;
+// lamp shadows 128, normal map 256, ORM map 512, lamps << 10. The shadow bits come per chunk
+// (shadow receiver culling).
+constexpr unsigned kSunShadowBit = 64, kLampShadowBit = 128, kShadowShift = 6, kNormalMapBit = 256, kOrmBit = 512,
+                   kLampShift = 10;
 std::string scene_defines(unsigned v) {
   const auto bit = [v](unsigned b) { return (v & b) ? "1" : "0"; };
   return std::string("#define TRIPLANAR ") + bit(1) + "\n#define MACRO " + bit(2) + "\n#define SECTIONS " + bit(4) +
          "\n#define BUMP " + bit(8) + "\n#define SPECULAR " + bit(16) + "\n#define SEDIMENT " + bit(32) +
          "\n#define SUN_SHADOW " + bit(kSunShadowBit) + "\n#define LAMP_SHADOWS " + bit(kLampShadowBit) +
+         "\n#define NORMAL_MAP " + bit(kNormalMapBit) + "\n#define ORM_MAP " + bit(kOrmBit) +
          "\n#define NLAMPS " + std::to_string(v >> kLampShift) + "\n";
 }
 
@@ -864,6 +880,7 @@ Program& Renderer::Impl::scene_program(const GpuMesh& m, unsigned shadow_bits, c
                                        std::set<unsigned>* set_up) {
   const unsigned v = (m.triplanar ? 1u : 0u) | (m.macro ? 2u : 0u) | (m.sections ? 4u : 0u) | (m.bump ? 8u : 0u) |
                      (m.specular ? 16u : 0u) | (m.sediment ? 32u : 0u) | (shadow_bits << kShadowShift) |
+                     (m.normal_map ? kNormalMapBit : 0u) | (m.orm_map ? kOrmBit : 0u) |
                      (static_cast<unsigned>(f.nl) << kLampShift);
   Program& p = scene_variants[v];
   if (p.id() == 0) p = Program(detail::kSceneVS, detail::kSceneFS, "scene", scene_defines(v));
@@ -890,6 +907,8 @@ Program& Renderer::Impl::scene_program(const GpuMesh& m, unsigned shadow_bits, c
   }
   glUniform1i(p["u_tex"], 0);
   if (v & 8u) glUniform1i(p["u_grad"], 1);
+  if (v & kNormalMapBit) glUniform1i(p["u_normal_map"], 2);
+  if (v & kOrmBit) glUniform1i(p["u_orm"], 3);
   if (v & 32u) {
     set3(p["u_sediment_albedo"], sediment_albedo);
     // No seabed: nothing is buried.
@@ -1008,8 +1027,16 @@ void Renderer::Impl::scene_pass(const Targets& t, const FrameSetup& f, double st
       if (m.bump) {
         glActiveTexture(GL_TEXTURE1);
         glBindTexture(GL_TEXTURE_2D, m.gradient);
-        glActiveTexture(GL_TEXTURE0);
       }
+      if (m.normal_map) {
+        glActiveTexture(GL_TEXTURE2);
+        glBindTexture(GL_TEXTURE_2D, m.normal_map);
+      }
+      if (m.orm_map) {
+        glActiveTexture(GL_TEXTURE3);
+        glBindTexture(GL_TEXTURE_2D, m.orm_map);
+      }
+      glActiveTexture(GL_TEXTURE0);
       glBindTexture(GL_TEXTURE_2D, m.texture);
       glBindVertexArray(m.vao);
       if (options.profile_passes) glBeginQuery(GL_SAMPLES_PASSED, fragment_query);
@@ -1377,7 +1404,7 @@ Renderer::Renderer(World world, std::vector<CameraModel> cameras, RenderOptions 
 void Renderer::Impl::release_scene() {
   for (auto& [image, t] : image_textures) glDeleteTextures(1, &t);
   image_textures.clear();
-  base_colors.clear();
+  mesh_images.clear();
   for (auto& m : meshes) {
     glDeleteBuffers(3, m.vbo);
     glDeleteBuffers(1, &m.ebo);

@@ -65,10 +65,18 @@ uniform float u_uv_scale;
 #ifndef LAMP_SHADOWS
 #define LAMP_SHADOWS 0  // the lamps' shadow maps
 #endif
+#ifndef NORMAL_MAP
+#define NORMAL_MAP 0  // a mesh file's tangent-space normal map (u_normal_map, by v_uv)
+#endif
+#ifndef ORM_MAP
+#define ORM_MAP 0     // a mesh file's occlusion-roughness-metallic map (u_orm, by v_uv)
+#endif
 uniform float u_relief;          // peak-to-trough height of the texture's relief [m]
 uniform sampler2D u_grad;        // the relief height's slope per unit of texture coordinate
-uniform float u_roughness;       // perceptual (alpha = roughness^2)
-uniform float u_metallic;
+uniform float u_roughness;       // perceptual (alpha = roughness^2); times the ORM map's green
+uniform float u_metallic;        // times the ORM map's blue
+uniform sampler2D u_normal_map;  // rgb = (n + 1) / 2 in the (+u, +v, normal) frame
+uniform sampler2D u_orm;         // r occlusion of the ambient light, g roughness, b metallic
 uniform float u_sediment;        // cover [0, 1]
 uniform vec3 u_sediment_albedo;  // the seabed's mean albedo
 uniform float u_seabed_z;        // mean seabed depth [m]
@@ -144,15 +152,15 @@ float value_noise(vec2 p) {
 #if SPECULAR
 // pi x the Cook-Torrance specular lobe (GGX D, Smith-Schlick G with k = (r + 1)^2 / 8, Schlick F):
 // J is pi x radiance here (albedo E is Lambert's), so J += specular() x the source's irradiance.
-vec3 specular(vec3 n, vec3 V, vec3 l, vec3 F0) {
+vec3 specular(vec3 n, vec3 V, vec3 l, vec3 F0, float rough) {
   float ndl = dot(n, l);
   if (ndl <= 0.0) return vec3(0.0);
   float ndv = max(dot(n, V), 1e-3);
   vec3 H = normalize(l + V);
   float ndh = max(dot(n, H), 0.0), vdh = max(dot(V, H), 0.0);
-  float a2 = u_roughness * u_roughness * u_roughness * u_roughness;
+  float a2 = rough * rough * rough * rough;
   float d = ndh * ndh * (a2 - 1.0) + 1.0;
-  float k = (u_roughness + 1.0) * (u_roughness + 1.0) / 8.0;
+  float k = (rough + 1.0) * (rough + 1.0) / 8.0;
   float G = ndl / (ndl * (1.0 - k) + k) * ndv / (ndv * (1.0 - k) + k);
   vec3 F = F0 + (1.0 - F0) * pow(1.0 - vdh, 5.0);
   return a2 / (d * d) * G * F / (4.0 * ndl * ndv);   // pi D = a2 / d^2
@@ -229,8 +237,38 @@ void main() {
     if (dot(nb, V) > 0.02) n = nb;   // never turned away from the camera
   }
 #endif
+#if NORMAL_MAP
+  // The file's normal map in the frame of its UVs, built per pixel from the screen derivatives
+  // of the position and of the UVs (Schueler's cotangent frame: no tangents in the mesh; exact
+  // per triangle, mirrored UVs and the back faces included).
+  {
+    vec3 tn = texture(u_normal_map, v_uv).xyz * 2.0 - 1.0;
+    vec3 dp1 = dFdx(v_pos_W), dp2 = dFdy(v_pos_W);
+    vec2 duv1 = dFdx(v_uv), duv2 = dFdy(v_uv);
+    vec3 dp2perp = cross(dp2, n), dp1perp = cross(n, dp1);
+    // T, B: the gradients of u and v along the surface, up to 1 / det[dp1, dp2, n] (its sign
+    // depends on how the screen axes sit on the surface: kept, the size normalised away).
+    float flip = dot(dp1, dp2perp) < 0.0 ? -1.0 : 1.0;
+    vec3 T = flip * (dp2perp * duv1.x + dp1perp * duv2.x);
+    vec3 B = flip * (dp2perp * duv1.y + dp1perp * duv2.y);
+    float m2 = max(dot(T, T), dot(B, B));
+    if (m2 > 1e-30) {
+      vec3 nm = normalize(inversesqrt(m2) * (T * tn.x + B * tn.y) + n * tn.z);
+      if (dot(nm, V) > 0.02) n = nm;   // never turned away from the camera
+    }
+  }
+#endif
+  float rough = u_roughness, metallic = u_metallic, occlusion = 1.0;
+#if ORM_MAP
+  {
+    vec3 orm = texture(u_orm, v_uv).rgb;
+    occlusion = orm.r;
+    rough = clamp(u_roughness * orm.g, 0.05, 1.0);
+    metallic = u_metallic * orm.b;
+  }
+#endif
 #if SPECULAR
-  vec3 F0 = mix(vec3(0.0032), albedo, u_metallic);   // ((1.5 - 1.34) / (1.5 + 1.34))^2 for dielectrics
+  vec3 F0 = mix(vec3(0.0032), albedo, metallic);   // ((1.5 - 1.34) / (1.5 + 1.34))^2 for dielectrics
   vec3 Jspec = vec3(0.0);
 #endif
 
@@ -252,10 +290,10 @@ void main() {
     float A = u_caustics * exp(-depth * (2.0 * Kd + 1.0 / 15.0));
     ndl *= max(1.0 + A * caustic_pattern(v_pos_W.xy, u_time), 0.0);
   }
-  vec3 Eamb = Ed * u_ambient * (0.5 + 0.5 * up);   // diffuse skylight: no highlight
+  vec3 Eamb = Ed * u_ambient * (0.5 + 0.5 * up) * occlusion;   // diffuse skylight: no highlight
   vec3 E = Ed * (1.0 - u_ambient) * ndl;             // direct: sun, then lamps
 #if SPECULAR
-  Jspec += specular(n, V, -u_sun_dir_W, F0) * E;
+  Jspec += specular(n, V, -u_sun_dir_W, F0, rough) * E;
 #endif
 
   // Lamps: inverse square, cone, attenuated lamp -> surface (surface -> camera below).
@@ -270,14 +308,14 @@ void main() {
       vec3 Ei = u_lamp_I[i] * cone * lamp_visibility(i, v_pos_W) * max(dot(n, l), 0.0) / (dl * dl) * exp(-u_betaD * dl);
       E += Ei;
 #if SPECULAR
-      Jspec += specular(n, V, l, F0) * Ei;
+      Jspec += specular(n, V, l, F0, rough) * Ei;
 #endif
     }
   }
   // A metal has no diffuse term under direct light; under the diffuse skylight a rough one
   // returns about its albedo, as a Lambertian surface would.
 #if SPECULAR
-  vec3 J = albedo * (Eamb + (1.0 - u_metallic) * E) + Jspec;
+  vec3 J = albedo * (Eamb + (1.0 - metallic) * E) + Jspec;
 #else
   vec3 J = albedo * (Eamb + E);
 #endif

@@ -253,3 +253,142 @@ TEST(Materials, MeshFileTextureIsDrawnByItsUvsTheRightWayUp) {
   }
   std::filesystem::remove_all(dir);
 }
+
+namespace {
+
+// The same 2 m quad as write_textured_quad() (u = (x + 1) / 2, v = (y + 1) / 2 after assimp's
+// glTF v flip) as glTF 2.0 with external buffer and maps: normalTexture normal.png,
+// metallicRoughnessTexture and occlusionTexture orm.png (glTF's packing: r occlusion, g
+// roughness, b metallic).
+std::string write_gltf_quad(const std::filesystem::path& dir) {
+  std::filesystem::create_directories(dir);
+  const float pos[12] = {-1, -1, 0, 1, -1, 0, 1, 1, 0, -1, 1, 0};
+  const float nrm[12] = {0, 0, -1, 0, 0, -1, 0, 0, -1, 0, 0, -1};
+  const float uv[8] = {0, 1, 1, 1, 1, 0, 0, 0};  // glTF: v = 0 at the image's top
+  const std::uint16_t idx[6] = {0, 1, 2, 0, 2, 3};
+  std::ofstream bin(dir / "quad.bin", std::ios::binary);
+  bin.write(reinterpret_cast<const char*>(pos), sizeof pos);
+  bin.write(reinterpret_cast<const char*>(nrm), sizeof nrm);
+  bin.write(reinterpret_cast<const char*>(uv), sizeof uv);
+  bin.write(reinterpret_cast<const char*>(idx), sizeof idx);
+  bin.close();
+  std::ofstream(dir / "quad.gltf") << R"({
+  "asset": {"version": "2.0"},
+  "scenes": [{"nodes": [0]}], "scene": 0,
+  "nodes": [{"mesh": 0}],
+  "meshes": [{"primitives": [{"attributes": {"POSITION": 0, "NORMAL": 1, "TEXCOORD_0": 2}, "indices": 3, "material": 0}]}],
+  "materials": [{"pbrMetallicRoughness": {"metallicRoughnessTexture": {"index": 1}, "metallicFactor": 1.0, "roughnessFactor": 1.0},
+                 "normalTexture": {"index": 0}, "occlusionTexture": {"index": 1}}],
+  "textures": [{"source": 0}, {"source": 1}],
+  "images": [{"uri": "normal.png"}, {"uri": "orm.png"}],
+  "buffers": [{"uri": "quad.bin", "byteLength": 140}],
+  "bufferViews": [{"buffer": 0, "byteOffset": 0, "byteLength": 48}, {"buffer": 0, "byteOffset": 48, "byteLength": 48},
+                  {"buffer": 0, "byteOffset": 96, "byteLength": 32}, {"buffer": 0, "byteOffset": 128, "byteLength": 12}],
+  "accessors": [{"bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3", "min": [-1, -1, 0], "max": [1, 1, 0]},
+                {"bufferView": 1, "componentType": 5126, "count": 4, "type": "VEC3"},
+                {"bufferView": 2, "componentType": 5126, "count": 4, "type": "VEC2"},
+                {"bufferView": 3, "componentType": 5123, "count": 6, "type": "SCALAR"}]
+})";
+  return (dir / "quad.gltf").string();
+}
+
+// Writes a 2 x 2 map whose west column (u < 0.5) is `west` and east column `east` (RGB); with
+// rows, its south row (v < 0.5: the image's bottom) `west` and its north row `east`.
+void write_columns(const std::filesystem::path& file, const cv::Vec3b& west, const cv::Vec3b& east,
+                   bool rows = false) {
+  cv::Mat m(2, 2, CV_8UC3);
+  for (int r = 0; r < 2; ++r)
+    for (int c = 0; c < 2; ++c) {
+      const cv::Vec3b& px = (rows ? r == 0 : c == 1) ? east : west;
+      m.at<cv::Vec3b>(r, c) = {px[2], px[1], px[0]};  // BGR
+    }
+  ASSERT_TRUE(cv::imwrite(file.string(), m));
+}
+
+}  // namespace
+
+TEST(Materials, MeshFileNormalAndOrmMapsShadeByTheirUvs) {
+  // A white quad (roughness 1: no highlight; no sediment) 1 m under the down camera in clear
+  // water, its own glTF maps. Levels are linear; the backscatter (same quad, albedo 0) is taken off.
+  const auto dir = std::filesystem::temp_directory_path() / ("unav_mesh_maps_" + std::to_string(::getpid()));
+  World w = unav::renderer::test::empty_world();
+  w.water = jerlov_preset("I");
+  Object quad;
+  quad.name = "mapped_quad";
+  quad.mesh_file = write_gltf_quad(dir);
+  quad.X_WO = pose_from_xyz_rpy({0.0, 0.0, 2.0}, {0.0, 0.0, 0.0});
+  quad.material = Material{"none", {1.0, 1.0, 1.0}, 1.0};
+  quad.material.sediment = 0.0;
+  w.objects.push_back(quad);
+  const double amb = w.sun.ambient_fraction;
+  const Pose X_WB = pose_from_xyz_rpy({0, 0, 1.0}, {0, 0, 0});
+  // Green at the west and east quarter points (with north_south: the south and north ones).
+  const auto levels = [&](const World& world, bool north_south = false) {
+    const Frame f = Renderer(world, {down_camera()}, with_materials(false)).render(X_WB, "down");
+    const auto at = [&](double x) {
+      const Eigen::Vector3d p = f.X_WC.inverse() * (north_south ? Eigen::Vector3d(0.0, x, 2.0) : Eigen::Vector3d(x, 0.0, 2.0));
+      return green(f, static_cast<int>(std::lround(f.K(0, 0) * p.x() / p.z() + f.K(0, 2))),
+                   static_cast<int>(std::lround(f.K(1, 1) * p.y() / p.z() + f.K(1, 2))));
+    };
+    return std::pair<double, double>(at(-0.5), at(0.5));
+  };
+  World dark = w;
+  dark.objects[0].material.albedo.setZero();
+
+  // Normal map: west flat, east tilted 45 deg towards +u (+x); the sun comes from +x, 45 deg
+  // off the zenith. Irradiance (ambient share a, skylight by (1 + up) / 2, direct by cos):
+  // flat a + (1 - a) cos 45; tilted a (1 + cos 45) / 2 + (1 - a). Tilted the wrong way (-x) it
+  // would get a (1 + cos 45) / 2 only.
+  const double c45 = std::sqrt(0.5);
+  write_columns(dir / "normal.png", {128, 128, 255}, {218, 128, 218});  // (n + 1) / 2: (0.707, 0, 0.707)
+  write_columns(dir / "orm.png", {255, 255, 0}, {255, 255, 0});
+  w.sun.direction_W = Eigen::Vector3d(-c45, 0.0, c45);
+  dark.sun = w.sun;
+  auto [fw, fe] = levels(w);
+  auto [bw, be] = levels(dark);
+  const double tilted = (fe - be) / (fw - bw);
+  const double predicted = (amb * (1.0 + c45) / 2.0 + (1.0 - amb)) / (amb + (1.0 - amb) * c45);
+  std::printf("normal map: west %.0f, east %.0f (backscatter %.0f %.0f): ratio %.3f, predicted %.3f\n", fw, fe, bw, be,
+              tilted, predicted);
+  // 8-bit levels near 100 (one level is 1 %) and the map's 8-bit normal: 3 %.
+  EXPECT_NEAR(tilted, predicted, 0.03 * predicted);
+  // The same along v: the north row tilted towards +v (+y, east in world_ned), the sun from +y.
+  write_columns(dir / "normal.png", {128, 128, 255}, {128, 218, 218}, true);
+  w.sun.direction_W = Eigen::Vector3d(0.0, -c45, c45);
+  dark.sun = w.sun;
+  std::tie(fw, fe) = levels(w, true);
+  std::tie(bw, be) = levels(dark, true);
+  std::printf("normal map along v: south %.0f, north %.0f: ratio %.3f, predicted %.3f\n", fw, fe, (fe - be) / (fw - bw),
+              predicted);
+  EXPECT_NEAR((fe - be) / (fw - bw), predicted, 0.03 * predicted);
+
+  // ORM map, sun from the zenith, flat normals: east occlusion 0.5 halves the skylight only
+  // (ratio a / 2 + 1 - a); a metallic east (b = 255) loses the diffuse direct light, which a
+  // rough lobe seen 26 deg off the mirror direction does not give back.
+  write_columns(dir / "normal.png", {128, 128, 255}, {128, 128, 255});
+  write_columns(dir / "orm.png", {255, 255, 0}, {128, 255, 0});
+  w.sun.direction_W = {0.0, 0.0, 1.0};
+  dark.sun = w.sun;
+  std::tie(fw, fe) = levels(w);
+  std::tie(bw, be) = levels(dark);
+  const double occluded = (fe - be) / (fw - bw);
+  std::printf("occlusion 0.5: ratio %.3f, predicted %.3f\n", occluded, amb / 2.0 + 1.0 - amb);
+  EXPECT_NEAR(occluded, amb / 2.0 + 1.0 - amb, 0.03);
+  write_columns(dir / "orm.png", {255, 255, 0}, {255, 255, 255});
+  std::tie(fw, fe) = levels(w);
+  std::printf("metallic: west (dielectric) %.0f, east (metal) %.0f, backscatter %.0f\n", fw, fe, bw);
+  EXPECT_LT(fe - be, 0.6 * (fw - bw));
+  EXPECT_GT(fe - be, 0.9 * amb * (fw - bw));  // the skylight stays (albedo 1)
+
+  // A normal map that is not there: the error names the object, the mesh file and the image.
+  std::filesystem::remove(dir / "normal.png");
+  try {
+    Renderer r(w, {down_camera()}, with_materials(false));
+    ADD_FAILURE() << "a mesh with a missing normal map was accepted";
+  } catch (const ConfigError& e) {
+    const std::string m = e.what();
+    EXPECT_NE(m.find("mapped_quad"), std::string::npos) << m;
+    EXPECT_NE(m.find("normal.png"), std::string::npos) << m;
+  }
+  std::filesystem::remove_all(dir);
+}

@@ -5,6 +5,7 @@
 #include <assimp/Importer.hpp>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include <algorithm>
 #include <array>
@@ -312,14 +313,18 @@ std::shared_ptr<const TextureImage> to_texture(const cv::Mat& decoded, const std
   return t;
 }
 
-// The base-colour texture of material `mi` (glTF base colour, else diffuse); null when it has none.
-std::shared_ptr<const TextureImage> base_color_of(const aiScene* scene, unsigned mi, const std::string& mesh_path) {
-  if (mi >= scene->mNumMaterials) return nullptr;
-  const aiMaterial* mat = scene->mMaterials[mi];
+// The first texture of material `mat` among `types`, decoded; null when it has none of them.
+std::shared_ptr<const TextureImage> texture_of(const aiScene* scene, const aiMaterial* mat,
+                                               std::initializer_list<aiTextureType> types,
+                                               const std::string& mesh_path) {
   aiString tex;
-  if (mat->GetTexture(aiTextureType_BASE_COLOR, 0, &tex) != AI_SUCCESS &&
-      mat->GetTexture(aiTextureType_DIFFUSE, 0, &tex) != AI_SUCCESS)
-    return nullptr;
+  bool found = false;
+  for (aiTextureType t : types)
+    if (mat->GetTexture(t, 0, &tex) == AI_SUCCESS) {
+      found = true;
+      break;
+    }
+  if (!found) return nullptr;
   const std::string name = tex.C_Str();
   if (const aiTexture* embedded = scene->GetEmbeddedTexture(tex.C_Str())) {
     const std::string source = mesh_path + " (embedded texture '" + name + "')";
@@ -339,6 +344,58 @@ std::shared_ptr<const TextureImage> base_color_of(const aiScene* scene, unsigned
   const cv::Mat img = cv::imread(file.string(), cv::IMREAD_UNCHANGED);
   if (img.empty()) throw ConfigError(source + ": cannot read or decode the image");
   return to_texture(img, file.string());
+}
+
+// One occlusion-roughness-metallic image from the material's maps: occlusion from its map's red,
+// roughness from its map's green, metallic from its map's blue (glTF packs all three so; a grey
+// map has them all), 255 where a map is missing; at the largest map's size.
+std::shared_ptr<const TextureImage> packed_orm(std::shared_ptr<const TextureImage> ao,
+                                               std::shared_ptr<const TextureImage> rough,
+                                               std::shared_ptr<const TextureImage> metal) {
+  if (!ao && !rough && !metal) return nullptr;
+  const std::array<std::shared_ptr<const TextureImage>, 3> maps = {std::move(ao), std::move(rough), std::move(metal)};
+  if (maps[0] == maps[1] && maps[1] == maps[2]) return maps[0];  // one packed image
+  auto out = std::make_shared<TextureImage>();
+  for (const auto& m : maps)
+    if (m && m->width * m->height > out->width * out->height) {
+      out->width = m->width;
+      out->height = m->height;
+    }
+  out->rgb.assign(static_cast<std::size_t>(out->width) * out->height * 3, 255);
+  for (int c = 0; c < 3; ++c) {
+    if (!maps[c]) continue;
+    out->source += (out->source.empty() ? "" : " + ") + maps[c]->source;
+    cv::Mat plane(maps[c]->height, maps[c]->width, CV_8UC3, const_cast<std::uint8_t*>(maps[c]->rgb.data()));
+    cv::Mat channel;
+    cv::extractChannel(plane, channel, c);
+    if (channel.cols != out->width || channel.rows != out->height)
+      cv::resize(channel, channel, cv::Size(out->width, out->height), 0, 0, cv::INTER_LINEAR);
+    for (int r = 0; r < out->height; ++r)
+      for (int x = 0; x < out->width; ++x)
+        out->rgb[(static_cast<std::size_t>(r) * out->width + x) * 3 + c] = channel.at<std::uint8_t>(r, x);
+  }
+  return out;
+}
+
+// The maps of material `mi` (see SurfaceMaps); none when it has none.
+SurfaceMaps maps_of(const aiScene* scene, unsigned mi, const std::string& mesh_path) {
+  SurfaceMaps maps;
+  if (mi >= scene->mNumMaterials) return maps;
+  const aiMaterial* mat = scene->mMaterials[mi];
+  maps.base_color = texture_of(scene, mat, {aiTextureType_BASE_COLOR, aiTextureType_DIFFUSE}, mesh_path);
+  maps.normal = texture_of(scene, mat, {aiTextureType_NORMALS, aiTextureType_NORMAL_CAMERA}, mesh_path);
+  // glTF's metallicRoughnessTexture comes as both (and as "unknown" from older importers).
+  auto rough = texture_of(scene, mat, {aiTextureType_DIFFUSE_ROUGHNESS, aiTextureType_UNKNOWN}, mesh_path);
+  auto metal = texture_of(scene, mat, {aiTextureType_METALNESS, aiTextureType_UNKNOWN}, mesh_path);
+  auto ao = texture_of(scene, mat, {aiTextureType_AMBIENT_OCCLUSION, aiTextureType_LIGHTMAP}, mesh_path);
+  // The same file named twice decodes twice: compare sources to pack one image only once.
+  if (rough && metal && rough->source == metal->source) metal = rough;
+  if (ao && rough && ao->source == rough->source) ao = rough;
+  maps.orm = packed_orm(std::move(ao), std::move(rough), std::move(metal));
+  ai_real f = 1;
+  if (mat->Get(AI_MATKEY_ROUGHNESS_FACTOR, f) == AI_SUCCESS && std::isfinite(f)) maps.roughness_factor = f;
+  if (mat->Get(AI_MATKEY_METALLIC_FACTOR, f) == AI_SUCCESS && std::isfinite(f)) maps.metallic_factor = f;
+  return maps;
 }
 
 const aiScene* read_mesh_file(Assimp::Importer& importer, const std::string& path) {
@@ -366,9 +423,9 @@ std::vector<MeshPart> load_mesh_parts(const std::string& path) {
     if (!(am->mPrimitiveTypes & aiPrimitiveType_TRIANGLE)) continue;
     auto [it, first] = part_of.emplace(am->mMaterialIndex, 0);
     if (first && am->HasTextureCoords(0)) {
-      if (auto base_color = base_color_of(scene, am->mMaterialIndex, path)) {
+      if (SurfaceMaps maps = maps_of(scene, am->mMaterialIndex, path); maps.any()) {
         it->second = parts.size();
-        parts.push_back({MeshData{}, std::move(base_color)});
+        parts.push_back({MeshData{}, std::move(maps)});
       }
     }
     parts[it->second].mesh.append(mesh_of(am));
@@ -409,11 +466,11 @@ void write_obj(const MeshData& m, const std::string& path) {
 SceneGeometry build_scene_geometry(const World& w) {
   SceneGeometry g;
   if (w.seabed.enabled) {
-    g.meshes.push_back({"seabed", make_seabed_mesh(w.seabed), SegClass::kSeabed, w.seabed.material, false, nullptr});
+    g.meshes.push_back({"seabed", make_seabed_mesh(w.seabed), SegClass::kSeabed, w.seabed.material, false, {}});
   }
   for (const auto& p : w.pipelines)
     g.meshes.push_back({"pipeline:" + p.name, make_tube_mesh(p.centerline_W, p.radius_m, 16), SegClass::kPipeline,
-                        p.material, false, nullptr});
+                        p.material, false, {}});
   // Rocks sharing a material are merged into one draw.
   std::vector<SceneMesh> rock_groups;
   for (const auto& r : w.rocks) {
@@ -423,7 +480,7 @@ SceneGeometry build_scene_geometry(const World& w) {
     for (auto& gm : rock_groups)
       if (same_look(gm.material, r.material)) grp = &gm;
     if (!grp) {
-      rock_groups.push_back({"rocks", {}, SegClass::kRock, r.material, true, nullptr});
+      rock_groups.push_back({"rocks", {}, SegClass::kRock, r.material, true, {}});
       grp = &rock_groups.back();
     }
     grp->mesh.append(m);
@@ -439,7 +496,7 @@ SceneGeometry build_scene_geometry(const World& w) {
     far.hm_width = far.hm_height = 0;
     far.hm_values.clear();
     far.depth_m = w.seabed.depth_m + w.seabed.relief_amplitude_m + 0.2;
-    g.meshes.push_back({"seabed_far", make_seabed_mesh(far), SegClass::kSeabed, w.seabed.material, false, nullptr});
+    g.meshes.push_back({"seabed_far", make_seabed_mesh(far), SegClass::kSeabed, w.seabed.material, false, {}});
   }
   for (const auto& o : w.objects) {
     MeshData m;
@@ -450,10 +507,10 @@ SceneGeometry build_scene_geometry(const World& w) {
       } catch (const ConfigError& e) {
         throw ConfigError(w.file + ": object '" + o.name + "': " + e.what());
       }
-      for (MeshPart& p : parts) {  // textured parts by their UVs, the rest triplanar
+      for (MeshPart& p : parts) {  // parts with maps by their UVs, the rest triplanar
         p.mesh.transform(o.X_WO, o.scale);
-        g.meshes.push_back(
-            {"object:" + o.name, std::move(p.mesh), o.seg_class, o.material, !p.base_color, p.base_color});
+        const bool triplanar = !p.maps.any();
+        g.meshes.push_back({"object:" + o.name, std::move(p.mesh), o.seg_class, o.material, triplanar, p.maps});
       }
       continue;
     } else if (o.shape == "box") {
@@ -464,7 +521,7 @@ SceneGeometry build_scene_geometry(const World& w) {
       m = make_plane_mesh(o.size_m.x(), o.size_m.y());
     }
     m.transform(o.X_WO, o.scale);
-    g.meshes.push_back({"object:" + o.name, std::move(m), o.seg_class, o.material, o.shape != "plane", nullptr});
+    g.meshes.push_back({"object:" + o.name, std::move(m), o.seg_class, o.material, o.shape != "plane", {}});
   }
   return g;
 }

@@ -23,12 +23,27 @@ struct MeshData {
   void append(const MeshData& other);
 };
 
-/// A texture image of a mesh file (its base colour), decoded: rgb8, rows bottom first (texture
-/// coordinate v = 0 is the image's bottom, as assimp gives UVs). `source` names it in messages.
+/// A texture image of a mesh file (base colour, normal or occlusion-roughness-metallic map),
+/// decoded: rgb8, rows bottom first (texture coordinate v = 0 is the image's bottom, as assimp
+/// gives UVs). `source` names it in messages.
 struct TextureImage {
   int width = 0, height = 0;
   std::vector<std::uint8_t> rgb;
   std::string source;
+};
+
+/// A mesh file material's own maps, drawn by the mesh's UVs (see MeshPart).
+struct SurfaceMaps {
+  /// Base colour (sRGB), times Material::albedo; null: the material's albedo alone.
+  std::shared_ptr<const TextureImage> base_color;
+  /// Tangent-space normal map (linear; x right = +u, y up = +v, z out of the surface: glTF's and
+  /// OpenGL's convention); null: the geometric normal.
+  std::shared_ptr<const TextureImage> normal;
+  /// Occlusion (red), roughness (green), metallic (blue), linear: glTF's packing; separate grey
+  /// maps are packed into one. Roughness and metallic are the map times the factors; null: none.
+  std::shared_ptr<const TextureImage> orm;
+  double roughness_factor = 1.0, metallic_factor = 1.0;  ///< the file's (glTF's default 1)
+  bool any() const { return base_color || normal || orm; }
 };
 
 struct SceneMesh {
@@ -37,18 +52,18 @@ struct SceneMesh {
   SegClass seg_class = SegClass::kOther;
   Material material;
   bool triplanar = false;  ///< texture by world position (meshes without UVs: rocks, files)
-  /// The mesh file's own base-colour texture (by its UVs, times material.albedo); null: the
-  /// material's procedural texture.
-  std::shared_ptr<const TextureImage> base_color;
+  /// The mesh file's own maps (by its UVs); none: the material's procedural texture.
+  SurfaceMaps maps;
 };
 
-/// A mesh file's triangles grouped by their base-colour texture: one part per textured material
-/// (glTF baseColorTexture, FBX/OBJ diffuse map; files next to the mesh or embedded, e.g. GLB),
-/// and one part with every untextured triangle. Throws ConfigError naming the mesh file and the
-/// texture when a texture is missing or cannot be decoded.
+/// A mesh file's triangles grouped by their maps: one part per material with maps of its own
+/// (glTF baseColorTexture, normalTexture, metallicRoughnessTexture and occlusionTexture; FBX/OBJ
+/// diffuse, normal, roughness, metalness and ambient-occlusion maps; files next to the mesh or
+/// embedded, e.g. GLB), and one part with every other triangle. Throws ConfigError naming the
+/// mesh file and the texture when a texture is missing or cannot be decoded.
 struct MeshPart {
   MeshData mesh;
-  std::shared_ptr<const TextureImage> base_color;
+  SurfaceMaps maps;
 };
 std::vector<MeshPart> load_mesh_parts(const std::string& path);
 
