@@ -112,7 +112,7 @@ struct GpuMesh {
   bool sediment = false;  ///< sand settled on its upward faces and near the seabed
   float roughness = 0.6f, metallic = 0.0f, relief_m = 0.0f, sediment_cover = 0.0f;
   GLuint texture = 0;
-  GLuint gradient = 0;  ///< the relief's slope (ProceduralTexture::gradient), for bump mapping
+  GLuint gradient = 0;    ///< the relief's slope (ProceduralTexture::gradient), for bump mapping
   GLuint normal_map = 0;  ///< a mesh file's tangent-space normal map (by UVs); 0: none
   GLuint orm_map = 0;     ///< a mesh file's occlusion-roughness-metallic map (by UVs); 0: none
 };
@@ -314,10 +314,10 @@ struct Renderer::Impl {
   struct SurfaceMaps {
     GLuint colour = 0, slope = 0;  // albedo + relief height; the relief's gradient
   };
-  std::map<std::string, SurfaceMaps> textures;                   // procedural, by name
+  std::map<std::string, SurfaceMaps> textures;                            // procedural, by name
   std::map<std::pair<const TextureImage*, bool>, GLuint> image_textures;  // mesh files' own maps (image, sRGB)
   std::vector<std::shared_ptr<const TextureImage>> mesh_images;           // keeps image_textures' keys alive
-  Eigen::Vector3d sediment_albedo{0.7, 0.64, 0.5};               // the seabed's mean albedo (linear): settled sand
+  Eigen::Vector3d sediment_albedo{0.7, 0.64, 0.5};  // the seabed's mean albedo (linear): settled sand
   // By material and lamp count (scene_variant()); compiled on first use.
   std::map<unsigned, Program> scene_variants;
   std::map<unsigned, Program> post_variants;  // by feature set (post_program())
@@ -475,8 +475,8 @@ void Renderer::Impl::upload_scene(const SceneGeometry& geo) {
       if (options.materials && sm.maps.orm) {
         // The map times the factors: the world's roughness / metallic when it sets them, else the file's.
         g.orm_map = image_texture(sm.maps.orm, false);
-        g.roughness = static_cast<float>(std::isnan(sm.material.roughness) ? sm.maps.roughness_factor
-                                                                            : sm.material.roughness);
+        g.roughness =
+            static_cast<float>(std::isnan(sm.material.roughness) ? sm.maps.roughness_factor : sm.material.roughness);
         g.metallic = static_cast<float>(sm.material.metallic > 0.0 ? sm.material.metallic : sm.maps.metallic_factor);
       }
     }
@@ -589,7 +589,6 @@ void Renderer::Impl::mark_sun_free() {
     }
   }
 }
-
 
 void Renderer::Impl::upload_snow() {
   const auto& ms = world.marine_snow;
@@ -715,7 +714,7 @@ struct Renderer::Impl::FrameSetup {
   float lamp_pos_W[12], lamp_dir_W[12], lamp_pos_C[12], lamp_dir_C[12], lamp_I[12], lamp_cos[8];
   bool shadows = false;
   float shadow_vp_W[64], shadow_vp_C[64];  // per lamp: world -> lamp clip, optical -> lamp clip
-  float lamp_texel_per_m[4];                // per lamp: its shadow map's texel at 1 m [m]
+  float lamp_texel_per_m[4];               // per lamp: its shadow map's texel at 1 m [m]
   bool sun_shadow = false;
   float sun_vp[16];  // world -> sun clip (orthographic)
 };
@@ -867,8 +866,8 @@ std::string scene_defines(unsigned v) {
   return std::string("#define TRIPLANAR ") + bit(1) + "\n#define MACRO " + bit(2) + "\n#define SECTIONS " + bit(4) +
          "\n#define BUMP " + bit(8) + "\n#define SPECULAR " + bit(16) + "\n#define SEDIMENT " + bit(32) +
          "\n#define SUN_SHADOW " + bit(kSunShadowBit) + "\n#define LAMP_SHADOWS " + bit(kLampShadowBit) +
-         "\n#define NORMAL_MAP " + bit(kNormalMapBit) + "\n#define ORM_MAP " + bit(kOrmBit) +
-         "\n#define NLAMPS " + std::to_string(v >> kLampShift) + "\n";
+         "\n#define NORMAL_MAP " + bit(kNormalMapBit) + "\n#define ORM_MAP " + bit(kOrmBit) + "\n#define NLAMPS " +
+         std::to_string(v >> kLampShift) + "\n";
 }
 
 }  // namespace
@@ -927,7 +926,6 @@ void Renderer::Impl::set_lamps_W(Program& p, const FrameSetup& f) const {
   glUniform2fv(p["u_lamp_cos[0]"], f.nl, f.lamp_cos);
 }
 
-
 // Shadow receiver culling for the lamps (per frame): bit 2 when some lamp's shadow map can darken
 // the terrain chunk ch of meshes[mesh]: it lies in the lamp's shadow frustum, and either the
 // terrain itself can cut the lamp's rays to it (the flattest ray from the lamp to the chunk is not
@@ -939,7 +937,7 @@ unsigned Renderer::Impl::lamp_shadow_bits(std::size_t mesh, const Chunk& ch, con
   for (int i = 0; i < f.nl; ++i) {
     const Eigen::Map<const Eigen::Matrix4f> vp(f.shadow_vp_W + std::ptrdiff_t{16} * i);
     if (!in_frustum(vp, ch)) continue;
-    const Eigen::Vector3f L(f.lamp_pos_W[3 * i], f.lamp_pos_W[3 * i + 1], f.lamp_pos_W[3 * i + 2]);
+    const Eigen::Vector3f L = Eigen::Map<const Eigen::Vector3f>(f.lamp_pos_W + 3 * static_cast<std::ptrdiff_t>(i));
     const LampCaster r = seen_from(L, mesh, ch.lo, ch.hi);
     if (!(std::tan(r.dep_lo) > m.tan_slope)) return 2u;
     for (const LampCaster& c : casters[static_cast<std::size_t>(i)])
@@ -982,14 +980,13 @@ void Renderer::Impl::scene_pass(const Targets& t, const FrameSetup& f, double st
     casters.resize(static_cast<std::size_t>(f.nl));
     for (int i = 0; i < f.nl; ++i) {
       const Eigen::Map<const Eigen::Matrix4f> lvp(f.shadow_vp_W + std::ptrdiff_t{16} * i);
-      const Eigen::Vector3f L(f.lamp_pos_W[3 * i], f.lamp_pos_W[3 * i + 1], f.lamp_pos_W[3 * i + 2]);
+      const Eigen::Vector3f L = Eigen::Map<const Eigen::Vector3f>(f.lamp_pos_W + 3 * static_cast<std::ptrdiff_t>(i));
       for (const CasterBox& c : caster_boxes) {
         if (!in_frustum(lvp, c.lo, c.hi)) continue;
         // Grown by two texels of the lamp's map at the box's far side (PCF reads the next texel).
         const float far = (c.lo - L).cwiseAbs().cwiseMax((c.hi - L).cwiseAbs()).norm();
         const float pad = 2.0f * f.lamp_texel_per_m[i] * far + 0.01f;
-        casters[static_cast<std::size_t>(i)].push_back(
-            seen_from(L, c.mesh, c.lo.array() - pad, c.hi.array() + pad));
+        casters[static_cast<std::size_t>(i)].push_back(seen_from(L, c.mesh, c.lo.array() - pad, c.hi.array() + pad));
       }
     }
   }

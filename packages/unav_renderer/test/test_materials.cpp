@@ -294,8 +294,7 @@ std::string write_gltf_quad(const std::filesystem::path& dir) {
 
 // Writes a 2 x 2 map whose west column (u < 0.5) is `west` and east column `east` (RGB); with
 // rows, its south row (v < 0.5: the image's bottom) `west` and its north row `east`.
-void write_columns(const std::filesystem::path& file, const cv::Vec3b& west, const cv::Vec3b& east,
-                   bool rows = false) {
+void write_columns(const std::filesystem::path& file, const cv::Vec3b& west, const cv::Vec3b& east, bool rows = false) {
   cv::Mat m(2, 2, CV_8UC3);
   for (int r = 0; r < 2; ++r)
     for (int c = 0; c < 2; ++c) {
@@ -326,7 +325,8 @@ TEST(Materials, MeshFileNormalAndOrmMapsShadeByTheirUvs) {
   const auto levels = [&](const World& world, bool north_south = false) {
     const Frame f = Renderer(world, {down_camera()}, with_materials(false)).render(X_WB, "down");
     const auto at = [&](double x) {
-      const Eigen::Vector3d p = f.X_WC.inverse() * (north_south ? Eigen::Vector3d(0.0, x, 2.0) : Eigen::Vector3d(x, 0.0, 2.0));
+      const Eigen::Vector3d p =
+          f.X_WC.inverse() * (north_south ? Eigen::Vector3d(0.0, x, 2.0) : Eigen::Vector3d(x, 0.0, 2.0));
       return green(f, static_cast<int>(std::lround(f.K(0, 0) * p.x() / p.z() + f.K(0, 2))),
                    static_cast<int>(std::lround(f.K(1, 1) * p.y() / p.z() + f.K(1, 2))));
     };

@@ -257,8 +257,8 @@ TEST(Shadows, ReceiverCullingChangesNoPixel) {
   Renderer full(world, {front, down}, no_cull);
   std::size_t skipped = 0, drawn = 0;
   for (const Pose& X_WB : {pose_from_xyz_rpy({3.0, 0.2, 8.0}, {0, 0, 0.1}),        // over the pipe, along it
-                           pose_from_xyz_rpy({9.0, 1.2, 9.0}, {0, 0.3, 1.2}),       // low, the boulder ahead
-                           pose_from_xyz_rpy({16.0, -1.0, 8.5}, {0, 0.2, -1.6}),    // the skid and the pipe
+                           pose_from_xyz_rpy({9.0, 1.2, 9.0}, {0, 0.3, 1.2}),      // low, the boulder ahead
+                           pose_from_xyz_rpy({16.0, -1.0, 8.5}, {0, 0.2, -1.6}),   // the skid and the pipe
                            pose_from_xyz_rpy({-4.0, 8.0, 7.0}, {0, 0.1, 2.5})}) {  // the open seabed
     for (const char* cam : {"front", "down"}) {
       const Frame a = culled.render(X_WB, cam, 1.0);

@@ -469,8 +469,12 @@ SceneGeometry build_scene_geometry(const World& w) {
     g.meshes.push_back({"seabed", make_seabed_mesh(w.seabed), SegClass::kSeabed, w.seabed.material, false, {}});
   }
   for (const auto& p : w.pipelines)
-    g.meshes.push_back({"pipeline:" + p.name, make_tube_mesh(p.centerline_W, p.radius_m, 16), SegClass::kPipeline,
-                        p.material, false, {}});
+    g.meshes.push_back({"pipeline:" + p.name,
+                        make_tube_mesh(p.centerline_W, p.radius_m, 16),
+                        SegClass::kPipeline,
+                        p.material,
+                        false,
+                        {}});
   // Rocks sharing a material are merged into one draw.
   std::vector<SceneMesh> rock_groups;
   for (const auto& r : w.rocks) {
