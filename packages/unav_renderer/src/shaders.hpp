@@ -102,22 +102,14 @@ layout(location = 1) out float o_depth;  // z along the optical axis [m]
 
 vec4 tex_at(vec2 uv) { return texture(u_tex, uv / u_uv_scale); }  // rgb albedo, a relief height
 
-// A sine's shape from two parabolas (within 0.056 of sin x; odd, period 2 pi, smooth): a
-// few instructions where llvmpipe spends ~40 on sin().
-float wave(float x) {
-  float u = x * 0.318309886;            // x / pi
-  u -= 2.0 * floor(0.5 * u + 0.5);      // [-1, 1)
-  return 4.0 * u * (1.0 - abs(u));
-}
-
 // Zero-mean caustic network at horizontal position p [m], time t [s]: two domain-warped,
-// drifting layers of wave x wave cells, sharpened into thin bright lines (g |g| keeps the mean 0).
+// drifting layers of sin x sin cells, sharpened into thin bright lines (g |g| keeps the mean 0).
 float caustic_pattern(vec2 p, float t) {
   float g = 0.0;
   vec2 q = p * 1.9;
   for (int k = 0; k < 2; ++k) {
-    vec2 w = q + 0.55 * vec2(wave(q.y * 1.3 + 0.8 * t + float(k)), wave(q.x * 1.1 - 0.6 * t + 2.0 * float(k)));
-    float s = wave(w.x + 0.35 * t) * wave(w.y - 0.3 * t);
+    vec2 w = q + 0.55 * vec2(sin(q.y * 1.3 + 0.8 * t + float(k)), sin(q.x * 1.1 - 0.6 * t + 2.0 * float(k)));
+    float s = sin(w.x + 0.35 * t) * sin(w.y - 0.3 * t);
     g += s * abs(s);
     q = mat2(0.8, 0.6, -0.6, 0.8) * q * 1.37 + vec2(3.1, 1.7);
   }
