@@ -94,6 +94,44 @@ bool may_shadow(const LampCaster& c, const LampCaster& r) {
   return std::abs(std::remainder(c.az_mid - r.az_mid, 2.0f * static_cast<float>(M_PI))) <= c.az_half + r.az_half;
 }
 
+// The casters seen from one lamp, bucketed by azimuth: a receiver tests those in its sectors only.
+class LampCasters {
+ public:
+  void add(const LampCaster& c) {
+    const auto index = static_cast<std::uint32_t>(all_.size());
+    all_.push_back(c);
+    for_sectors(c, [&](std::size_t k) { sectors_[k].push_back(index); });
+  }
+  // Whether a caster of another mesh than `mesh` may shadow receiver r (may_shadow()).
+  bool any_may_shadow(const LampCaster& r, std::size_t mesh) const {
+    bool hit = false;
+    for_sectors(r, [&](std::size_t k) {
+      for (std::uint32_t i = 0; i < sectors_[k].size() && !hit; ++i) {
+        const LampCaster& c = all_[sectors_[k][i]];
+        hit = c.mesh != mesh && may_shadow(c, r);
+      }
+    });
+    return hit;
+  }
+
+ private:
+  static constexpr int kSectors = 64;
+  template <typename F>
+  static void for_sectors(const LampCaster& c, F&& f) {
+    const float w = 2.0f * static_cast<float>(M_PI) / kSectors;
+    if (c.az_half >= static_cast<float>(M_PI)) {
+      for (int k = 0; k < kSectors; ++k) f(static_cast<std::size_t>(k));
+      return;
+    }
+    const int a = static_cast<int>(std::floor((c.az_mid - c.az_half) / w));
+    const int b = static_cast<int>(std::floor((c.az_mid + c.az_half) / w));
+    for (int k = a; k <= b && k < a + kSectors; ++k)
+      f(static_cast<std::size_t>(((k % kSectors) + kSectors) % kSectors));
+  }
+  std::vector<LampCaster> all_;
+  std::array<std::vector<std::uint32_t>, kSectors> sectors_;
+};
+
 struct GpuMesh {
   GLuint vao = 0, vbo[3] = {0, 0, 0}, ebo = 0;
   GLsizei index_count = 0;
@@ -199,8 +237,10 @@ std::vector<std::uint32_t> chunked_indices(const MeshData& mesh, std::vector<Chu
       hi[a] = std::max(hi[a], centroid(t, a));
     }
   int n[2] = {1, 1};
+  // At least ~8 triangles a chunk (a coarse mesh over a large area, as the far seabed, in few).
+  const int most = std::clamp(static_cast<int>(std::sqrt(static_cast<double>(nt) / 8.0)), 1, 64);
   if (nt > 2000)
-    for (int a = 0; a < 2; ++a) n[a] = std::clamp(static_cast<int>(std::ceil((hi[a] - lo[a]) / kChunkM)), 1, 64);
+    for (int a = 0; a < 2; ++a) n[a] = std::clamp(static_cast<int>(std::ceil((hi[a] - lo[a]) / kChunkM)), 1, most);
   std::vector<std::vector<std::size_t>> cells(static_cast<std::size_t>(n[0] * n[1]));
   for (std::size_t t = 0; t < nt; ++t) {
     int c[2];
@@ -373,7 +413,7 @@ struct Renderer::Impl {
   void build_caster_boxes(const SceneGeometry& geo);
   void mark_sun_free();
   unsigned lamp_shadow_bits(std::size_t mesh, const Chunk& ch, const FrameSetup& f,
-                            const std::vector<std::vector<LampCaster>>& casters) const;
+                            const std::vector<LampCasters>& casters) const;
   Program& post_program(const std::array<bool, 8>& features);
   void snow_pass(const FrameSetup& f, const CameraModel& c, double stamp_s);
   bool inscatter_pass(const Targets& t, const FrameSetup& f, const CameraModel& c, float* march_max_out);
@@ -932,7 +972,7 @@ void Renderer::Impl::set_lamps_W(Program& p, const FrameSetup& f) const {
 // steeper than the terrain's steepest slope), or a caster box of another mesh overlaps it as seen
 // from the lamp, in azimuth and in depression angle (a ray through both needs both).
 unsigned Renderer::Impl::lamp_shadow_bits(std::size_t mesh, const Chunk& ch, const FrameSetup& f,
-                                          const std::vector<std::vector<LampCaster>>& casters) const {
+                                          const std::vector<LampCasters>& casters) const {
   const GpuMesh& m = meshes[mesh];
   for (int i = 0; i < f.nl; ++i) {
     const Eigen::Map<const Eigen::Matrix4f> vp(f.shadow_vp_W + std::ptrdiff_t{16} * i);
@@ -940,8 +980,7 @@ unsigned Renderer::Impl::lamp_shadow_bits(std::size_t mesh, const Chunk& ch, con
     const Eigen::Vector3f L = Eigen::Map<const Eigen::Vector3f>(f.lamp_pos_W + 3 * static_cast<std::ptrdiff_t>(i));
     const LampCaster r = seen_from(L, mesh, ch.lo, ch.hi);
     if (!(std::tan(r.dep_lo) > m.tan_slope)) return 2u;
-    for (const LampCaster& c : casters[static_cast<std::size_t>(i)])
-      if (c.mesh != mesh && may_shadow(c, r)) return 2u;
+    if (casters[static_cast<std::size_t>(i)].any_may_shadow(r, mesh)) return 2u;
   }
   return 0u;
 }
@@ -975,7 +1014,7 @@ void Renderer::Impl::scene_pass(const Targets& t, const FrameSetup& f, double st
   // Shadow receiver culling: the terrain's visible chunks by the shadow lookups they need (llvmpipe
   // pays for a lookup on every pixel of a draw that compiles it, lit or not).
   const bool cull = options.shadow_receiver_culling && all_shadows != 0;
-  std::vector<std::vector<LampCaster>> casters;  // per lamp: the caster boxes in its frustum, seen from it
+  std::vector<LampCasters> casters;  // per lamp: the caster boxes in its frustum, seen from it
   if (cull && f.shadows) {
     casters.resize(static_cast<std::size_t>(f.nl));
     for (int i = 0; i < f.nl; ++i) {
@@ -986,7 +1025,7 @@ void Renderer::Impl::scene_pass(const Targets& t, const FrameSetup& f, double st
         // Grown by two texels of the lamp's map at the box's far side (PCF reads the next texel).
         const float far = (c.lo - L).cwiseAbs().cwiseMax((c.hi - L).cwiseAbs()).norm();
         const float pad = 2.0f * f.lamp_texel_per_m[i] * far + 0.01f;
-        casters[static_cast<std::size_t>(i)].push_back(seen_from(L, c.mesh, c.lo.array() - pad, c.hi.array() + pad));
+        casters[static_cast<std::size_t>(i)].add(seen_from(L, c.mesh, c.lo.array() - pad, c.hi.array() + pad));
       }
     }
   }
