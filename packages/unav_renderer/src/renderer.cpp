@@ -181,6 +181,8 @@ struct Slot {
 void validate_options(const RenderOptions& o, const std::string& where) {
   if (o.shadow_map_size < 16 || o.shadow_map_size > 8192)
     throw ConfigError(where, "shadow_map_size", std::to_string(o.shadow_map_size), "must be in [16, 8192] px");
+  if (!(o.shadow_bias >= 0.0) || !std::isfinite(o.shadow_bias))
+    throw ConfigError(where, "shadow_bias", std::to_string(o.shadow_bias), "must be finite and >= 0");
   if (o.lamp_scatter_downsample < 1)
     throw ConfigError(where, "lamp_scatter_downsample", std::to_string(o.lamp_scatter_downsample), "must be >= 1");
 }
@@ -864,7 +866,8 @@ void Renderer::Impl::shadow_pass(const FrameSetup& f) {
   glDisable(GL_CULL_FACE);
   glDisable(GL_BLEND);
   glEnable(GL_POLYGON_OFFSET_FILL);
-  glPolygonOffset(2.0f, 4.0f);
+  const auto bias = static_cast<float>(options.shadow_bias);
+  glPolygonOffset(2.0f * bias, 4.0f * bias);
   shadow.use();
   const float one = 1.0f;
   // The sun's map depends on the static scene and its matrix only: reused until either changes.
@@ -877,7 +880,7 @@ void Renderer::Impl::shadow_pass(const FrameSetup& f) {
       const int sun_size = std::min(4096, kSunMapScale * size);
       glFramebufferTexture2D(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_TEXTURE_2D, sun_tex, 0);
       glViewport(0, 0, sun_size, sun_size);
-      glPolygonOffset(1.5f, 2.0f);
+      glPolygonOffset(1.5f * bias, 2.0f * bias);
     } else {
       glFramebufferTextureLayer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, shadow_tex, 0, i);
     }

@@ -46,6 +46,9 @@ struct RenderOptions {
   /// the light, and the light steeper than the terrain's steepest slope) are drawn without the
   /// shadow lookups. Same image (conservative tests); false only to measure or to check that.
   bool shadow_receiver_culling = true;
+  /// Scale of the shadow maps' depth bias (slope-scaled polygon offset) against self-shadowing
+  /// ("acne"): larger removes acne on steep terrain and detaches contact shadows. >= 0.
+  double shadow_bias = 1.0;
   /// Caustics: the sun's direct light on the seabed is focused by the moving surface into a
   /// drifting network of bright lines, modulation 1 + A g(x, t) with g of mean ~0 and
   /// A = caustic_strength exp(-d (2 K_d + 1 / 15 m)) at depth d (green K_d): clear shallow water
