@@ -560,7 +560,9 @@ RandomizationSpec RandomizationSpec::parse(const YAML::Node& root, const std::st
     }
     s.leaves_.push_back(n);
   }
-  s.base_seed_ = s.leaves_[0].as<std::uint64_t>();
+  // Validated above as an integer in [0, 2^53] (so exact as a double). Not as<uint64_t>: yaml-cpp
+  // reads a leading 0 as octal and throws on "0999" (YAML 1.2: decimal 999).
+  s.base_seed_ = static_cast<std::uint64_t>(s.leaves_[0].as<double>());
   s.base_world_ = s.leaves_[1].Scalar();
   s.cameras_config_ = s.leaves_[2].Scalar();
   for (size_t i = 0; i < rules().size(); ++i) {

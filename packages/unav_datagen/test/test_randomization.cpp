@@ -200,3 +200,13 @@ TEST(RandomizationSpec, IntRangeWrittenWithRealsDrawsIntegers) {
   for (int k = 0; k < 200; ++k) counts.insert(spec.sample(k)["rocks"]["count"].as<int64_t>());
   EXPECT_EQ(counts, (std::set<int64_t>{1, 2, 3}));
 }
+
+// Found by fuzz_spec: "seed: 0999" passed the integer check but yaml-cpp's as<uint64_t> reads a
+// leading 0 as octal and threw a YAML exception instead of giving 999 (YAML 1.2 decimal).
+TEST(RandomizationSpec, SeedWithLeadingZeroIsDecimal) {
+  YAML::Node root = YAML::LoadFile(kSpec);
+  root["seed"] = YAML::Load("0999");
+  const auto spec = RandomizationSpec::parse(root, kSpec);
+  EXPECT_EQ(spec.seed_of(0), 999u);
+  EXPECT_EQ(spec.sample(0)["seed"].as<double>(), 999.0);
+}
