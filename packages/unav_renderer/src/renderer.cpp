@@ -202,16 +202,19 @@ constexpr double kSunShadowHalfM = 12.0;  // the sun's shadow map covers 24 m x 
 constexpr double kSunSnapM = 2.0;         // its centre moves in 2 m steps: the map is reused in between
 constexpr int kSunMapScale = 4;           // its edge: 4 x shadow_map_size (1024 px: 2 cm texels)
 
+// The corners of triangle t of mesh.
+std::array<Eigen::Vector3f, 3> triangle_corners(const MeshData& mesh, std::size_t t) {
+  std::array<Eigen::Vector3f, 3> p;
+  for (std::size_t k = 0; k < 3; ++k)
+    p[k] = Eigen::Map<const Eigen::Vector3f>(&mesh.positions[std::size_t{3} * mesh.indices[3 * t + k]]);
+  return p;
+}
+
 // The steepest slope of a mesh's faces, as tan(angle from horizontal) (world_ned, z down).
 float steepest_slope(const MeshData& mesh) {
   float best = 0.0f;
-  const auto& P = mesh.positions;
   for (std::size_t t = 0; t < mesh.triangle_count(); ++t) {
-    Eigen::Vector3f p[3];
-    for (int k = 0; k < 3; ++k) {
-      const std::size_t b = std::size_t{3} * mesh.indices[3 * t + static_cast<std::size_t>(k)];
-      p[k] = Eigen::Vector3f(P[b], P[b + 1], P[b + 2]);
-    }
+    const auto p = triangle_corners(mesh, t);
     const Eigen::Vector3f n = (p[1] - p[0]).cross(p[2] - p[0]);
     const float horizontal = std::hypot(n.x(), n.y());
     if (horizontal == 0.0f) continue;
@@ -294,32 +297,6 @@ bool in_frustum(const Eigen::Matrix4f& vp, const Eigen::Vector3f& lo, const Eige
 }
 bool in_frustum(const Eigen::Matrix4f& vp, const Chunk& ch) { return in_frustum(vp, ch.lo, ch.hi); }
 
-// Draws the chunks of m inside vp's frustum (neighbouring visible chunks in one call).
-void draw_visible(const GpuMesh& m, const Eigen::Matrix4f& vp) {
-  GLsizei first = 0, count = 0;
-  auto flush = [&] {
-    if (count > 0)
-      glDrawElements(GL_TRIANGLES, count, GL_UNSIGNED_INT,
-                     // NOLINTNEXTLINE(performance-no-int-to-ptr): GL takes a buffer offset as a pointer
-                     reinterpret_cast<const void*>(static_cast<std::uintptr_t>(first) * sizeof(std::uint32_t)));
-    count = 0;
-  };
-  for (const Chunk& ch : m.chunks) {
-    if (!in_frustum(vp, ch)) {
-      flush();
-      continue;
-    }
-    if (count > 0 && first + count == ch.first) {
-      count += ch.count;
-    } else {
-      flush();
-      first = ch.first;
-      count = ch.count;
-    }
-  }
-  flush();
-}
-
 // Draws the listed chunks (in mesh order; neighbours in one call).
 void draw_chunks(const std::vector<const Chunk*>& chunks) {
   GLsizei first = 0, count = 0;
@@ -340,6 +317,15 @@ void draw_chunks(const std::vector<const Chunk*>& chunks) {
     }
   }
   flush();
+}
+
+// Draws the chunks of m inside vp's frustum (neighbouring visible chunks in one call).
+void draw_visible(const GpuMesh& m, const Eigen::Matrix4f& vp) {
+  std::vector<const Chunk*> visible;
+  visible.reserve(m.chunks.size());
+  for (const Chunk& ch : m.chunks)
+    if (in_frustum(vp, ch)) visible.push_back(&ch);
+  draw_chunks(visible);
 }
 
 double luminance(const Eigen::Vector3d& c) { return 0.2126 * c.x() + 0.7152 * c.y() + 0.0722 * c.z(); }
@@ -578,11 +564,7 @@ void Renderer::Impl::build_caster_boxes(const SceneGeometry& geo) {
     const MeshData& mesh = geo.meshes[mi].mesh;
     std::map<std::pair<long, long>, std::size_t> cell_box;
     for (std::size_t t = 0; t < mesh.triangle_count(); ++t) {
-      Eigen::Vector3f p[3];
-      for (int k = 0; k < 3; ++k) {
-        const std::size_t b = std::size_t{3} * mesh.indices[3 * t + static_cast<std::size_t>(k)];
-        p[k] = Eigen::Vector3f(mesh.positions[b], mesh.positions[b + 1], mesh.positions[b + 2]);
-      }
+      const auto p = triangle_corners(mesh, t);
       const Eigen::Vector3f c = (p[0] + p[1] + p[2]) / 3.0f;
       const std::pair<long, long> key{std::lround(std::floor(c.x() / kCasterCellM)),
                                       std::lround(std::floor(c.y() / kCasterCellM))};
@@ -611,6 +593,12 @@ void Renderer::Impl::mark_sun_free() {
   const Eigen::Vector3f a = std::abs(s.x()) < 0.9f ? Eigen::Vector3f::UnitX() : Eigen::Vector3f::UnitY();
   const Eigen::Vector3f u = (a - s * a.dot(s)).normalized(), v = s.cross(u);
   const float tan_elevation = s.z() > 1e-6f ? s.z() / std::hypot(s.x(), s.y()) : 0.0f;  // inf overhead
+  // Each caster's extent along u, v (across the sunlight) and s (along it), once.
+  using Interval = std::pair<float, float>;
+  std::vector<std::array<Interval, 3>> seen;
+  seen.reserve(caster_boxes.size());
+  for (const CasterBox& c : caster_boxes)
+    seen.push_back({box_interval(c.lo, c.hi, u), box_interval(c.lo, c.hi, v), box_interval(c.lo, c.hi, s)});
   for (std::size_t mi = 0; mi < meshes.size(); ++mi) {
     GpuMesh& m = meshes[mi];
     for (Chunk& r : m.chunks) r.sun_free = false;
@@ -618,9 +606,10 @@ void Renderer::Impl::mark_sun_free() {
     for (Chunk& r : m.chunks) {
       const auto ru = box_interval(r.lo, r.hi, u), rv = box_interval(r.lo, r.hi, v), rs = box_interval(r.lo, r.hi, s);
       bool blocked = false;
-      for (const CasterBox& c : caster_boxes) {
+      for (std::size_t ci = 0; ci < caster_boxes.size(); ++ci) {
+        const CasterBox& c = caster_boxes[ci];
         if (c.mesh == mi) continue;
-        const auto cu = box_interval(c.lo, c.hi, u), cv = box_interval(c.lo, c.hi, v), cs = box_interval(c.lo, c.hi, s);
+        const auto& [cu, cv, cs] = seen[ci];
         if (cu.first <= ru.second + pad && ru.first <= cu.second + pad && cv.first <= rv.second + pad &&
             rv.first <= cv.second + pad && cs.first < rs.second + pad && c.lo.z() - pad <= r.hi.z()) {
           blocked = true;
