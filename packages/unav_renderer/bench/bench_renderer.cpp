@@ -1,13 +1,25 @@
 // Frames per second of the underwater renderer on worlds/pipe_inspection, RGB + depth +
 // segmentation with readback, at 320x180 and 640x480, synchronous and pipelined (PBO ring).
 // Prints a table; also a breakdown by switching effects off, to show what dominates.
-//   bench_unav_renderer [frames=40] [world.yaml]
+//   bench_unav_renderer [frames=40] [world.yaml] [--quick] [--camera NAME] [--callgrind]
+// --quick: the default configuration and the per-pass breakdown only (for A/B runs of two builds,
+// interleaved: this VM's speed drifts by +-15 % over minutes); --camera: that camera only
+// (w320x180, w640x480, w640x480_distorted). --callgrind: render `frames` frames of each camera with
+// callgrind's instrumentation on (after warm-up) and nothing else; run it as
+//   valgrind --tool=callgrind --instr-atstart=no bench_unav_renderer 4 --callgrind --camera w640x480
+// and divide "Collected" by the frames: instructions per frame compare two builds without this
+// VM's timing noise (texture and memory stalls are not counted: check the direction with fps).
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
 #include <string>
 #include <vector>
+
+#if __has_include(<valgrind/callgrind.h>)
+#include <valgrind/callgrind.h>
+#define UNAV_HAVE_CALLGRIND 1
+#endif
 
 #include "unav_common/resources.hpp"
 #include "unav_renderer/renderer.hpp"
@@ -53,8 +65,23 @@ Result measure(Renderer& r, const std::string& cam, int frames) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  const int frames = argc > 1 ? std::atoi(argv[1]) : 40;
-  const std::string world_path = argc > 2 ? argv[2] : unav::common::find_resource("worlds/pipe_inspection/world.yaml");
+  bool quick = false, callgrind = false;
+  std::string only;
+  std::vector<std::string> args;
+  for (int i = 1; i < argc; ++i) {
+    if (std::string(argv[i]) == "--quick")
+      quick = true;
+    else if (std::string(argv[i]) == "--callgrind")
+      callgrind = true;
+    else if (std::string(argv[i]) == "--camera" && i + 1 < argc)
+      only = argv[++i];
+    else
+      args.emplace_back(argv[i]);
+  }
+  auto skip = [&](const char* cam) { return !only.empty() && only != cam; };
+  const int frames = !args.empty() ? std::atoi(args[0].c_str()) : 40;
+  const std::string world_path =
+      args.size() > 1 ? args[1] : unav::common::find_resource("worlds/pipe_inspection/world.yaml");
   World world = load_world(world_path);
   CameraModel small = CameraModel::from_hfov("w320x180", 320, 180, 90.0 * M_PI / 180.0);
   small.X_BC.linear() = rotation_from_rpy(0, -M_PI / 2, 0) * R_camera_body_to_optical();
@@ -92,10 +119,27 @@ int main(int argc, char** argv) {
   o.marine_snow = false;
   o.noise = false;
   configs.push_back({"+ no snow, no noise", o});
+  if (quick) configs.resize(1);
+  if (callgrind) {
+#ifdef UNAV_HAVE_CALLGRIND
+    for (const char* cam : {"w320x180", "w640x480", "w640x480_distorted"}) {
+      if (skip(cam)) continue;
+      for (int i = 0; i < 3; ++i) r.render(pose_at(i), cam, 0.1 * i);  // warm-up (shader JIT)
+      CALLGRIND_START_INSTRUMENTATION;
+      for (int i = 0; i < frames; ++i) r.render(pose_at(i), cam, 0.1 * i);
+      CALLGRIND_STOP_INSTRUMENTATION;
+      std::printf("%s: %d frames instrumented\n", cam, frames);
+    }
+    return 0;
+#else
+    std::fprintf(stderr, "bench_unav_renderer: built without valgrind/callgrind.h (apt-get install valgrind)\n");
+    return 2;
+#endif
+  }
   for (const auto& c : configs) {
     r.set_options(c.o);
     for (const char* cam : {"w320x180", "w640x480", "w640x480_distorted"}) {
-      if (c.name != configs.front().name && std::string(cam) == "w640x480_distorted") continue;
+      if ((c.name != configs.front().name && std::string(cam) == "w640x480_distorted") || skip(cam)) continue;
       const Result res = measure(r, cam, frames);
       std::printf("%-34s %-20s %10.1f %10.1f %12.2f\n", c.name, cam, res.fps_sync, res.fps_pipelined, res.median_ms);
     }
@@ -110,6 +154,7 @@ int main(int argc, char** argv) {
               "inscatter", "post", "readback", "cpu shad", "scene", "snow", "inscatter", "post", "cpu sum");
   std::vector<std::string> lookups;
   for (const char* cam : {"w320x180", "w640x480"}) {
+    if (skip(cam)) continue;
     std::vector<RenderTimings> t;
     for (int i = 0; i < frames; ++i) {
       r.render(pose_at(i), cam, 0.1 * i);

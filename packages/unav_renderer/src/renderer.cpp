@@ -350,7 +350,11 @@ struct Renderer::Impl {
   std::map<unsigned, Program> scene_variants;
   std::map<unsigned, Program> post_variants;  // by feature set (post_program())
   BodyVelocity velocity;                      // of the frame being drawn (motion blur)
-  Program snow, inscatter, shadow;
+  // Marine snow by lamp count, in-scattering by lamps, march samples and shadows (compile-time
+  // counts: unrolled loops, constant uniform indices); compiled on first use.
+  std::map<int, Program> snow_variants;
+  std::map<int, Program> inscatter_variants;
+  Program shadow;
   GLuint shadow_tex = 0, shadow_fbo = 0;  // depth array, one layer per lamp
   GLuint shadow_nearest = 0;              // sampler: one depth test per lookup (the in-scatter march, smooth anyway)
   GLuint sun_tex = 0;                     // the sun's depth map
@@ -386,18 +390,24 @@ struct Renderer::Impl {
   Targets& targets_for(const CameraModel& c);
   struct FrameSetup;
   void set_lamps_W(Program& p, const FrameSetup& f) const;
+  Program& snow_program(int nlamps);
+  Program& inscatter_program(int nlamps, int nsamples, bool shadows);
   FrameSetup setup_frame(const Pose& X_WB, const CameraModel& c) const;
   void shadow_pass(const FrameSetup& f);
   void scene_pass(const Targets& t, const FrameSetup& f, double stamp_s);
   Program& scene_program(const GpuMesh& m, unsigned shadow_bits, const FrameSetup& f, double stamp_s,
                          std::set<unsigned>* set_up);
   // Shadow receiver culling (mark_sun_free(), lamp_shadow_bits()): boxes around what can cast a
-  // shadow, by mesh: 1 m cells of objects, rocks and pipes; the chunks of the terrain.
+  // shadow, by mesh: 0.5 m cells of objects, rocks and pipes; the chunks of the terrain.
   struct CasterBox {
     std::size_t mesh;
     Eigen::Vector3f lo, hi;
+    /// A terrain chunk wholly below another terrain mesh (the far seabed under the patch): the
+    /// index of that mesh, else -1. A lamp above that mesh and over its footprint cannot see it.
+    long under = -1;
   };
   std::vector<CasterBox> caster_boxes;
+  std::vector<std::pair<Eigen::Vector3f, Eigen::Vector3f>> terrain_bounds;  // by mesh (terrain only)
   void build_caster_boxes(const SceneGeometry& geo);
   void mark_sun_free();
   unsigned lamp_shadow_bits(std::size_t mesh, const Chunk& ch, const FrameSetup& f,
@@ -556,9 +566,27 @@ std::pair<float, float> box_interval(const Eigen::Vector3f& lo, const Eigen::Vec
 
 void Renderer::Impl::build_caster_boxes(const SceneGeometry& geo) {
   caster_boxes.clear();
+  terrain_bounds.assign(meshes.size(), {Eigen::Vector3f::Constant(1e30f), Eigen::Vector3f::Constant(-1e30f)});
+  for (std::size_t mi = 0; mi < meshes.size(); ++mi)
+    if (meshes[mi].terrain)
+      for (const Chunk& c : meshes[mi].chunks) {
+        terrain_bounds[mi].first = terrain_bounds[mi].first.cwiseMin(c.lo);
+        terrain_bounds[mi].second = terrain_bounds[mi].second.cwiseMax(c.hi);
+      }
   for (std::size_t mi = 0; mi < meshes.size(); ++mi) {
     if (meshes[mi].terrain) {  // the terrain casts on other terrain only (the patch's edge on the far seabed)
-      for (const Chunk& c : meshes[mi].chunks) caster_boxes.push_back({mi, c.lo, c.hi});
+      for (const Chunk& c : meshes[mi].chunks) {
+        CasterBox box{mi, c.lo, c.hi};
+        // Under another terrain mesh: inside its footprint (a full grid: its bounding rectangle)
+        // and deeper than its deepest point.
+        for (std::size_t pi = 0; pi < meshes.size(); ++pi) {
+          const auto& [plo, phi] = terrain_bounds[pi];
+          if (pi != mi && meshes[pi].terrain && c.lo.x() >= plo.x() && c.lo.y() >= plo.y() && c.hi.x() <= phi.x() &&
+              c.hi.y() <= phi.y() && c.lo.z() > phi.z())
+            box.under = static_cast<long>(pi);
+        }
+        caster_boxes.push_back(box);
+      }
       continue;
     }
     const MeshData& mesh = geo.meshes[mi].mesh;
@@ -1014,6 +1042,10 @@ void Renderer::Impl::scene_pass(const Targets& t, const FrameSetup& f, double st
       const Eigen::Vector3f L = Eigen::Map<const Eigen::Vector3f>(f.lamp_pos_W + 3 * static_cast<std::ptrdiff_t>(i));
       for (const CasterBox& c : caster_boxes) {
         if (!in_frustum(lvp, c.lo, c.hi)) continue;
+        if (c.under >= 0) {  // hidden under a terrain mesh the lamp stands over: never in its map
+          const auto& [plo, phi] = terrain_bounds[static_cast<std::size_t>(c.under)];
+          if (L.x() >= plo.x() && L.y() >= plo.y() && L.x() <= phi.x() && L.y() <= phi.y() && L.z() < plo.z()) continue;
+        }
         // Grown by two texels of the lamp's map at the box's far side (PCF reads the next texel).
         const float far = (c.lo - L).cwiseAbs().cwiseMax((c.hi - L).cwiseAbs()).norm();
         const float pad = 2.0f * f.lamp_texel_per_m[i] * far + 0.01f;
@@ -1025,7 +1057,14 @@ void Renderer::Impl::scene_pass(const Targets& t, const FrameSetup& f, double st
   timings.shadow_lookups_drawn = timings.shadow_lookups_skipped = 0;
   timings.scene_fragments = timings.sun_lookup_fragments = timings.lamp_lookup_fragments = 0;
   if (options.profile_passes && fragment_query == 0) glGenQueries(1, &fragment_query);
-  for (std::size_t mi = 0; mi < meshes.size(); ++mi) {
+  // The terrain last: what stands on it hides part of it, and llvmpipe skips the shading of
+  // blocks whose depth test fails (the image is the same in any order).
+  std::vector<std::size_t> order;
+  order.reserve(meshes.size());
+  for (const bool terrain : {false, true})
+    for (std::size_t mi = 0; mi < meshes.size(); ++mi)
+      if (meshes[mi].terrain == terrain) order.push_back(mi);
+  for (const std::size_t mi : order) {
     const GpuMesh& m = meshes[mi];
     for (auto& b : bins) b.clear();
     for (const Chunk& ch : m.chunks) {
@@ -1081,9 +1120,32 @@ void Renderer::Impl::scene_pass(const Targets& t, const FrameSetup& f, double st
   }
 }
 
+Program& Renderer::Impl::snow_program(int nlamps) {
+  auto it = snow_variants.find(nlamps);
+  if (it == snow_variants.end())
+    it = snow_variants
+             .emplace(nlamps, Program(detail::kSnowVS, detail::kSnowFS, "marine_snow",
+                                      "#define NLAMPS " + std::to_string(nlamps) + "\n"))
+             .first;
+  return it->second;
+}
+
+Program& Renderer::Impl::inscatter_program(int nlamps, int nsamples, bool shadows) {
+  const int key = (nlamps << 16) | (nsamples << 1) | (shadows ? 1 : 0);
+  auto it = inscatter_variants.find(key);
+  if (it == inscatter_variants.end()) {
+    const std::string defines = "#define NLAMPS " + std::to_string(nlamps) + "\n#define NSAMPLES " +
+                                std::to_string(nsamples) + "\n#define SHADOWS " + (shadows ? "1" : "0") + "\n";
+    it = inscatter_variants.emplace(key, Program(detail::kPostVS, detail::kInscatterFS, "lamp_inscatter", defines))
+             .first;
+  }
+  return it->second;
+}
+
 // Marine snow: additive into the colour only (depth and segmentation untouched).
 void Renderer::Impl::snow_pass(const FrameSetup& f, const CameraModel& c, double stamp_s) {
   if (options.marine_snow && snow_count > 0) {
+    Program& snow = snow_program(f.nl);
     snow.use();
     glUniformMatrix4fv(snow["u_view"], 1, GL_FALSE, f.view.data());
     glUniformMatrix4fv(snow["u_proj"], 1, GL_FALSE, f.proj.data());
@@ -1095,7 +1157,6 @@ void Renderer::Impl::snow_pass(const FrameSetup& f, const CameraModel& c, double
     set3(snow["u_E0"], world.sun.surface_irradiance);
     set3(snow["u_Kd"], water.K_d);
     set3(snow["u_betaD"], water.beta_D);
-    glUniform1i(snow["u_nlamps"], f.nl);
     set_lamps_W(snow, f);
     glEnable(GL_PROGRAM_POINT_SIZE);
     glDepthMask(GL_FALSE);
@@ -1123,6 +1184,7 @@ bool Renderer::Impl::inscatter_pass(const Targets& t, const FrameSetup& f, const
   if (do_inscatter) {
     glBindFramebuffer(GL_FRAMEBUFFER, t.is_fbo);
     glViewport(0, 0, t.is_width, t.is_height);
+    Program& inscatter = inscatter_program(f.nl, nsamples, f.shadows);
     inscatter.use();
     glActiveTexture(GL_TEXTURE0);
     glBindTexture(GL_TEXTURE_2D, t.scene_color);
@@ -1136,12 +1198,10 @@ bool Renderer::Impl::inscatter_pass(const Targets& t, const FrameSetup& f, const
     glUniform2i(inscatter["u_size"], t.width, t.height);
     glUniform1f(inscatter["u_scale"], static_cast<float>(t.is_scale));
     set3(inscatter["u_betaD"], water.beta_D);
-    glUniform1i(inscatter["u_nlamps"], f.nl);
     glUniform3fv(inscatter["u_lamp_pos_C[0]"], f.nl, f.lamp_pos_C);
     glUniform3fv(inscatter["u_lamp_dir_C[0]"], f.nl, f.lamp_dir_C);
     glUniform3fv(inscatter["u_lamp_I[0]"], f.nl, f.lamp_I);
     glUniform2fv(inscatter["u_lamp_cos[0]"], f.nl, f.lamp_cos);
-    glUniform1i(inscatter["u_shadows"], f.shadows ? 1 : 0);
     glUniform1i(inscatter["u_shadow"], 5);
     glActiveTexture(GL_TEXTURE5);
     glBindTexture(GL_TEXTURE_2D_ARRAY, f.shadows ? shadow_tex : 0);
@@ -1153,7 +1213,6 @@ bool Renderer::Impl::inscatter_pass(const Targets& t, const FrameSetup& f, const
     set3(inscatter["u_b_scatter"], water.b_scatter);
     glUniform1f(inscatter["u_schlick_k"], static_cast<float>(water.schlick_k()));
     glUniform1f(inscatter["u_back_frac"], static_cast<float>(water.phase_backscatter_fraction));
-    glUniform1i(inscatter["u_nsamples"], nsamples);
     glUniform1f(inscatter["u_march_max_m"], march_max_m);
     glBindVertexArray(empty_vao);
     glDrawArrays(GL_TRIANGLES, 0, 3);
@@ -1418,10 +1477,12 @@ Renderer::Renderer(World world, std::vector<CameraModel> cameras, RenderOptions 
   impl_->self_test();
   // Scene programs are compiled per material variant on first use (scene_program()); the plain one now.
   impl_->scene_variants[0] = Program(detail::kSceneVS, detail::kSceneFS, "scene", scene_defines(0));
-  impl_->snow = Program(detail::kSnowVS, detail::kSnowFS, "marine_snow");
+  impl_->snow_program(static_cast<int>(std::min<std::size_t>(4, world.lamps.size())));  // shader errors show here
   impl_->post_program(
       {false, true, true, false, false, true, true, false});  // the common one; a shader error shows here
-  impl_->inscatter = Program(detail::kPostVS, detail::kInscatterFS, "lamp_inscatter");
+  if (!world.lamps.empty())
+    impl_->inscatter_program(static_cast<int>(std::min<std::size_t>(4, world.lamps.size())),
+                             std::max(1, options.lamp_scatter_samples), true);
   impl_->shadow = Program(detail::kShadowVS, detail::kShadowFS, "lamp_shadow");
   impl_->upload_scene(geo);
   impl_->upload_snow();
@@ -1493,9 +1554,9 @@ Renderer::~Renderer() {
   if (impl_->shadow_tex) glDeleteTextures(1, &impl_->shadow_tex);
   if (impl_->sun_tex) glDeleteTextures(1, &impl_->sun_tex);
   if (impl_->shadow_fbo) glDeleteFramebuffers(1, &impl_->shadow_fbo);
-  glDeleteProgram(impl_->snow.id());
+  for (const auto& kv : impl_->snow_variants) glDeleteProgram(kv.second.id());
   for (const auto& kv : impl_->post_variants) glDeleteProgram(kv.second.id());
-  glDeleteProgram(impl_->inscatter.id());
+  for (const auto& kv : impl_->inscatter_variants) glDeleteProgram(kv.second.id());
 }
 
 void Renderer::submit(const Pose& X_WB, const std::string& camera, double stamp_s, const BodyVelocity& velocity) {

@@ -346,13 +346,15 @@ void main() {
 
 inline constexpr const char* kSnowFS = R"GLSL(
 #version 330 core
+#ifndef NLAMPS
+#define NLAMPS 0   // compile-time: constant indices into the lamp arrays (no per-pixel gathers)
+#endif
 in vec3 v_pos_W;
 in float v_cover;
 uniform vec3 u_cam_W;
 uniform vec3 u_E0;
 uniform vec3 u_Kd;
 uniform vec3 u_betaD;
-uniform int u_nlamps;
 uniform vec3 u_lamp_pos_W[4];
 uniform vec3 u_lamp_dir_W[4];
 uniform vec3 u_lamp_I[4];
@@ -363,7 +365,7 @@ void main() {
   vec2 q = gl_PointCoord * 2.0 - 1.0;
   float disc = clamp(1.0 - dot(q, q), 0.0, 1.0);
   vec3 E = 0.6 * u_E0 * exp(-u_Kd * max(v_pos_W.z, 0.0));
-  for (int i = 0; i < u_nlamps; ++i) {
+  for (int i = 0; i < NLAMPS; ++i) {
     vec3 L = u_lamp_pos_W[i] - v_pos_W;
     float dl = max(length(L), 1.0);
     float cone = smoothstep(u_lamp_cos[i].x, u_lamp_cos[i].y, dot(-L / dl, u_lamp_dir_W[i]));
@@ -622,24 +624,33 @@ void main() {
 // fraction of the image resolution: the veil is smooth, and this is the costliest shader.
 inline constexpr const char* kInscatterFS = R"GLSL(
 #version 330 core
+// Compile-time counts (Renderer keeps one program per combination in use): the loops unroll and
+// the lamp arrays are read at constant indices (a loop-variable index makes llvmpipe gather every
+// uniform per pixel), and llvmpipe pays for both sides of a branch on a uniform.
+#ifndef NLAMPS
+#define NLAMPS 1
+#endif
+#ifndef NSAMPLES
+#define NSAMPLES 8
+#endif
+#ifndef SHADOWS
+#define SHADOWS 1
+#endif
 uniform sampler2D u_color;     // RGBA16F: a = seg id (0 = water)
 uniform sampler2D u_depth;     // R32F: z_C
 uniform vec4 u_K;              // fx, fy, cx, cy of the full-resolution (internal) image
 uniform ivec2 u_size;          // full-resolution size
 uniform float u_scale;         // full-resolution pixels per low-resolution pixel
 uniform vec3 u_betaD;
-uniform int u_nlamps;
 uniform vec3 u_lamp_pos_C[4];
 uniform vec3 u_lamp_dir_C[4];
 uniform vec3 u_lamp_I[4];
 uniform vec2 u_lamp_cos[4];
-uniform bool u_shadows;
 uniform sampler2DArrayShadow u_shadow;
 uniform mat4 u_shadow_vp_C[4];   // camera optical -> lamp clip
 uniform vec3 u_b_scatter;
 uniform float u_schlick_k;
 uniform float u_back_frac;
-uniform int u_nsamples;
 uniform float u_march_max_m;
 layout(location = 0) out vec4 o_Ls;
 const float PI = 3.14159265358979;
@@ -657,28 +668,30 @@ void main() {
   vec3 Ls = vec3(0.0);
   // Lamps outer, samples inner: what depends on the lamp and the ray only is computed once (the
   // sample at t is x = d t, so its lamp-clip position is t M(d, 0) + M(0, 0, 0, 1)).
-  for (int i = 0; i < u_nlamps; ++i) {
+  for (int i = 0; i < NLAMPS; ++i) {
     vec4 Ad = u_shadow_vp_C[i] * vec4(d, 0.0);
     vec4 A0 = u_shadow_vp_C[i][3];
     vec3 lamp_p = u_lamp_pos_C[i];
     vec3 lamp_dir = u_lamp_dir_C[i];
     vec2 lamp_cos = u_lamp_cos[i];
     vec3 Li = u_b_scatter * u_lamp_I[i];
-    for (int s = 0; s < u_nsamples; ++s) {
-      float f = (float(s) + 0.5) / float(u_nsamples);
+    for (int s = 0; s < NSAMPLES; ++s) {
+      float f = (float(s) + 0.5) / float(NSAMPLES);
       float t = tmax * f * f;
-      float dt = 2.0 * tmax * f / float(u_nsamples);
+      float dt = 2.0 * tmax * f / float(NSAMPLES);
       vec3 L = d * t - lamp_p;
       float dl = max(length(L), 0.05);
       vec3 l = L / dl;   // propagation direction of the lamp light
       float cone = smoothstep(lamp_cos.x, lamp_cos.y, dot(l, lamp_dir));
       if (cone <= 0.0) continue;
-      if (u_shadows) {   // water behind an object, seen from the lamp, is not lit: shafts
+#if SHADOWS
+      {   // water behind an object, seen from the lamp, is not lit: shafts
         vec4 c = t * Ad + A0;
         vec3 q = c.xyz / c.w * 0.5 + 0.5;
         if (c.w > 1e-4 && all(greaterThanEqual(q.xy, vec2(0.0))) && all(lessThanEqual(q.xy, vec2(1.0))) && q.z <= 1.0)
           cone *= texture(u_shadow, vec4(q.xy, float(i), q.z));
       }
+#endif
       float cth = dot(l, -d);   // cosine of the scattering angle
       float den = 1.0 - k * cth;
       float ph = (1.0 - u_back_frac) * (1.0 - k * k) / (4.0 * PI * den * den) +
