@@ -37,15 +37,20 @@ inline GLuint compile(GLenum type, const char* src, const char* name) {
 class Program {
  public:
   Program() = default;
-  /// `defines` ("#define X 1\n...") go after the fragment shader's #version line: shader variants
+  /// `defines` ("#define X 1\n...") go after both shaders' #version lines: shader variants
   /// specialised at compile time (llvmpipe runs both sides of a branch on a uniform).
   Program(const char* vs, const char* fs, const char* name, const std::string& defines = "") {
-    std::string fs_text = fs;
-    if (!defines.empty()) {
-      const std::size_t eol = fs_text.find('\n', fs_text.find("#version"));
-      fs_text.insert(eol == std::string::npos ? fs_text.size() : eol + 1, defines);
-    }
-    const GLuint v = compile(GL_VERTEX_SHADER, vs, name), f = compile(GL_FRAGMENT_SHADER, fs_text.c_str(), name);
+    const auto with_defines = [&defines](const char* src) {
+      std::string text = src;
+      if (!defines.empty()) {
+        const std::size_t eol = text.find('\n', text.find("#version"));
+        text.insert(eol == std::string::npos ? text.size() : eol + 1, defines);
+      }
+      return text;
+    };
+    const std::string vs_text = with_defines(vs), fs_text = with_defines(fs);
+    const GLuint v = compile(GL_VERTEX_SHADER, vs_text.c_str(), name),
+                 f = compile(GL_FRAGMENT_SHADER, fs_text.c_str(), name);
     id_ = glCreateProgram();
     glAttachShader(id_, v);
     glAttachShader(id_, f);

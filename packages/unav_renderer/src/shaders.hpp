@@ -7,6 +7,15 @@ namespace unav::renderer::detail {
 // ---------------------------------------------------------------- scene pass (geometry)
 inline constexpr const char* kSceneVS = R"GLSL(
 #version 330 core
+#ifndef SUN_SHADOW
+#define SUN_SHADOW 0
+#endif
+#ifndef LAMP_SHADOWS
+#define LAMP_SHADOWS 0
+#endif
+#ifndef NLAMPS
+#define NLAMPS 0
+#endif
 layout(location = 0) in vec3 a_pos_W;
 layout(location = 1) in vec3 a_nrm_W;
 layout(location = 2) in vec2 a_uv;
@@ -16,7 +25,24 @@ out vec3 v_pos_W;
 out vec3 v_nrm_W;
 out vec2 v_uv;
 out float v_z_C;
+// Shadow-map coordinates per vertex: linear in the world position, so the perspective-correct
+// interpolation gives each pixel exactly its own (a matrix product per pixel costs llvmpipe ~4 %
+// of a frame).
+#if LAMP_SHADOWS && NLAMPS > 0
+uniform mat4 u_shadow_vp[NLAMPS];   // world -> lamp clip
+out vec4 v_lamp_clip[NLAMPS];
+#endif
+#if SUN_SHADOW
+uniform mat4 u_sun_vp;   // world -> sun clip (orthographic: no division)
+out vec3 v_sun_q;        // sun map coordinates and depth
+#endif
 void main() {
+#if LAMP_SHADOWS && NLAMPS > 0
+  for (int i = 0; i < NLAMPS; ++i) v_lamp_clip[i] = u_shadow_vp[i] * vec4(a_pos_W, 1.0);
+#endif
+#if SUN_SHADOW
+  v_sun_q = (u_sun_vp * vec4(a_pos_W, 1.0)).xyz * 0.5 + 0.5;
+#endif
   vec4 p_C = u_view * vec4(a_pos_W, 1.0);
   v_pos_W = a_pos_W;
   v_nrm_W = a_nrm_W;
@@ -92,11 +118,15 @@ uniform vec3 u_lamp_dir_W[4];
 uniform vec3 u_lamp_I[4];
 uniform vec2 u_lamp_cos[4];  // cos(outer), cos(inner)
 uniform sampler2DArrayShadow u_shadow;  // one depth layer per lamp
-uniform mat4 u_shadow_vp[4];            // world -> lamp clip
+#if LAMP_SHADOWS && NLAMPS > 0
+in vec4 v_lamp_clip[NLAMPS];            // lamp clip coordinates (vertex shader)
+#endif
 uniform float u_caustics;               // caustic_strength (0 = off)
 uniform float u_time;                   // frame stamp [s]
-uniform mat4 u_sun_vp;                  // world -> sun clip (orthographic)
 uniform sampler2DShadow u_sun_map;
+#if SUN_SHADOW
+in vec3 v_sun_q;                        // sun map coordinates and depth (vertex shader)
+#endif
 layout(location = 0) out vec4 o_color;   // rgb: direct signal D = J exp(-beta_D z); a: seg id
 layout(location = 1) out float o_depth;  // z along the optical axis [m]
 
@@ -116,17 +146,18 @@ float caustic_pattern(vec2 p, float t) {
   return g;
 }
 
-// Share of lamp i's light reaching world point p (percentage-closer filtered); 1 outside the map.
-float lamp_visibility(int i, vec3 p) {
-#if !LAMP_SHADOWS
+// Share of lamp i's light reaching this pixel (percentage-closer filtered); 1 outside the map.
+float lamp_visibility(int i) {
+#if !LAMP_SHADOWS || NLAMPS == 0
   return 1.0;
-#endif
-  vec4 c = u_shadow_vp[i] * vec4(p, 1.0);
+#else
+  vec4 c = v_lamp_clip[i];
   if (c.w <= 1e-4) return 1.0;
   vec3 q = c.xyz / c.w * 0.5 + 0.5;
   if (any(lessThan(q.xy, vec2(0.0))) || any(greaterThan(q.xy, vec2(1.0))) || q.z > 1.0) return 1.0;
   // One bilinear comparison: the hardware filters 2x2 depth tests (soft edges over one texel).
   return texture(u_shadow, vec4(q.xy, float(i), q.z));
+#endif
 }
 
 // Smooth value noise (hash lattice, cell 1 unit): not periodic, unlike the texture tile.
@@ -272,7 +303,7 @@ void main() {
   float ndl = max(dot(n, -u_sun_dir_W), 0.0);
 #if SUN_SHADOW
   if (ndl > 0.0) {   // the direct part is blocked by what lies up-sun
-    vec3 q = (u_sun_vp * vec4(v_pos_W, 1.0)).xyz * 0.5 + 0.5;
+    vec3 q = v_sun_q;
     if (all(greaterThanEqual(q, vec3(0.0))) && all(lessThanEqual(q, vec3(1.0))))
       ndl *= texture(u_sun_map, q);
   }
@@ -297,7 +328,7 @@ void main() {
     vec3 l = L / dl;
     float cone = smoothstep(u_lamp_cos[i].x, u_lamp_cos[i].y, dot(-l, u_lamp_dir_W[i]));
     if (cone > 0.0) {
-      vec3 Ei = u_lamp_I[i] * cone * lamp_visibility(i, v_pos_W) * max(dot(n, l), 0.0) / (dl * dl) * exp(-u_betaD * dl);
+      vec3 Ei = u_lamp_I[i] * cone * lamp_visibility(i) * max(dot(n, l), 0.0) / (dl * dl) * exp(-u_betaD * dl);
       E += Ei;
 #if SPECULAR
       Jspec += specular(n, V, l, F0, rough) * Ei;
@@ -380,9 +411,24 @@ void main() {
 // ---------------------------------------------------------------- full-screen post pass
 inline constexpr const char* kPostVS = R"GLSL(
 #version 330 core
+// The post pass without distortion: each pixel's view ray (camera and world frames) is affine in
+// its coordinates, so it is interpolated from the corners, not computed per pixel.
+#if defined(DISTMAP) && !DISTMAP
+#define POST_RAYS 1
+uniform vec4 u_K;      // fx, fy, cx, cy
+uniform ivec2 u_size;  // the viewport
+uniform mat3 u_R_WC;   // optical -> world rotation
+noperspective out vec3 v_ray;    // ((x - cx) / fx, (y - cy) / fy, 1) at pixel (x, y)
+noperspective out vec3 v_ray_W;  // the same in the world frame
+#endif
 void main() {
   vec2 p = vec2((gl_VertexID == 1) ? 3.0 : -1.0, (gl_VertexID == 2) ? 3.0 : -1.0);
   gl_Position = vec4(p, 0.0, 1.0);
+#ifdef POST_RAYS
+  vec2 src = (p + 1.0) * 0.5 * vec2(u_size) - 0.5;   // pixel (x, y) has its centre at x + 0.5
+  v_ray = vec3((src.x - u_K.z) / u_K.x, (src.y - u_K.w) / u_K.y, 1.0);
+  v_ray_W = u_R_WC * v_ray;
+#endif
 }
 )GLSL";
 
@@ -444,6 +490,10 @@ uniform uint u_seed;
 uniform bool u_srgb;
 layout(location = 0) out vec4 o_rgba;   // rgb8 + seg id in alpha
 layout(location = 1) out float o_depth;
+#if !DISTMAP
+noperspective in vec3 v_ray;    // the vertex shader's view rays (see kPostVS)
+noperspective in vec3 v_ray_W;
+#endif
 
 const float PI = 3.14159265358979;
 
@@ -494,7 +544,11 @@ void main() {
     D = c.rgb;
 #endif
   }
+#if DISTMAP
   vec3 ray = vec3((src.x - u_K.z) / u_K.x, (src.y - u_K.w) / u_K.y, 1.0);
+#else
+  vec3 ray = v_ray;
+#endif
   float raylen = length(ray);
   vec3 d = ray / raylen;
   bool hit = seg > 0.5;
@@ -533,7 +587,11 @@ void main() {
 
   // Backscatter of ambient light towards the veiling light. The veiling light is brighter
   // looking up than down (downwelling radiance): factor 1 + gradient * up-component of the ray.
+#if DISTMAP
   vec3 d_W = u_R_WC * d;
+#else
+  vec3 d_W = v_ray_W / raylen;
+#endif
   vec3 Bdir = u_Binf * (1.0 + u_veil_gradient * (-d_W.z));
   vec3 B = Bdir * (1.0 - exp(-u_betaB * range));
 
