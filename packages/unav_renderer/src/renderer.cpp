@@ -169,6 +169,9 @@ struct Targets {
   GLuint scene_fbo = 0, scene_color = 0, scene_zc = 0, scene_depth = 0;
   GLuint post_fbo = 0, post_rgba = 0, post_zc = 0;
   GLuint distmap = 0;
+  /// No distortion: the post pass reads pixel for pixel and draws geometry and water apart, by a
+  /// depth test against scene_depth (attached to post_fbo too).
+  bool split_post = false;
 };
 
 struct Slot {
@@ -412,11 +415,13 @@ struct Renderer::Impl {
   void mark_sun_free();
   unsigned lamp_shadow_bits(std::size_t mesh, const Chunk& ch, const FrameSetup& f,
                             const std::vector<LampCasters>& casters) const;
-  Program& post_program(const std::array<bool, 8>& features);
+  Program& post_program(const std::array<bool, 8>& features, int pixels = 0);
   void snow_pass(const FrameSetup& f, const CameraModel& c, double stamp_s);
   bool inscatter_pass(const Targets& t, const FrameSetup& f, const CameraModel& c, float* march_max_out);
   void post_pass(const Targets& t, const FrameSetup& f, const CameraModel& c, std::uint64_t seq, bool do_inscatter,
                  float march_max_m);
+  void post_draw(Program& post, const Targets& t, const FrameSetup& f, const CameraModel& c, std::uint64_t seq,
+                 float march_max_m, bool window, bool motion, const Eigen::Vector3d& v_C, const Eigen::Vector3d& w_C);
   void draw(const Pose& X_WB, const CameraModel& out_cam, double stamp_s, std::uint64_t seq);
   void start_readback(Slot& s, const Targets& t);
   Frame finish_readback(Slot& s);
@@ -753,6 +758,8 @@ Targets& Renderer::Impl::targets_for(const CameraModel& c) {
   t.post_zc = make_tex(GL_R32F, c.width, c.height, GL_RED, GL_FLOAT, GL_NEAREST);
   glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, t.post_rgba, 0);
   glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT1, GL_TEXTURE_2D, t.post_zc, 0);
+  t.split_post = dst.empty() && t.width == c.width && t.height == c.height;
+  if (t.split_post) glFramebufferTexture2D(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_TEXTURE_2D, t.scene_depth, 0);
   glDrawBuffers(2, bufs);
   check_fbo("post");
   if (!dst.empty()) {
@@ -1257,14 +1264,16 @@ double max_up_component(const CameraModel& c, const Eigen::Matrix3d& R_WC) {
 }  // namespace
 
 // The post program with these features compiled in (compiled on first use).
-Program& Renderer::Impl::post_program(const std::array<bool, 8>& features) {
+// pixels: 0 every pixel, 1 those with geometry, 2 the water (see PIXELS in kPostFS).
+Program& Renderer::Impl::post_program(const std::array<bool, 8>& features, int pixels) {
   static constexpr std::array<const char*, 8> kNames = {"DISTMAP", "FWD",        "INSCATTER", "VIGNETTING",
                                                         "SHOT",    "READ_NOISE", "SNELL",     "MOTION"};
   unsigned key = 0;
   for (std::size_t i = 0; i < features.size(); ++i) key |= (features[i] ? 1u : 0u) << i;
+  key |= static_cast<unsigned>(pixels) << features.size();
   auto it = post_variants.find(key);
   if (it == post_variants.end()) {  // the defines string only when compiling, not every frame
-    std::string defines;
+    std::string defines = "#define PIXELS " + std::to_string(pixels) + "\n";
     for (std::size_t i = 0; i < features.size(); ++i)
       defines += std::string("#define ") + kNames[i] + (features[i] ? " 1\n" : " 0\n");
     it = post_variants.emplace(key, Program(detail::kPostVS, detail::kPostFS, "post", defines)).first;
@@ -1289,8 +1298,33 @@ void Renderer::Impl::post_pass(const Targets& t, const FrameSetup& f, const Came
   const double critical_up = std::sqrt(1.0 - 1.0 / (water.refractive_index * water.refractive_index));
   const bool window =
       options.snell_window && f.cam_W.z() > 0.0 && max_up_component(c, f.X_WC.linear()) > critical_up - 1e-3;
-  Program& post = post_program(
-      {t.distmap != 0, options.forward_scatter, do_inscatter, c.vignetting > 0.0, shot, read_noise, window, motion});
+  const std::array<bool, 8> features{
+      t.distmap != 0, options.forward_scatter, do_inscatter, c.vignetting > 0.0, shot, read_noise, window, motion};
+  if (!t.split_post) {
+    post_draw(post_program(features), t, f, c, seq, march_max_m, window, motion, v_C, w_C);
+    return;
+  }
+  // Geometry and water apart: the water's pixels (depth still at its clear value 1) skip the
+  // forward scatter and the depth read, the geometry's skip Snell's window; llvmpipe shades only
+  // the blocks whose depth test passes. Every pixel is drawn by exactly one of the two.
+  glEnable(GL_DEPTH_TEST);
+  glDepthMask(GL_FALSE);
+  std::array<bool, 8> geometry = features, water_only = features;
+  geometry[6] = false;      // no Snell's window
+  water_only[1] = false;    // no forward scatter
+  glDepthFunc(GL_GREATER);  // the triangle lies at depth 1: passes where the scene drew
+  post_draw(post_program(geometry, 1), t, f, c, seq, march_max_m, false, motion, v_C, w_C);
+  glDepthFunc(GL_EQUAL);  // where it did not
+  post_draw(post_program(water_only, 2), t, f, c, seq, march_max_m, window, motion, v_C, w_C);
+  glDepthFunc(GL_LESS);
+  glDepthMask(GL_TRUE);
+  glDisable(GL_DEPTH_TEST);
+}
+
+// One draw of the post pass with program `post` (post_pass()).
+void Renderer::Impl::post_draw(Program& post, const Targets& t, const FrameSetup& f, const CameraModel& c,
+                               std::uint64_t seq, float march_max_m, bool window, bool motion,
+                               const Eigen::Vector3d& v_C, const Eigen::Vector3d& w_C) {
   post.use();
   glActiveTexture(GL_TEXTURE0);
   glBindTexture(GL_TEXTURE_2D, t.scene_color);

@@ -423,7 +423,7 @@ noperspective out vec3 v_ray_W;  // the same in the world frame
 #endif
 void main() {
   vec2 p = vec2((gl_VertexID == 1) ? 3.0 : -1.0, (gl_VertexID == 2) ? 3.0 : -1.0);
-  gl_Position = vec4(p, 0.0, 1.0);
+  gl_Position = vec4(p, 1.0, 1.0);   // on the far plane: depth 1, the scene's clear value (see PIXELS)
 #ifdef POST_RAYS
   vec2 src = (p + 1.0) * 0.5 * vec2(u_size) - 0.5;   // pixel (x, y) has its centre at x + 0.5
   v_ray = vec3((src.x - u_K.z) / u_K.x, (src.y - u_K.w) / u_K.y, 1.0);
@@ -460,6 +460,9 @@ inline constexpr const char* kPostFS = R"GLSL(
 #ifndef MOTION
 #define MOTION 0      // motion blur over the exposure
 #endif
+#ifndef PIXELS
+#define PIXELS 0      // 0 every pixel; 1 those with geometry, 2 the water only (without distortion the
+#endif                // pass is drawn twice, split by a depth test against the scene's depth buffer)
 uniform sampler2D u_color;     // RGBA16F: D and seg
 uniform sampler2D u_depth;     // R32F: z_C
 uniform sampler2D u_distmap;   // RG32F: undistorted pixel for each output pixel
@@ -537,7 +540,9 @@ void main() {
   if (inside) {
     vec4 c = texelFetch(u_color, si, 0);
     seg = c.a;
+#if PIXELS != 2
     z = texelFetch(u_depth, si, 0).x;
+#endif
 #if DISTMAP
     D = textureLod(u_color, uv, 0.0).rgb;
 #else
@@ -551,7 +556,11 @@ void main() {
 #endif
   float raylen = length(ray);
   vec3 d = ray / raylen;
+#if PIXELS == 2
+  const bool hit = false;
+#else
   bool hit = seg > 0.5;
+#endif
   float range = hit ? z * raylen : 1.0e6;
 
 #if MOTION
@@ -575,7 +584,7 @@ void main() {
 
   // Forward scattering: a share 1 - exp(-f z) of the direct signal spreads over a disc
   // whose radius grows with range (blur read from the mip chain: smooth, no ghost taps).
-#if FWD
+#if FWD && PIXELS != 2
   if (hit) {
     float w = 1.0 - exp(-u_fwd_per_m * range);
     float rad = clamp(u_blur_px_per_m * range, 0.0, 16.0);
@@ -595,7 +604,7 @@ void main() {
   vec3 Bdir = u_Binf * (1.0 + u_veil_gradient * (-d_W.z));
   vec3 B = Bdir * (1.0 - exp(-u_betaB * range));
 
-#if SNELL
+#if SNELL && PIXELS != 1
   // Snell's window: a water ray closer to the zenith than asin(1 / n) leaves through the surface,
   // s = depth / cos(zenith angle) away, and brings the sky (and the sun's glint) from above,
   // weighted by the Fresnel transmittance; the reflected share R continues in the water like a
