@@ -1511,12 +1511,12 @@ Renderer::Renderer(World world, std::vector<CameraModel> cameras, RenderOptions 
   impl_->self_test();
   // Scene programs are compiled per material variant on first use (scene_program()); the plain one now.
   impl_->scene_variants[0] = Program(detail::kSceneVS, detail::kSceneFS, "scene", scene_defines(0));
-  impl_->snow_program(static_cast<int>(std::min<std::size_t>(4, world.lamps.size())));  // shader errors show here
+  // The lamp count's programs now: a shader error shows here, not in the first frame.
+  const int nlamps = static_cast<int>(std::min<std::size_t>(4, impl_->world.lamps.size()));
+  impl_->snow_program(nlamps);
   impl_->post_program(
       {false, true, true, false, false, true, true, false});  // the common one; a shader error shows here
-  if (!world.lamps.empty())
-    impl_->inscatter_program(static_cast<int>(std::min<std::size_t>(4, world.lamps.size())),
-                             std::max(1, options.lamp_scatter_samples), true);
+  if (nlamps > 0) impl_->inscatter_program(nlamps, std::max(1, options.lamp_scatter_samples), true);
   impl_->shadow = Program(detail::kShadowVS, detail::kShadowFS, "lamp_shadow");
   impl_->upload_scene(geo);
   impl_->upload_snow();
