@@ -188,6 +188,10 @@ void validate_options(const RenderOptions& o, const std::string& where) {
     throw ConfigError(where, "shadow_bias", std::to_string(o.shadow_bias), "must be finite and >= 0");
   if (o.lamp_scatter_downsample < 1)
     throw ConfigError(where, "lamp_scatter_downsample", std::to_string(o.lamp_scatter_downsample), "must be >= 1");
+  // A compile-time count in the in-scatter shader (one program per value).
+  if (o.lamp_scatter_samples < 0 || o.lamp_scatter_samples > 256)
+    throw ConfigError(where, "lamp_scatter_samples", std::to_string(o.lamp_scatter_samples),
+                      "must be in [0, 256] (0: no lamp in-scattering)");
 }
 
 // A bound depth texture as a shadow map: bilinear depth comparison (hardware PCF), clamped.

@@ -166,6 +166,16 @@ TEST(Shadows, ShadowMapSizeIsValidated) {
       EXPECT_NE(std::string(e.what()).find("shadow_bias"), std::string::npos) << e.what();
     }
   }
+  for (int samples : {-1, 257}) {  // the in-scatter march: a compile-time count
+    o = exact(true, true, 0);
+    o.lamp_scatter_samples = samples;
+    try {
+      Renderer r(scene(true, true), {down_camera()}, o);
+      ADD_FAILURE() << "lamp_scatter_samples " << samples << " accepted";
+    } catch (const ConfigError& e) {
+      EXPECT_NE(std::string(e.what()).find("lamp_scatter_samples"), std::string::npos) << e.what();
+    }
+  }
 }
 
 namespace {

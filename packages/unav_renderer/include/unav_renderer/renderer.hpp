@@ -34,7 +34,7 @@ struct RenderOptions {
   bool marine_snow = true;
   bool noise = true;
   bool lamps = true;
-  int lamp_scatter_samples = 8;     ///< ray-march steps for lamp in-scattering; 0 disables
+  int lamp_scatter_samples = 8;     ///< ray-march steps for lamp in-scattering, 0..256; 0 disables
   int lamp_scatter_downsample = 4;  ///< in-scattering is computed at 1/N resolution (smooth)
   /// Shadows: a depth map per lamp (its cone as a perspective frustum) and one for the sun
   /// (orthographic along the sunlight, 20 m x 20 m around the camera, 4x the edge), looked up with bilinear
