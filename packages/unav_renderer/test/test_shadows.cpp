@@ -147,34 +147,31 @@ TEST(Shadows, SunShadowLeavesTheAmbientShareOnly) {
   EXPECT_NEAR(green_at(f0, {0.0, 1.5, 10.0}), lit, 1);
 }
 
+namespace {
+// The renderer refuses options `o` with a ConfigError naming `key`; `what` describes the value.
+void expect_rejected(const RenderOptions& o, const std::string& key, const std::string& what) {
+  try {
+    Renderer r(scene(true, true), {down_camera()}, o);
+    ADD_FAILURE() << key << " " << what << " accepted";
+  } catch (const ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find(key), std::string::npos) << e.what();
+  }
+}
+}  // namespace
+
 TEST(Shadows, ShadowMapSizeIsValidated) {
   RenderOptions o = exact(true, true, 0);
   o.shadow_map_size = 0;
-  try {
-    Renderer r(scene(true, true), {down_camera()}, o);
-    FAIL() << "shadow_map_size 0 accepted";
-  } catch (const ConfigError& e) {
-    EXPECT_NE(std::string(e.what()).find("shadow_map_size"), std::string::npos) << e.what();
-  }
+  expect_rejected(o, "shadow_map_size", "0");
   for (double bias : {-1.0, std::nan("")}) {
     o = exact(true, true, 0);
     o.shadow_bias = bias;
-    try {
-      Renderer r(scene(true, true), {down_camera()}, o);
-      ADD_FAILURE() << "shadow_bias " << bias << " accepted";
-    } catch (const ConfigError& e) {
-      EXPECT_NE(std::string(e.what()).find("shadow_bias"), std::string::npos) << e.what();
-    }
+    expect_rejected(o, "shadow_bias", std::to_string(bias));
   }
   for (int samples : {-1, 257}) {  // the in-scatter march: a compile-time count
     o = exact(true, true, 0);
     o.lamp_scatter_samples = samples;
-    try {
-      Renderer r(scene(true, true), {down_camera()}, o);
-      ADD_FAILURE() << "lamp_scatter_samples " << samples << " accepted";
-    } catch (const ConfigError& e) {
-      EXPECT_NE(std::string(e.what()).find("lamp_scatter_samples"), std::string::npos) << e.what();
-    }
+    expect_rejected(o, "lamp_scatter_samples", std::to_string(samples));
   }
 }
 
@@ -314,6 +311,8 @@ TEST(Shadows, ReceiverCullingChangesNoPixel) {
       }
     }
     std::printf("terrain chunk draws without shadow lookups: %zu of %zu\n", skipped, skipped + drawn);
-    if (&world == &base) EXPECT_GT(skipped, drawn / 4);
+    if (&world == &base) {
+      EXPECT_GT(skipped, drawn / 4);
+    }
   }
 }
