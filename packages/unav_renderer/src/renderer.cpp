@@ -359,8 +359,8 @@ struct Renderer::Impl {
   BodyVelocity velocity;                      // of the frame being drawn (motion blur)
   // Marine snow by lamp count, in-scattering by lamps, march samples and shadows (compile-time
   // counts: unrolled loops, constant uniform indices); compiled on first use.
-  std::map<int, Program> snow_variants;
-  std::map<int, Program> inscatter_variants;
+  std::map<unsigned, Program> snow_variants;
+  std::map<unsigned, Program> inscatter_variants;
   Program shadow;
   GLuint shadow_tex = 0, shadow_fbo = 0;  // depth array, one layer per lamp
   GLuint shadow_nearest = 0;              // sampler: one depth test per lookup (the in-scatter march, smooth anyway)
@@ -946,14 +946,28 @@ std::string scene_defines(unsigned v) {
 // The scene program of a material variant (compiled on first use), with this frame's uniforms
 // set the first time it is used in the pass.
 // shadow_bits: 1 the sun's shadow map, 2 the lamps'.
+namespace {
+
+// The program of `variants` under `key`, compiled on first use with the defines make_defines()
+// returns (built only then, not every frame).
+template <typename MakeDefines>
+Program& program_variant(std::map<unsigned, Program>& variants, unsigned key, const char* vs, const char* fs,
+                         const char* name, MakeDefines&& make_defines) {
+  auto it = variants.find(key);
+  if (it == variants.end()) it = variants.emplace(key, Program(vs, fs, name, make_defines())).first;
+  return it->second;
+}
+
+}  // namespace
+
 Program& Renderer::Impl::scene_program(const GpuMesh& m, unsigned shadow_bits, const FrameSetup& f, double stamp_s,
                                        std::set<unsigned>* set_up) {
   const unsigned v = (m.triplanar ? 1u : 0u) | (m.macro ? 2u : 0u) | (m.sections ? 4u : 0u) | (m.bump ? 8u : 0u) |
                      (m.specular ? 16u : 0u) | (m.sediment ? 32u : 0u) | (shadow_bits << kShadowShift) |
                      (m.normal_map ? kNormalMapBit : 0u) | (m.orm_map ? kOrmBit : 0u) |
                      (static_cast<unsigned>(f.nl) << kLampShift);
-  Program& p = scene_variants[v];
-  if (p.id() == 0) p = Program(detail::kSceneVS, detail::kSceneFS, "scene", scene_defines(v));
+  Program& p =
+      program_variant(scene_variants, v, detail::kSceneVS, detail::kSceneFS, "scene", [v] { return scene_defines(v); });
   p.use();
   if (!set_up->insert(v).second) return p;
   glUniformMatrix4fv(p["u_view"], 1, GL_FALSE, f.view.data());
@@ -1132,25 +1146,16 @@ void Renderer::Impl::scene_pass(const Targets& t, const FrameSetup& f, double st
 }
 
 Program& Renderer::Impl::snow_program(int nlamps) {
-  auto it = snow_variants.find(nlamps);
-  if (it == snow_variants.end())
-    it = snow_variants
-             .emplace(nlamps, Program(detail::kSnowVS, detail::kSnowFS, "marine_snow",
-                                      "#define NLAMPS " + std::to_string(nlamps) + "\n"))
-             .first;
-  return it->second;
+  return program_variant(snow_variants, static_cast<unsigned>(nlamps), detail::kSnowVS, detail::kSnowFS, "marine_snow",
+                         [nlamps] { return "#define NLAMPS " + std::to_string(nlamps) + "\n"; });
 }
 
 Program& Renderer::Impl::inscatter_program(int nlamps, int nsamples, bool shadows) {
-  const int key = (nlamps << 16) | (nsamples << 1) | (shadows ? 1 : 0);
-  auto it = inscatter_variants.find(key);
-  if (it == inscatter_variants.end()) {
-    const std::string defines = "#define NLAMPS " + std::to_string(nlamps) + "\n#define NSAMPLES " +
-                                std::to_string(nsamples) + "\n#define SHADOWS " + (shadows ? "1" : "0") + "\n";
-    it = inscatter_variants.emplace(key, Program(detail::kPostVS, detail::kInscatterFS, "lamp_inscatter", defines))
-             .first;
-  }
-  return it->second;
+  const auto key = (static_cast<unsigned>(nlamps) << 16) | (static_cast<unsigned>(nsamples) << 1) | (shadows ? 1u : 0u);
+  return program_variant(inscatter_variants, key, detail::kPostVS, detail::kInscatterFS, "lamp_inscatter", [&] {
+    return "#define NLAMPS " + std::to_string(nlamps) + "\n#define NSAMPLES " + std::to_string(nsamples) +
+           "\n#define SHADOWS " + (shadows ? "1" : "0") + "\n";
+  });
 }
 
 // Marine snow: additive into the colour only (depth and segmentation untouched).
@@ -1275,14 +1280,12 @@ Program& Renderer::Impl::post_program(const std::array<bool, 8>& features, int p
   unsigned key = 0;
   for (std::size_t i = 0; i < features.size(); ++i) key |= (features[i] ? 1u : 0u) << i;
   key |= static_cast<unsigned>(pixels) << features.size();
-  auto it = post_variants.find(key);
-  if (it == post_variants.end()) {  // the defines string only when compiling, not every frame
+  return program_variant(post_variants, key, detail::kPostVS, detail::kPostFS, "post", [&] {
     std::string defines = "#define PIXELS " + std::to_string(pixels) + "\n";
     for (std::size_t i = 0; i < features.size(); ++i)
       defines += std::string("#define ") + kNames[i] + (features[i] ? " 1\n" : " 0\n");
-    it = post_variants.emplace(key, Program(detail::kPostVS, detail::kPostFS, "post", defines)).first;
-  }
-  return it->second;
+    return defines;
+  });
 }
 
 // Post pass: forward scatter, backscatter, + in-scatter, distortion, noise, encoding.
