@@ -188,10 +188,22 @@ MeshData make_tube_mesh(const std::vector<Eigen::Vector3d>& C, double radius_m, 
     const Eigen::Vector3d& b = C[std::min(i + 1, C.size() - 1)];
     T[i] = (b - a).normalized();
   }
+  // A ring whose neighbours share its tangent lies inside a straight run: the faces on either side
+  // of it are one prism face cut in two (its vertices lie on the lines joining theirs, with the
+  // same normals and uv linear in arc length), so it is left out. A 7 m run becomes one segment
+  // instead of 70: a third of the triangles the lamps' shadow maps and the camera drew.
+  constexpr double kStraight = 1e-9;  // |dT| of a straight run: rounding only
+  std::vector<std::uint32_t> kept;    // centre-line indices with a ring
+  for (std::size_t i = 0; i < C.size(); ++i) {
+    const bool inner =
+        i > 0 && i + 1 < C.size() && (T[i] - T[i - 1]).norm() < kStraight && (T[i + 1] - T[i]).norm() < kStraight;
+    if (!inner) kept.push_back(static_cast<std::uint32_t>(i));
+  }
   Eigen::Vector3d N = T[0].cross(Eigen::Vector3d::UnitZ());
   if (N.norm() < 1e-6) N = T[0].cross(Eigen::Vector3d::UnitX());
   N.normalize();
   double arc = 0.0;
+  std::size_t next = 0;  // next entry of kept
   for (std::size_t i = 0; i < C.size(); ++i) {
     if (i > 0) {
       arc += (C[i] - C[i - 1]).norm();
@@ -199,6 +211,8 @@ MeshData make_tube_mesh(const std::vector<Eigen::Vector3d>& C, double radius_m, 
       N = (q * N).normalized();
       N = (N - T[i] * T[i].dot(N)).normalized();
     }
+    if (kept[next] != i) continue;
+    ++next;
     const Eigen::Vector3d B = T[i].cross(N);
     for (int s = 0; s <= sides; ++s) {
       const double a = 2.0 * M_PI * s / sides;
@@ -210,7 +224,8 @@ MeshData make_tube_mesh(const std::vector<Eigen::Vector3d>& C, double radius_m, 
     }
   }
   const auto ring = static_cast<std::uint32_t>(sides + 1);
-  for (std::uint32_t i = 0; i + 1 < C.size(); ++i)
+  const auto rings = static_cast<std::uint32_t>(kept.size());
+  for (std::uint32_t i = 0; i + 1 < rings; ++i)
     for (std::uint32_t s = 0; s < static_cast<std::uint32_t>(sides); ++s) {
       const std::uint32_t a = i * ring + s, b = a + 1, c = a + ring, d = c + 1;
       m.indices.insert(m.indices.end(), {a, c, b, b, c, d});
@@ -223,7 +238,7 @@ MeshData make_tube_mesh(const std::vector<Eigen::Vector3d>& C, double radius_m, 
     push3(m.positions, C[i]);
     push3(m.normals, n);
     m.uvs.insert(m.uvs.end(), {0.f, 0.f});
-    const std::uint32_t first = static_cast<std::uint32_t>(i) * ring;
+    const std::uint32_t first = (end == 0 ? 0 : rings - 1) * ring;
     for (int s = 0; s <= sides; ++s) {
       const std::uint32_t src = first + s;
       const std::size_t at = 3 * std::size_t{src};

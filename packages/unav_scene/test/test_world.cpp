@@ -242,6 +242,21 @@ TEST(Meshes, AssimpLoadsObjPlyGltfGlbFbx) {
   }
 }
 
+TEST(Meshes, TubeHasRingsOnlyWhereItsCentreLineTurns) {
+  // A straight run sampled every 0.1 m is one prism (2 rings: 16 sides x 2 triangles, plus two
+  // 16-triangle caps); the far ring's uv is the run's length. A right-angle kink at sample 5 keeps
+  // the rings where the tangent changes (samples 4, 5, 6) and the ends: 5 rings, 4 segments.
+  std::vector<Eigen::Vector3d> straight, kinked;
+  for (int i = 0; i <= 10; ++i) straight.emplace_back(0.1 * i, 0.0, 10.0);
+  const MeshData s = make_tube_mesh(straight, 0.25, 16);
+  EXPECT_EQ(s.triangle_count(), 2u * 16u + 2u * 16u);
+  EXPECT_NEAR(s.uvs[2 * 17], 1.0, 1e-6);  // first vertex of the second ring: arc length 1 m
+  EXPECT_NEAR(s.positions[3 * 17], 1.0, 1e-6);
+  for (int i = 0; i <= 10; ++i) kinked.emplace_back(i <= 5 ? 0.1 * i : 0.5, i <= 5 ? 0.0 : 0.1 * (i - 5), 10.0);
+  const MeshData k = make_tube_mesh(kinked, 0.25, 16);
+  EXPECT_EQ(k.triangle_count(), 4u * 2u * 16u + 2u * 16u);
+}
+
 TEST(Meshes, SceneGeometryOfPipeInspection) {
   const World w = load_world(kRoot + "/worlds/pipe_inspection/world.yaml");
   const SceneGeometry g = build_scene_geometry(w);
