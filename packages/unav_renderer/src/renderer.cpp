@@ -145,6 +145,8 @@ struct GpuMesh {
   bool triplanar = false;
   bool macro = false;
   bool sections = false;  ///< pipe coating: each section shows another part of the texture
+  // What the material has; drawn only with RenderOptions::materials (Renderer::Impl::look(), so
+  // that set_options() switches them).
   bool bump = false;      ///< relief_m > 0: shaded by the texture's height field
   bool specular = false;  ///< GGX highlights (metals, smooth surfaces; see scene_program())
   bool sediment = false;  ///< sand settled on its upward faces and near the seabed
@@ -404,6 +406,14 @@ struct Renderer::Impl {
   void scene_pass(const Targets& t, const FrameSetup& f, double stamp_s);
   Program& scene_program(const GpuMesh& m, unsigned shadow_bits, const FrameSetup& f, double stamp_s,
                          std::set<unsigned>* set_up);
+  // A mesh's material features as drawn under the current options (all off without materials).
+  struct Look {
+    bool bump, specular, sediment, normal_map, orm_map;
+  };
+  Look look(const GpuMesh& m) const {
+    const bool on = options.materials;
+    return {on && m.bump, on && m.specular, on && m.sediment, on && m.normal_map != 0, on && m.orm_map != 0};
+  }
   // Shadow receiver culling (mark_sun_free(), lamp_shadow_bits()): boxes around what can cast a
   // shadow, by mesh: 0.5 m cells of objects, rocks and pipes; the chunks of the terrain.
   struct CasterBox {
@@ -512,14 +522,14 @@ void Renderer::Impl::upload_scene(const SceneGeometry& geo) {
     g.roughness = static_cast<float>(material_roughness(sm.material));
     g.metallic = static_cast<float>(sm.material.metallic);
     g.relief_m = static_cast<float>(material_relief_m(sm.material));
-    g.bump = options.materials && g.relief_m > 0.0f && sm.material.texture != "none";
+    g.bump = g.relief_m > 0.0f && sm.material.texture != "none";
     if (sm.maps.any()) {  // the mesh file's own maps, by its UVs (one repeat per unit)
       g.texture = sm.maps.base_color ? image_texture(sm.maps.base_color, true) : texture("none").colour;
       g.material.uv_scale_m = 1.0;
       g.macro = g.sections = false;
       g.bump = false;  // the file's normal map, if any, instead of the procedural relief
-      if (options.materials && sm.maps.normal) g.normal_map = image_texture(sm.maps.normal, false);
-      if (options.materials && sm.maps.orm) {
+      if (sm.maps.normal) g.normal_map = image_texture(sm.maps.normal, false);
+      if (sm.maps.orm) {
         // The map times the factors: the world's roughness / metallic when it sets them, else the file's.
         g.orm_map = image_texture(sm.maps.orm, false);
         g.roughness =
@@ -531,9 +541,9 @@ void Renderer::Impl::upload_scene(const SceneGeometry& geo) {
     // A dielectric's highlight in water is faint (F0 = 0.0032 for index 1.5 against 1.34): only
     // smooth ones show it (roughness 0.45: +4..30 % over the diffuse at the peak; 0.8: < 1 %). An
     // ORM map varies both per pixel.
-    g.specular = options.materials && (g.metallic > 0.0f || g.roughness < 0.7f || g.orm_map != 0);
+    g.specular = g.metallic > 0.0f || g.roughness < 0.7f || g.orm_map != 0;
     g.sediment_cover = static_cast<float>(material_sediment(sm.material));
-    g.sediment = options.materials && !g.macro && sm.seg_class != SegClass::kSeabed && g.sediment_cover > 0.0f;
+    g.sediment = !g.macro && sm.seg_class != SegClass::kSeabed && g.sediment_cover > 0.0f;
     glGenVertexArrays(1, &g.vao);
     glBindVertexArray(g.vao);
     glGenBuffers(3, g.vbo);
@@ -962,9 +972,10 @@ Program& program_variant(std::map<unsigned, Program>& variants, unsigned key, co
 
 Program& Renderer::Impl::scene_program(const GpuMesh& m, unsigned shadow_bits, const FrameSetup& f, double stamp_s,
                                        std::set<unsigned>* set_up) {
-  const unsigned v = (m.triplanar ? 1u : 0u) | (m.macro ? 2u : 0u) | (m.sections ? 4u : 0u) | (m.bump ? 8u : 0u) |
-                     (m.specular ? 16u : 0u) | (m.sediment ? 32u : 0u) | (shadow_bits << kShadowShift) |
-                     (m.normal_map ? kNormalMapBit : 0u) | (m.orm_map ? kOrmBit : 0u) |
+  const Look k = look(m);
+  const unsigned v = (m.triplanar ? 1u : 0u) | (m.macro ? 2u : 0u) | (m.sections ? 4u : 0u) | (k.bump ? 8u : 0u) |
+                     (k.specular ? 16u : 0u) | (k.sediment ? 32u : 0u) | (shadow_bits << kShadowShift) |
+                     (k.normal_map ? kNormalMapBit : 0u) | (k.orm_map ? kOrmBit : 0u) |
                      (static_cast<unsigned>(f.nl) << kLampShift);
   Program& p =
       program_variant(scene_variants, v, detail::kSceneVS, detail::kSceneFS, "scene", [v] { return scene_defines(v); });
@@ -1109,22 +1120,23 @@ void Renderer::Impl::scene_pass(const Targets& t, const FrameSetup& f, double st
       Program& scene = scene_program(m, bits, f, stamp_s, &set_up);
       set3(scene["u_albedo"], m.material.albedo);
       glUniform1f(scene["u_uv_scale"], static_cast<float>(m.material.uv_scale_m));
-      if (m.bump) glUniform1f(scene["u_relief"], m.relief_m);
-      if (m.specular) {
+      const Look k = look(m);
+      if (k.bump) glUniform1f(scene["u_relief"], m.relief_m);
+      if (k.specular) {
         glUniform1f(scene["u_roughness"], m.roughness);
         glUniform1f(scene["u_metallic"], m.metallic);
       }
-      if (m.sediment) glUniform1f(scene["u_sediment"], m.sediment_cover);
+      if (k.sediment) glUniform1f(scene["u_sediment"], m.sediment_cover);
       glUniform1f(scene["u_seg"], static_cast<float>(m.seg_class));
-      if (m.bump) {
+      if (k.bump) {
         glActiveTexture(GL_TEXTURE1);
         glBindTexture(GL_TEXTURE_2D, m.gradient);
       }
-      if (m.normal_map) {
+      if (k.normal_map) {
         glActiveTexture(GL_TEXTURE2);
         glBindTexture(GL_TEXTURE_2D, m.normal_map);
       }
-      if (m.orm_map) {
+      if (k.orm_map) {
         glActiveTexture(GL_TEXTURE3);
         glBindTexture(GL_TEXTURE_2D, m.orm_map);
       }

@@ -106,6 +106,28 @@ TEST(Materials, MetalHighlightLiesWhereTheLampIsMirroredByTheFloor) {
   EXPECT_LT(green(flat, bu, bv), best - 20);
 }
 
+TEST(Materials, SetOptionsSwitchesThemAtRunTime) {
+  // Renderer::set_options(materials = false) draws what a Renderer made without materials draws,
+  // bit for bit, and switching them back on restores the first image (the features are chosen
+  // per frame, not when the scene is uploaded).
+  Material metal{"sand", {0.9, 0.9, 0.9}, 1.0};
+  metal.metallic = 1.0;
+  metal.roughness = 0.3;
+  const CameraModel cam = down_camera();
+  RenderOptions on = with_materials(true), off = on;
+  off.materials = false;
+  Renderer r(lamp_over_floor(metal, 0.06), {cam}, on);
+  const Frame a = r.render(kBody, "down");
+  r.set_options(off);
+  const Frame b = r.render(kBody, "down");
+  const Frame fresh = Renderer(lamp_over_floor(metal, 0.06), {cam}, off).render(kBody, "down");
+  r.set_options(on);
+  const Frame c = r.render(kBody, "down");
+  EXPECT_EQ(b.rgb, fresh.rgb);
+  EXPECT_NE(a.rgb, b.rgb);  // a smooth metal's highlight and the sand's relief are gone
+  EXPECT_EQ(a.rgb, c.rgb);
+}
+
 TEST(Materials, ReliefShadesOnlyWhereTheHeightVaries) {
   // A constant height field (the checker texture's) has no slope: any relief leaves the image
   // unchanged, bit for bit. Sand seen from 0.7 m (14 px per ripple) under the grazing light (65 deg
