@@ -1,7 +1,7 @@
 // Frames per second of the underwater renderer on worlds/pipe_inspection, RGB + depth +
 // segmentation with readback, at 320x180 and 640x480, synchronous and pipelined (PBO ring).
 // Prints a table; also a breakdown by switching effects off, to show what dominates.
-//   bench_unav_renderer [frames=40] [world.yaml] [--quick] [--camera NAME] [--callgrind]
+//   bench_unav_renderer [frames=40] [world.yaml] [--quick] [--camera NAME] [--callgrind [--config N]]
 // --quick: the default configuration and the per-pass breakdown only (for A/B runs of two builds,
 // interleaved: this VM's speed drifts by +-15 % over minutes); --camera: that camera only
 // (w320x180, w640x480, w640x480_distorted). --callgrind: render `frames` frames of each camera with
@@ -9,6 +9,7 @@
 //   valgrind --tool=callgrind --instr-atstart=no bench_unav_renderer 4 --callgrind --camera w640x480
 // and divide "Collected" by the frames: instructions per frame compare two builds without this
 // VM's timing noise (texture and memory stalls are not counted: check the direction with fps).
+// --config N: the N-th configuration of the table (0 default, 1 no materials, ...) instead.
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -66,6 +67,7 @@ Result measure(Renderer& r, const std::string& cam, int frames) {
 
 int main(int argc, char** argv) {
   bool quick = false, callgrind = false;
+  int config_index = 0;  // --callgrind: which configuration (0 = default options)
   std::string only;
   std::vector<std::string> args;
   for (int i = 1; i < argc; ++i) {
@@ -75,6 +77,8 @@ int main(int argc, char** argv) {
       callgrind = true;
     else if (std::string(argv[i]) == "--camera" && i + 1 < argc)
       only = argv[++i];
+    else if (std::string(argv[i]) == "--config" && i + 1 < argc)
+      config_index = std::atoi(argv[++i]);
     else
       args.emplace_back(argv[i]);
   }
@@ -119,9 +123,14 @@ int main(int argc, char** argv) {
   o.marine_snow = false;
   o.noise = false;
   configs.push_back({"+ no snow, no noise", o});
-  if (quick) configs.resize(1);
   if (callgrind) {
 #ifdef UNAV_HAVE_CALLGRIND
+    if (config_index < 0 || config_index >= static_cast<int>(configs.size())) {
+      std::fprintf(stderr, "bench_unav_renderer: --config must be 0..%zu\n", configs.size() - 1);
+      return 2;
+    }
+    r.set_options(configs[static_cast<std::size_t>(config_index)].o);
+    std::printf("configuration: %s\n", configs[static_cast<std::size_t>(config_index)].name);
     for (const char* cam : {"w320x180", "w640x480", "w640x480_distorted"}) {
       if (skip(cam)) continue;
       for (int i = 0; i < 3; ++i) r.render(pose_at(i), cam, 0.1 * i);  // warm-up (shader JIT)
@@ -132,10 +141,12 @@ int main(int argc, char** argv) {
     }
     return 0;
 #else
+    (void)config_index;
     std::fprintf(stderr, "bench_unav_renderer: built without valgrind/callgrind.h (apt-get install valgrind)\n");
     return 2;
 #endif
   }
+  if (quick) configs.resize(1);
   for (const auto& c : configs) {
     r.set_options(c.o);
     for (const char* cam : {"w320x180", "w640x480", "w640x480_distorted"}) {
