@@ -158,7 +158,11 @@ MeshData make_box_mesh(const Eigen::Vector3d& size_m) {
         m.uvs.push_back(static_cast<float>(p[u]));
         m.uvs.push_back(static_cast<float>(p[v]));
       }
-      m.indices.insert(m.indices.end(), {base, base + 1, base + 2, base, base + 2, base + 3});
+      // Corners counter-clockwise about +axis: outward on the + face, reversed on the - face.
+      if (sgn > 0)
+        m.indices.insert(m.indices.end(), {base, base + 1, base + 2, base, base + 2, base + 3});
+      else
+        m.indices.insert(m.indices.end(), {base, base + 2, base + 1, base, base + 3, base + 2});
     }
   }
   return m;
@@ -176,6 +180,53 @@ MeshData make_plane_mesh(double sx, double sy) {
   }
   m.indices = {0, 1, 2, 0, 2, 3};
   return m;
+}
+
+int closed_orientation(const MeshData& m) {
+  if (m.triangle_count() == 0) return 0;
+  // Weld vertices at the same position (seams of uv or normals duplicate them).
+  std::map<std::array<float, 3>, std::uint32_t> weld;
+  std::vector<std::uint32_t> id(m.vertex_count());
+  for (std::size_t i = 0; i < m.vertex_count(); ++i) {
+    const std::array<float, 3> p{m.positions[3 * i], m.positions[3 * i + 1], m.positions[3 * i + 2]};
+    id[i] = weld.try_emplace(p, static_cast<std::uint32_t>(weld.size())).first->second;
+  }
+  // Every directed edge once, and its reverse once.
+  std::map<std::pair<std::uint32_t, std::uint32_t>, int> edges;
+  std::vector<std::uint32_t> parent(weld.size());
+  for (std::uint32_t i = 0; i < parent.size(); ++i) parent[i] = i;
+  const auto root = [&parent](std::uint32_t v) {
+    while (parent[v] != v) v = parent[v] = parent[parent[v]];
+    return v;
+  };
+  for (std::size_t t = 0; t < m.triangle_count(); ++t) {
+    const std::uint32_t v[3] = {id[m.indices[3 * t]], id[m.indices[3 * t + 1]], id[m.indices[3 * t + 2]]};
+    if (v[0] == v[1] || v[1] == v[2] || v[2] == v[0]) return 0;
+    for (int k = 0; k < 3; ++k) {
+      if (++edges[{v[k], v[(k + 1) % 3]}] > 1) return 0;
+      parent[root(v[k])] = root(v[(k + 1) % 3]);
+    }
+  }
+  for (const auto& [e, n] : edges)
+    if (edges.find({e.second, e.first}) == edges.end()) return 0;
+  // Signed volume of each connected part (divergence theorem; 6 x the volume).
+  std::map<std::uint32_t, double> volume;
+  for (std::size_t t = 0; t < m.triangle_count(); ++t) {
+    Eigen::Vector3d p[3];
+    for (int k = 0; k < 3; ++k) {
+      const std::size_t i = m.indices[3 * t + k];
+      p[k] = Eigen::Vector3d(m.positions[3 * i], m.positions[3 * i + 1], m.positions[3 * i + 2]);
+    }
+    // Closed parts: independent of the origin; in double, exact enough tens of metres out.
+    volume[root(id[m.indices[3 * t]])] += p[0].dot(p[1].cross(p[2]));
+  }
+  int sign = 0;
+  for (const auto& [r, v] : volume) {
+    const int s = v > 0.0 ? 1 : (v < 0.0 ? -1 : 0);
+    if (s == 0 || (sign != 0 && s != sign)) return 0;
+    sign = s;
+  }
+  return sign;
 }
 
 MeshData make_tube_mesh(const std::vector<Eigen::Vector3d>& C, double radius_m, int sides) {
@@ -216,7 +267,9 @@ MeshData make_tube_mesh(const std::vector<Eigen::Vector3d>& C, double radius_m, 
     const Eigen::Vector3d B = T[i].cross(N);
     for (int s = 0; s <= sides; ++s) {
       const double a = 2.0 * M_PI * s / sides;
-      const Eigen::Vector3d n = std::cos(a) * N + std::sin(a) * B;
+      // The seam's second copy (s = sides) sits exactly on the first (a closed solid).
+      const double a_s = 2.0 * M_PI * (s % sides) / sides;
+      const Eigen::Vector3d n = std::cos(a_s) * N + std::sin(a_s) * B;
       push3(m.positions, C[i] + radius_m * n);
       push3(m.normals, n);
       m.uvs.push_back(static_cast<float>(arc));
@@ -228,7 +281,7 @@ MeshData make_tube_mesh(const std::vector<Eigen::Vector3d>& C, double radius_m, 
   for (std::uint32_t i = 0; i + 1 < rings; ++i)
     for (std::uint32_t s = 0; s < static_cast<std::uint32_t>(sides); ++s) {
       const std::uint32_t a = i * ring + s, b = a + 1, c = a + ring, d = c + 1;
-      m.indices.insert(m.indices.end(), {a, c, b, b, c, d});
+      m.indices.insert(m.indices.end(), {a, b, c, b, d, c});  // counter-clockwise seen from outside
     }
   // Flat end caps.
   for (int end = 0; end < 2; ++end) {
@@ -248,8 +301,13 @@ MeshData make_tube_mesh(const std::vector<Eigen::Vector3d>& C, double radius_m, 
       m.uvs.insert(m.uvs.end(), {static_cast<float>(radius_m * std::cos(2 * M_PI * s / sides)),
                                  static_cast<float>(radius_m * std::sin(2 * M_PI * s / sides))});
     }
-    for (std::uint32_t s = 0; s < static_cast<std::uint32_t>(sides); ++s)
-      m.indices.insert(m.indices.end(), {centre, centre + 1 + s, centre + 2 + s});
+    for (std::uint32_t s = 0; s < static_cast<std::uint32_t>(sides); ++s) {
+      // The ring turns counter-clockwise about the tangent: outward at the end cap (+T), inward at the start (-T).
+      if (end == 0)
+        m.indices.insert(m.indices.end(), {centre, centre + 2 + s, centre + 1 + s});
+      else
+        m.indices.insert(m.indices.end(), {centre, centre + 1 + s, centre + 2 + s});
+    }
   }
   return m;
 }

@@ -257,6 +257,34 @@ TEST(Meshes, TubeHasRingsOnlyWhereItsCentreLineTurns) {
   EXPECT_EQ(k.triangle_count(), 4u * 2u * 16u + 2u * 16u);
 }
 
+TEST(Meshes, ClosedOrientationOfTheGenerators) {
+  // Solids, counter-clockwise seen from outside (+1); reversing every triangle gives -1; a mesh
+  // with a hole, a plane and a mix of both orientations give 0.
+  std::vector<Eigen::Vector3d> bent;
+  for (int i = 0; i <= 20; ++i) bent.emplace_back(0.1 * i, i > 10 ? 0.1 * (i - 10) : 0.0, 10.0);
+  const MeshData solids[] = {make_tube_mesh(bent, 0.25, 16), make_rock_mesh(3, {0.4, 0.3, 0.2}, 2),
+                             make_rock_mesh(4, {0.1, 0.1, 0.1}, 1), make_box_mesh({0.6, 0.35, 0.3}),
+                             make_sphere_mesh(0.5, 2)};
+  for (const MeshData& m : solids) {
+    EXPECT_EQ(closed_orientation(m), 1) << m.triangle_count() << " triangles";
+    MeshData r = m;
+    for (std::size_t t = 0; t < r.triangle_count(); ++t) std::swap(r.indices[3 * t + 1], r.indices[3 * t + 2]);
+    EXPECT_EQ(closed_orientation(r), -1);
+    MeshData holed = m;
+    holed.indices.resize(holed.indices.size() - 3);
+    EXPECT_EQ(closed_orientation(holed), 0);
+    MeshData mixed = m;
+    mixed.append(r);  // two parts turned opposite ways (and overlapping: still closed each)
+    EXPECT_EQ(closed_orientation(mixed), 0);
+  }
+  EXPECT_EQ(closed_orientation(make_plane_mesh(2.0, 2.0)), 0);
+  // Two separate solids turned the same way: one closed mesh (a rock group).
+  MeshData two = solids[1], far = solids[2];
+  far.transform(pose_from_xyz_rpy({5.0, 0.0, 0.0}, {0.0, 0.0, 0.0}));
+  two.append(far);
+  EXPECT_EQ(closed_orientation(two), 1);
+}
+
 TEST(Meshes, SceneGeometryOfPipeInspection) {
   const World w = load_world(kRoot + "/worlds/pipe_inspection/world.yaml");
   const SceneGeometry g = build_scene_geometry(w);

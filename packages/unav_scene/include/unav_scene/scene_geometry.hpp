@@ -85,7 +85,16 @@ MeshData make_rock_mesh(std::uint32_t seed, const Eigen::Vector3d& radii_m, int 
 MeshData make_box_mesh(const Eigen::Vector3d& size_m);
 MeshData make_plane_mesh(double sx, double sy);  ///< sx x sy [m] in local xy, normal -z (up in NED)
 MeshData make_sphere_mesh(double radius_m, int subdivisions = 3);
-/// Tube of `radius_m` along a centre line (parallel-transport frames), uv = (arc/circumference).
+/// Whether the mesh bounds solids, and which way its triangles turn: +1 when every edge (vertices
+/// welded by position) joins exactly two triangles that traverse it in opposite directions and
+/// every connected part encloses a positive volume (counter-clockwise seen from outside: the
+/// right-hand normal points out), -1 when every part's volume is negative (clockwise), 0 otherwise
+/// (open, non-manifold, inconsistently wound or degenerate). Seen from outside, such a mesh's
+/// faces turned away from the eye always lie behind faces turned towards it (back-face culling
+/// changes no pixel).
+int closed_orientation(const MeshData& m);
+/// Tube of `radius_m` along a centre line (parallel-transport frames), uv = (arc/circumference),
+/// closed by flat caps, counter-clockwise seen from outside.
 MeshData make_tube_mesh(const std::vector<Eigen::Vector3d>& centerline_W, double radius_m, int sides = 16);
 MeshData make_seabed_mesh(const Seabed& sb);
 
