@@ -49,6 +49,9 @@ struct Chunk {
   GLsizei first = 0, count = 0;  // in indices
   Eigen::Vector3f lo, hi;
   bool sun_free = false;  ///< terrain that nothing can shadow from the sun (mark_sun_free())
+  /// Terrain wholly under another terrain mesh (index; -1 none): the far seabed under the patch,
+  /// which nobody standing over the patch can see (build_caster_boxes()).
+  long under = -1;
 };
 
 // A box as seen from a lamp: its azimuths (mid, half-width; all of them when the lamp stands over
@@ -142,6 +145,9 @@ struct GpuMesh {
   /// comes in flatter than its steepest slope, tan_slope (shadow receiver culling).
   bool terrain = false;
   float tan_slope = 0.0f;
+  /// closed_orientation() of the mesh: +-1 a solid (back faces culled: they lie behind its front
+  /// faces), 0 open or not consistently wound (both sides drawn).
+  int winding = 0;
   bool triplanar = false;
   bool macro = false;
   bool sections = false;  ///< pipe coating: each section shows another part of the texture
@@ -328,15 +334,6 @@ void draw_chunks(const std::vector<const Chunk*>& chunks) {
   flush();
 }
 
-// Draws the chunks of m inside vp's frustum (neighbouring visible chunks in one call).
-void draw_visible(const GpuMesh& m, const Eigen::Matrix4f& vp) {
-  std::vector<const Chunk*> visible;
-  visible.reserve(m.chunks.size());
-  for (const Chunk& ch : m.chunks)
-    if (in_frustum(vp, ch)) visible.push_back(&ch);
-  draw_chunks(visible);
-}
-
 double luminance(const Eigen::Vector3d& c) { return 0.2126 * c.x() + 0.7152 * c.y() + 0.0722 * c.z(); }
 
 }  // namespace
@@ -372,7 +369,8 @@ struct Renderer::Impl {
   GLuint snow_vao = 0, snow_vbo = 0;
   GLsizei snow_count = 0;
   GLuint empty_vao = 0;
-  GLuint fragment_query = 0;  // GL_SAMPLES_PASSED, for the profile's fragment counts
+  GLuint fragment_query = 0;    // GL_SAMPLES_PASSED, for the profile's fragment counts
+  GLuint invocation_query = 0;  // GL_FRAGMENT_SHADER_INVOCATIONS where the driver counts them (0: not)
   std::map<std::string, Targets> targets;
   std::vector<Slot> slots;
   std::deque<std::size_t> in_flight;  // slot indices, oldest first
@@ -427,6 +425,36 @@ struct Renderer::Impl {
   std::vector<std::pair<Eigen::Vector3f, Eigen::Vector3f>> terrain_bounds;  // by mesh (terrain only)
   void build_caster_boxes(const SceneGeometry& geo);
   void mark_sun_free();
+  /// True when a chunk or caster box `under` a terrain mesh (index, -1 none) lies under it and `eye` stands over that
+  /// mesh (inside its footprint, above its shallowest point): every line from the eye to the chunk crosses the mesh
+  /// first (a height field over the whole rectangle), so nothing of it can be seen from there.
+  bool hidden_under(long under, const Eigen::Vector3f& eye) const {
+    if (under < 0) return false;
+    const auto& [lo, hi] = terrain_bounds[static_cast<std::size_t>(under)];
+    return eye.x() >= lo.x() && eye.y() >= lo.y() && eye.x() <= hi.x() && eye.y() <= hi.y() && eye.z() < lo.z();
+  }
+  /// Back-face culling for a solid (GpuMesh::winding) drawn through vp, else both sides. Where vp
+  /// keeps orientation (determinant > 0), a face whose right-hand normal points at the eye points
+  /// to -z in normalised device coordinates: clockwise in window x (right), y (up).
+  void cull_back_faces(const GpuMesh& m, const Eigen::Matrix4f& vp) const {
+    if (!options.occlusion_culling || m.winding == 0) {
+      glDisable(GL_CULL_FACE);
+      return;
+    }
+    glEnable(GL_CULL_FACE);
+    glCullFace(GL_BACK);
+    glFrontFace((vp.determinant() > 0.0f) == (m.winding > 0) ? GL_CW : GL_CCW);
+  }
+  /// Draws the chunks of m inside vp's frustum (neighbouring visible chunks in one call), less
+  /// those hidden under other terrain from `eye` (none: draws them).
+  void draw_visible(const GpuMesh& m, const Eigen::Matrix4f& vp, const Eigen::Vector3f* eye) const {
+    std::vector<const Chunk*> visible;
+    visible.reserve(m.chunks.size());
+    for (const Chunk& ch : m.chunks)
+      if (in_frustum(vp, ch) && !(eye && options.occlusion_culling && hidden_under(ch.under, *eye)))
+        visible.push_back(&ch);
+    draw_chunks(visible);
+  }
   unsigned lamp_shadow_bits(std::size_t mesh, const Chunk& ch, const FrameSetup& f,
                             const std::vector<LampCasters>& casters) const;
   Program& post_program(const std::array<bool, 8>& features, int pixels = 0);
@@ -514,6 +542,7 @@ void Renderer::Impl::upload_scene(const SceneGeometry& geo) {
     g.seg_class = sm.seg_class;
     g.material = sm.material;
     g.triplanar = sm.triplanar;
+    g.winding = closed_orientation(sm.mesh);
     g.terrain = sm.name == "seabed" || sm.name == "seabed_far";
     if (g.terrain) g.tan_slope = steepest_slope(sm.mesh);
     g.macro = g.terrain && sm.material.texture != "none";
@@ -594,7 +623,7 @@ void Renderer::Impl::build_caster_boxes(const SceneGeometry& geo) {
       }
   for (std::size_t mi = 0; mi < meshes.size(); ++mi) {
     if (meshes[mi].terrain) {  // the terrain casts on other terrain only (the patch's edge on the far seabed)
-      for (const Chunk& c : meshes[mi].chunks) {
+      for (Chunk& c : meshes[mi].chunks) {
         CasterBox box{mi, c.lo, c.hi};
         // Under another terrain mesh: inside its footprint (a full grid: its bounding rectangle)
         // and deeper than its deepest point.
@@ -604,6 +633,7 @@ void Renderer::Impl::build_caster_boxes(const SceneGeometry& geo) {
               c.hi.y() <= phi.y() && c.lo.z() > phi.z())
             box.under = static_cast<long>(pi);
         }
+        c.under = box.under;
         caster_boxes.push_back(box);
       }
       continue;
@@ -873,7 +903,9 @@ Renderer::Impl::FrameSetup Renderer::Impl::setup_frame(const Pose& X_WB, const C
 }
 
 // Depth of the scene seen from each lamp (its shadow map), with a slope-scaled offset against
-// self-shadowing.
+// self-shadowing. Both sides of every face: culling a solid's back faces here would let the front
+// faces' offset decide the texels on its silhouette (-2 % of a frame's instructions, but shadow
+// edges move by a texel at contact lines).
 void Renderer::Impl::shadow_pass(const FrameSetup& f) {
   if (!f.shadows && !f.sun_shadow) return;
   const int size = options.shadow_map_size;
@@ -927,9 +959,13 @@ void Renderer::Impl::shadow_pass(const FrameSetup& f) {
     const float* vp_data = sun ? f.sun_vp : f.shadow_vp_W + std::ptrdiff_t{16} * i;
     glUniformMatrix4fv(shadow["u_vp"], 1, GL_FALSE, vp_data);
     const Eigen::Matrix4f vp = Eigen::Map<const Eigen::Matrix4f>(vp_data);
+    // The sun has no position: its map keeps the terrain hidden under other terrain (and is cached).
+    const Eigen::Vector3f lamp =
+        sun ? Eigen::Vector3f::Zero()
+            : Eigen::Vector3f(Eigen::Map<const Eigen::Vector3f>(f.lamp_pos_W + std::ptrdiff_t{3} * i));
     for (const GpuMesh& m : meshes) {
       glBindVertexArray(m.vao);
-      draw_visible(m, vp);
+      draw_visible(m, vp, sun ? nullptr : &lamp);
     }
   }
   glDisable(GL_POLYGON_OFFSET_FILL);
@@ -1065,6 +1101,7 @@ void Renderer::Impl::scene_pass(const Targets& t, const FrameSetup& f, double st
   glBindTexture(GL_TEXTURE_2D_ARRAY, f.shadows ? shadow_tex : 0);
   glActiveTexture(GL_TEXTURE0);
   const Eigen::Matrix4f vp = f.proj * f.view;
+  const Eigen::Vector3f cam = f.cam_W.cast<float>();
   std::set<unsigned> set_up;  // variants whose frame uniforms are set
   const unsigned all_shadows = (f.sun_shadow ? 1u : 0u) | (f.shadows ? 2u : 0u);
   // Shadow receiver culling: the terrain's visible chunks by the shadow lookups they need (llvmpipe
@@ -1078,10 +1115,7 @@ void Renderer::Impl::scene_pass(const Targets& t, const FrameSetup& f, double st
       const Eigen::Vector3f L = Eigen::Map<const Eigen::Vector3f>(f.lamp_pos_W + 3 * static_cast<std::ptrdiff_t>(i));
       for (const CasterBox& c : caster_boxes) {
         if (!in_frustum(lvp, c.lo, c.hi)) continue;
-        if (c.under >= 0) {  // hidden under a terrain mesh the lamp stands over: never in its map
-          const auto& [plo, phi] = terrain_bounds[static_cast<std::size_t>(c.under)];
-          if (L.x() >= plo.x() && L.y() >= plo.y() && L.x() <= phi.x() && L.y() <= phi.y() && L.z() < plo.z()) continue;
-        }
+        if (hidden_under(c.under, L)) continue;  // under a terrain mesh the lamp stands over: never in its map
         // Grown by two texels of the lamp's map at the box's far side (PCF reads the next texel).
         const float far = (c.lo - L).cwiseAbs().cwiseMax((c.hi - L).cwiseAbs()).norm();
         const float pad = 2.0f * f.lamp_texel_per_m[i] * far + 0.01f;
@@ -1092,7 +1126,12 @@ void Renderer::Impl::scene_pass(const Targets& t, const FrameSetup& f, double st
   std::vector<const Chunk*> bins[4];
   timings.shadow_lookups_drawn = timings.shadow_lookups_skipped = 0;
   timings.scene_fragments = timings.sun_lookup_fragments = timings.lamp_lookup_fragments = 0;
-  if (options.profile_passes && fragment_query == 0) glGenQueries(1, &fragment_query);
+  timings.scene_invocations = 0;
+  if (options.profile_passes && fragment_query == 0) {
+    glGenQueries(1, &fragment_query);
+    if (epoxy_gl_version() >= 46 || epoxy_has_gl_extension("GL_ARB_pipeline_statistics_query"))
+      glGenQueries(1, &invocation_query);
+  }
   // The terrain last: what stands on it hides part of it, and llvmpipe skips the shading of
   // blocks whose depth test fails (the image is the same in any order).
   std::vector<std::size_t> order;
@@ -1104,7 +1143,7 @@ void Renderer::Impl::scene_pass(const Targets& t, const FrameSetup& f, double st
     const GpuMesh& m = meshes[mi];
     for (auto& b : bins) b.clear();
     for (const Chunk& ch : m.chunks) {
-      if (!in_frustum(vp, ch)) continue;
+      if (!in_frustum(vp, ch) || (options.occlusion_culling && hidden_under(ch.under, cam))) continue;
       unsigned bits = all_shadows;
       if (cull && m.terrain) {
         bits = (f.sun_shadow && !ch.sun_free ? 1u : 0u) | (f.shadows ? lamp_shadow_bits(mi, ch, f, casters) : 0u);
@@ -1143,18 +1182,28 @@ void Renderer::Impl::scene_pass(const Targets& t, const FrameSetup& f, double st
       glActiveTexture(GL_TEXTURE0);
       glBindTexture(GL_TEXTURE_2D, m.texture);
       glBindVertexArray(m.vao);
-      if (options.profile_passes) glBeginQuery(GL_SAMPLES_PASSED, fragment_query);
+      cull_back_faces(m, vp);
+      if (options.profile_passes) {
+        glBeginQuery(GL_SAMPLES_PASSED, fragment_query);
+        if (invocation_query) glBeginQuery(GL_FRAGMENT_SHADER_INVOCATIONS_ARB, invocation_query);
+      }
       draw_chunks(bins[bits]);
       if (options.profile_passes) {  // fragments shaded (the depth test passed) with and without lookups
         glEndQuery(GL_SAMPLES_PASSED);
-        GLuint n = 0;
+        GLuint n = 0, inv = 0;
         glGetQueryObjectuiv(fragment_query, GL_QUERY_RESULT, &n);
+        if (invocation_query) {
+          glEndQuery(GL_FRAGMENT_SHADER_INVOCATIONS_ARB);
+          glGetQueryObjectuiv(invocation_query, GL_QUERY_RESULT, &inv);
+        }
+        timings.scene_invocations += inv;
         timings.scene_fragments += n;
         if (bits & 1u) timings.sun_lookup_fragments += n;
         if (bits & 2u) timings.lamp_lookup_fragments += n;
       }
     }
   }
+  glDisable(GL_CULL_FACE);
 }
 
 Program& Renderer::Impl::snow_program(int nlamps) {
@@ -1601,6 +1650,7 @@ Renderer::~Renderer() {
   glDeleteVertexArrays(1, &impl_->empty_vao);
   glDeleteSamplers(1, &impl_->shadow_nearest);
   if (impl_->fragment_query) glDeleteQueries(1, &impl_->fragment_query);
+  if (impl_->invocation_query) glDeleteQueries(1, &impl_->invocation_query);
   for (const auto& [v, p] : impl_->scene_variants)
     if (p.id()) glDeleteProgram(p.id());
   glDeleteProgram(impl_->shadow.id());

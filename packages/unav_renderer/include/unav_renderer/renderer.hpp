@@ -46,6 +46,13 @@ struct RenderOptions {
   /// the light, and the light steeper than the terrain's steepest slope) are drawn without the
   /// shadow lookups. Same image (conservative tests); false only to measure or to check that.
   bool shadow_receiver_culling = true;
+  /// Occlusion culling: what cannot be seen is not drawn. Back faces of solids (closed,
+  /// consistently wound meshes: pipes, rocks, boxes, closed mesh files) in the camera's view: seen
+  /// from outside a solid they lie behind its front faces, yet llvmpipe shades a face that a later
+  /// one hides. Terrain under other terrain (the far seabed under the patch) for a camera or lamp
+  /// standing over it. No pixel changes (a camera inside a solid would see through it); false only
+  /// to measure or to check that.
+  bool occlusion_culling = true;
   /// Scale of the shadow maps' depth bias (slope-scaled polygon offset) against self-shadowing
   /// ("acne"): larger removes acne on steep terrain and detaches contact shadows. >= 0.
   double shadow_bias = 1.0;
@@ -106,6 +113,10 @@ struct RenderTimings {
   /// Only with profile_passes (occlusion queries): fragments the scene pass shaded, and how many
   /// of them looked up the sun's shadow map and the lamps' (a deterministic measure of the work).
   std::size_t scene_fragments = 0, sun_lookup_fragments = 0, lamp_lookup_fragments = 0;
+  /// Only with profile_passes, where the driver counts them (GL 4.6 or ARB_pipeline_statistics_query;
+  /// else 0): fragment shader invocations of the scene pass. llvmpipe shades 4x4 blocks, so a block
+  /// a triangle's edge crosses costs 16, and a face hidden by a later one was shaded anyway.
+  std::size_t scene_invocations = 0;
 };
 
 /// The vehicle's velocity in base_link_frd (nav_msgs/Odometry's twist) at a frame's stamp: for
