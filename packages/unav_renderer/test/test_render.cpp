@@ -5,6 +5,7 @@
 
 #include <cmath>
 
+#include "../src/pixel_ops.hpp"
 #include "render_test_util.hpp"
 #include "unav_renderer/errors.hpp"
 #include "unav_renderer/renderer.hpp"
@@ -301,4 +302,20 @@ TEST(RenderErrors, CausesAreNamed) {
   w.objects.clear();
   Renderer r(w, {down_camera()}, exact_options());
   EXPECT_THROW(r.render(Pose::Identity(), "rear"), std::invalid_argument);
+}
+
+TEST(Readback, SplitRgbaMatchesTheByteLoop) {
+  // Four pixels per step as words, then the tail: every length from 0 to 13 and a VGA frame + 3.
+  std::uint32_t state = 12345u;
+  for (std::size_t px : {0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 640 * 480 + 3}) {
+    std::vector<std::uint8_t> rgba(4 * px), rgb(3 * px, 0), alpha(px, 0);
+    for (auto& b : rgba) b = static_cast<std::uint8_t>((state = state * 1664525u + 1013904223u) >> 24);
+    unav::renderer::detail::split_rgba(rgba.data(), px, rgb.data(), alpha.data());
+    for (std::size_t i = 0; i < px; ++i) {
+      ASSERT_EQ(rgb[3 * i], rgba[4 * i]) << px << " " << i;
+      ASSERT_EQ(rgb[3 * i + 1], rgba[4 * i + 1]) << px << " " << i;
+      ASSERT_EQ(rgb[3 * i + 2], rgba[4 * i + 2]) << px << " " << i;
+      ASSERT_EQ(alpha[i], rgba[4 * i + 3]) << px << " " << i;
+    }
+  }
 }
