@@ -198,7 +198,10 @@ vec3 specular(vec3 n, vec3 V, vec3 l, vec3 F0, float rough) {
   float d = ndh * ndh * (a2 - 1.0) + 1.0;
   float k = (rough + 1.0) * (rough + 1.0) / 8.0;
   float G = ndl / (ndl * (1.0 - k) + k) * ndv / (ndv * (1.0 - k) + k);
-  vec3 F = F0 + (1.0 - F0) * pow(1.0 - vdh, 5.0);
+  // max(): rounding can give vdh a hair above 1 where the light comes from the eye (a lamp beside
+  // the camera, a far surface), and pow() of a negative base is NaN (which the forward-scatter
+  // blur's mip chain then spreads over 16 x 16 pixel squares).
+  vec3 F = F0 + (1.0 - F0) * pow(max(1.0 - vdh, 0.0), 5.0);
   return a2 / (d * d) * G * F / (4.0 * ndl * ndv);   // pi D = a2 / d^2
 }
 #endif
