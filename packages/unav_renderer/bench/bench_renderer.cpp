@@ -167,7 +167,7 @@ int main(int argc, char** argv) {
   std::printf("%-20s %8s %8s %8s %10s %8s %10s | %8s %8s %8s %10s %8s %9s\n", "camera", "shadows", "scene", "snow",
               "inscatter", "post", "readback", "cpu shad", "scene", "snow", "inscatter", "post", "cpu sum");
   std::vector<std::string> lookups;
-  for (const char* cam : {"w320x180", "w640x480"}) {
+  for (const char* cam : {"w320x180", "w640x480", "w640x480_distorted"}) {
     if (skip(cam)) continue;
     std::vector<RenderTimings> t;
     for (int i = 0; i < frames; ++i) {
