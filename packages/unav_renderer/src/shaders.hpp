@@ -132,27 +132,14 @@ layout(location = 1) out float o_depth;  // z along the optical axis [m]
 
 vec4 tex_at(vec2 uv) { return texture(u_tex, uv / u_uv_scale); }  // rgb albedo, a relief height
 
-// sin(x) for vectors, to 4e-6 plus the reduction's rounding (|x| 1e3: 1e-4): whole turns removed,
-// folded into [-pi/2, pi/2], Taylor to x^7. A third of llvmpipe's sin() (which reduces by pi/4
-// in several parts for full float accuracy); for the caustic pattern, whose 8 sines per pixel
-// were 5 % of a frame.
-vec2 sin_fast(vec2 x) {
-  vec2 y = x * 0.15915494309;   // turns
-  y -= floor(y + 0.5);          // [-0.5, 0.5]
-  y = mix(y, sign(y) * 0.5 - y, step(0.25, abs(y)));   // sin(pi - a) = sin(a): [-0.25, 0.25]
-  vec2 z = y * 6.28318530718, z2 = z * z;
-  return z * (1.0 + z2 * (-1.0 / 6.0 + z2 * (1.0 / 120.0 + z2 * (-1.0 / 5040.0))));
-}
-
 // Zero-mean caustic network at horizontal position p [m], time t [s]: two domain-warped,
 // drifting layers of sin x sin cells, sharpened into thin bright lines (g |g| keeps the mean 0).
 float caustic_pattern(vec2 p, float t) {
   float g = 0.0;
   vec2 q = p * 1.9;
   for (int k = 0; k < 2; ++k) {
-    vec2 w = q + 0.55 * sin_fast(vec2(q.y * 1.3 + 0.8 * t + float(k), q.x * 1.1 - 0.6 * t + 2.0 * float(k)));
-    vec2 sw = sin_fast(vec2(w.x + 0.35 * t, w.y - 0.3 * t));
-    float s = sw.x * sw.y;
+    vec2 w = q + 0.55 * vec2(sin(q.y * 1.3 + 0.8 * t + float(k)), sin(q.x * 1.1 - 0.6 * t + 2.0 * float(k)));
+    float s = sin(w.x + 0.35 * t) * sin(w.y - 0.3 * t);
     g += s * abs(s);
     q = mat2(0.8, 0.6, -0.6, 0.8) * q * 1.37 + vec2(3.1, 1.7);
   }
