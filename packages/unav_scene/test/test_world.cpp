@@ -250,8 +250,9 @@ TEST(Meshes, TubeHasRingsOnlyWhereItsCentreLineTurns) {
   for (int i = 0; i <= 10; ++i) straight.emplace_back(0.1 * i, 0.0, 10.0);
   const MeshData s = make_tube_mesh(straight, 0.25, 16);
   EXPECT_EQ(s.triangle_count(), 2u * 16u + 2u * 16u);
-  EXPECT_NEAR(s.uvs[2 * 17], 1.0, 1e-6);  // first vertex of the second ring: arc length 1 m
-  EXPECT_NEAR(s.positions[3 * 17], 1.0, 1e-6);
+  constexpr std::size_t kSecondRing = 17;          // 16 sides + the seam's copy
+  EXPECT_NEAR(s.uvs[2 * kSecondRing], 1.0, 1e-6);  // its first vertex: arc length 1 m
+  EXPECT_NEAR(s.positions[3 * kSecondRing], 1.0, 1e-6);
   for (int i = 0; i <= 10; ++i) kinked.emplace_back(i <= 5 ? 0.1 * i : 0.5, i <= 5 ? 0.0 : 0.1 * (i - 5), 10.0);
   const MeshData k = make_tube_mesh(kinked, 0.25, 16);
   EXPECT_EQ(k.triangle_count(), 4u * 2u * 16u + 2u * 16u);
