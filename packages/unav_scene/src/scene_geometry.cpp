@@ -183,46 +183,63 @@ MeshData make_plane_mesh(double sx, double sy) {
 }
 
 int closed_orientation(const MeshData& m) {
-  if (m.triangle_count() == 0) return 0;
-  // Weld vertices at the same position (seams of uv or normals duplicate them).
-  std::map<std::array<float, 3>, std::uint32_t> weld;
-  std::vector<std::uint32_t> id(m.vertex_count());
-  for (std::size_t i = 0; i < m.vertex_count(); ++i) {
-    const std::array<float, 3> p{m.positions[3 * i], m.positions[3 * i + 1], m.positions[3 * i + 2]};
-    id[i] = weld.try_emplace(p, static_cast<std::uint32_t>(weld.size())).first->second;
+  const std::size_t nv = m.vertex_count(), nt = m.triangle_count();
+  if (nt == 0) return 0;
+  // Weld vertices at the same position (seams of uv or normals duplicate them): sorted, not a
+  // tree, so that a scanned wreck of millions of triangles costs a sort, not a map per vertex.
+  const auto pos = [&m](std::size_t i) {
+    return std::array<float, 3>{m.positions[3 * i], m.positions[3 * i + 1], m.positions[3 * i + 2]};
+  };
+  std::vector<std::uint32_t> order(nv);
+  for (std::size_t i = 0; i < nv; ++i) order[i] = static_cast<std::uint32_t>(i);
+  std::sort(order.begin(), order.end(), [&pos](std::uint32_t a, std::uint32_t b) { return pos(a) < pos(b); });
+  std::vector<std::uint32_t> id(nv);
+  std::uint32_t welded = 0;
+  for (std::size_t k = 0; k < nv; ++k) {
+    if (k > 0 && pos(order[k]) != pos(order[k - 1])) ++welded;
+    id[order[k]] = welded;
   }
-  // Every directed edge once, and its reverse once.
-  std::map<std::pair<std::uint32_t, std::uint32_t>, int> edges;
-  std::vector<std::uint32_t> parent(weld.size());
-  for (std::uint32_t i = 0; i < parent.size(); ++i) parent[i] = i;
+  ++welded;
+  // Every directed edge once, and its reverse once; parts by union-find.
+  std::vector<std::uint64_t> edges;
+  edges.reserve(3 * nt);
+  std::vector<std::uint32_t> parent(welded);
+  for (std::uint32_t i = 0; i < welded; ++i) parent[i] = i;
   const auto root = [&parent](std::uint32_t v) {
     while (parent[v] != v) v = parent[v] = parent[parent[v]];
     return v;
   };
-  for (std::size_t t = 0; t < m.triangle_count(); ++t) {
+  for (std::size_t t = 0; t < nt; ++t) {
     const std::uint32_t v[3] = {id[m.indices[3 * t]], id[m.indices[3 * t + 1]], id[m.indices[3 * t + 2]]};
     if (v[0] == v[1] || v[1] == v[2] || v[2] == v[0]) return 0;
     for (int k = 0; k < 3; ++k) {
-      if (++edges[{v[k], v[(k + 1) % 3]}] > 1) return 0;
-      parent[root(v[k])] = root(v[(k + 1) % 3]);
+      const std::uint32_t a = v[k], b = v[(k + 1) % 3];
+      edges.push_back((std::uint64_t{a} << 32) | b);
+      parent[root(a)] = root(b);
     }
   }
-  for (const auto& [e, n] : edges)
-    if (edges.find({e.second, e.first}) == edges.end()) return 0;
-  // Signed volume of each connected part (divergence theorem; 6 x the volume).
-  std::map<std::uint32_t, double> volume;
-  for (std::size_t t = 0; t < m.triangle_count(); ++t) {
+  std::sort(edges.begin(), edges.end());
+  if (std::adjacent_find(edges.begin(), edges.end()) != edges.end()) return 0;  // an edge twice one way
+  for (const std::uint64_t e : edges)
+    if (!std::binary_search(edges.begin(), edges.end(), (e << 32) | (e >> 32))) return 0;  // no reverse
+  // Signed volume of each connected part (divergence theorem; 6 x the volume). Closed parts:
+  // independent of the origin; in double, exact enough tens of metres out.
+  std::vector<double> volume(welded, 0.0);
+  std::vector<char> part(welded, 0);
+  for (std::size_t t = 0; t < nt; ++t) {
     Eigen::Vector3d p[3];
     for (int k = 0; k < 3; ++k) {
       const std::size_t i = m.indices[3 * t + k];
       p[k] = Eigen::Vector3d(m.positions[3 * i], m.positions[3 * i + 1], m.positions[3 * i + 2]);
     }
-    // Closed parts: independent of the origin; in double, exact enough tens of metres out.
-    volume[root(id[m.indices[3 * t]])] += p[0].dot(p[1].cross(p[2]));
+    const std::uint32_t r = root(id[m.indices[3 * t]]);
+    volume[r] += p[0].dot(p[1].cross(p[2]));
+    part[r] = 1;
   }
   int sign = 0;
-  for (const auto& [r, v] : volume) {
-    const int s = v > 0.0 ? 1 : (v < 0.0 ? -1 : 0);
+  for (std::uint32_t r = 0; r < welded; ++r) {
+    if (!part[r]) continue;
+    const int s = volume[r] > 0.0 ? 1 : (volume[r] < 0.0 ? -1 : 0);
     if (s == 0 || (sign != 0 && s != sign)) return 0;
     sign = s;
   }
