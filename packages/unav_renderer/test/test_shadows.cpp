@@ -3,6 +3,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <vector>
 
 #include "render_test_util.hpp"
 #include "unav_renderer/errors.hpp"
@@ -254,6 +255,24 @@ TEST(Determinism, SamePoseStampAndSeedGiveIdenticalImagesWhateverCameBefore) {
   EXPECT_EQ(a.depth, c.depth);
 }
 
+namespace {
+
+// Cameras and poses of the culling tests in the pipe world: a front (200x150, 80 deg) and a down
+// (160x120, 90 deg) camera; over the pipe along it, low with the boulder ahead, at the skid and
+// the pipe.
+std::vector<CameraModel> front_and_down() {
+  CameraModel front = CameraModel::from_hfov("front", 200, 150, 80.0 * M_PI / 180.0);
+  front.X_BC.linear() = R_camera_body_to_optical();
+  CameraModel down = CameraModel::from_hfov("down", 160, 120, 90.0 * M_PI / 180.0);
+  down.X_BC.linear() = rotation_from_rpy(0, -M_PI / 2, 0) * R_camera_body_to_optical();
+  return {front, down};
+}
+const Pose kOverPipe = pose_from_xyz_rpy({3.0, 0.2, 8.0}, {0, 0, 0.1});
+const Pose kBoulderAhead = pose_from_xyz_rpy({9.0, 1.2, 9.0}, {0, 0.3, 1.2});
+const Pose kSkidAndPipe = pose_from_xyz_rpy({16.0, -1.0, 8.5}, {0, 0.2, -1.6});
+
+}  // namespace
+
 // Shadow receiver culling skips the shadow lookups on terrain chunks that nothing can shadow;
 // they would have read "lit", so the image must not change. Pipe world (pipe, rocks, a boulder
 // and a skid casting on the seabed), sun and both lamps, front and down cameras, poses close to
@@ -266,10 +285,6 @@ TEST(Shadows, ReceiverCullingChangesNoPixel) {
   rough.seabed.relief_wavelength_m = 3.0;
   rough.sun.direction_W = Eigen::Vector3d(std::cos(0.61), 0.0, std::sin(0.61));
   for (const World& world : {base, rough}) {
-    CameraModel front = CameraModel::from_hfov("front", 200, 150, 80.0 * M_PI / 180.0);
-    front.X_BC.linear() = R_camera_body_to_optical();
-    CameraModel down = CameraModel::from_hfov("down", 160, 120, 90.0 * M_PI / 180.0);
-    down.X_BC.linear() = rotation_from_rpy(0, -M_PI / 2, 0) * R_camera_body_to_optical();
     RenderOptions o = unav::renderer::test::exact_options();
     o.lamps = true;
     o.materials = true;
@@ -279,12 +294,10 @@ TEST(Shadows, ReceiverCullingChangesNoPixel) {
     o.shadow_bias = 4.0;
     RenderOptions no_cull = o;
     no_cull.shadow_receiver_culling = false;
-    Renderer culled(world, {front, down}, o);
-    Renderer full(world, {front, down}, no_cull);
+    Renderer culled(world, front_and_down(), o);
+    Renderer full(world, front_and_down(), no_cull);
     std::size_t skipped = 0, drawn = 0;
-    for (const Pose& X_WB : {pose_from_xyz_rpy({3.0, 0.2, 8.0}, {0, 0, 0.1}),        // over the pipe, along it
-                             pose_from_xyz_rpy({9.0, 1.2, 9.0}, {0, 0.3, 1.2}),      // low, the boulder ahead
-                             pose_from_xyz_rpy({16.0, -1.0, 8.5}, {0, 0.2, -1.6}),   // the skid and the pipe
+    for (const Pose& X_WB : {kOverPipe, kBoulderAhead, kSkidAndPipe,
                              pose_from_xyz_rpy({-4.0, 8.0, 7.0}, {0, 0.1, 2.5})}) {  // the open seabed
       for (const char* cam : {"front", "down"}) {
         const Frame a = culled.render(X_WB, cam, 1.0);
@@ -323,22 +336,16 @@ TEST(Culling, OcclusionCullingChangesNoPixelAndShadesLess) {
   // outside its footprint (where the far seabed under it stays drawn), with fewer fragment shader
   // invocations where the driver counts them.
   const World world = load_world(std::string(UNAV_REPO_ROOT) + "/worlds/pipe_inspection/world.yaml");
-  CameraModel front = CameraModel::from_hfov("front", 200, 150, 80.0 * M_PI / 180.0);
-  front.X_BC.linear() = R_camera_body_to_optical();
-  CameraModel down = CameraModel::from_hfov("down", 160, 120, 90.0 * M_PI / 180.0);
-  down.X_BC.linear() = rotation_from_rpy(0, -M_PI / 2, 0) * R_camera_body_to_optical();
   RenderOptions o = unav::renderer::test::exact_options();
   o.lamps = true;
   o.materials = true;
   o.profile_passes = true;  // invocation counts
   RenderOptions all = o;
   all.occlusion_culling = false;
-  Renderer culled(world, {front, down}, o);
-  Renderer full(world, {front, down}, all);
+  Renderer culled(world, front_and_down(), o);
+  Renderer full(world, front_and_down(), all);
   std::size_t inv_culled = 0, inv_full = 0;
-  for (const Pose& X_WB : {pose_from_xyz_rpy({3.0, 0.2, 8.0}, {0, 0, 0.1}),          // over the pipe, along it
-                           pose_from_xyz_rpy({9.0, 1.2, 9.0}, {0, 0.3, 1.2}),        // low, the boulder ahead
-                           pose_from_xyz_rpy({16.0, -1.0, 8.5}, {0, 0.2, -1.6}),     // the skid and the pipe
+  for (const Pose& X_WB : {kOverPipe, kBoulderAhead, kSkidAndPipe,
                            pose_from_xyz_rpy({-30.0, -2.0, 9.5}, {0, 0.1, 0.0})}) {  // off the patch, towards it
     for (const char* cam : {"front", "down"}) {
       const Frame a = culled.render(X_WB, cam, 1.0);
