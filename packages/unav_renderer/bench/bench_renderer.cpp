@@ -1,7 +1,7 @@
 // Frames per second of the underwater renderer on worlds/pipe_inspection, RGB + depth +
 // segmentation with readback, at 320x180 and 640x480, synchronous and pipelined (PBO ring).
 // Prints a table; also a breakdown by switching effects off, to show what dominates.
-//   bench_unav_renderer [frames=40] [world.yaml] [--quick] [--camera NAME] [--callgrind [--config N]]
+//   bench_unav_renderer [frames=40] [world.yaml] [--quick] [--camera NAME] [--config N] [--callgrind]
 // --quick: the default configuration and the per-pass breakdown only (for A/B runs of two builds,
 // interleaved: this VM's speed drifts by +-15 % over minutes); --camera: that camera only
 // (w320x180, w640x480, w640x480_distorted). --callgrind: render `frames` frames of each camera with
@@ -9,7 +9,8 @@
 //   valgrind --tool=callgrind --instr-atstart=no bench_unav_renderer 4 --callgrind --camera w640x480
 // and divide "Collected" by the frames: instructions per frame compare two builds without this
 // VM's timing noise (texture and memory stalls are not counted: check the direction with fps).
-// --config N: the N-th configuration of the table (0 default, 1 no materials, ...) instead.
+// --config N: the N-th configuration of the table (0 default, 1 no materials, ...) for the
+// callgrind count and for the per-pass breakdown.
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -67,7 +68,7 @@ Result measure(Renderer& r, const std::string& cam, int frames) {
 
 int main(int argc, char** argv) {
   bool quick = false, callgrind = false;
-  int config_index = 0;  // --callgrind: which configuration (0 = default options)
+  int config_index = 0;  // --callgrind and the per-pass table: which configuration (0 = default options)
   std::string only;
   std::vector<std::string> args;
   for (int i = 1; i < argc; ++i) {
@@ -113,6 +114,9 @@ int main(int argc, char** argv) {
   o.shadow_receiver_culling = false;
   configs.push_back({"no shadow receiver culling", o});
   o = opt;
+  o.shadow_caster_culling = false;
+  configs.push_back({"no shadow caster culling", o});
+  o = opt;
   o.occlusion_culling = false;
   configs.push_back({"no occlusion culling", o});
   o = opt;
@@ -126,12 +130,12 @@ int main(int argc, char** argv) {
   o.marine_snow = false;
   o.noise = false;
   configs.push_back({"+ no snow, no noise", o});
+  if (config_index < 0 || config_index >= static_cast<int>(configs.size())) {
+    std::fprintf(stderr, "bench_unav_renderer: --config must be 0..%zu\n", configs.size() - 1);
+    return 2;
+  }
   if (callgrind) {
 #ifdef UNAV_HAVE_CALLGRIND
-    if (config_index < 0 || config_index >= static_cast<int>(configs.size())) {
-      std::fprintf(stderr, "bench_unav_renderer: --config must be 0..%zu\n", configs.size() - 1);
-      return 2;
-    }
     r.set_options(configs[static_cast<std::size_t>(config_index)].o);
     std::printf("configuration: %s\n", configs[static_cast<std::size_t>(config_index)].name);
     for (const char* cam : {"w320x180", "w640x480", "w640x480_distorted"}) {
@@ -158,12 +162,13 @@ int main(int argc, char** argv) {
       std::printf("%-34s %-20s %10.1f %10.1f %12.2f\n", c.name, cam, res.fps_sync, res.fps_pipelined, res.median_ms);
     }
   }
-  // Where the time goes (glFinish after each pass; default options).
-  RenderOptions prof = opt;
+  // Where the time goes (glFinish after each pass; default options, or those of --config N).
+  RenderOptions prof = configs[static_cast<std::size_t>(config_index)].o;
   prof.profile_passes = true;
   r.set_options(prof);
-  std::printf("\nper-pass time, median of %d frames [ms] (glFinish after each pass); wall, then process CPU time:\n",
-              frames);
+  std::printf(
+      "\nper-pass time (%s), median of %d frames [ms] (glFinish after each pass); wall, then process CPU time:\n",
+      configs[static_cast<std::size_t>(config_index)].name, frames);
   std::printf("%-20s %8s %8s %8s %10s %8s %10s | %8s %8s %8s %10s %8s %9s\n", "camera", "shadows", "scene", "snow",
               "inscatter", "post", "readback", "cpu shad", "scene", "snow", "inscatter", "post", "cpu sum");
   std::vector<std::string> lookups;

@@ -218,6 +218,8 @@ constexpr int kShadowLayers = 4;          // one per lamp
 constexpr double kSunShadowHalfM = 12.0;  // the sun's shadow map covers 24 m x 24 m around the camera
 constexpr double kSunSnapM = 2.0;         // its centre moves in 2 m steps: the map is reused in between
 constexpr int kSunMapScale = 4;           // its edge: 4 x shadow_map_size (1024 px: 2 cm texels)
+// A lamp's shadow map ends there: its light is spent (the in-scattering marches <= 30 m too).
+constexpr float kLampFarM = 30.0f;
 
 // The corners of triangle t of mesh.
 std::array<Eigen::Vector3f, 3> triangle_corners(const MeshData& mesh, std::size_t t) {
@@ -313,6 +315,33 @@ bool in_frustum(const Eigen::Matrix4f& vp, const Eigen::Vector3f& lo, const Eige
   return true;
 }
 bool in_frustum(const Eigen::Matrix4f& vp, const Chunk& ch) { return in_frustum(vp, ch.lo, ch.hi); }
+
+// Whether nothing inside the frustum vp_cam can lie in the shadow that box lo..hi casts from a
+// lamp at L whose map ends at the plane at distance far_m along its axis: every lamp ray behind
+// the box runs inside the hull of the box's corners and of their projections from L onto that
+// plane, so when all 16 points lie outside one plane of vp_cam's frustum, the hull does too.
+bool shadow_out_of_view(const Eigen::Matrix4f& vp_cam, const Eigen::Vector3f& L, const Eigen::Vector3f& axis,
+                        float far_m, const Eigen::Vector3f& lo, const Eigen::Vector3f& hi) {
+  int outside[6] = {0, 0, 0, 0, 0, 0};
+  for (int i = 0; i < 16; ++i) {
+    Eigen::Vector3f p(i & 1 ? hi.x() : lo.x(), i & 2 ? hi.y() : lo.y(), i & 4 ? hi.z() : lo.z());
+    if (i & 8) {
+      const float along = (p - L).dot(axis);
+      if (!(along > 1e-3f)) return false;  // a corner beside or behind the lamp: no such bound
+      p = L + (p - L) * std::max(1.0f, far_m / along);
+    }
+    const Eigen::Vector4f c = vp_cam * p.homogeneous();
+    outside[0] += c.x() < -c.w();
+    outside[1] += c.x() > c.w();
+    outside[2] += c.y() < -c.w();
+    outside[3] += c.y() > c.w();
+    outside[4] += c.z() < -c.w();
+    outside[5] += c.z() > c.w();
+  }
+  for (int k : outside)
+    if (k == 16) return true;
+  return false;
+}
 
 // Draws the listed chunks (in mesh order; neighbours in one call).
 void draw_chunks(const std::vector<const Chunk*>& chunks) {
@@ -448,7 +477,17 @@ struct Renderer::Impl {
   };
   std::vector<CasterBox> caster_boxes;
   std::vector<std::pair<Eigen::Vector3f, Eigen::Vector3f>> terrain_bounds;  // by mesh (terrain only)
+  float deepest_z = 0.0f;  // the deepest point of all the scene's geometry (z down) [m]
   void build_caster_boxes(const SceneGeometry& geo);
+  /// Shadow caster culling: true when terrain chunk ch of meshes[mi] cannot shadow anything the
+  /// camera at `eye` can see from lamp L, so L's map can do without it. Every lamp ray through the
+  /// chunk sinks faster than the terrain's steepest slope: where it meets the height field it goes
+  /// under it and stays under (the gap grows along the ray) until it leaves the mesh's footprint,
+  /// and by then it is deeper than any geometry (deepest_z). What lies behind the chunk from the
+  /// lamp is therefore under the terrain, which the eye over the mesh cannot see (the line to it
+  /// crosses the surface); water, objects and terrain in front of the chunk are lit with or
+  /// without it in the map.
+  bool casts_nothing(std::size_t mi, const Chunk& ch, const Eigen::Vector3f& L, const Eigen::Vector3f& eye) const;
   void mark_sun_free();
   /// True when a chunk or caster box `under` a terrain mesh (index, -1 none) lies under it and `eye` stands over that
   /// mesh (inside its footprint, above its shallowest point): every line from the eye to the chunk crosses the mesh
@@ -640,6 +679,9 @@ std::pair<float, float> box_interval(const Eigen::Vector3f& lo, const Eigen::Vec
 void Renderer::Impl::build_caster_boxes(const SceneGeometry& geo) {
   caster_boxes.clear();
   terrain_bounds.assign(meshes.size(), {Eigen::Vector3f::Constant(1e30f), Eigen::Vector3f::Constant(-1e30f)});
+  deepest_z = -1e30f;
+  for (const GpuMesh& m : meshes)
+    for (const Chunk& c : m.chunks) deepest_z = std::max(deepest_z, c.hi.z());
   for (std::size_t mi = 0; mi < meshes.size(); ++mi)
     if (meshes[mi].terrain)
       for (const Chunk& c : meshes[mi].chunks) {
@@ -679,6 +721,25 @@ void Renderer::Impl::build_caster_boxes(const SceneGeometry& geo) {
       }
     }
   }
+}
+
+bool Renderer::Impl::casts_nothing(std::size_t mi, const Chunk& ch, const Eigen::Vector3f& L,
+                                   const Eigen::Vector3f& eye) const {
+  const GpuMesh& m = meshes[mi];
+  if (!m.terrain) return false;
+  const auto& [lo, hi] = terrain_bounds[mi];
+  // The eye over the mesh: inside its footprint (a full grid over the rectangle), above it.
+  if (!(eye.x() >= lo.x() && eye.y() >= lo.y() && eye.x() <= hi.x() && eye.y() <= hi.y() && eye.z() < lo.z()))
+    return false;
+  // The flattest lamp ray through the chunk: from the lamp to its shallowest, farthest corner.
+  const float drop = ch.lo.z() - L.z();
+  const float h_far =
+      std::hypot(std::max(L.x() - ch.lo.x(), ch.hi.x() - L.x()), std::max(L.y() - ch.lo.y(), ch.hi.y() - L.y()));
+  if (!(drop > 0.0f) || !(drop > m.tan_slope * h_far)) return false;
+  const float sink = drop / std::max(h_far, 1e-6f);  // metres down per metre across, every ray
+  // Leaving the footprint at least this far from the chunk, below all geometry (1 cm to spare).
+  const float to_edge = std::min({ch.lo.x() - lo.x(), hi.x() - ch.hi.x(), ch.lo.y() - lo.y(), hi.y() - ch.hi.y()});
+  return ch.lo.z() + sink * std::max(to_edge, 0.0f) >= deepest_z + 0.01f;
 }
 
 // Shadow receiver culling for the sun (static scene, fixed sun): a terrain chunk needs the sun's
@@ -886,7 +947,7 @@ Renderer::Impl::FrameSetup Renderer::Impl::setup_frame(const Pose& X_WB, const C
     lc.fx = lc.fy = 0.5 * lc.width / std::tan(half);
     lc.cx = lc.cy = 0.5 * lc.width - 0.5;
     lc.near_m = 0.05;
-    lc.far_m = 30.0;  // lamp light is spent by then (the in-scattering marches <= 30 m too)
+    lc.far_m = kLampFarM;
     Pose X_WLo = X_WL;
     X_WLo.linear() = X_WL.linear() * R_camera_body_to_optical();
     const Eigen::Matrix4f vp_W = projection_from_K(lc) * X_WLo.inverse().matrix().cast<float>();
@@ -932,6 +993,7 @@ Renderer::Impl::FrameSetup Renderer::Impl::setup_frame(const Pose& X_WB, const C
 // faces' offset decide the texels on its silhouette (-2 % of a frame's instructions, but shadow
 // edges move by a texel at contact lines).
 void Renderer::Impl::shadow_pass(const FrameSetup& f) {
+  timings.lamp_map_triangles = timings.lamp_map_culled = 0;
   if (!f.shadows && !f.sun_shadow) return;
   const int size = options.shadow_map_size;
   if (shadow_size != size) {
@@ -965,6 +1027,8 @@ void Renderer::Impl::shadow_pass(const FrameSetup& f) {
   glPolygonOffset(2.0f * bias, 4.0f * bias);
   shadow.use();
   const float one = 1.0f;
+  const Eigen::Vector3f cam = f.cam_W.cast<float>();
+  const Eigen::Matrix4f cam_vp = f.proj * f.view;
   // The sun's map depends on the static scene and its matrix only: reused until either changes.
   const bool sun_fresh =
       f.sun_shadow && sun_vp_cached.size() == 16 && std::equal(sun_vp_cached.begin(), sun_vp_cached.end(), f.sun_vp);
@@ -988,9 +1052,32 @@ void Renderer::Impl::shadow_pass(const FrameSetup& f) {
     const Eigen::Vector3f lamp =
         sun ? Eigen::Vector3f::Zero()
             : Eigen::Vector3f(Eigen::Map<const Eigen::Vector3f>(f.lamp_pos_W + std::ptrdiff_t{3} * i));
-    for (const GpuMesh& m : meshes) {
+    const Eigen::Vector3f axis =
+        sun ? Eigen::Vector3f::Zero()
+            : Eigen::Vector3f(Eigen::Map<const Eigen::Vector3f>(f.lamp_dir_W + std::ptrdiff_t{3} * i));
+    for (std::size_t mi = 0; mi < meshes.size(); ++mi) {
+      const GpuMesh& m = meshes[mi];
       glBindVertexArray(m.vao);
-      draw_visible(m, vp, sun ? nullptr : &lamp);
+      if (sun) {
+        draw_visible(m, vp, nullptr);
+        continue;
+      }
+      std::vector<const Chunk*> visible;
+      visible.reserve(m.chunks.size());
+      for (const Chunk& ch : m.chunks) {
+        if (!in_frustum(vp, ch) || (options.occlusion_culling && hidden_under(ch.under, lamp))) continue;
+        bool culled = false;
+        if (options.shadow_caster_culling) {
+          // Grown by two texels of the lamp's map at the chunk's far side (PCF reads the next texel).
+          const float far = (ch.lo - lamp).cwiseAbs().cwiseMax((ch.hi - lamp).cwiseAbs()).norm();
+          const float pad = 2.0f * f.lamp_texel_per_m[i] * far + 0.01f;
+          culled = (m.terrain && casts_nothing(mi, ch, lamp, cam)) ||
+                   shadow_out_of_view(cam_vp, lamp, axis, kLampFarM, ch.lo.array() - pad, ch.hi.array() + pad);
+        }
+        (culled ? timings.lamp_map_culled : timings.lamp_map_triangles) += static_cast<std::size_t>(ch.count) / 3;
+        if (!culled) visible.push_back(&ch);
+      }
+      draw_chunks(visible);
     }
   }
   glDisable(GL_POLYGON_OFFSET_FILL);

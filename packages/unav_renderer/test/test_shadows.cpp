@@ -330,6 +330,54 @@ TEST(Shadows, ReceiverCullingChangesNoPixel) {
   }
 }
 
+// Shadow caster culling leaves out of the lamps' shadow maps the terrain chunks whose every lamp
+// ray sinks faster than the terrain's steepest slope: what they hide from a lamp lies under the
+// terrain, so no pixel (surfaces, shafts in the water) may change. The pipe world and a rough
+// seabed (slopes ~45 deg: only chunks right under a lamp qualify), over the patch and from
+// outside its footprint (where nothing may be culled: under the patch's edge is in view there).
+TEST(Culling, ShadowCasterCullingChangesNoPixel) {
+  World base = load_world(std::string(UNAV_REPO_ROOT) + "/worlds/pipe_inspection/world.yaml");
+  World rough = base;
+  rough.seabed.relief_amplitude_m = 0.8;
+  rough.seabed.relief_wavelength_m = 3.0;
+  const Pose kOffPatch = pose_from_xyz_rpy({-30.0, -2.0, 9.5}, {0, 0.1, 0.0});
+  for (const World* world : {&base, &rough}) {
+    RenderOptions o = unav::renderer::test::exact_options();
+    o.lamps = true;  // and their in-scattering, with its shadow lookups (shafts)
+    o.materials = true;
+    RenderOptions all = o;
+    all.shadow_caster_culling = false;
+    Renderer culled(*world, front_and_down(), o);
+    Renderer full(*world, front_and_down(), all);
+    std::size_t left_out = 0, drawn = 0;
+    for (const Pose& X_WB : {kOverPipe, kBoulderAhead, kSkidAndPipe, kOffPatch}) {
+      for (const char* cam : {"front", "down"}) {
+        const Frame a = culled.render(X_WB, cam, 1.0);
+        const RenderTimings t = culled.last_timings();
+        const Frame b = full.render(X_WB, cam, 1.0);
+        EXPECT_EQ(full.last_timings().lamp_map_culled, 0u);
+        EXPECT_EQ(t.lamp_map_triangles + t.lamp_map_culled, full.last_timings().lamp_map_triangles);
+        left_out += t.lamp_map_culled;
+        drawn += t.lamp_map_triangles;
+        ASSERT_EQ(a.rgb.size(), b.rgb.size());
+        int worst = 0;
+        std::size_t off = 0;
+        for (std::size_t i = 0; i < a.rgb.size(); ++i) {
+          const int d = std::abs(static_cast<int>(a.rgb[i]) - static_cast<int>(b.rgb[i]));
+          worst = std::max(worst, d);
+          off += d > 0;
+        }
+        std::printf("%s: %zu of %zu values differ, by <= %d\n", cam, off, a.rgb.size(), worst);
+        EXPECT_EQ(worst, 0) << cam;
+        EXPECT_EQ(a.depth, b.depth);
+        EXPECT_EQ(a.seg, b.seg);
+      }
+    }
+    std::printf("lamp-map triangles: %zu drawn, %zu left out\n", drawn, left_out);
+    EXPECT_GT(left_out, world == &base ? drawn / 5 : 0);  // measured: base 1/3 of them
+  }
+}
+
 TEST(Culling, OcclusionCullingChangesNoPixelAndShadesLess) {
   // Back faces of the solids (pipe, rocks, boulder, skid) and the far seabed under the patch are
   // not drawn: the same rgb, depth and segmentation bit for bit, from over the patch and from

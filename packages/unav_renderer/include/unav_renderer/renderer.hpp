@@ -36,16 +36,22 @@ struct RenderOptions {
   bool lamps = true;
   int lamp_scatter_samples = 8;     ///< ray-march steps for lamp in-scattering, 0..256; 0 disables
   int lamp_scatter_downsample = 4;  ///< in-scattering is computed at 1/N resolution (smooth)
-  /// Shadows: a depth map per lamp (its cone as a perspective frustum) and one for the sun
-  /// (orthographic along the sunlight, 20 m x 20 m around the camera, 4x the edge), looked up with bilinear
-  /// PCF (soft edges) by the surfaces; the lamp maps also by the lamp in-scattering (shafts cut
+  /// Shadows: a depth map per lamp (its cone as a perspective frustum, to 30 m) and one for the
+  /// sun (orthographic along the sunlight, 24 m x 24 m around the camera, 4x the edge), looked up
+  /// with bilinear PCF (soft edges) by the surfaces; the lamp maps also by the lamp in-scattering (shafts cut
   /// by objects). The sun's shadow removes its direct share (1 - ambient_fraction) only.
   bool shadows = true;
-  int shadow_map_size = 256;
+  int shadow_map_size = 256;  ///< edge [px] of each lamp's shadow map, 16..8192
   /// Shadow receiver culling: terrain chunks that nothing can shadow (no caster between them and
   /// the light, and the light steeper than the terrain's steepest slope) are drawn without the
   /// shadow lookups. Same image (conservative tests); false only to measure or to check that.
   bool shadow_receiver_culling = true;
+  /// Shadow caster culling: what cannot shadow anything the camera sees stays out of the lamps'
+  /// shadow maps: chunks whose shadow (the hull of the chunk and of its projection from the lamp
+  /// onto the map's far plane) lies outside the camera's view frustum, and terrain chunks whose
+  /// every lamp ray sinks faster than the terrain's steepest slope (what they hide from the lamp
+  /// lies under the terrain). Same image (conservative tests); false only to measure or to check.
+  bool shadow_caster_culling = true;
   /// Occlusion culling: what cannot be seen is not drawn. Back faces of solids (closed,
   /// consistently wound meshes: pipes, rocks, boxes, closed mesh files) in the camera's view: seen
   /// from outside a solid they lie behind its front faces, yet llvmpipe shades a face that a later
@@ -61,8 +67,8 @@ struct RenderOptions {
   /// A = caustic_strength exp(-d (2 K_d + 1 / 15 m)) at depth d (green K_d): clear shallow water
   /// shows them, depth and turbidity wash them out. Animated with the frame stamp.
   bool caustics = true;
-  double caustic_strength = 0.8;  ///< edge [px] of each lamp's shadow map, 16..8192
-  bool srgb_output = true;        ///< encode rgb8 as sRGB (false: linear 0..1 -> 0..255)
+  double caustic_strength = 0.8;
+  bool srgb_output = true;  ///< encode rgb8 as sRGB (false: linear 0..1 -> 0..255)
   /// Snell's window: water rays within asin(1 / n) of the zenith leave through the surface and
   /// see the sky (radiance n^2 x the diffuse share of E0, Fresnel-weighted) and the sun's glint,
   /// attenuated over the path to the surface; beyond it total internal reflection (the veil).
@@ -110,6 +116,8 @@ struct RenderTimings {
   /// Shadow receiver culling in the last frame: visible terrain chunks times the shadow maps in
   /// use (sun, lamps), drawn with the lookup and drawn without it (nothing can shadow them).
   std::size_t shadow_lookups_drawn = 0, shadow_lookups_skipped = 0;
+  /// Triangles drawn into the lamps' shadow maps (all lamps), and those shadow caster culling left out.
+  std::size_t lamp_map_triangles = 0, lamp_map_culled = 0;
   /// Only with profile_passes (occlusion queries): fragments the scene pass shaded, and how many
   /// of them looked up the sun's shadow map and the lamps' (a deterministic measure of the work).
   std::size_t scene_fragments = 0, sun_lookup_fragments = 0, lamp_lookup_fragments = 0;
