@@ -176,6 +176,7 @@ struct Targets {
   CameraModel seen;                // what the water sees: the fitted model behind a port (Frame::K/D)
   int is_width = 0, is_height = 0, is_scale = 1;
   GLuint is_fbo = 0, is_tex = 0;
+  GLuint is_water_tex = 0;  // the in-scattering premultiplied by its upsampling weight for water pixels
   GLuint scene_fbo = 0, scene_color = 0, scene_zc = 0, scene_depth = 0;
   GLuint post_fbo = 0, post_rgba = 0, post_zc = 0;
   GLuint distmap = 0;
@@ -877,9 +878,11 @@ Targets& Renderer::Impl::targets_for(const CameraModel& c) {
   t.is_height = (t.height + t.is_scale - 1) / t.is_scale;
   glGenFramebuffers(1, &t.is_fbo);
   glBindFramebuffer(GL_FRAMEBUFFER, t.is_fbo);
-  t.is_tex = make_tex(GL_RGBA16F, t.is_width, t.is_height, GL_RGBA, GL_FLOAT, GL_LINEAR);
+  t.is_tex = make_tex(GL_RGBA16F, t.is_width, t.is_height, GL_RGBA, GL_FLOAT, GL_NEAREST);
+  t.is_water_tex = make_tex(GL_RGBA16F, t.is_width, t.is_height, GL_RGBA, GL_FLOAT, GL_LINEAR);
   glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, t.is_tex, 0);
-  glDrawBuffers(1, bufs);
+  glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT1, GL_TEXTURE_2D, t.is_water_tex, 0);
+  glDrawBuffers(2, bufs);
   check_fbo("in-scatter");
 
   glGenFramebuffers(1, &t.post_fbo);
@@ -1514,11 +1517,14 @@ void Renderer::Impl::post_draw(Program& post, const Targets& t, const FrameSetup
   glBindTexture(GL_TEXTURE_2D, t.distmap);
   glActiveTexture(GL_TEXTURE3);
   glBindTexture(GL_TEXTURE_2D, t.is_tex);
+  glActiveTexture(GL_TEXTURE4);
+  glBindTexture(GL_TEXTURE_2D, t.is_water_tex);
   glActiveTexture(GL_TEXTURE0);
   glUniform1i(post["u_color"], 0);
   glUniform1i(post["u_depth"], 1);
   glUniform1i(post["u_distmap"], 2);
   glUniform1i(post["u_inscatter"], 3);
+  glUniform1i(post["u_inscatter_water"], 4);
   glUniform1f(post["u_march_max_m"], march_max_m);
   glUniform4f(post["u_K"], static_cast<float>(c.fx), static_cast<float>(c.fy), static_cast<float>(c.cx),
               static_cast<float>(c.cy));
@@ -1746,7 +1752,8 @@ Renderer::~Renderer() {
   for (auto& [name, t] : impl_->targets) {
     GLuint fbos[3] = {t.scene_fbo, t.post_fbo, t.is_fbo};
     glDeleteFramebuffers(3, fbos);
-    GLuint texs[7] = {t.scene_color, t.scene_zc, t.scene_depth, t.post_rgba, t.post_zc, t.distmap, t.is_tex};
+    GLuint texs[8] = {t.scene_color, t.scene_zc, t.scene_depth, t.post_rgba,
+                      t.post_zc,     t.distmap,  t.is_tex,      t.is_water_tex};
     glDeleteTextures(7, texs);
   }
   impl_->release_scene();

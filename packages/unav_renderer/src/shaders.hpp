@@ -479,6 +479,7 @@ uniform mat3 u_R_WC;           // optical -> world rotation
 uniform float u_fwd_per_m;
 uniform float u_blur_px_per_m;
 uniform sampler2D u_inscatter; // RGBA16F, low resolution: lamp light scattered into the ray
+uniform sampler2D u_inscatter_water;  // the same times the water pixels' weight w, and w (bilinear)
 uniform float u_march_max_m;
 uniform float u_gain;
 uniform float u_noise_std;
@@ -634,7 +635,15 @@ void main() {
   // Depth-aware upsampling of the low-resolution in-scatter: of the 4 nearest texels, trust
   // those whose marched length matches this pixel's (no halos at silhouettes).
   vec3 Ls = vec3(0.0);
-#if INSCATTER
+#if INSCATTER && PIXELS == 2
+  {
+    // Water: the pixel's marched length is u_march_max_m, so each texel's depth weight depends on
+    // the texel only, and the weighted bilinear sum is one filtered fetch of the premultiplied
+    // texture (the same weights as below, to float rounding).
+    vec4 s = texture(u_inscatter_water, uv);
+    Ls = s.rgb / max(s.a, 1e-9);
+  }
+#elif INSCATTER
   {
     vec2 isz = vec2(textureSize(u_inscatter, 0));
     vec2 p = uv * isz - 0.5;
@@ -723,6 +732,7 @@ uniform float u_schlick_k;
 uniform float u_back_frac;
 uniform float u_march_max_m;
 layout(location = 0) out vec4 o_Ls;
+layout(location = 1) out vec4 o_Ls_water;  // weighted for the water pixels' upsampling (kPostFS)
 const float PI = 3.14159265358979;
 void main() {
   vec2 src = (gl_FragCoord.xy) * u_scale - 0.5;   // full-res pixel coordinates of this texel
@@ -771,6 +781,11 @@ void main() {
     }
   }
   o_Ls = vec4(Ls, tmax);   // alpha: marched length, for depth-aware upsampling
+  // A water pixel marches u_march_max_m, so its upsampling weight for this texel depends on the
+  // texel alone: premultiplied, one bilinear fetch does the weighted sum (kPostFS).
+  // (kPostFS's 1 / (1e-3 + x) times 1e-3: at most 1, so that half floats cannot overflow.)
+  float wd = 1.0 / (1.0 + 1e3 * abs(tmax - u_march_max_m) / max(u_march_max_m, 0.1));
+  o_Ls_water = vec4(Ls * wd, wd);
 }
 )GLSL";
 
