@@ -1751,10 +1751,10 @@ Renderer::~Renderer() {
   }
   for (auto& [name, t] : impl_->targets) {
     GLuint fbos[3] = {t.scene_fbo, t.post_fbo, t.is_fbo};
-    glDeleteFramebuffers(3, fbos);
+    glDeleteFramebuffers(static_cast<GLsizei>(std::size(fbos)), fbos);
     GLuint texs[8] = {t.scene_color, t.scene_zc, t.scene_depth, t.post_rgba,
                       t.post_zc,     t.distmap,  t.is_tex,      t.is_water_tex};
-    glDeleteTextures(7, texs);
+    glDeleteTextures(static_cast<GLsizei>(std::size(texs)), texs);
   }
   impl_->release_scene();
   for (auto& [name, maps] : impl_->textures) {
