@@ -298,21 +298,18 @@ std::vector<std::uint32_t> chunked_indices(const MeshData& mesh, std::vector<Chu
   return out;
 }
 
-// False when the box lies entirely outside one plane of the clip volume of vp (conservative).
+// False when the box lies entirely outside one plane of the clip volume of vp (conservative):
+// each plane (-w <= x, x <= w, ... in clip coordinates) is a half-space of world points, and the
+// box is wholly outside it when its corner farthest inside (picked per axis by the plane's normal)
+// is outside. Called per chunk and caster box, per pass and lamp: on the thread that feeds the GL.
 bool in_frustum(const Eigen::Matrix4f& vp, const Eigen::Vector3f& lo, const Eigen::Vector3f& hi) {
-  int outside[6] = {0, 0, 0, 0, 0, 0};
-  for (int i = 0; i < 8; ++i) {
-    const Eigen::Vector4f p(i & 1 ? hi.x() : lo.x(), i & 2 ? hi.y() : lo.y(), i & 4 ? hi.z() : lo.z(), 1.0f);
-    const Eigen::Vector4f c = vp * p;
-    outside[0] += c.x() < -c.w();
-    outside[1] += c.x() > c.w();
-    outside[2] += c.y() < -c.w();
-    outside[3] += c.y() > c.w();
-    outside[4] += c.z() < -c.w();
-    outside[5] += c.z() > c.w();
+  for (int k = 0; k < 6; ++k) {
+    const Eigen::Vector4f plane = vp.row(3) + (k & 1 ? -1.0f : 1.0f) * vp.row(k / 2);  // inside: plane . p >= 0
+    const float inside = plane.x() * (plane.x() > 0.0f ? hi.x() : lo.x()) +
+                         plane.y() * (plane.y() > 0.0f ? hi.y() : lo.y()) +
+                         plane.z() * (plane.z() > 0.0f ? hi.z() : lo.z()) + plane.w();
+    if (inside < 0.0f) return false;
   }
-  for (int k : outside)
-    if (k == 8) return false;
   return true;
 }
 bool in_frustum(const Eigen::Matrix4f& vp, const Chunk& ch) { return in_frustum(vp, ch.lo, ch.hi); }
