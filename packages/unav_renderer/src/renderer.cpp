@@ -325,8 +325,10 @@ bool shadow_out_of_view(const Eigen::Matrix4f& vp_cam, const Eigen::Vector3f& L,
     Eigen::Vector3f p(i & 1 ? hi.x() : lo.x(), i & 2 ? hi.y() : lo.y(), i & 4 ? hi.z() : lo.z());
     if (i & 8) {
       const float along = (p - L).dot(axis);
-      if (!(along > 1e-3f)) return false;  // a corner beside or behind the lamp: no such bound
-      p = L + (p - L) * std::max(1.0f, far_m / along);
+      // A corner beside or behind the lamp, or on the far plane or past it (a ray through the box
+      // may then leave it sideways before the plane): no such bound.
+      if (!(along > 1e-3f) || !(along < far_m)) return false;
+      p = L + (p - L) * (far_m / along);
     }
     const Eigen::Vector4f c = vp_cam * p.homogeneous();
     outside[0] += c.x() < -c.w();
