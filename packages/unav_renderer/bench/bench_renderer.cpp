@@ -201,19 +201,22 @@ int main(int argc, char** argv) {
                 med(&RenderTimings::snow_pass_ms), med(&RenderTimings::inscatter_pass_ms),
                 med(&RenderTimings::post_pass_ms), med(&RenderTimings::readback_ms), cpu[0], cpu[1], cpu[2], cpu[3],
                 cpu[4], cpu[0] + cpu[1] + cpu[2] + cpu[3] + cpu[4]);
-    char line[200];
-    std::snprintf(line, sizeof line, "%-20s %10.0f %12.0f %10.0f (%4.1f %%) %10.0f (%4.1f %%)", cam,
+    char line[240];
+    std::snprintf(line, sizeof line, "%-20s %10.0f %12.0f %10.0f (%4.1f %%) %10.0f (%4.1f %%) %10.0f %10.0f", cam,
                   medz(&RenderTimings::scene_fragments), medz(&RenderTimings::scene_invocations),
                   medz(&RenderTimings::sun_lookup_fragments),
                   100.0 * medz(&RenderTimings::sun_lookup_fragments) / medz(&RenderTimings::scene_fragments),
                   medz(&RenderTimings::lamp_lookup_fragments),
-                  100.0 * medz(&RenderTimings::lamp_lookup_fragments) / medz(&RenderTimings::scene_fragments));
+                  100.0 * medz(&RenderTimings::lamp_lookup_fragments) / medz(&RenderTimings::scene_fragments),
+                  medz(&RenderTimings::lamp_map_triangles), medz(&RenderTimings::lamp_map_culled));
     lookups.emplace_back(line);
   }
   std::printf(
       "\nscene fragments per frame (median; shaded: fragment shader invocations, llvmpipe counts 4x4 blocks)"
-      " and those with shadow lookups (receiver culling on):\n");
-  std::printf("%-20s %10s %12s %19s %19s\n", "camera", "fragments", "shaded", "sun lookups", "lamp lookups");
+      " and those with shadow lookups (receiver culling on); triangles drawn into the lamps' shadow maps and those"
+      " caster culling left out:\n");
+  std::printf("%-20s %10s %12s %19s %19s %10s %10s\n", "camera", "fragments", "shaded", "sun lookups", "lamp lookups",
+              "lamp map", "culled");
   for (const auto& l : lookups) std::puts(l.c_str());
   return 0;
 }
