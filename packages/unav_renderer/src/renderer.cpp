@@ -1635,7 +1635,6 @@ Frame Renderer::Impl::finish_readback(Slot& s) {
   }
   f.rgb.resize(px * 3);
   f.seg.resize(px);
-  f.depth.resize(px);
   glBindBuffer(GL_PIXEL_PACK_BUFFER, s.pbo_rgba);
   const auto* rgba = static_cast<const std::uint8_t*>(
       glMapBufferRange(GL_PIXEL_PACK_BUFFER, 0, static_cast<GLsizeiptr>(px * 4), GL_MAP_READ_BIT));
@@ -1646,7 +1645,7 @@ Frame Renderer::Impl::finish_readback(Slot& s) {
   const auto* dz = static_cast<const float*>(
       glMapBufferRange(GL_PIXEL_PACK_BUFFER, 0, static_cast<GLsizeiptr>(px * 4), GL_MAP_READ_BIT));
   if (!dz) throw GlError("glMapBufferRange failed for the depth readback");
-  std::copy(dz, dz + px, f.depth.begin());
+  f.depth.assign(dz, dz + px);  // one pass (a resize would zero it first)
   glUnmapBuffer(GL_PIXEL_PACK_BUFFER);
   glBindBuffer(GL_PIXEL_PACK_BUFFER, 0);
   return f;
