@@ -314,6 +314,13 @@ bool in_frustum(const Eigen::Matrix4f& vp, const Eigen::Vector3f& lo, const Eige
 }
 bool in_frustum(const Eigen::Matrix4f& vp, const Chunk& ch) { return in_frustum(vp, ch.lo, ch.hi); }
 
+// How far a box seen from a lamp at L must grow to cover what the lamp map's PCF reads for it: two
+// texels (texel_per_m at 1 m) at the box's far side, plus 1 cm.
+float pcf_pad(float texel_per_m, const Eigen::Vector3f& L, const Eigen::Vector3f& lo, const Eigen::Vector3f& hi) {
+  const float far = (lo - L).cwiseAbs().cwiseMax((hi - L).cwiseAbs()).norm();
+  return 2.0f * texel_per_m * far + 0.01f;
+}
+
 // Whether nothing inside the frustum vp_cam can lie in the shadow that box lo..hi casts from a
 // lamp at L whose map ends at the plane at distance far_m along its axis: every lamp ray behind
 // the box runs inside the hull of the box's corners and of their projections from L onto that
@@ -493,8 +500,12 @@ struct Renderer::Impl {
   /// mesh (inside its footprint, above its shallowest point): every line from the eye to the chunk crosses the mesh
   /// first (a height field over the whole rectangle), so nothing of it can be seen from there.
   bool hidden_under(long under, const Eigen::Vector3f& eye) const {
-    if (under < 0) return false;
-    const auto& [lo, hi] = terrain_bounds[static_cast<std::size_t>(under)];
+    return under >= 0 && stands_over(static_cast<std::size_t>(under), eye);
+  }
+  /// Whether `eye` stands over terrain mesh `mesh`: inside its footprint (a full grid over the
+  /// rectangle), above its shallowest point.
+  bool stands_over(std::size_t mesh, const Eigen::Vector3f& eye) const {
+    const auto& [lo, hi] = terrain_bounds[mesh];
     return eye.x() >= lo.x() && eye.y() >= lo.y() && eye.x() <= hi.x() && eye.y() <= hi.y() && eye.z() < lo.z();
   }
   /// Back-face culling for a solid (GpuMesh::winding) drawn through vp, else both sides. Where vp
@@ -508,16 +519,6 @@ struct Renderer::Impl {
     glEnable(GL_CULL_FACE);
     glCullFace(GL_BACK);
     glFrontFace((vp.determinant() > 0.0f) == (m.winding > 0) ? GL_CW : GL_CCW);
-  }
-  /// Draws the chunks of m inside vp's frustum (neighbouring visible chunks in one call), less
-  /// those hidden under other terrain from `eye` (none: draws them).
-  void draw_visible(const GpuMesh& m, const Eigen::Matrix4f& vp, const Eigen::Vector3f* eye) const {
-    std::vector<const Chunk*> visible;
-    visible.reserve(m.chunks.size());
-    for (const Chunk& ch : m.chunks)
-      if (in_frustum(vp, ch) && !(eye && options.occlusion_culling && hidden_under(ch.under, *eye)))
-        visible.push_back(&ch);
-    draw_chunks(visible);
   }
   unsigned lamp_shadow_bits(std::size_t mesh, const Chunk& ch, const FrameSetup& f,
                             const std::vector<LampCasters>& casters) const;
@@ -727,10 +728,8 @@ bool Renderer::Impl::casts_nothing(std::size_t mi, const Chunk& ch, const Eigen:
                                    const Eigen::Vector3f& eye) const {
   const GpuMesh& m = meshes[mi];
   if (!m.terrain) return false;
+  if (!stands_over(mi, eye)) return false;
   const auto& [lo, hi] = terrain_bounds[mi];
-  // The eye over the mesh: inside its footprint (a full grid over the rectangle), above it.
-  if (!(eye.x() >= lo.x() && eye.y() >= lo.y() && eye.x() <= hi.x() && eye.y() <= hi.y() && eye.z() < lo.z()))
-    return false;
   // The flattest lamp ray through the chunk: from the lamp to its shallowest, farthest corner.
   const float drop = ch.lo.z() - L.z();
   const float h_far =
@@ -1060,19 +1059,18 @@ void Renderer::Impl::shadow_pass(const FrameSetup& f) {
     for (std::size_t mi = 0; mi < meshes.size(); ++mi) {
       const GpuMesh& m = meshes[mi];
       glBindVertexArray(m.vao);
-      if (sun) {
-        draw_visible(m, vp, nullptr);
-        continue;
-      }
       std::vector<const Chunk*> visible;
       visible.reserve(m.chunks.size());
       for (const Chunk& ch : m.chunks) {
-        if (!in_frustum(vp, ch) || (options.occlusion_culling && hidden_under(ch.under, lamp))) continue;
+        if (!in_frustum(vp, ch)) continue;
+        if (sun) {
+          visible.push_back(&ch);
+          continue;
+        }
+        if (options.occlusion_culling && hidden_under(ch.under, lamp)) continue;
         bool culled = false;
         if (options.shadow_caster_culling) {
-          // Grown by two texels of the lamp's map at the chunk's far side (PCF reads the next texel).
-          const float far = (ch.lo - lamp).cwiseAbs().cwiseMax((ch.hi - lamp).cwiseAbs()).norm();
-          const float pad = 2.0f * f.lamp_texel_per_m[i] * far + 0.01f;
+          const float pad = pcf_pad(f.lamp_texel_per_m[i], lamp, ch.lo, ch.hi);
           culled = (m.terrain && casts_nothing(mi, ch, lamp, cam)) ||
                    shadow_out_of_view(cam_vp, lamp, axis, kLampFarM, ch.lo.array() - pad, ch.hi.array() + pad);
         }
@@ -1230,9 +1228,7 @@ void Renderer::Impl::scene_pass(const Targets& t, const FrameSetup& f, double st
       for (const CasterBox& c : caster_boxes) {
         if (!in_frustum(lvp, c.lo, c.hi)) continue;
         if (hidden_under(c.under, L)) continue;  // under a terrain mesh the lamp stands over: never in its map
-        // Grown by two texels of the lamp's map at the box's far side (PCF reads the next texel).
-        const float far = (c.lo - L).cwiseAbs().cwiseMax((c.hi - L).cwiseAbs()).norm();
-        const float pad = 2.0f * f.lamp_texel_per_m[i] * far + 0.01f;
+        const float pad = pcf_pad(f.lamp_texel_per_m[i], L, c.lo, c.hi);
         casters[static_cast<std::size_t>(i)].add(seen_from(L, c.mesh, c.lo.array() - pad, c.hi.array() + pad));
       }
     }

@@ -3,6 +3,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <utility>
 #include <vector>
 
 #include "render_test_util.hpp"
@@ -267,6 +268,18 @@ std::vector<CameraModel> front_and_down() {
   down.X_BC.linear() = rotation_from_rpy(0, -M_PI / 2, 0) * R_camera_body_to_optical();
   return {front, down};
 }
+// How many rgb values of two same-size frames differ, and by how much at most (printed).
+std::pair<std::size_t, int> rgb_difference(const Frame& a, const Frame& b, const char* cam) {
+  int worst = 0;
+  std::size_t off = 0;
+  for (std::size_t i = 0; i < a.rgb.size(); ++i) {
+    const int d = std::abs(static_cast<int>(a.rgb[i]) - static_cast<int>(b.rgb[i]));
+    worst = std::max(worst, d);
+    off += d > 0;
+  }
+  std::printf("%s: %zu of %zu values differ, by <= %d\n", cam, off, a.rgb.size(), worst);
+  return {off, worst};
+}
 const Pose kOverPipe = pose_from_xyz_rpy({3.0, 0.2, 8.0}, {0, 0, 0.1});
 const Pose kBoulderAhead = pose_from_xyz_rpy({9.0, 1.2, 9.0}, {0, 0.3, 1.2});
 const Pose kSkidAndPipe = pose_from_xyz_rpy({16.0, -1.0, 8.5}, {0, 0.2, -1.6});
@@ -305,14 +318,7 @@ TEST(Shadows, ReceiverCullingChangesNoPixel) {
         drawn += culled.last_timings().shadow_lookups_drawn;
         const Frame b = full.render(X_WB, cam, 1.0);
         ASSERT_EQ(a.rgb.size(), b.rgb.size());
-        int worst = 0;
-        std::size_t off = 0;
-        for (std::size_t i = 0; i < a.rgb.size(); ++i) {
-          const int d = std::abs(static_cast<int>(a.rgb[i]) - static_cast<int>(b.rgb[i]));
-          worst = std::max(worst, d);
-          off += d > 0;
-        }
-        std::printf("%s: %zu of %zu values differ, by <= %d\n", cam, off, a.rgb.size(), worst);
+        const auto [off, worst] = rgb_difference(a, b, cam);
         // A skipped lookup would have returned 1 (lit): identical images (measured: 0 values
         // differ). One level allowed for float rounding across shader variants. With the default
         // bias, culling also removes acne: 26 values off by 1 here, up to 4 levels on the rough
@@ -332,9 +338,10 @@ TEST(Shadows, ReceiverCullingChangesNoPixel) {
 
 // Shadow caster culling leaves out of the lamps' shadow maps the terrain chunks whose every lamp
 // ray sinks faster than the terrain's steepest slope: what they hide from a lamp lies under the
-// terrain, so no pixel (surfaces, shafts in the water) may change. The pipe world and a rough
-// seabed (slopes ~45 deg: only chunks right under a lamp qualify), over the patch and from
-// outside its footprint (where nothing may be culled: under the patch's edge is in view there).
+// terrain, and the chunks whose shadow cannot reach the camera's view, so no pixel (surfaces,
+// shafts in the water) may change. The pipe world and a rough seabed (slopes ~45 deg: only chunks
+// right under a lamp pass the slope test), over the patch and from outside its footprint (where
+// the slope test never applies: under the patch's edge is in view there).
 TEST(Culling, ShadowCasterCullingChangesNoPixel) {
   World base = load_world(std::string(UNAV_REPO_ROOT) + "/worlds/pipe_inspection/world.yaml");
   World rough = base;
@@ -360,21 +367,14 @@ TEST(Culling, ShadowCasterCullingChangesNoPixel) {
         left_out += t.lamp_map_culled;
         drawn += t.lamp_map_triangles;
         ASSERT_EQ(a.rgb.size(), b.rgb.size());
-        int worst = 0;
-        std::size_t off = 0;
-        for (std::size_t i = 0; i < a.rgb.size(); ++i) {
-          const int d = std::abs(static_cast<int>(a.rgb[i]) - static_cast<int>(b.rgb[i]));
-          worst = std::max(worst, d);
-          off += d > 0;
-        }
-        std::printf("%s: %zu of %zu values differ, by <= %d\n", cam, off, a.rgb.size(), worst);
+        const auto [off, worst] = rgb_difference(a, b, cam);
         EXPECT_EQ(worst, 0) << cam;
         EXPECT_EQ(a.depth, b.depth);
         EXPECT_EQ(a.seg, b.seg);
       }
     }
     std::printf("lamp-map triangles: %zu drawn, %zu left out\n", drawn, left_out);
-    EXPECT_GT(left_out, world == &base ? drawn / 5 : 0);  // measured: base 1/3 of them
+    EXPECT_GT(left_out, world == &base ? drawn / 5 : 0);  // measured: base 42 % of them
   }
 }
 
