@@ -2,15 +2,16 @@
 // segmentation with readback, at 320x180 and 640x480, synchronous and pipelined (PBO ring).
 // Prints a table; also a breakdown by switching effects off, to show what dominates.
 //   bench_unav_renderer [frames=40] [world.yaml] [--quick] [--camera NAME] [--config N] [--callgrind]
-// --quick: the default configuration and the per-pass breakdown only (for A/B runs of two builds,
-// interleaved: this VM's speed drifts by +-15 % over minutes); --camera: that camera only
+// --quick: one configuration's row (--config N, default 0) and the per-pass breakdown only (for A/B
+// runs of two builds or two configurations, interleaved: this VM's speed drifts by +-15 % over
+// minutes); --camera: that camera only
 // (w320x180, w640x480, w640x480_distorted). --callgrind: render `frames` frames of each camera with
 // callgrind's instrumentation on (after warm-up) and nothing else; run it as
 //   valgrind --tool=callgrind --instr-atstart=no bench_unav_renderer 4 --callgrind --camera w640x480
 // and divide "Collected" by the frames: instructions per frame compare two builds without this
 // VM's timing noise (texture and memory stalls are not counted: check the direction with fps).
 // --config N: the N-th configuration of the table (0 default, 1 no materials, ...) for the
-// callgrind count and for the per-pass breakdown.
+// callgrind count, the --quick row and the per-pass breakdown.
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -153,7 +154,7 @@ int main(int argc, char** argv) {
     return 2;
 #endif
   }
-  if (quick) configs.resize(1);
+  if (quick) configs = {configs[static_cast<std::size_t>(config_index)]};
   for (const auto& c : configs) {
     r.set_options(c.o);
     for (const char* cam : {"w320x180", "w640x480", "w640x480_distorted"}) {
