@@ -103,6 +103,7 @@ uniform float u_roughness;       // perceptual (alpha = roughness^2); times the 
 uniform float u_metallic;        // times the ORM map's blue
 uniform sampler2D u_normal_map;  // rgb = (n + 1) / 2 in the (+u, +v, normal) frame
 uniform sampler2D u_orm;         // r occlusion of the ambient light, g roughness, b metallic
+uniform sampler2D u_macro;       // MACRO: u_tex's green, linear RGBA8 (a cheaper fetch than sRGB)
 uniform float u_sediment;        // cover [0, 1]
 uniform vec3 u_sediment_albedo;  // the seabed's mean albedo
 uniform float u_seabed_z;        // mean seabed depth [m]
@@ -132,14 +133,27 @@ layout(location = 1) out float o_depth;  // z along the optical axis [m]
 
 vec4 tex_at(vec2 uv) { return texture(u_tex, uv / u_uv_scale); }  // rgb albedo, a relief height
 
+// sin(x) to ~4e-6 absolute for |x| < 4e5: Cody-Waite reduction to [-pi, pi] (2 pi split in a
+// short head, exact times k, and a tail), folded to [-pi/2, pi/2], degree-9 Taylor (error
+// (pi/2)^11 / 11! = 3.6e-6). llvmpipe's sin() reduces to [0, pi/4] and evaluates two polynomials:
+// about twice the instructions, and the caustics make 8 of them a pixel.
+float sin_fast(float x) {
+  float k = floor(x * 0.15915494 + 0.5);
+  float r = (x - k * 6.28125) - k * 0.0019353072;
+  float h = 3.1415927 * sign(r);
+  r = abs(r) > 1.5707964 ? h - r : r;
+  float r2 = r * r;
+  return r * (1.0 + r2 * (-0.16666667 + r2 * (0.0083333333 + r2 * (-1.9841270e-4 + r2 * 2.7557319e-6))));
+}
+
 // Zero-mean caustic network at horizontal position p [m], time t [s]: two domain-warped,
 // drifting layers of sin x sin cells, sharpened into thin bright lines (g |g| keeps the mean 0).
 float caustic_pattern(vec2 p, float t) {
   float g = 0.0;
   vec2 q = p * 1.9;
   for (int k = 0; k < 2; ++k) {
-    vec2 w = q + 0.55 * vec2(sin(q.y * 1.3 + 0.8 * t + float(k)), sin(q.x * 1.1 - 0.6 * t + 2.0 * float(k)));
-    float s = sin(w.x + 0.35 * t) * sin(w.y - 0.3 * t);
+    vec2 w = q + 0.55 * vec2(sin_fast(q.y * 1.3 + 0.8 * t + float(k)), sin_fast(q.x * 1.1 - 0.6 * t + 2.0 * float(k)));
+    float s = sin_fast(w.x + 0.35 * t) * sin_fast(w.y - 0.3 * t);
     g += s * abs(s);
     q = mat2(0.8, 0.6, -0.6, 0.8) * q * 1.37 + vec2(3.1, 1.7);
   }
@@ -228,7 +242,7 @@ void main() {
   vec3 albedo = t.rgb;
   float relief = u_relief;
 #if MACRO
-  albedo *= 0.7 + 0.6 * texture(u_tex, v_uv / (u_uv_scale * 7.31) + vec2(0.37, 0.11)).g;
+  albedo *= 0.7 + 0.6 * texture(u_macro, v_uv / (u_uv_scale * 7.31) + vec2(0.37, 0.11)).g;
 #endif
   albedo *= u_albedo;
 #if SEDIMENT
@@ -300,8 +314,10 @@ void main() {
 
   // Sunlight at this depth: E0 exp(-K_d d); diffuse part from the upper hemisphere, direct
   // part with the cosine law. A surface facing straight up under a vertical sun gets E(d).
+  // Every irradiance below is carried on to the camera already (times exp(-beta_D range)): one
+  // exponential of the summed path per light instead of a product of two.
   float depth = max(v_pos_W.z, 0.0);
-  vec3 Ed = u_E0 * exp(-u_Kd * depth);
+  vec3 Ed = u_E0 * exp(-u_Kd * depth - u_betaD * range);
   float up = -n.z;
   float ndl = max(dot(n, -u_sun_dir_W), 0.0);
 #if SUN_SHADOW
@@ -322,7 +338,7 @@ void main() {
   Jspec += specular(n, V, -u_sun_dir_W, F0, rough) * E;
 #endif
 
-  // Lamps: inverse square, cone, attenuated lamp -> surface (surface -> camera below).
+  // Lamps: inverse square, cone, attenuated lamp -> surface -> camera.
   // NLAMPS is a compile-time count: the loop unrolls and the lamp arrays are read at constant
   // indices (a loop-variable index makes llvmpipe gather every uniform per pixel).
   for (int i = 0; i < NLAMPS; ++i) {
@@ -331,7 +347,7 @@ void main() {
     vec3 l = L / dl;
     float cone = smoothstep(u_lamp_cos[i].x, u_lamp_cos[i].y, dot(-l, u_lamp_dir_W[i]));
     if (cone > 0.0) {
-      vec3 Ei = u_lamp_I[i] * cone * lamp_visibility(i) * max(dot(n, l), 0.0) / (dl * dl) * exp(-u_betaD * dl);
+      vec3 Ei = u_lamp_I[i] * cone * lamp_visibility(i) * max(dot(n, l), 0.0) / (dl * dl) * exp(-u_betaD * (dl + range));
       E += Ei;
 #if SPECULAR
       Jspec += specular(n, V, l, F0, rough) * Ei;
@@ -345,7 +361,7 @@ void main() {
 #else
   vec3 J = albedo * (Eamb + E);
 #endif
-  o_color = vec4(J * exp(-u_betaD * range), u_seg);
+  o_color = vec4(J, u_seg);
   o_depth = v_z_C;
 }
 )GLSL";
@@ -478,7 +494,7 @@ uniform float u_veil_gradient;
 uniform mat3 u_R_WC;           // optical -> world rotation
 uniform float u_fwd_per_m;
 uniform float u_blur_px_per_m;
-uniform sampler2D u_inscatter; // RGBA16F, low resolution: lamp light scattered into the ray
+uniform sampler2D u_inscatter; // RGBA32F, low resolution: lamp light scattered into the ray
 uniform sampler2D u_inscatter_water;  // the same times the water pixels' weight w, and w (bilinear)
 uniform float u_march_max_m;
 uniform float u_gain;
@@ -783,7 +799,7 @@ void main() {
   o_Ls = vec4(Ls, tmax);   // alpha: marched length, for depth-aware upsampling
   // A water pixel marches u_march_max_m, so its upsampling weight for this texel depends on the
   // texel alone: premultiplied, one bilinear fetch does the weighted sum (kPostFS).
-  // (kPostFS's 1 / (1e-3 + x) times 1e-3: at most 1, so that half floats cannot overflow.)
+  // (kPostFS's 1 / (1e-3 + x) times 1e-3: at most 1, well inside any float format's range.)
   float wd = 1.0 / (1.0 + 1e3 * abs(tmax - u_march_max_m) / max(u_march_max_m, 0.1));
   o_Ls_water = vec4(Ls * wd, wd);
 }
