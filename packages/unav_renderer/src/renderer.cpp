@@ -429,8 +429,11 @@ struct Renderer::Impl {
   Program shadow;
   GLuint shadow_tex = 0, shadow_fbo = 0;  // depth array, one layer per lamp
   GLuint shadow_nearest = 0;              // sampler: one depth test per lookup (the in-scatter march, smooth anyway)
-  GLuint sun_tex = 0;                     // the sun's depth map
-  std::vector<float> sun_vp_cached;       // the matrix sun_tex was rendered with (empty: none)
+  // Sampler: one texel, unfiltered. texture() at a texel's centre through it reads what texelFetch
+  // does, for fewer instructions on llvmpipe (texelFetch checks every lane's bounds).
+  GLuint nearest = 0;
+  GLuint sun_tex = 0;                // the sun's depth map
+  std::vector<float> sun_vp_cached;  // the matrix sun_tex was rendered with (empty: none)
   int shadow_size = 0;
   GLuint snow_vao = 0, snow_vbo = 0;
   GLsizei snow_count = 0;
@@ -1423,6 +1426,7 @@ bool Renderer::Impl::inscatter_pass(const Targets& t, const FrameSetup& f, const
     // The march's samples lie centimetres to metres apart and the result is upsampled: nearest
     // depth tests instead of 2x2 PCF (a quarter of the cost of the pass's costliest lookup).
     glBindSampler(5, shadow_nearest);
+    glBindSampler(0, nearest);  // u_color: the segmentation of one pixel
     set3(inscatter["u_b_scatter"], water.b_scatter);
     glUniform1f(inscatter["u_schlick_k"], static_cast<float>(water.schlick_k()));
     glUniform1f(inscatter["u_back_frac"], static_cast<float>(water.phase_backscatter_fraction));
@@ -1430,6 +1434,7 @@ bool Renderer::Impl::inscatter_pass(const Targets& t, const FrameSetup& f, const
     glBindVertexArray(empty_vao);
     glDrawArrays(GL_TRIANGLES, 0, 3);
     glBindSampler(5, 0);
+    glBindSampler(0, 0);
   }
 
   if (options.forward_scatter) {
@@ -1540,8 +1545,12 @@ void Renderer::Impl::post_draw(Program& post, const Targets& t, const FrameSetup
   glBindTexture(GL_TEXTURE_2D, t.is_tex);
   glActiveTexture(GL_TEXTURE4);
   glBindTexture(GL_TEXTURE_2D, t.is_water_tex);
+  glActiveTexture(GL_TEXTURE7);
+  glBindTexture(GL_TEXTURE_2D, t.scene_color);
+  glBindSampler(7, nearest);
   glActiveTexture(GL_TEXTURE0);
   glUniform1i(post["u_color"], 0);
+  glUniform1i(post["u_color_px"], 7);
   glUniform1i(post["u_depth"], 1);
   glUniform1i(post["u_distmap"], 2);
   glUniform1i(post["u_inscatter"], 3);
@@ -1591,6 +1600,7 @@ void Renderer::Impl::post_draw(Program& post, const Targets& t, const FrameSetup
   }
   glBindVertexArray(empty_vao);
   glDrawArrays(GL_TRIANGLES, 0, 3);
+  glBindSampler(7, 0);
 }
 
 void Renderer::Impl::draw(const Pose& X_WB, const CameraModel& out_cam, double stamp_s, std::uint64_t seq) {
@@ -1709,6 +1719,11 @@ Renderer::Renderer(World world, std::vector<CameraModel> cameras, RenderOptions 
   glSamplerParameteri(impl_->shadow_nearest, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
   glSamplerParameteri(impl_->shadow_nearest, GL_TEXTURE_COMPARE_MODE, GL_COMPARE_REF_TO_TEXTURE);
   glSamplerParameteri(impl_->shadow_nearest, GL_TEXTURE_COMPARE_FUNC, GL_LEQUAL);
+  glGenSamplers(1, &impl_->nearest);
+  glSamplerParameteri(impl_->nearest, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+  glSamplerParameteri(impl_->nearest, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+  glSamplerParameteri(impl_->nearest, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+  glSamplerParameteri(impl_->nearest, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
   impl_->self_test();
   // Scene programs are compiled per material variant on first use (scene_program()); the plain one now.
   impl_->scene_variants[0] = Program(detail::kSceneVS, detail::kSceneFS, "scene", scene_defines(0));
@@ -1784,6 +1799,7 @@ Renderer::~Renderer() {
   }
   glDeleteVertexArrays(1, &impl_->empty_vao);
   glDeleteSamplers(1, &impl_->shadow_nearest);
+  glDeleteSamplers(1, &impl_->nearest);
   if (impl_->fragment_query) glDeleteQueries(1, &impl_->fragment_query);
   if (impl_->invocation_query) glDeleteQueries(1, &impl_->invocation_query);
   for (const auto& [v, p] : impl_->scene_variants)

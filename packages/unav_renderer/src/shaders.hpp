@@ -483,6 +483,7 @@ inline constexpr const char* kPostFS = R"GLSL(
 #define PIXELS 0      // 0 every pixel; 1 those with geometry, 2 the water only (without distortion the
 #endif                // pass is drawn twice, split by a depth test against the scene's depth buffer)
 uniform sampler2D u_color;     // RGBA16F: D and seg
+uniform sampler2D u_color_px;  // the same through a nearest sampler: texel centres read one texel
 uniform sampler2D u_depth;     // R32F: z_C
 uniform sampler2D u_distmap;   // RG32F: undistorted pixel for each output pixel
 uniform vec4 u_K;              // fx, fy, cx, cy
@@ -547,7 +548,7 @@ vec3 encode(vec3 x) {
 void main() {
   ivec2 pix = ivec2(gl_FragCoord.xy);
 #if DISTMAP
-  vec2 src = texelFetch(u_distmap, pix, 0).xy;
+  vec2 src = texture(u_distmap, gl_FragCoord.xy / vec2(textureSize(u_distmap, 0))).xy;   // nearest: pixel pix
 #else
   vec2 src = vec2(pix);
 #endif
@@ -558,10 +559,10 @@ void main() {
   float z = 0.0;
   vec3 D = vec3(0.0);
   if (inside) {
-    vec4 c = texelFetch(u_color, si, 0);
+    vec4 c = texture(u_color_px, (vec2(si) + 0.5) / vec2(u_size));
     seg = c.a;
 #if PIXELS != 2
-    z = texelFetch(u_depth, si, 0).x;
+    z = texture(u_depth, (vec2(si) + 0.5) / vec2(u_size)).x;
 #endif
 #if DISTMAP
     D = textureLod(u_color, uv, 0.0).rgb;
@@ -669,8 +670,7 @@ void main() {
     float wsum = 0.0;
     for (int j = 0; j < 2; ++j)
       for (int i = 0; i < 2; ++i) {
-        ivec2 q = clamp(b + ivec2(i, j), ivec2(0), ivec2(isz) - 1);
-        vec4 s = texelFetch(u_inscatter, q, 0);
+        vec4 s = texture(u_inscatter, (vec2(b + ivec2(i, j)) + 0.5) / isz);
         float wb = (i == 1 ? f.x : 1.0 - f.x) * (j == 1 ? f.y : 1.0 - f.y);
         float wd = 1.0 / (1e-3 + abs(s.a - tmax) / max(tmax, 0.1));
         Ls += s.rgb * wb * wd;
@@ -731,7 +731,7 @@ inline constexpr const char* kInscatterFS = R"GLSL(
 #ifndef SHADOWS
 #define SHADOWS 1
 #endif
-uniform sampler2D u_color;     // RGBA16F: a = seg id (0 = water)
+uniform sampler2D u_color;     // RGBA16F: a = seg id (0 = water); a nearest sampler (one texel)
 uniform sampler2D u_depth;     // R32F: z_C
 uniform vec4 u_K;              // fx, fy, cx, cy of the full-resolution (internal) image
 uniform ivec2 u_size;          // full-resolution size
@@ -753,8 +753,8 @@ const float PI = 3.14159265358979;
 void main() {
   vec2 src = (gl_FragCoord.xy) * u_scale - 0.5;   // full-res pixel coordinates of this texel
   ivec2 si = clamp(ivec2(floor(src + 0.5)), ivec2(0), u_size - 1);
-  float seg = texelFetch(u_color, si, 0).a;
-  float z = texelFetch(u_depth, si, 0).x;
+  float seg = texture(u_color, (vec2(si) + 0.5) / vec2(u_size)).a;
+  float z = texture(u_depth, (vec2(si) + 0.5) / vec2(u_size)).x;
   vec3 ray = vec3((src.x - u_K.z) / u_K.x, (src.y - u_K.w) / u_K.y, 1.0);
   float raylen = length(ray);
   vec3 d = ray / raylen;
