@@ -161,7 +161,6 @@ struct GpuMesh {
   float roughness = 0.6f, metallic = 0.0f, relief_m = 0.0f, sediment_cover = 0.0f;
   GLuint texture = 0;
   GLuint gradient = 0;    ///< the relief's slope (ProceduralTexture::gradient), for bump mapping
-  GLuint macro_map = 0;   ///< macro materials: the texture's linear green, RGBA8 (SurfaceMaps::macro)
   GLuint normal_map = 0;  ///< a mesh file's tangent-space normal map (by UVs); 0: none
   GLuint orm_map = 0;     ///< a mesh file's occlusion-roughness-metallic map (by UVs); 0: none
 };
@@ -409,10 +408,6 @@ struct Renderer::Impl {
   std::vector<GpuMesh> meshes;
   struct SurfaceMaps {
     GLuint colour = 0, slope = 0;  // albedo + relief height; the relief's gradient
-    // The albedo's green, decoded to linear and stored as linear RGBA8 in every channel: the macro
-    // modulation's low-frequency copy reads it. llvmpipe filters RGBA8 UNORM in 16-bit fixed point,
-    // an sRGB texture in floats after decoding every texel (this fetch took 4 % of a 640x480 frame).
-    GLuint macro = 0;
   };
   std::map<std::string, SurfaceMaps> textures;                            // procedural, by name
   std::map<std::pair<const TextureImage*, bool>, GLuint> image_textures;  // mesh files' own maps (image, sRGB)
@@ -583,19 +578,6 @@ const Renderer::Impl::SurfaceMaps& Renderer::Impl::texture(const std::string& na
   // Albedo in sRGB, the relief height (alpha) linear; its slope mipmapped: a footprint's mean.
   maps.colour = gl::make_tiled_tex(GL_SRGB8_ALPHA8, size, size, GL_RGBA, GL_UNSIGNED_BYTE, tex.rgba.data());
   maps.slope = gl::make_tiled_tex(GL_RG16F, size, size, GL_RG, GL_FLOAT, tex.gradient.data());
-  std::array<std::uint8_t, 256> lin{};  // sRGB 8-bit -> linear 8-bit (IEC 61966-2-1)
-  for (int c = 0; c < 256; ++c) {
-    const double e = c / 255.0;
-    const double l = e <= 0.04045 ? e / 12.92 : std::pow((e + 0.055) / 1.055, 2.4);
-    lin[static_cast<std::size_t>(c)] = static_cast<std::uint8_t>(std::lround(255.0 * l));
-  }
-  std::vector<std::uint8_t> green(tex.rgba.size());
-  for (std::size_t i = 0; i < green.size(); i += 4) {
-    const std::uint8_t g = lin[tex.rgba[i + 1]];
-    green[i] = green[i + 1] = green[i + 2] = g;
-    green[i + 3] = 255;
-  }
-  maps.macro = gl::make_tiled_tex(GL_RGBA8, size, size, GL_RGBA, GL_UNSIGNED_BYTE, green.data());
   return maps;
 }
 
@@ -653,7 +635,6 @@ void Renderer::Impl::upload_scene(const SceneGeometry& geo) {
       }
     }
     if (g.bump) g.gradient = texture(sm.material.texture).slope;
-    if (g.macro) g.macro_map = texture(sm.material.texture).macro;
     // A dielectric's highlight in water is faint (F0 = 0.0032 for index 1.5 against 1.34): only
     // smooth ones show it (roughness 0.45: +4..30 % over the diffuse at the peak; 0.8: < 1 %). An
     // ORM map varies both per pixel.
@@ -1176,7 +1157,6 @@ Program& Renderer::Impl::scene_program(const GpuMesh& m, unsigned shadow_bits, c
   if (v & 8u) glUniform1i(p["u_grad"], 1);
   if (v & kNormalMapBit) glUniform1i(p["u_normal_map"], 2);
   if (v & kOrmBit) glUniform1i(p["u_orm"], 3);
-  if (v & 2u) glUniform1i(p["u_macro"], 4);
   if (v & 32u) {
     set3(p["u_sediment_albedo"], sediment_albedo);
     // No seabed: nothing is buried.
@@ -1313,10 +1293,6 @@ void Renderer::Impl::scene_pass(const Targets& t, const FrameSetup& f, double st
       if (k.orm_map) {
         glActiveTexture(GL_TEXTURE3);
         glBindTexture(GL_TEXTURE_2D, m.orm_map);
-      }
-      if (m.macro) {
-        glActiveTexture(GL_TEXTURE4);
-        glBindTexture(GL_TEXTURE_2D, m.macro_map);
       }
       glActiveTexture(GL_TEXTURE0);
       glBindTexture(GL_TEXTURE_2D, m.texture);
@@ -1795,7 +1771,6 @@ Renderer::~Renderer() {
   for (auto& [name, maps] : impl_->textures) {
     glDeleteTextures(1, &maps.colour);
     glDeleteTextures(1, &maps.slope);
-    glDeleteTextures(1, &maps.macro);
   }
   glDeleteVertexArrays(1, &impl_->empty_vao);
   glDeleteSamplers(1, &impl_->shadow_nearest);

@@ -103,7 +103,6 @@ uniform float u_roughness;       // perceptual (alpha = roughness^2); times the 
 uniform float u_metallic;        // times the ORM map's blue
 uniform sampler2D u_normal_map;  // rgb = (n + 1) / 2 in the (+u, +v, normal) frame
 uniform sampler2D u_orm;         // r occlusion of the ambient light, g roughness, b metallic
-uniform sampler2D u_macro;       // MACRO: u_tex's green, linear RGBA8 (a cheaper fetch than sRGB)
 uniform float u_sediment;        // cover [0, 1]
 uniform vec3 u_sediment_albedo;  // the seabed's mean albedo
 uniform float u_seabed_z;        // mean seabed depth [m]
@@ -242,7 +241,7 @@ void main() {
   vec3 albedo = t.rgb;
   float relief = u_relief;
 #if MACRO
-  albedo *= 0.7 + 0.6 * texture(u_macro, v_uv / (u_uv_scale * 7.31) + vec2(0.37, 0.11)).g;
+  albedo *= 0.7 + 0.6 * texture(u_tex, v_uv / (u_uv_scale * 7.31) + vec2(0.37, 0.11)).g;
 #endif
   albedo *= u_albedo;
 #if SEDIMENT
