@@ -205,6 +205,17 @@ void validate_options(const RenderOptions& o, const std::string& where) {
                       "must be in [0, 256] (0: no lamp in-scattering)");
 }
 
+// A sampler object reading one texel, unfiltered, clamped to the edges.
+GLuint nearest_sampler() {
+  GLuint s = 0;
+  glGenSamplers(1, &s);
+  glSamplerParameteri(s, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+  glSamplerParameteri(s, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+  glSamplerParameteri(s, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+  glSamplerParameteri(s, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+  return s;
+}
+
 // A bound depth texture as a shadow map: bilinear depth comparison (hardware PCF), clamped.
 void shadow_sampling(GLenum target) {
   glTexParameteri(target, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
@@ -1688,18 +1699,10 @@ Renderer::Renderer(World world, std::vector<CameraModel> cameras, RenderOptions 
   impl_->ctx = context ? std::move(context) : std::shared_ptr<EglContext>(EglContext::create(options.egl));
   impl_->ctx->make_current();
   glGenVertexArrays(1, &impl_->empty_vao);
-  glGenSamplers(1, &impl_->shadow_nearest);
-  glSamplerParameteri(impl_->shadow_nearest, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
-  glSamplerParameteri(impl_->shadow_nearest, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
-  glSamplerParameteri(impl_->shadow_nearest, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
-  glSamplerParameteri(impl_->shadow_nearest, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+  impl_->shadow_nearest = nearest_sampler();
   glSamplerParameteri(impl_->shadow_nearest, GL_TEXTURE_COMPARE_MODE, GL_COMPARE_REF_TO_TEXTURE);
   glSamplerParameteri(impl_->shadow_nearest, GL_TEXTURE_COMPARE_FUNC, GL_LEQUAL);
-  glGenSamplers(1, &impl_->nearest);
-  glSamplerParameteri(impl_->nearest, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
-  glSamplerParameteri(impl_->nearest, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
-  glSamplerParameteri(impl_->nearest, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
-  glSamplerParameteri(impl_->nearest, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+  impl_->nearest = nearest_sampler();
   impl_->self_test();
   // Scene programs are compiled per material variant on first use (scene_program()); the plain one now.
   impl_->scene_variants[0] = Program(detail::kSceneVS, detail::kSceneFS, "scene", scene_defines(0));

@@ -558,10 +558,11 @@ void main() {
   float z = 0.0;
   vec3 D = vec3(0.0);
   if (inside) {
-    vec4 c = texture(u_color_px, (vec2(si) + 0.5) / vec2(u_size));
+    vec2 tc = (vec2(si) + 0.5) / vec2(u_size);   // the centre of texel si (nearest samplers)
+    vec4 c = texture(u_color_px, tc);
     seg = c.a;
 #if PIXELS != 2
-    z = texture(u_depth, (vec2(si) + 0.5) / vec2(u_size)).x;
+    z = texture(u_depth, tc).x;
 #endif
 #if DISTMAP
     D = textureLod(u_color, uv, 0.0).rgb;
@@ -669,6 +670,7 @@ void main() {
     float wsum = 0.0;
     for (int j = 0; j < 2; ++j)
       for (int i = 0; i < 2; ++i) {
+        // Texel b + (i, j) (nearest; the texture clamps to its edges as texelFetch's clamp did).
         vec4 s = texture(u_inscatter, (vec2(b + ivec2(i, j)) + 0.5) / isz);
         float wb = (i == 1 ? f.x : 1.0 - f.x) * (j == 1 ? f.y : 1.0 - f.y);
         float wd = 1.0 / (1e-3 + abs(s.a - tmax) / max(tmax, 0.1));
@@ -752,8 +754,9 @@ const float PI = 3.14159265358979;
 void main() {
   vec2 src = (gl_FragCoord.xy) * u_scale - 0.5;   // full-res pixel coordinates of this texel
   ivec2 si = clamp(ivec2(floor(src + 0.5)), ivec2(0), u_size - 1);
-  float seg = texture(u_color, (vec2(si) + 0.5) / vec2(u_size)).a;
-  float z = texture(u_depth, (vec2(si) + 0.5) / vec2(u_size)).x;
+  vec2 tc = (vec2(si) + 0.5) / vec2(u_size);   // the centre of texel si (nearest samplers)
+  float seg = texture(u_color, tc).a;
+  float z = texture(u_depth, tc).x;
   vec3 ray = vec3((src.x - u_K.z) / u_K.x, (src.y - u_K.w) / u_K.y, 1.0);
   float raylen = length(ray);
   vec3 d = ray / raylen;
