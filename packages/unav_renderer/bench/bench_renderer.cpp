@@ -26,6 +26,7 @@
 
 #include "unav_common/resources.hpp"
 #include "unav_renderer/renderer.hpp"
+#include "unav_renderer/renderer_pool.hpp"
 
 using namespace unav::renderer;
 using Clock = std::chrono::steady_clock;
@@ -63,6 +64,23 @@ Result measure(Renderer& r, const std::string& cam, int frames) {
   const double pipe_s = std::chrono::duration<double>(Clock::now() - t1).count();
   std::sort(ms.begin(), ms.end());
   return {frames / sync_s, got / pipe_s, ms[ms.size() / 2]};
+}
+
+// Frames per second of a RendererPool: `frames` frames in flight two per worker, collected in order.
+double pool_fps(RendererPool& pool, const std::string& cam, int frames) {
+  const auto run = [&](int n, int first) {
+    for (int i = 0; i < n; ++i) {
+      pool.submit(pose_at(first + i), cam, 0.1 * (first + i));
+      if (pool.in_flight() >= 2 * static_cast<std::size_t>(pool.workers()))
+        if (pool.collect().rgb.empty()) std::abort();
+    }
+    while (pool.in_flight() > 0)
+      if (pool.collect().rgb.empty()) std::abort();
+  };
+  run(3 * pool.workers(), 0);  // warm-up: every worker compiles its shaders
+  const auto t0 = Clock::now();
+  run(frames, 0);
+  return frames / std::chrono::duration<double>(Clock::now() - t0).count();
 }
 
 }  // namespace
@@ -161,6 +179,24 @@ int main(int argc, char** argv) {
       if ((c.name != configs.front().name && std::string(cam) == "w640x480_distorted") || skip(cam)) continue;
       const Result res = measure(r, cam, frames);
       std::printf("%-34s %-20s %10.1f %10.1f %12.2f\n", c.name, cam, res.fps_sync, res.fps_pipelined, res.median_ms);
+    }
+  }
+  // Throughput with several contexts at once (RendererPool), alternated with one context so that
+  // both see the same machine (this VM's speed drifts).
+  {
+    const Config& c = configs[quick ? 0 : static_cast<std::size_t>(config_index)];
+    std::printf("\nframes per second of a RendererPool (%s; one EGL context and thread per worker, frames in order):\n",
+                c.name);
+    RendererPool one(world, {small, vga, vga_dist}, c.o, 1);
+    RendererPool two(world, {small, vga, vga_dist}, c.o, 2);
+    std::printf("(2 workers on EGL platforms %s and %s)\n", two.platforms()[0].c_str(), two.platforms()[1].c_str());
+    std::printf("%-20s %10s %10s %10s\n", "camera", "1 worker", "2 workers", "gain");
+    for (const char* cam : {"w320x180", "w640x480", "w640x480_distorted"}) {
+      if (skip(cam)) continue;
+      const double f1 = pool_fps(one, cam, frames), f2 = pool_fps(two, cam, frames);
+      const double g1 = pool_fps(one, cam, frames), g2 = pool_fps(two, cam, frames);
+      std::printf("%-20s %10.1f %10.1f %9.0f %%\n", cam, 0.5 * (f1 + g1), 0.5 * (f2 + g2),
+                  100.0 * ((f2 + g2) / (f1 + g1) - 1.0));
     }
   }
   // Where the time goes (glFinish after each pass; default options, or those of --config N).
