@@ -168,6 +168,7 @@ std::vector<std::string> RendererPool::platforms() const {
   for (const auto& w : impl_->workers) p.push_back(w->renderer->context().platform());
   return p;
 }
+std::size_t RendererPool::triangle_count() const { return impl_->workers.front()->renderer->triangle_count(); }
 std::string RendererPool::gl_renderer() const { return impl_->workers.front()->renderer->context().gl_renderer(); }
 
 }  // namespace unav::renderer

@@ -13,6 +13,12 @@
 namespace unav::renderer {
 namespace {
 
+std::string join(const std::vector<std::string>& parts) {
+  std::string out;
+  for (const auto& p : parts) out += (out.empty() ? "" : ", ") + p;
+  return out;
+}
+
 // Installed data file (config/, worlds/), or "" when unav_resources is not installed.
 std::string resource(const std::string& rel) { return unav::common::try_find_resource(rel).value_or(""); }
 
@@ -82,7 +88,9 @@ UnderwaterRendererNode::UnderwaterRendererNode(const unav::NodeOptions& options)
   } catch (const std::exception& e) {
     throw unav::ConfigError(e.what());  // world/camera/water errors name the file and key
   }
-  renderer_ = std::make_unique<Renderer>(std::move(world), cams, ro);
+  const int workers =
+      static_cast<int>(std::min<std::int64_t>(prm.render_workers, static_cast<std::int64_t>(cams.size())));
+  renderer_ = std::make_unique<RendererPool>(std::move(world), cams, ro, std::max(1, workers));
 
   odom_sub_ = create_subscription<nav_msgs::msg::Odometry>("ground_truth/odom", unav::QoS::reliable(),
                                                            [this](const nav_msgs::msg::Odometry& m) { on_odom(m); });
@@ -131,7 +139,7 @@ UnderwaterRendererNode::UnderwaterRendererNode(const unav::NodeOptions& options)
   tf_static_pub_->publish(mounts);
   logger()->info("world '{}' ({} triangles), {} camera(s) at {:.1f} Hz on {}{}", world_path,
                  renderer_->triangle_count(), cameras_.size(), rate,
-                 renderer_->context().gl_renderer() + " (EGL " + renderer_->context().platform() + ")",
+                 renderer_->gl_renderer() + " (EGL " + join(renderer_->platforms()) + ")",
                  lockstep_ ? ", lockstep" : "");
 }
 
@@ -172,8 +180,9 @@ void UnderwaterRendererNode::on_odom(const nav_msgs::msg::Odometry& odom) {
 void UnderwaterRendererNode::render_and_publish(const Pose& X_WB, const BodyVelocity& velocity,
                                                 const std_msgs::msg::dds_::Header_& header) {
   const double t = unav::Time::from_msg(header.stamp().sec(), header.stamp().nanosec()).seconds();
+  for (const auto& c : cameras_) renderer_->submit(X_WB, c.name, t, velocity);  // in parallel
   for (auto& c : cameras_) {
-    Frame f = renderer_->render(X_WB, c.name, t, velocity);
+    Frame f = renderer_->collect();  // in submission order: camera c's
     const std::string frame_id = c.name + "_optical";
     for (auto* m : {&c.image_msg, &c.depth_msg, &c.seg_msg}) {
       m->header().stamp() = header.stamp();

@@ -31,6 +31,7 @@
 #include "tf2_msgs/msg/tf_message.hpp"
 #include "unav_common/config.hpp"
 #include "unav_renderer/renderer.hpp"
+#include "unav_renderer/renderer_pool.hpp"
 #include "unav_runtime/lockstep_ack.hpp"
 #include "unav_runtime/runtime.hpp"
 #include "unav_runtime/validation.hpp"
@@ -56,6 +57,7 @@ struct UnderwaterRendererParams {
   bool materials = true;
   int64_t seed = 1;
   std::string body_frame = "base_link_frd";
+  int64_t render_workers = 2;
 
   template <class Archive>
   void Serialize(Archive* a) {
@@ -77,6 +79,10 @@ struct UnderwaterRendererParams {
     a->Visit(Field("materials", &materials).Doc("relief (bump), GGX highlights, sediment (RenderOptions::materials)"));
     a->Visit(Field("seed", &seed).Min(0.0).Doc("noise seed"));
     a->Visit(Field("body_frame", &body_frame).Doc("vehicle body frame (tf parent of the cameras)"));
+    a->Visit(Field("render_workers", &render_workers)
+                 .Range(1, 8)
+                 .Doc("renderers at once, one EGL context and thread each (RendererPool): a frame's cameras "
+                      "render in parallel; at most one per camera"));
   }
 };
 
@@ -100,7 +106,7 @@ class UnderwaterRendererNode : public unav::Node {
   void render_and_publish(const Pose& X_WB, const BodyVelocity& velocity, const std_msgs::msg::dds_::Header_& header);
   void republish_last_frame();
 
-  std::unique_ptr<Renderer> renderer_;
+  std::unique_ptr<RendererPool> renderer_;  // the cameras of a frame in parallel, in order
   std::vector<CameraPorts> cameras_;
   double period_ = 0.1;
   double next_frame_t_ = -1.0;  // set by the first odometry

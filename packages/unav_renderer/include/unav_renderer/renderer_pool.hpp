@@ -49,6 +49,7 @@ class RendererPool {
   /// The first worker's renderer info (GL renderer string, cameras): all workers are alike.
   const CameraModel& camera(const std::string& name) const;
   std::string gl_renderer() const;
+  std::size_t triangle_count() const;
   /// Each worker's EGL platform ("device[0]", "surfaceless"): on llvmpipe, left to choose
   /// (EglOptions::Platform::kAuto), the odd workers take Mesa's surfaceless display, whose
   /// rasterizer threads are not the device display's (see renderer_pool.cpp).
