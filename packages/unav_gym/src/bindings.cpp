@@ -142,8 +142,7 @@ PYBIND11_MODULE(_core, m) {
              std::vector<std::uint8_t> obs;
              {
                py::gil_scoped_release nogil;
-               for (int i = 0; i < v.size(); ++i) infos.push_back(v.env(i).reset(seeds[static_cast<std::size_t>(i)]));
-               v.observe_all(&obs);
+               infos = v.reset(seeds, &obs);  // on the envs' GL threads
              }
              py::list li;
              for (const auto& i : infos) li.append(to_dict(i));
@@ -185,21 +184,11 @@ PYBIND11_MODULE(_core, m) {
               throw py::value_error("reset_some: " + std::to_string(seeds.size()) + " entries for " +
                                     std::to_string(v.size()) + " environments");
             const int h = v.env(0).obs_height(), w = v.env(0).obs_width();
-            const std::size_t frame = static_cast<std::size_t>(h) * w * 3;
-            std::vector<std::uint8_t> obs(frame * seeds.size(), 0);
-            std::vector<std::optional<PipeFollowingInfo>> infos(seeds.size());
+            std::vector<std::uint8_t> obs;
+            std::vector<std::optional<PipeFollowingInfo>> infos;
             {
               py::gil_scoped_release nogil;
-              for (std::size_t i = 0; i < seeds.size(); ++i)
-                if (seeds[i]) {
-                  infos[i] = v.env(static_cast<int>(i)).reset(*seeds[i]);
-                  v.env(static_cast<int>(i)).submit_observation();
-                }
-              for (std::size_t i = 0; i < seeds.size(); ++i)
-                if (seeds[i]) {
-                  const auto o = v.env(static_cast<int>(i)).collect_observation();
-                  std::copy(o.begin(), o.end(), obs.begin() + static_cast<std::ptrdiff_t>(i * frame));
-                }
+              infos = v.reset_some(seeds, &obs);  // on the envs' GL threads
             }
             py::list li;
             for (const auto& i : infos) li.append(i ? py::object(to_dict(*i)) : py::object(py::none()));

@@ -9,6 +9,7 @@
 #include <utility>
 
 #include "unav_renderer/errors.hpp"
+#include "unav_renderer/gl_thread.hpp"
 
 namespace unav::renderer {
 
@@ -41,10 +42,13 @@ struct Worker {
     if (thread.joinable()) thread.join();
   }
 
+  // beside: a context whose rasterizer threads this one should not share (second_llvmpipe_display()).
   void run(const World& world, const std::vector<CameraModel>& cameras, const RenderOptions& options,
-           std::promise<void>* ready) {
+           const EglContext* beside, std::promise<void>* ready) {
     try {
-      renderer = std::make_unique<Renderer>(world, cameras, options);
+      std::shared_ptr<EglContext> ctx = beside ? second_llvmpipe_display(*beside) : nullptr;
+      renderer = ctx ? std::make_unique<Renderer>(world, cameras, options, std::move(ctx))
+                     : std::make_unique<Renderer>(world, cameras, options);
     } catch (...) {
       ready->set_exception(std::current_exception());
       return;
@@ -73,12 +77,13 @@ struct Worker {
 // Starts a worker and waits for its Renderer (one at a time: each construction - geometry,
 // textures, shader compilation - uses the machine's cores); rethrows its construction error.
 std::unique_ptr<Worker> start_worker(const World& world, const std::vector<CameraModel>& cameras,
-                                     const RenderOptions& options) {
+                                     const RenderOptions& options, const EglContext* beside) {
   auto w = std::make_unique<Worker>();
   std::promise<void> ready;
   std::future<void> built = ready.get_future();
   Worker* raw = w.get();
-  w->thread = std::thread([raw, &world, &cameras, &options, &ready] { raw->run(world, cameras, options, &ready); });
+  w->thread = std::thread(
+      [raw, &world, &cameras, &options, beside, &ready] { raw->run(world, cameras, options, beside, &ready); });
   built.get();  // on error the thread has returned: ~Worker joins it
   return w;
 }
@@ -95,35 +100,13 @@ struct RendererPool::Impl {
 RendererPool::RendererPool(World world, std::vector<CameraModel> cameras, RenderOptions options, int workers)
     : impl_(std::make_unique<Impl>()) {
   if (workers < 1) throw ConfigError("RendererPool", "workers", std::to_string(workers), "must be >= 1");
-  impl_->workers.push_back(start_worker(world, cameras, options));
-  // llvmpipe runs the scenes of all the contexts of one EGL display on one set of rasterizer
-  // threads, one scene after the other, each ending when its slowest thread does; contexts on
-  // two displays (Mesa's device and surfaceless platforms) have a set each, and fill each
-  // other's gaps. Only when the platform was left to choose, and only where the second display
-  // is the same driver (the same images): on an NVIDIA machine Mesa's surfaceless platform is
-  // llvmpipe, not the GPU.
-  const std::string driver = impl_->workers.front()->renderer->context().gl_renderer();
-  bool alternate = options.egl.platform == EglOptions::Platform::kAuto &&
-                   impl_->workers.front()->renderer->context().platform() != "surfaceless" &&
-                   driver.find("llvmpipe") != std::string::npos;
-  for (int k = 1; k < workers; ++k) {
-    if (alternate && k % 2 == 1) {
-      RenderOptions other = options;
-      other.egl.platform = EglOptions::Platform::kSurfaceless;
-      std::unique_ptr<Worker> w;
-      try {
-        w = start_worker(world, cameras, other);
-      } catch (const EglError&) {
-        alternate = false;  // no second display here: one display for all
-      }
-      if (w && w->renderer->context().gl_renderer() == driver) {
-        impl_->workers.push_back(std::move(w));
-        continue;
-      }
-      alternate = false;
-    }
-    impl_->workers.push_back(start_worker(world, cameras, options));
-  }
+  impl_->workers.push_back(start_worker(world, cameras, options, nullptr));
+  // On llvmpipe the odd workers take a second EGL display, whose rasterizer threads fill the
+  // first's idle time (second_llvmpipe_display(); only when the platform was left to choose).
+  const EglContext* first = &impl_->workers.front()->renderer->context();
+  const bool alternate = options.egl.platform == EglOptions::Platform::kAuto;
+  for (int k = 1; k < workers; ++k)
+    impl_->workers.push_back(start_worker(world, cameras, options, alternate && k % 2 == 1 ? first : nullptr));
 }
 
 RendererPool::~RendererPool() = default;

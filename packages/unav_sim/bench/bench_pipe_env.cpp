@@ -2,10 +2,15 @@
 // steps/s of one env and of the vectorised env (one EGL context), for both dynamics, with the
 // time per step split into physics, MPC + allocator, render submit and readback.
 //   bench_pipe_env [--config F] [--steps 60] [--envs 4] [--dynamics mpc|kinematic] [key=value ...]
+// The vector env runs twice on one EGL context and twice as it chooses (two displays on llvmpipe),
+// alternated: this VM's speed drifts over minutes.
 // key=value: any config key (episode.image_width=80, episode.marine_snow=false, ...).
+#include <algorithm>
+#include <array>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -39,13 +44,14 @@ EpisodeTimings diff(const EpisodeTimings& a, const EpisodeTimings& b) {
   return d;
 }
 
-void run(const PipeFollowingConfig& cfg, int num_envs, int steps) {
-  VectorPipeFollowingEnv vec(cfg, num_envs);
+void run(const PipeFollowingConfig& cfg, int num_envs, int steps, int contexts) {
+  VectorPipeFollowingEnv vec(cfg, num_envs, 0, contexts);
   std::vector<std::uint8_t> obs;
   std::vector<std::array<double, 2>> actions(static_cast<std::size_t>(num_envs));
   std::uint64_t seed = 0;
-  for (int i = 0; i < num_envs; ++i) vec.env(i).reset(seed++);
-  vec.observe_all(&obs);
+  std::vector<std::uint64_t> seeds;
+  for (int i = 0; i < num_envs; ++i) seeds.push_back(seed++);
+  vec.reset(seeds, &obs);
   EpisodeTimings before;
   for (int i = 0; i < num_envs; ++i) before = sum(before, vec.env(i).episode().timings());
   const auto t0 = Clock::now();
@@ -53,11 +59,14 @@ void run(const PipeFollowingConfig& cfg, int num_envs, int steps) {
   for (int k = 0; k < steps; ++k) {
     for (int i = 0; i < num_envs; ++i) actions[static_cast<std::size_t>(i)] = vec.env(i).expert_action();
     const auto r = vec.step(actions, &obs);
+    std::vector<std::optional<std::uint64_t>> ended(static_cast<std::size_t>(num_envs));
     for (int i = 0; i < num_envs; ++i)
       if (r[static_cast<std::size_t>(i)].terminated || r[static_cast<std::size_t>(i)].truncated) {
-        vec.env(i).reset(seed++);
+        ended[static_cast<std::size_t>(i)] = seed++;
         ++resets;
       }
+    if (resets > 0 && std::any_of(ended.begin(), ended.end(), [](const auto& e) { return e.has_value(); }))
+      vec.reset_some(ended, &obs);
   }
   const double wall = std::chrono::duration<double>(Clock::now() - t0).count();
   EpisodeTimings after;
@@ -65,10 +74,10 @@ void run(const PipeFollowingConfig& cfg, int num_envs, int steps) {
   const EpisodeTimings d = diff(after, before);
   const double n = static_cast<double>(steps) * num_envs;
   std::printf(
-      "%-9s %3dx%-3d envs=%d: %7.1f steps/s  (%.2f ms/step: physics %.2f, mpc+alloc %.2f, render %.2f, "
+      "%-9s %3dx%-3d envs=%d contexts=%d: %7.1f steps/s  (%.2f ms/step: physics %.2f, mpc+alloc %.2f, render %.2f, "
       "readback %.2f, other %.2f; parts summed over threads; %d resets incl.)\n",
-      cfg.env.dynamics.c_str(), vec.env(0).obs_height(), vec.env(0).obs_width(), num_envs, n / wall, 1e3 * wall / n,
-      1e3 * d.physics_s / n, 1e3 * d.control_s / n, 1e3 * d.render_s / n, 1e3 * d.readback_s / n,
+      cfg.env.dynamics.c_str(), vec.env(0).obs_height(), vec.env(0).obs_width(), num_envs, vec.contexts(), n / wall,
+      1e3 * wall / n, 1e3 * d.physics_s / n, 1e3 * d.control_s / n, 1e3 * d.render_s / n, 1e3 * d.readback_s / n,
       1e3 * (wall - d.physics_s - d.control_s - d.render_s - d.readback_s) / n, resets);
 }
 
@@ -104,8 +113,11 @@ int main(int argc, char** argv) {
   std::printf("pipe-following env throughput (%s), expert actions, random scenes\n", path.c_str());
   for (const auto& dyn : dynamics) {
     cfg.env.dynamics = dyn;
-    run(cfg, 1, steps);
-    if (num_envs > 1) run(cfg, num_envs, steps);
+    run(cfg, 1, steps, 1);
+    // The vector env on one EGL context, then on two displays where llvmpipe allows (alternated).
+    if (num_envs > 1)
+      for (int rep = 0; rep < 2; ++rep)
+        for (int contexts : {1, 0}) run(cfg, num_envs, steps, contexts);
   }
   return 0;
 }

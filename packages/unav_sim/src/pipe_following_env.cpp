@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <exception>
+#include <future>
 #include <mutex>
 #include <random>
 #include <thread>
@@ -238,16 +239,102 @@ void PipeFollowingEnv::set_option(const std::string& key, const std::string& yam
   config_.env = p;
 }
 
-VectorPipeFollowingEnv::VectorPipeFollowingEnv(const PipeFollowingConfig& config, int num_envs, int num_threads) {
+VectorPipeFollowingEnv::VectorPipeFollowingEnv(const PipeFollowingConfig& config, int num_envs, int num_threads,
+                                               int contexts) {
   if (num_envs < 1) throw ConfigError("vector env", "num_envs", std::to_string(num_envs), "must be >= 1");
+  if (contexts < 0 || contexts > 1)
+    throw ConfigError("vector env", "contexts", std::to_string(contexts), "must be 0 (automatic) or 1");
   if (num_threads < 0) throw ConfigError("vector env", "num_threads", std::to_string(num_threads), "must be >= 0");
   threads_ = num_threads > 0 ? num_threads : std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
   threads_ = std::min(threads_, num_envs);
-  std::shared_ptr<unav::renderer::EglContext> ctx;
-  for (int i = 0; i < num_envs; ++i) {
-    envs_.push_back(std::make_unique<PipeFollowingEnv>(config, ctx));
-    ctx = envs_.back()->episode().renderer().shared_context();
+  try {
+    build(config, num_envs, contexts);
+  } catch (...) {
+    release();  // the envs built so far, each on its GL thread
+    throw;
   }
+}
+
+void VectorPipeFollowingEnv::build(const PipeFollowingConfig& config, int num_envs, int contexts) {
+  gl_.push_back(std::make_unique<unav::renderer::GlThread>());
+  gl_[0]->run([&] { envs_.push_back(std::make_unique<PipeFollowingEnv>(config)); });
+  std::shared_ptr<unav::renderer::EglContext> ctx[2] = {envs_[0]->episode().renderer().shared_context(), nullptr};
+  if (num_envs > 1 && contexts == 0) {
+    auto second = std::make_unique<unav::renderer::GlThread>();
+    second->run([&] { ctx[1] = unav::renderer::second_llvmpipe_display(*ctx[0]); });
+    if (ctx[1]) gl_.push_back(std::move(second));
+  }
+  for (int i = 1; i < num_envs; ++i) {
+    const std::size_t g = static_cast<std::size_t>(i) % gl_.size();
+    gl_[g]->run([&] { envs_.push_back(std::make_unique<PipeFollowingEnv>(config, ctx[g])); });
+  }
+  // The envs hold their contexts now; the last owner of each lets it go on its GL thread.
+  if (ctx[1]) gl_[1]->run([&] { ctx[1].reset(); });
+}
+
+VectorPipeFollowingEnv::~VectorPipeFollowingEnv() { release(); }
+
+void VectorPipeFollowingEnv::release() {
+  for (std::size_t i = 0; i < envs_.size(); ++i) gl_of(i).run([this, i] { envs_[i].reset(); });
+  envs_.clear();
+}
+
+std::vector<PipeFollowingInfo> VectorPipeFollowingEnv::reset(const std::vector<std::uint64_t>& seeds,
+                                                             std::vector<std::uint8_t>* observations) {
+  if (seeds.size() != envs_.size())
+    throw std::invalid_argument("VectorPipeFollowingEnv::reset: " + std::to_string(seeds.size()) + " seeds for " +
+                                std::to_string(envs_.size()) + " environments");
+  std::vector<std::optional<PipeFollowingInfo>> some;
+  reset_on_gl({seeds.begin(), seeds.end()}, &some);
+  observe({}, observations);
+  std::vector<PipeFollowingInfo> infos;
+  for (auto& i : some) infos.push_back(std::move(*i));
+  return infos;
+}
+
+std::vector<std::optional<PipeFollowingInfo>> VectorPipeFollowingEnv::reset_some(
+    const std::vector<std::optional<std::uint64_t>>& seeds, std::vector<std::uint8_t>* observations) {
+  if (seeds.size() != envs_.size())
+    throw std::invalid_argument("VectorPipeFollowingEnv::reset_some: " + std::to_string(seeds.size()) +
+                                " entries for " + std::to_string(envs_.size()) + " environments");
+  std::vector<std::optional<PipeFollowingInfo>> infos;
+  reset_on_gl(seeds, &infos);
+  std::vector<bool> which(seeds.size());
+  for (std::size_t i = 0; i < seeds.size(); ++i) which[i] = seeds[i].has_value();
+  observe(which, observations);
+  return infos;
+}
+
+void VectorPipeFollowingEnv::reset_on_gl(const std::vector<std::optional<std::uint64_t>>& seeds,
+                                         std::vector<std::optional<PipeFollowingInfo>>* infos) {
+  infos->assign(envs_.size(), std::nullopt);
+  std::vector<std::future<void>> done;
+  for (std::size_t g = 0; g < gl_.size(); ++g)
+    done.push_back(gl_[g]->post([&, g] {
+      for (std::size_t i = g; i < envs_.size(); i += gl_.size())
+        if (seeds[i]) (*infos)[i] = envs_[i]->reset(*seeds[i]);  // uploads the new scene: GL work
+    }));
+  for (auto& d : done) d.wait();
+  for (auto& d : done) d.get();  // the first error, once every thread is done
+}
+
+void VectorPipeFollowingEnv::observe(const std::vector<bool>& which, std::vector<std::uint8_t>* observations) {
+  const std::size_t frame = static_cast<std::size_t>(envs_[0]->obs_width()) * envs_[0]->obs_height() * 3;
+  observations->assign(frame * envs_.size(), 0);
+  std::vector<std::future<void>> done;
+  for (std::size_t g = 0; g < gl_.size(); ++g)
+    done.push_back(gl_[g]->post([&, g] {
+      // All of this context's frames submitted before any is read back.
+      for (std::size_t i = g; i < envs_.size(); i += gl_.size())
+        if (which.empty() || which[i]) envs_[i]->submit_observation();
+      for (std::size_t i = g; i < envs_.size(); i += gl_.size())
+        if (which.empty() || which[i]) {
+          const std::vector<std::uint8_t> o = envs_[i]->collect_observation();
+          std::copy(o.begin(), o.end(), observations->begin() + static_cast<std::ptrdiff_t>(i * frame));
+        }
+    }));
+  for (auto& d : done) d.wait();
+  for (auto& d : done) d.get();
 }
 
 std::vector<PipeFollowingStep> VectorPipeFollowingEnv::step(const std::vector<std::array<double, 2>>& actions,
@@ -288,20 +375,16 @@ std::vector<PipeFollowingStep> VectorPipeFollowingEnv::step(const std::vector<st
   }
   for (auto& th : pool) th.join();
   if (error) std::rethrow_exception(error);
-  // Resets upload a new scene: GL work, on this (the context's) thread.
-  for (std::size_t i = 0; i < resets.size(); ++i)
-    if (resets[i]) out[i].info = envs_[i]->reset(*resets[i]);
-  observe_all(observations);
+  if (!resets.empty()) {
+    std::vector<std::optional<PipeFollowingInfo>> infos;
+    reset_on_gl(resets, &infos);
+    for (std::size_t i = 0; i < resets.size(); ++i)
+      if (infos[i]) out[i].info = std::move(*infos[i]);
+  }
+  observe({}, observations);
   return out;
 }
 
-void VectorPipeFollowingEnv::observe_all(std::vector<std::uint8_t>* observations) {
-  for (auto& e : envs_) e->submit_observation();
-  observations->clear();
-  for (auto& e : envs_) {
-    const std::vector<std::uint8_t> o = e->collect_observation();
-    observations->insert(observations->end(), o.begin(), o.end());
-  }
-}
+void VectorPipeFollowingEnv::observe_all(std::vector<std::uint8_t>* observations) { observe({}, observations); }
 
 }  // namespace unav::sim

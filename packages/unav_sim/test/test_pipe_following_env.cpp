@@ -1,6 +1,10 @@
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <array>
 #include <cmath>
+#include <optional>
+#include <string>
 
 #include "unav_common/errors.hpp"
 #include "unav_sim/pipe_following_env.hpp"
@@ -129,23 +133,52 @@ TEST(PipeFollowingEnv, RandomScenesRepeatPerSeedAndSplitsAreDisjoint) {
   EXPECT_NE(eval.observe(), obs_a);
 }
 
-TEST(PipeFollowingEnv, VectorEnvSharesOneContextAndMatchesSingleEnvs) {
+TEST(PipeFollowingEnv, VectorEnvSharesContextsAndMatchesSingleEnvs) {
   PipeFollowingConfig c = fixed_config("kinematic");
   c.env.scenes = "random";
   VectorPipeFollowingEnv vec(c, 3);
+  // Even envs on one context; on llvmpipe the odd ones on a second display's context.
   EXPECT_EQ(&vec.env(0).episode().renderer().context(), &vec.env(2).episode().renderer().context());
-  for (int i = 0; i < 3; ++i) vec.env(i).reset(100 + i);
+  const bool llvmpipe = vec.env(0).episode().renderer().context().gl_renderer().find("llvmpipe") != std::string::npos;
+  EXPECT_EQ(vec.contexts(), llvmpipe ? 2 : 1);
+  if (vec.contexts() == 2)
+    EXPECT_NE(vec.env(0).episode().renderer().context().platform(),
+              vec.env(1).episode().renderer().context().platform());
+  const std::size_t frame = std::size_t{80} * 45 * 3;
   std::vector<std::uint8_t> obs;
+  const auto infos = vec.reset({100, 101, 102}, &obs);
+  ASSERT_EQ(infos.size(), 3u);
+  ASSERT_EQ(obs.size(), 3 * frame);
+  const std::vector<std::uint8_t> reset_obs = obs;
   const auto steps = vec.step({{0.1, 0.0}, {0.0, -0.2}, {-0.3, 0.4}}, &obs);
   ASSERT_EQ(steps.size(), 3u);
-  const std::size_t frame = std::size_t{80} * 45 * 3;
   ASSERT_EQ(obs.size(), 3 * frame);
-  PipeFollowingEnv single(c);
-  single.reset(102);
-  const auto s = single.act({-0.3, 0.4});
-  EXPECT_EQ(s.reward, steps[2].reward);
-  const auto o = single.observe();
-  EXPECT_TRUE(std::equal(o.begin(), o.end(), obs.begin() + 2 * frame));
+  // Each env's step and frame are a single env's, bit for bit, on either context.
+  for (int i : {1, 2}) {
+    PipeFollowingEnv single(c);
+    const PipeFollowingInfo first = single.reset(100 + i);
+    EXPECT_EQ(first.scene_seed, infos[static_cast<std::size_t>(i)].scene_seed);
+    const auto o0 = single.observe();  // as the vector env's reset did (the noise follows the frame count)
+    EXPECT_TRUE(std::equal(o0.begin(), o0.end(), reset_obs.begin() + static_cast<std::ptrdiff_t>(i * frame)))
+        << "env " << i;
+    const std::array<double, 2> a = i == 1 ? std::array<double, 2>{0.0, -0.2} : std::array<double, 2>{-0.3, 0.4};
+    const auto s = single.act(a);
+    EXPECT_EQ(s.reward, steps[static_cast<std::size_t>(i)].reward) << "env " << i;
+    const auto o = single.observe();
+    EXPECT_TRUE(std::equal(o.begin(), o.end(), obs.begin() + static_cast<std::ptrdiff_t>(i * frame))) << "env " << i;
+  }
+  // reset_some: the env given a seed is reset and observed, the others read as zeros.
+  const auto some = vec.reset_some({std::nullopt, 101, std::nullopt}, &obs);
+  ASSERT_EQ(obs.size(), 3 * frame);
+  EXPECT_FALSE(some[0].has_value());
+  ASSERT_TRUE(some[1].has_value());
+  EXPECT_EQ(some[1]->scene_seed, infos[1].scene_seed);
+  EXPECT_TRUE(
+      std::all_of(obs.begin(), obs.begin() + static_cast<std::ptrdiff_t>(frame), [](auto v) { return v == 0; }));
+  PipeFollowingEnv again(c);
+  again.reset(101);
+  const auto o1 = again.observe();
+  EXPECT_TRUE(std::equal(o1.begin(), o1.end(), obs.begin() + static_cast<std::ptrdiff_t>(frame)));
 }
 
 TEST(PipeFollowingConfig, OverridesAreCheckedByName) {

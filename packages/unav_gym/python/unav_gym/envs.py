@@ -84,7 +84,8 @@ class PipeFollowingEnv(gymnasium.Env):
 
 
 class PipeFollowingVectorEnv(gymnasium.vector.VectorEnv):
-    """N pipe-following environments in one process, one GL context, dynamics on threads.
+    """N pipe-following environments in one process, dynamics on threads, frames on GL threads
+    (on llvmpipe two EGL contexts on two displays, rendering at once).
 
     Next-step autoreset (Gymnasium 1.0): the step after a sub-environment ends resets it and
     returns its first observation with reward 0.

@@ -1,5 +1,5 @@
-"""A stable-baselines3 VecEnv over the C++ vector core: N envs stepped in one process (one GL
-context, dynamics on threads), SB3's same-step autoreset (info["terminal_observation"])."""
+"""A stable-baselines3 VecEnv over the C++ vector core: N envs stepped in one process (dynamics
+on threads, frames on one or two GL contexts), SB3's same-step autoreset (info["terminal_observation"])."""
 from __future__ import annotations
 
 import json

@@ -23,6 +23,7 @@
 #include <vector>
 
 #include "unav_common/config.hpp"
+#include "unav_renderer/gl_thread.hpp"
 #include "unav_sim/episode.hpp"
 #include "unav_sim/pipe_scene.hpp"
 
@@ -169,25 +170,51 @@ class PipeFollowingEnv {
   bool pipe_end_ = false;
 };
 
-/// N environments stepped together in one process, sharing one EGL context: the dynamics (MPC +
-/// physics) of the N envs on `num_threads` threads, then the N frames submitted before any is
-/// read back (rendering stays on the calling thread, which owns the context).
+/// N environments stepped together in one process: the dynamics (MPC + physics) of the N envs on
+/// `num_threads` threads, then the N frames submitted before any is read back. The frames are
+/// rendered on GL threads that own the EGL contexts: one context, or on llvmpipe two on two EGL
+/// displays (even envs on the first, odd on the second; each display has its own rasterizer
+/// threads, and the two render at once: second_llvmpipe_display()). The observations are those of
+/// single envs, bit for bit, whatever the split.
 class VectorPipeFollowingEnv {
  public:
-  /// num_threads: 0 = std::thread::hardware_concurrency(); 1 = all on the calling thread.
-  VectorPipeFollowingEnv(const PipeFollowingConfig& config, int num_envs, int num_threads = 0);
+  /// num_threads: 0 = std::thread::hardware_concurrency(); 1 = all dynamics on the calling thread.
+  /// contexts: 0 = two on llvmpipe (two displays) when there are two envs or more, else one; 1 = one.
+  VectorPipeFollowingEnv(const PipeFollowingConfig& config, int num_envs, int num_threads = 0, int contexts = 0);
+  ~VectorPipeFollowingEnv();  ///< each env is destroyed on its GL thread
   int size() const { return static_cast<int>(envs_.size()); }
+  /// Env i, for what needs no GL (sizes, expert actions, options); its reset and frames go
+  /// through reset()/reset_some()/step() (its context is current on its GL thread only).
   PipeFollowingEnv& env(int i) { return *envs_.at(static_cast<std::size_t>(i)); }
+  /// How many EGL contexts render (1, or 2 on llvmpipe with 2 envs or more).
+  int contexts() const { return static_cast<int>(gl_.size()); }
   /// act() on every env, then the N observations (concatenated, N x H x W x 3). `resets`
   /// (empty, or one entry per env): a seed resets that env instead of acting (its step has
   /// reward 0, no flags, the reset's info): gymnasium's next-step autoreset.
   std::vector<PipeFollowingStep> step(const std::vector<std::array<double, 2>>& actions,
                                       std::vector<std::uint8_t>* observations,
                                       const std::vector<std::optional<std::uint64_t>>& resets = {});
+  /// Resets every env (one seed each) and observes all.
+  std::vector<PipeFollowingInfo> reset(const std::vector<std::uint64_t>& seeds,
+                                       std::vector<std::uint8_t>* observations);
+  /// Resets the envs with a seed (nullopt: untouched); the N observations with zeros for the
+  /// untouched envs.
+  std::vector<std::optional<PipeFollowingInfo>> reset_some(const std::vector<std::optional<std::uint64_t>>& seeds,
+                                                           std::vector<std::uint8_t>* observations);
   /// observe() of every env into one N x H x W x 3 buffer.
   void observe_all(std::vector<std::uint8_t>* observations);
 
  private:
+  void build(const PipeFollowingConfig& config, int num_envs, int contexts);
+  void release();  ///< destroys the envs, each on its GL thread
+  unav::renderer::GlThread& gl_of(std::size_t env) { return *gl_[env % gl_.size()]; }
+  /// Env i's reset for the seeds given, on its GL thread, every GL thread at once.
+  void reset_on_gl(const std::vector<std::optional<std::uint64_t>>& seeds,
+                   std::vector<std::optional<PipeFollowingInfo>>* infos);
+  /// The frames of the envs in `which` (all: empty), each GL thread rendering its own at once.
+  void observe(const std::vector<bool>& which, std::vector<std::uint8_t>* observations);
+
+  std::vector<std::unique_ptr<unav::renderer::GlThread>> gl_;  // before envs_: destroyed after them
   std::vector<std::unique_ptr<PipeFollowingEnv>> envs_;
   int threads_ = 1;
 };
