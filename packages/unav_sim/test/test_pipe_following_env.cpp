@@ -141,9 +141,10 @@ TEST(PipeFollowingEnv, VectorEnvSharesContextsAndMatchesSingleEnvs) {
   EXPECT_EQ(&vec.env(0).episode().renderer().context(), &vec.env(2).episode().renderer().context());
   const bool llvmpipe = vec.env(0).episode().renderer().context().gl_renderer().find("llvmpipe") != std::string::npos;
   EXPECT_EQ(vec.contexts(), llvmpipe ? 2 : 1);
-  if (vec.contexts() == 2)
+  if (vec.contexts() == 2) {
     EXPECT_NE(vec.env(0).episode().renderer().context().platform(),
               vec.env(1).episode().renderer().context().platform());
+  }
   const std::size_t frame = std::size_t{80} * 45 * 3;
   std::vector<std::uint8_t> obs;
   const auto infos = vec.reset({100, 101, 102}, &obs);
