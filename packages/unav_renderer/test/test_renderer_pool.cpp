@@ -44,6 +44,7 @@ struct Shot {
 };
 std::vector<Shot> shots() {
   std::vector<Shot> s;
+  s.reserve(7);
   for (int i = 0; i < 7; ++i)
     s.push_back({pose_from_xyz_rpy({1.0 + 0.7 * i, 0.2 - 0.1 * i, 8.0}, {0.0, 0.05 * i, 0.1 * i}),
                  i % 3 == 2 ? "down" : "front", 0.1 * i});
@@ -66,7 +67,9 @@ TEST(RendererPool, FramesComeInOrderAndMatchOneRendererBitForBit) {
   const auto platforms = pool.platforms();
   std::printf("pool on %s: workers on %s and %s\n", pool.gl_renderer().c_str(), platforms[0].c_str(),
               platforms[1].c_str());
-  if (pool.gl_renderer().find("llvmpipe") != std::string::npos) EXPECT_NE(platforms[0], platforms[1]);
+  if (pool.gl_renderer().find("llvmpipe") != std::string::npos) {
+    EXPECT_NE(platforms[0], platforms[1]);
+  }
   pool.set_next_sequence(40);
   std::vector<Frame> got;
   // More frames than the pool holds in flight (2 per worker): submit() waits, nothing is lost.

@@ -49,8 +49,8 @@ void run(const PipeFollowingConfig& cfg, int num_envs, int steps, int contexts) 
   std::vector<std::uint8_t> obs;
   std::vector<std::array<double, 2>> actions(static_cast<std::size_t>(num_envs));
   std::uint64_t seed = 0;
-  std::vector<std::uint64_t> seeds;
-  for (int i = 0; i < num_envs; ++i) seeds.push_back(seed++);
+  std::vector<std::uint64_t> seeds(static_cast<std::size_t>(num_envs));
+  for (auto& s : seeds) s = seed++;
   vec.reset(seeds, &obs);
   EpisodeTimings before;
   for (int i = 0; i < num_envs; ++i) before = sum(before, vec.env(i).episode().timings());

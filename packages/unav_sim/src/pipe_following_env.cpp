@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <exception>
+#include <functional>
 #include <future>
 #include <mutex>
 #include <random>
@@ -288,7 +289,8 @@ std::vector<PipeFollowingInfo> VectorPipeFollowingEnv::reset(const std::vector<s
   reset_on_gl({seeds.begin(), seeds.end()}, &some);
   observe({}, observations);
   std::vector<PipeFollowingInfo> infos;
-  for (auto& i : some) infos.push_back(std::move(*i));
+  infos.reserve(some.size());
+  for (const auto& i : some) infos.push_back(*i);
   return infos;
 }
 
@@ -308,12 +310,15 @@ std::vector<std::optional<PipeFollowingInfo>> VectorPipeFollowingEnv::reset_some
 void VectorPipeFollowingEnv::reset_on_gl(const std::vector<std::optional<std::uint64_t>>& seeds,
                                          std::vector<std::optional<PipeFollowingInfo>>* infos) {
   infos->assign(envs_.size(), std::nullopt);
+  on_each_gl_thread([&](std::size_t first) {
+    for (std::size_t i = first; i < envs_.size(); i += gl_.size())
+      if (seeds[i]) (*infos)[i] = envs_[i]->reset(*seeds[i]);  // uploads the new scene: GL work
+  });
+}
+
+void VectorPipeFollowingEnv::on_each_gl_thread(const std::function<void(std::size_t)>& work) {
   std::vector<std::future<void>> done;
-  for (std::size_t g = 0; g < gl_.size(); ++g)
-    done.push_back(gl_[g]->post([&, g] {
-      for (std::size_t i = g; i < envs_.size(); i += gl_.size())
-        if (seeds[i]) (*infos)[i] = envs_[i]->reset(*seeds[i]);  // uploads the new scene: GL work
-    }));
+  for (std::size_t g = 0; g < gl_.size(); ++g) done.push_back(gl_[g]->post([&work, g] { work(g); }));
   for (auto& d : done) d.wait();
   for (auto& d : done) d.get();  // the first error, once every thread is done
 }
@@ -321,20 +326,16 @@ void VectorPipeFollowingEnv::reset_on_gl(const std::vector<std::optional<std::ui
 void VectorPipeFollowingEnv::observe(const std::vector<bool>& which, std::vector<std::uint8_t>* observations) {
   const std::size_t frame = static_cast<std::size_t>(envs_[0]->obs_width()) * envs_[0]->obs_height() * 3;
   observations->assign(frame * envs_.size(), 0);
-  std::vector<std::future<void>> done;
-  for (std::size_t g = 0; g < gl_.size(); ++g)
-    done.push_back(gl_[g]->post([&, g] {
-      // All of this context's frames submitted before any is read back.
-      for (std::size_t i = g; i < envs_.size(); i += gl_.size())
-        if (which.empty() || which[i]) envs_[i]->submit_observation();
-      for (std::size_t i = g; i < envs_.size(); i += gl_.size())
-        if (which.empty() || which[i]) {
-          const std::vector<std::uint8_t> o = envs_[i]->collect_observation();
-          std::copy(o.begin(), o.end(), observations->begin() + static_cast<std::ptrdiff_t>(i * frame));
-        }
-    }));
-  for (auto& d : done) d.wait();
-  for (auto& d : done) d.get();
+  on_each_gl_thread([&](std::size_t first) {
+    // All of this context's frames submitted before any is read back.
+    for (std::size_t i = first; i < envs_.size(); i += gl_.size())
+      if (which.empty() || which[i]) envs_[i]->submit_observation();
+    for (std::size_t i = first; i < envs_.size(); i += gl_.size())
+      if (which.empty() || which[i]) {
+        const std::vector<std::uint8_t> o = envs_[i]->collect_observation();
+        std::copy(o.begin(), o.end(), observations->begin() + static_cast<std::ptrdiff_t>(i * frame));
+      }
+  });
 }
 
 std::vector<PipeFollowingStep> VectorPipeFollowingEnv::step(const std::vector<std::array<double, 2>>& actions,
@@ -379,7 +380,7 @@ std::vector<PipeFollowingStep> VectorPipeFollowingEnv::step(const std::vector<st
     std::vector<std::optional<PipeFollowingInfo>> infos;
     reset_on_gl(resets, &infos);
     for (std::size_t i = 0; i < resets.size(); ++i)
-      if (infos[i]) out[i].info = std::move(*infos[i]);
+      if (infos[i]) out[i].info = *infos[i];
   }
   observe({}, observations);
   return out;

@@ -30,13 +30,15 @@ class RendererPool {
  public:
   /// `workers` >= 1 renderers (ConfigError otherwise); a Renderer's construction error (bad world,
   /// no EGL) is thrown here.
-  RendererPool(World world, std::vector<CameraModel> cameras, RenderOptions options = {}, int workers = 2);
+  RendererPool(const World& world, const std::vector<CameraModel>& cameras, const RenderOptions& options = {},
+               int workers = 2);
   ~RendererPool();  ///< waits for the frames in flight, then stops the workers
   RendererPool(const RendererPool&) = delete;
   RendererPool& operator=(const RendererPool&) = delete;
 
   /// Queues a frame on the next worker (round robin) with the next sequence number; returns that
-  /// number. Blocks while 2 x workers() frames are in flight (collect() them).
+  /// number. With 2 x workers() frames or more in flight, first waits until the oldest is
+  /// rendered (collect() them: the frames wait in the pool until then).
   std::uint64_t submit(const Pose& X_WB, const std::string& camera, double stamp_s = 0.0,
                        const BodyVelocity& velocity = {});
   /// The oldest frame submitted, waiting for it; rethrows the error its worker met. Throws

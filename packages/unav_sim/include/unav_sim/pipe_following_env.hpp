@@ -16,6 +16,7 @@
 
 #include <array>
 #include <cstdint>
+#include <functional>
 #include <map>
 #include <memory>
 #include <optional>
@@ -211,6 +212,9 @@ class VectorPipeFollowingEnv {
   /// Env i's reset for the seeds given, on its GL thread, every GL thread at once.
   void reset_on_gl(const std::vector<std::optional<std::uint64_t>>& seeds,
                    std::vector<std::optional<PipeFollowingInfo>>* infos);
+  /// work(g) on GL thread g (its envs are g, g + contexts(), ...), every thread at once; rethrows
+  /// the first error once all are done.
+  void on_each_gl_thread(const std::function<void(std::size_t)>& work);
   /// The frames of the envs in `which` (all: empty), each GL thread rendering its own at once.
   void observe(const std::vector<bool>& which, std::vector<std::uint8_t>* observations);
 
