@@ -162,10 +162,21 @@ VoSummary KltVo::ProcessFrame(const cv::Mat& gray, const cv::Mat& depth, Eigen::
   bool ok = false;
   Eigen::Isometry3d X_cur_kf = Eigen::Isometry3d::Identity();
   if (static_cast<int>(obj.size()) >= options_.min_inliers) {
-    cv::Mat rvec, tvec;
+    // Start from the constant-velocity prediction of this frame in the keyframe: every RANSAC
+    // hypothesis and the final refinement iterate from it. From no guess, the solver starts from a
+    // homography of these near-planar points (the seabed seen from above), which has a mirrored
+    // twin; seen: 277 of 293 tracks "inliers" to a pose 2 m and 35 deg off.
+    const Eigen::Isometry3d X_kf_cur_pred = T_C0K_.inverse() * (T_C0C_ * last_motion_);
+    const Eigen::Isometry3d X_cur_kf_pred = X_kf_cur_pred.inverse();
+    cv::Mat R0(3, 3, CV_64F), rvec, tvec(3, 1, CV_64F);
+    for (int r = 0; r < 3; ++r) {
+      for (int c = 0; c < 3; ++c) R0.at<double>(r, c) = X_cur_kf_pred.linear()(r, c);
+      tvec.at<double>(r) = X_cur_kf_pred.translation()[r];
+    }
+    cv::Rodrigues(R0, rvec);
     std::vector<int> inliers;
     ok =
-        cv::solvePnPRansac(obj, img, K_, cv::noArray(), rvec, tvec, false, 200,
+        cv::solvePnPRansac(obj, img, K_, cv::noArray(), rvec, tvec, true, 200,
                            static_cast<float>(options_.ransac_reprojection_px), 0.999, inliers, cv::SOLVEPNP_ITERATIVE);
     s.inliers = static_cast<int>(inliers.size());
     ok = ok && s.inliers >= options_.min_inliers && 10 * s.inliers >= 3 * static_cast<int>(obj.size());
@@ -179,6 +190,8 @@ VoSummary KltVo::ProcessFrame(const cv::Mat& gray, const cv::Mat& depth, Eigen::
       // Keep only inlier tracks.
       std::vector<cv::Point3f> obj_in;
       std::vector<cv::Point2f> img_in;
+      obj_in.reserve(inliers.size());
+      img_in.reserve(inliers.size());
       for (int i : inliers) {
         obj_in.push_back(obj[static_cast<size_t>(i)]);
         img_in.push_back(img[static_cast<size_t>(i)]);

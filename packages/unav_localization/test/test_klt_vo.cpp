@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <random>
 #include <vector>
 
 #include <Eigen/Geometry>
@@ -99,60 +100,110 @@ KltVoOptions monocular() {
 
 }  // namespace
 
-TEST(KltVo, RgbdTracksARenderedSequenceWithKnownMotion) {
-  unav::scene::World world =
-      unav::scene::load_world(std::string(UNAV_REPO_ROOT) + "/worlds/pipe_inspection/world.yaml");
-  unav::scene::CameraModel cam = unav::scene::CameraModel::from_hfov("down", 320, 180, 90.0 * M_PI / 180.0);
-  unav::renderer::RenderOptions ro;
-  ro.noise = false;
-  ro.marine_snow = false;  // particles move independently of the scene
-  ro.lamps = false;        // the lamp pool moves with the camera: a moving brightness pattern
-  ro.forward_scatter = false;
-  unav::renderer::Renderer renderer(world, {cam}, ro);
-  KltVo vo(cam.K());
-  // 60 frames: 3 m north at 5 cm per frame, yawing 0.3 rad in total, sinking 0.3 m.
-  const int n = 60;
-  Eigen::Isometry3d X_WC0 = Eigen::Isometry3d::Identity(), last_est = Eigen::Isometry3d::Identity();
+namespace {
+
+// 60 frames of the down camera over the seabed: 3 m north at 5 cm per frame, yawing 0.3 rad in
+// total, sinking 0.3 m. Rendered once for the RGB-D tests.
+struct RgbdSequence {
+  Eigen::Matrix3d K;
+  std::vector<cv::Mat> gray, depth;
+  std::vector<Eigen::Isometry3d> X_WC;
+};
+
+const RgbdSequence& rgbd_sequence() {
+  static const RgbdSequence seq = [] {
+    unav::scene::World world =
+        unav::scene::load_world(std::string(UNAV_REPO_ROOT) + "/worlds/pipe_inspection/world.yaml");
+    unav::scene::CameraModel cam = unav::scene::CameraModel::from_hfov("down", 320, 180, 90.0 * M_PI / 180.0);
+    unav::renderer::RenderOptions ro;
+    ro.noise = false;
+    ro.marine_snow = false;  // particles move independently of the scene
+    ro.lamps = false;        // the lamp pool moves with the camera: a moving brightness pattern
+    ro.forward_scatter = false;
+    // Caustics stay on: a light pattern drifting over the seabed, which biases the corners it
+    // makes (their tracks follow the light); most of the remaining error comes from it (seen
+    // 0.044 m at the end with caustics, 0.018 m without).
+    unav::renderer::Renderer renderer(world, {cam}, ro);
+    RgbdSequence s;
+    s.K = cam.K();
+    for (int k = 0; k < 60; ++k) {
+      Eigen::Isometry3d X_WB = Eigen::Isometry3d::Identity();
+      X_WB.translation() = Eigen::Vector3d(-2.0 + 0.05 * k, 1.5, 7.8 + 0.005 * k);
+      X_WB.linear() = Eigen::AngleAxisd(0.005 * k, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+      const unav::renderer::Frame f = renderer.render(X_WB, "down", 0.1 * k);
+      cv::Mat rgb(f.height, f.width, CV_8UC3, const_cast<uint8_t*>(f.rgb.data())), gray;
+      cv::cvtColor(rgb, gray, cv::COLOR_RGB2GRAY);
+      s.gray.push_back(gray);
+      s.depth.push_back(cv::Mat(f.height, f.width, CV_32FC1, const_cast<float*>(f.depth.data())).clone());
+      s.X_WC.push_back(f.X_WC);
+    }
+    return s;
+  }();
+  return seq;
+}
+
+// The image with 2 % of its pixels moved by one grey level (seeded): what a renderer change that
+// re-rounds a texture does. Tracking must not hinge on it.
+cv::Mat perturbed(const cv::Mat& gray, unsigned seed) {
+  cv::Mat out = gray.clone();
+  std::mt19937 rng(seed);
+  std::uniform_int_distribution<int> pick(0, 99), sign(0, 1);
+  for (int r = 0; r < out.rows; ++r)
+    for (int c = 0; c < out.cols; ++c)
+      if (pick(rng) < 2) {
+        const int v = out.at<uint8_t>(r, c) + (sign(rng) != 0 ? 1 : -1);
+        out.at<uint8_t>(r, c) = static_cast<uint8_t>(std::clamp(v, 0, 255));
+      }
+  return out;
+}
+
+}  // namespace
+
+// Seed 0: the rendered images as they are; seeds 1, 2: perturbed().
+class KltVoRgbd : public ::testing::TestWithParam<unsigned> {};
+
+TEST_P(KltVoRgbd, TracksARenderedSequenceWithKnownMotion) {
+  const RgbdSequence& seq = rgbd_sequence();
+  KltVo vo(seq.K);
+  const int n = static_cast<int>(seq.gray.size());
+  Eigen::Isometry3d X_WC0 = seq.X_WC[0];
   int lost = 0;
   double path = 0.0;
-  Eigen::Vector3d prev_p = Eigen::Vector3d::Zero();
   for (int k = 0; k < n; ++k) {
-    Eigen::Isometry3d X_WB = Eigen::Isometry3d::Identity();
-    X_WB.translation() = Eigen::Vector3d(-2.0 + 0.05 * k, 1.5, 7.8 + 0.005 * k);
-    X_WB.linear() = Eigen::AngleAxisd(0.005 * k, Eigen::Vector3d::UnitZ()).toRotationMatrix();
-    const unav::renderer::Frame f = renderer.render(X_WB, "down", 0.1 * k);
-    cv::Mat rgb(f.height, f.width, CV_8UC3, const_cast<uint8_t*>(f.rgb.data())), gray;
-    cv::cvtColor(rgb, gray, cv::COLOR_RGB2GRAY);
-    cv::Mat depth(f.height, f.width, CV_32FC1, const_cast<float*>(f.depth.data()));
+    const size_t i = static_cast<size_t>(k);
+    const cv::Mat gray =
+        GetParam() == 0 ? seq.gray[i] : perturbed(seq.gray[i], GetParam() * 1000u + static_cast<unsigned>(k));
     Eigen::Isometry3d T_C0C;
-    const auto s = vo.ProcessFrame(gray, depth, &T_C0C);
+    const auto s = vo.ProcessFrame(gray, seq.depth[i], &T_C0C);
     if (k == 0) {
       EXPECT_EQ(s.status, VoStatus::kInitialized);
-      X_WC0 = f.X_WC;
     } else if (s.status != VoStatus::kTracking) {
       ++lost;
+      std::printf("frame %d: %s (%s)\n", k, to_string(s.status), s.message.c_str());
     }
-    const Eigen::Vector3d p = (X_WC0.inverse() * f.X_WC).translation();
-    if (k > 0) path += (p - prev_p).norm();
-    prev_p = p;
-    last_est = T_C0C;
+    if (k > 0) path += (seq.X_WC[i].translation() - seq.X_WC[i - 1].translation()).norm();
     if (k == n - 1) {
-      const Eigen::Isometry3d gt = X_WC0.inverse() * f.X_WC;
+      const Eigen::Isometry3d gt = X_WC0.inverse() * seq.X_WC[i];
       const double err = (gt.translation() - T_C0C.translation()).norm();
       const double rot = Eigen::AngleAxisd(gt.linear().transpose() * T_C0C.linear()).angle();
-      std::printf("KLT RGB-D VO: path %.3f m, final position error %.4f m (%.2f%%), rotation error %.5f rad\n", path,
-                  err, 100 * err / path, rot);
+      std::printf("KLT RGB-D VO, seed %u: path %.3f m, final position error %.4f m (%.2f%%), rotation error %.5f rad\n",
+                  GetParam(), path, err, 100 * err / path, rot);
       // Bound: 2% of the distance travelled and 0.02 rad after 60 frames, a usual figure for
-      // RGB-D VO; seen here: 0.55% and 0.007 rad. The remaining drift comes from KLT on the 1-D
-      // sand ripples (aperture) and keyframe hand-overs, not from depth (exact, noise-free).
+      // RGB-D VO; seen over 11 runs (clean and perturbed): 0.22-1.48 % and 0.003-0.015 rad. The
+      // error comes from the caustics (above) and from KLT on the 1-D sand ripples (aperture) and
+      // keyframe hand-overs, not from depth (exact, noise-free).
       EXPECT_LT(err, 0.02 * path);
       EXPECT_LT(rot, 0.02);
     }
   }
-  // A rare frame without a consistent PnP solution is bridged by constant-velocity prediction
-  // (seen: 1 of 60); the pose bounds above still hold through it.
-  EXPECT_LE(lost, 2);
+  // PnP starts from the constant-velocity prediction: from no guess it started from a homography
+  // of the near-planar seabed and took its mirrored twin on 1-3 frames of 60 (a pose 2 m and
+  // 0.6 rad off with 95 % "inliers", rejected as lost), and which frames did so changed when 2 %
+  // of the pixels moved by a grey level. Seen since: 0 lost in 11 runs.
+  EXPECT_EQ(lost, 0);
 }
+
+INSTANTIATE_TEST_SUITE_P(CleanAndPerturbed, KltVoRgbd, ::testing::Values(0u, 1u, 2u));
 
 TEST(KltVo, BadInputIsRejectedNotCrashing) {
   Eigen::Matrix3d K;
