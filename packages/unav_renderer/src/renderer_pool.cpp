@@ -1,5 +1,6 @@
 #include "unav_renderer/renderer_pool.hpp"
 
+#include <chrono>
 #include <deque>
 #include <future>
 #include <stdexcept>
@@ -88,6 +89,11 @@ Frame RendererPool::collect() {
 }
 
 std::size_t RendererPool::in_flight() const { return impl_->pending.size(); }
+
+bool RendererPool::ready() const {
+  const auto& p = impl_->pending;
+  return !p.empty() && p.front().wait_for(std::chrono::seconds(0)) == std::future_status::ready;
+}
 int RendererPool::workers() const { return static_cast<int>(impl_->workers.size()); }
 void RendererPool::set_next_sequence(std::uint64_t sequence) { impl_->sequence = sequence; }
 const CameraModel& RendererPool::camera(const std::string& name) const {

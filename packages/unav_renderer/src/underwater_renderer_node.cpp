@@ -1,6 +1,7 @@
 #include "underwater_renderer_node.hpp"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstring>
 
@@ -88,13 +89,19 @@ UnderwaterRendererNode::UnderwaterRendererNode(const unav::NodeOptions& options)
   } catch (const std::exception& e) {
     throw unav::ConfigError(e.what());  // world/camera/water errors name the file and key
   }
-  const int workers =
-      static_cast<int>(std::min<std::int64_t>(prm.render_workers, static_cast<std::int64_t>(cams.size())));
+  // Lockstep: a frame instant's cameras in parallel, at most one worker each (the next instant
+  // waits for the acks). Free-running: the workers left over take the following instants.
+  const auto ncams = static_cast<std::int64_t>(cams.size());
+  const int workers = static_cast<int>(lockstep_ ? std::min(prm.render_workers, ncams) : prm.render_workers);
+  max_in_flight_ = lockstep_ ? 1 : static_cast<std::size_t>(std::max<std::int64_t>(1, prm.render_workers / ncams));
   renderer_ = std::make_unique<RendererPool>(std::move(world), cams, ro, std::max(1, workers));
 
   odom_sub_ = create_subscription<nav_msgs::msg::Odometry>("ground_truth/odom", unav::QoS::reliable(),
                                                            [this](const nav_msgs::msg::Odometry& m) { on_odom(m); });
   if (lockstep_) acker_ = std::make_unique<unav::lockstep::Acker>(*this, ack_name_);  // answers every state
+  // Free-running, frames finish between odometry messages: 2 ms polls publish them (and the next
+  // odometry does too).
+  if (!lockstep_) poll_timer_ = create_wall_timer(std::chrono::milliseconds(2), [this] { publish_rendered(false); });
   const unav::QoS qos = unav::QoS::reliable(5);
   for (const auto& cam : cams) {
     const CameraModel c = cam.water_equivalent();  // behind a port: what the water sees
@@ -143,13 +150,22 @@ UnderwaterRendererNode::UnderwaterRendererNode(const unav::NodeOptions& options)
                  lockstep_ ? ", lockstep" : "");
 }
 
-UnderwaterRendererNode::~UnderwaterRendererNode() = default;
+UnderwaterRendererNode::~UnderwaterRendererNode() {
+  // Nothing is lost on shutdown: the frames still rendering are published (callbacks run on the
+  // spinning thread, which has stopped).
+  try {
+    publish_rendered(true);
+  } catch (const std::exception& e) {
+    logger()->error("frames in flight at shutdown not published: {}", e.what());
+  }
+}
 
 void UnderwaterRendererNode::on_odom(const nav_msgs::msg::Odometry& odom) {
   if (const std::string why = unav::odometry_problem(odom); !why.empty()) {
     rejections_.reject(odom_sub_->topic_name(), why);  // neither rendered nor acked
     return;
   }
+  if (!lockstep_) publish_rendered(false);  // frames that finished since the last call
   const double t = unav::seconds(odom.header());
   const std::int64_t t_ns = unav::nanoseconds(odom.header());
   if (lockstep_ && t_ns == last_state_ns_ && t_ns == last_frame_ns_) {
@@ -169,7 +185,8 @@ void UnderwaterRendererNode::on_odom(const nav_msgs::msg::Odometry& odom) {
     BodyVelocity velocity;
     velocity.linear = unav::from_msg(odom.twist().twist().linear());
     velocity.angular = unav::from_msg(odom.twist().twist().angular());
-    render_and_publish(unav::from_msg(odom.pose().pose()), velocity, odom.header());
+    submit(unav::from_msg(odom.pose().pose()), velocity, odom.header());
+    if (lockstep_) publish_rendered(true);  // before the ack: the barrier holds until it is out
     last_frame_ns_ = t_ns;
     // Next frame instant: the next multiple of the period after t (no drift, no bursts).
     next_frame_t_ = (std::floor((t + eps) / period_) + 1.0) * period_;
@@ -177,33 +194,50 @@ void UnderwaterRendererNode::on_odom(const nav_msgs::msg::Odometry& odom) {
   if (acker_) acker_->ack(odom.header());
 }
 
-void UnderwaterRendererNode::render_and_publish(const Pose& X_WB, const BodyVelocity& velocity,
-                                                const std_msgs::msg::dds_::Header_& header) {
+void UnderwaterRendererNode::submit(const Pose& X_WB, const BodyVelocity& velocity,
+                                    const std_msgs::msg::dds_::Header_& header) {
+  // Full: the oldest instant is published first (waiting for it), so none is dropped.
+  while (in_flight_.size() >= max_in_flight_) publish_next();
   const double t = unav::Time::from_msg(header.stamp().sec(), header.stamp().nanosec()).seconds();
   for (const auto& c : cameras_) renderer_->submit(X_WB, c.name, t, velocity);  // in parallel
-  for (auto& c : cameras_) {
-    Frame f = renderer_->collect();  // in submission order: camera c's
-    const std::string frame_id = c.name + "_optical";
-    for (auto* m : {&c.image_msg, &c.depth_msg, &c.seg_msg}) {
-      m->header().stamp() = header.stamp();
-      m->header().frame_id(frame_id);
-    }
-    c.info_msg.header().stamp() = header.stamp();
-    c.info_msg.header().frame_id(frame_id);
-    c.image_msg.data().swap(f.rgb);  // no copy: the frame's buffer becomes the message's
-    c.image->publish(c.image_msg);
-    if (c.depth) {
-      c.depth_msg.data().resize(f.depth.size() * sizeof(float));
-      std::memcpy(c.depth_msg.data().data(), f.depth.data(), c.depth_msg.data().size());
-      c.depth->publish(c.depth_msg);
-    }
-    if (c.seg) {
-      c.seg_msg.data().swap(f.seg);
-      c.seg->publish(c.seg_msg);
-    }
-    c.info->publish(c.info_msg);
+  in_flight_.push_back({header, 0});
+  peak_in_flight_ = std::max(peak_in_flight_, in_flight_.size());
+}
+
+void UnderwaterRendererNode::publish_rendered(bool wait) {
+  while (!in_flight_.empty() && (wait || renderer_->ready())) publish_next();
+}
+
+void UnderwaterRendererNode::publish_next() {
+  Instant& k = in_flight_.front();
+  Frame f = renderer_->collect();  // in submission order: the oldest instant's next camera
+  publish_frame(cameras_[k.published], f, k.header);
+  if (++k.published == cameras_.size()) {
+    in_flight_.pop_front();
+    ++frames_;
   }
-  ++frames_;
+}
+
+void UnderwaterRendererNode::publish_frame(CameraPorts& c, Frame& f, const std_msgs::msg::dds_::Header_& header) {
+  const std::string frame_id = c.name + "_optical";
+  for (auto* m : {&c.image_msg, &c.depth_msg, &c.seg_msg}) {
+    m->header().stamp() = header.stamp();
+    m->header().frame_id(frame_id);
+  }
+  c.info_msg.header().stamp() = header.stamp();
+  c.info_msg.header().frame_id(frame_id);
+  c.image_msg.data().swap(f.rgb);  // no copy: the frame's buffer becomes the message's
+  c.image->publish(c.image_msg);
+  if (c.depth) {
+    c.depth_msg.data().resize(f.depth.size() * sizeof(float));
+    std::memcpy(c.depth_msg.data().data(), f.depth.data(), c.depth_msg.data().size());
+    c.depth->publish(c.depth_msg);
+  }
+  if (c.seg) {
+    c.seg_msg.data().swap(f.seg);
+    c.seg->publish(c.seg_msg);
+  }
+  c.info->publish(c.info_msg);
 }
 
 void UnderwaterRendererNode::republish_last_frame() {

@@ -18,9 +18,16 @@
 // instant of the last frame gets that frame published again, unchanged: a reader that matched
 // after it was sent (16 processes starting at once), or lost it, gets it then and the barrier
 // opens. Frame consumers therefore skip (and ack again) a frame stamp they already have.
+// Free-running (lockstep false), frames are published as they finish rendering, in order, and a
+// frame falling due while earlier ones still render starts at once on another worker: up to
+// render_workers / cameras frames of each camera in flight (at least 1), so one camera with two
+// workers renders two frames at once. A frame due while that many are in flight waits for the
+// oldest (no frame is dropped). Shutting down publishes the frames still rendering.
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
+#include <deque>
 #include <memory>
 #include <string>
 #include <vector>
@@ -82,7 +89,8 @@ struct UnderwaterRendererParams {
     a->Visit(Field("render_workers", &render_workers)
                  .Range(1, 8)
                  .Doc("renderers at once, one EGL context and thread each (RendererPool): a frame's cameras "
-                      "render in parallel; at most one per camera"));
+                      "render in parallel; free-running, successive frames too (lockstep: at most one per "
+                      "camera)"));
   }
 };
 
@@ -93,6 +101,11 @@ class UnderwaterRendererNode : public unav::Node {
   std::uint64_t frames_published() const { return frames_; }
   /// Frames published again for a repeated state (see above).
   std::uint64_t frames_republished() const { return republished_; }
+  /// Frame instants (all cameras) rendering at once at most: 1 in lockstep, free-running
+  /// render_workers / cameras (at least 1).
+  std::size_t max_frames_in_flight() const { return max_in_flight_; }
+  /// The most frame instants that were in flight at once so far.
+  std::size_t peak_frames_in_flight() const { return peak_in_flight_; }
 
  private:
   struct CameraPorts {
@@ -102,12 +115,25 @@ class UnderwaterRendererNode : public unav::Node {
     sensor_msgs::msg::Image image_msg, depth_msg, seg_msg;
     sensor_msgs::msg::CameraInfo info_msg;
   };
+  /// A frame instant in flight: its header, and how many of its cameras were published.
+  struct Instant {
+    std_msgs::msg::dds_::Header_ header;
+    std::size_t published = 0;
+  };
   void on_odom(const nav_msgs::msg::Odometry& odom);
-  void render_and_publish(const Pose& X_WB, const BodyVelocity& velocity, const std_msgs::msg::dds_::Header_& header);
+  void submit(const Pose& X_WB, const BodyVelocity& velocity, const std_msgs::msg::dds_::Header_& header);
+  /// Publishes the rendered frames in order: those done (wait false) or all in flight (true).
+  void publish_rendered(bool wait);
+  /// Publishes the next frame of the oldest instant in flight, waiting for it.
+  void publish_next();
+  void publish_frame(CameraPorts& c, Frame& f, const std_msgs::msg::dds_::Header_& header);
   void republish_last_frame();
 
   std::unique_ptr<RendererPool> renderer_;  // the cameras of a frame in parallel, in order
   std::vector<CameraPorts> cameras_;
+  std::deque<Instant> in_flight_;  // submitted to renderer_, oldest first
+  std::size_t max_in_flight_ = 1, peak_in_flight_ = 0;
+  std::shared_ptr<unav::Timer> poll_timer_;  // free-running: publishes frames as they finish
   double period_ = 0.1;
   double next_frame_t_ = -1.0;  // set by the first odometry
   bool lockstep_ = false;

@@ -7,6 +7,7 @@
 #include "unav_runtime/conversions.hpp"
 #include "unav_runtime/testing.hpp"
 #include "unav_scene/camera.hpp"
+#include "unav_scene/world.hpp"
 #include "underwater_renderer_node.hpp"
 
 using namespace std::chrono_literals;
@@ -22,9 +23,12 @@ std::string small_cameras() {
   return p;
 }
 
-// The renderer node in lockstep at 10 Hz (one small down camera, no noise) and a probe that sends
-// it odometry and records its lockstep acks [s]; the tests add their own image readers.
+// The renderer node at 10 Hz (one small down camera, no noise; in lockstep unless told) and a
+// probe that sends it odometry and records its lockstep acks [s]; the tests add their own image
+// readers.
 struct LockstepRenderer {
+  explicit LockstepRenderer(const char* mode = "lockstep:=true") : mode_arg(mode) {}
+  const char* mode_arg;
   std::string world_arg = std::string("world:=") + UNAV_REPO_ROOT + "/worlds/pipe_inspection/world.yaml";
   std::string cams_arg = "cameras_config:=" + small_cameras();
   std::vector<const char*> argv = {"underwater_renderer",
@@ -34,7 +38,7 @@ struct LockstepRenderer {
                                    "-p",
                                    cams_arg.c_str(),
                                    "-p",
-                                   "lockstep:=true",
+                                   mode_arg,
                                    "-p",
                                    "rate:=10.0",
                                    "-p",
@@ -61,12 +65,14 @@ struct LockstepRenderer {
   bool matched(const std::vector<unav::testing::Link>& links) {
     return unav::testing::wait_for_match({&node_ctx, &test_ctx}, links);
   }
-  // 2 m above the 10 m deep seabed, over the pipe's first point (north 0, east 0 of the world).
-  void send(double t) {
+  // 2 m above the 10 m deep seabed, over the pipe's first point (north 0, east 0 of the world)
+  // unless told another north.
+  void send(double t, double north = 0.0) {
     nav_msgs::msg::Odometry o;
     const unav::Time s{std::llround(t * 1e9)};
     o.header().stamp().sec(s.sec());
     o.header().stamp().nanosec(s.nanosec());
+    o.pose().pose().position().x(north);
     o.pose().pose().position().z(8.0);
     odom_pub->publish(o);
   }
@@ -180,4 +186,39 @@ TEST(UnderwaterRendererNode, PublishesTheLastFrameAgainWhenTheLockstepRepeatsIts
   EXPECT_EQ(unav::nanoseconds(late[1].header()), 100000000);
   EXPECT_EQ(r.node.frames_published(), 2u);
   EXPECT_EQ(r.node.frames_republished(), 1u);
+}
+
+// Free-running, one camera on two workers: a frame due while the previous one still renders
+// starts at once on the other worker. The frames come out in order, each stamped with its pose's
+// time, and each is the frame one Renderer draws for that pose in that order, bit for bit (noise
+// off; marine snow, caustics, shadows and materials on).
+TEST(UnderwaterRendererNode, FreeRunningRendersSuccessiveFramesAtOnceInOrder) {
+  LockstepRenderer r("lockstep:=false");
+  EXPECT_EQ(r.node.max_frames_in_flight(), 2u);
+  std::vector<sensor_msgs::msg::Image> images;
+  auto img_sub = r.image_reader("/rov/camera/down/image_raw", &images);
+  const std::vector<unav::testing::Link> links = {make_link(*r.odom_pub, r.node), make_link(r.node, *img_sub)};
+  ASSERT_TRUE(r.matched(links)) << unav::testing::describe(links);
+  // Six instants due at 10 Hz, sent at once (within the odometry and image history depths of 10):
+  // none may be dropped or reordered, however the renders overlap.
+  const int n = 6;
+  for (int k = 0; k < n; ++k) r.send(0.1 * k, 0.25 * k);
+  ASSERT_TRUE(r.spin_until([&] { return images.size() == static_cast<size_t>(n); })) << images.size() << " images";
+  EXPECT_EQ(r.node.frames_published(), static_cast<std::uint64_t>(n));
+  EXPECT_LE(r.node.peak_frames_in_flight(), 2u);
+
+  unav::scene::World world =
+      unav::scene::load_world(std::string(UNAV_REPO_ROOT) + "/worlds/pipe_inspection/world.yaml");
+  unav::renderer::RenderOptions ro;  // the node's defaults, noise off as in the fixture
+  ro.noise = false;
+  unav::renderer::Renderer reference(world, unav::scene::load_cameras(small_cameras()), ro);
+  for (int k = 0; k < n; ++k) {
+    const auto& img = images[static_cast<size_t>(k)];
+    EXPECT_EQ(unav::nanoseconds(img.header()), std::llround(0.1 * k * 1e9)) << "frame " << k;
+    Eigen::Isometry3d X_WB = Eigen::Isometry3d::Identity();
+    X_WB.translation() = Eigen::Vector3d(0.25 * k, 0.0, 8.0);
+    const unav::renderer::Frame f = reference.render(X_WB, "down", 0.1 * k);
+    EXPECT_TRUE(img.data() == f.rgb) << "frame " << k << " differs from one Renderer's";
+  }
+  EXPECT_NE(images[0].data(), images[n - 1].data());  // 1.25 m apart: the poses were applied
 }

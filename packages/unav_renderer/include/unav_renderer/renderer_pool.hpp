@@ -45,6 +45,8 @@ class RendererPool {
   /// std::logic_error when nothing is in flight.
   Frame collect();
   std::size_t in_flight() const;
+  /// True when a frame is in flight and the oldest is rendered: collect() returns at once.
+  bool ready() const;
   int workers() const;
   /// The sequence number of the next submit() (the noise's frame index), as Renderer's.
   void set_next_sequence(std::uint64_t sequence);
