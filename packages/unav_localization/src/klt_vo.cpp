@@ -8,6 +8,8 @@
 #include <opencv2/imgproc.hpp>
 #include <opencv2/video/tracking.hpp>
 
+#include "pnp_pose.hpp"
+
 namespace unav::localization {
 
 bool KltVoOptions::IsValid(std::string* msg) const {
@@ -166,14 +168,8 @@ VoSummary KltVo::ProcessFrame(const cv::Mat& gray, const cv::Mat& depth, Eigen::
     // hypothesis and the final refinement iterate from it. From no guess, the solver starts from a
     // homography of these near-planar points (the seabed seen from above), which has a mirrored
     // twin; seen: 277 of 293 tracks "inliers" to a pose 2 m and 35 deg off.
-    const Eigen::Isometry3d X_kf_cur_pred = T_C0K_.inverse() * (T_C0C_ * last_motion_);
-    const Eigen::Isometry3d X_cur_kf_pred = X_kf_cur_pred.inverse();
-    cv::Mat R0(3, 3, CV_64F), rvec, tvec(3, 1, CV_64F);
-    for (int r = 0; r < 3; ++r) {
-      for (int c = 0; c < 3; ++c) R0.at<double>(r, c) = X_cur_kf_pred.linear()(r, c);
-      tvec.at<double>(r) = X_cur_kf_pred.translation()[r];
-    }
-    cv::Rodrigues(R0, rvec);
+    cv::Mat rvec, tvec;
+    detail::ToRvecTvec((T_C0K_.inverse() * (T_C0C_ * last_motion_)).inverse(), &rvec, &tvec);
     std::vector<int> inliers;
     ok =
         cv::solvePnPRansac(obj, img, K_, cv::noArray(), rvec, tvec, true, 200,
@@ -181,12 +177,7 @@ VoSummary KltVo::ProcessFrame(const cv::Mat& gray, const cv::Mat& depth, Eigen::
     s.inliers = static_cast<int>(inliers.size());
     ok = ok && s.inliers >= options_.min_inliers && 10 * s.inliers >= 3 * static_cast<int>(obj.size());
     if (ok) {
-      cv::Mat R;
-      cv::Rodrigues(rvec, R);
-      for (int r = 0; r < 3; ++r) {
-        for (int c = 0; c < 3; ++c) X_cur_kf.linear()(r, c) = R.at<double>(r, c);
-        X_cur_kf.translation()[r] = tvec.at<double>(r);
-      }
+      X_cur_kf = detail::FromRvecTvec(rvec, tvec);
       // Keep only inlier tracks.
       std::vector<cv::Point3f> obj_in;
       std::vector<cv::Point2f> img_in;

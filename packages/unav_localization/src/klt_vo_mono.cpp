@@ -7,6 +7,7 @@
 #include <opencv2/imgproc.hpp>
 #include <opencv2/video/tracking.hpp>
 #include <stdexcept>
+#include "pnp_pose.hpp"
 #include "unav_localization/klt_vo.hpp"
 #include "unav_localization/two_view.hpp"
 
@@ -65,15 +66,6 @@ Eigen::Isometry3d to_isometry(const Eigen::Matrix3d& R, const Eigen::Vector3d& t
   Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
   T.linear() = R;
   T.translation() = t;
-  return T;
-}
-
-Eigen::Isometry3d to_isometry(const cv::Mat& R, const cv::Mat& t) {
-  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
-  for (int r = 0; r < 3; ++r) {
-    for (int c = 0; c < 3; ++c) T.linear()(r, c) = R.at<double>(r, c);
-    T.translation()[r] = t.at<double>(r);
-  }
   return T;
 }
 
@@ -262,13 +254,8 @@ bool KltVo::mono_track(VoSummary* s) {
     return false;
   }
   // Initial guess: constant-velocity prediction.
-  const Eigen::Isometry3d T_CC0_guess = (T_C0C_ * last_motion_).inverse();
-  cv::Mat R(3, 3, CV_64F), rvec, tvec(3, 1, CV_64F);
-  for (int r = 0; r < 3; ++r) {
-    for (int c = 0; c < 3; ++c) R.at<double>(r, c) = T_CC0_guess.linear()(r, c);
-    tvec.at<double>(r) = T_CC0_guess.translation()[r];
-  }
-  cv::Rodrigues(R, rvec);
+  cv::Mat rvec, tvec;
+  detail::ToRvecTvec((T_C0C_ * last_motion_).inverse(), &rvec, &tvec);
   std::vector<int> ransac_inliers;
   bool ok = cv::solvePnPRansac(obj, img, K_, cv::noArray(), rvec, tvec, true, 100,
                                static_cast<float>(options_.ransac_reprojection_px), 0.999, ransac_inliers,
@@ -298,8 +285,7 @@ bool KltVo::mono_track(VoSummary* s) {
                  " map points)";
     return false;
   }
-  cv::Rodrigues(rvec, R);
-  const Eigen::Isometry3d T_C0C_new = to_isometry(R, tvec).inverse();
+  const Eigen::Isometry3d T_C0C_new = detail::FromRvecTvec(rvec, tvec).inverse();
   // A planar scene can give PnP a mirrored solution with plenty of inliers: reject steps no
   // vehicle makes between two frames (translation in units of the scene depth: scale is arbitrary).
   const Eigen::Isometry3d step = T_C0C_.inverse() * T_C0C_new;

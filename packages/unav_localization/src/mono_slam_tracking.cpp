@@ -1,5 +1,6 @@
 // MonoSlam, tracking: motion model, reference keyframe, local map, pose optimisation, relocalisation.
 #include "mono_slam_impl.hpp"
+#include "pnp_pose.hpp"
 
 namespace unav::localization {
 
@@ -211,14 +212,7 @@ auto MonoSlam::Impl::Relocalize() -> bool {
     if (!cv::solvePnPRansac(obj, img, Kcv, cv::noArray(), rvec, tvec, false, 200, 2.0f, 0.99, inl, cv::SOLVEPNP_EPNP))
       continue;
     if (inl.size() < 10) continue;
-    cv::Mat Rc;
-    cv::Rodrigues(rvec, Rc);
-    Eigen::Matrix3d R;
-    Eigen::Vector3d t;
-    cv::cv2eigen(Rc, R);
-    cv::cv2eigen(tvec, t);
-    cur.T_cw.linear() = R;
-    cur.T_cw.translation() = t;
+    cur.T_cw = detail::FromRvecTvec(rvec, tvec);
     std::fill(cur.points.begin(), cur.points.end(), -1);
     for (int k : inl)
       cur.points[static_cast<size_t>(m[static_cast<size_t>(k)].second)] =
