@@ -212,12 +212,25 @@ void PhysicsServer::hold_at_barrier() {
   // within a barrier's normal wait on a loaded machine (~0.1 s), and soon enough to act on.
   if (now - held_since_ >= 3.0 && now - last_wait_log_ >= 5.0) {
     last_wait_log_ = now;
-    std::string missing;
-    for (const auto& p : barrier_->missing(barrier_ns())) missing += " " + p;
-    if (wait_for_command_ && !barrier_->meets(last_command_ns_, barrier_ns())) missing += " (thruster command)";
     logger()->warn("lockstep: holding at t = {:.3f} s for {:.0f} s, waiting for:{}", barrier_t_, now - held_since_,
-                   missing);
+                   missing_with_acks());
   }
+}
+
+std::string PhysicsServer::missing_with_acks() const {
+  // Each with what it acked last: a participant one frame short (an input lost on the way) reads
+  // differently from one that never answered (not started, or acking under another name).
+  std::string missing;
+  for (const auto& p : barrier_->missing(barrier_ns())) {
+    const int64_t last = barrier_->last_ack(p);
+    missing += last == INT64_MIN ? fmt::format(" {} (nothing acked)", p)
+                                 : fmt::format(" {} (acked t = {:.3f} s)", p, static_cast<double>(last) * 1e-9);
+  }
+  if (wait_for_command_ && !barrier_->meets(last_command_ns_, barrier_ns()))
+    missing += last_command_ns_ == INT64_MIN ? std::string(" (thruster command: none yet)")
+                                             : fmt::format(" (thruster command: last stamped t = {:.3f} s)",
+                                                           static_cast<double>(last_command_ns_) * 1e-9);
+  return missing;
 }
 
 void PhysicsServer::step_once() {
@@ -252,9 +265,7 @@ void PhysicsServer::finish() {
   const bool acked = !lockstep_ || barrier_->open(barrier_ns());
   if (!acked && wall_now_s() - finish_started_ < 10.0) return;  // spin on: acks are on their way
   if (!acked) {
-    std::string missing;
-    for (const auto& p : barrier_->missing(barrier_ns())) missing += " " + p;
-    logger()->warn("lockstep: the last state was not acked within 10 s by:{}", missing);
+    logger()->warn("lockstep: the last state was not acked within 10 s by:{}", missing_with_acks());
   }
   const eprosima::fastrtps::Duration_t wait(2, 0);
   for (auto* w : {odom_pub_->writer(), tf_pub_->writer(), clock_pub_->writer()}) w->wait_for_acknowledgments(wait);

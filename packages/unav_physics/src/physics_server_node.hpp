@@ -150,6 +150,8 @@ class PhysicsServer : public unav::Node {
  private:
   bool barrier_open() const;
   int64_t barrier_ns() const;
+  /// The participants the barrier waits for, each with its last ack (for the hold warnings).
+  std::string missing_with_acks() const;
   void hold_at_barrier();
   void step_once();
   void publish_state();

@@ -42,18 +42,47 @@ int PublisherBase::subscription_count() const {
   return status.current_count;
 }
 
+namespace {
+const char* return_code_name(const ReturnCode_t& rc) {
+  switch (rc()) {
+    case ReturnCode_t::RETCODE_TIMEOUT:
+      return "timeout: the writer stayed busy for max_blocking_time";
+    case ReturnCode_t::RETCODE_OUT_OF_RESOURCES:
+      return "out of resources: history or payload pool full";
+    case ReturnCode_t::RETCODE_BAD_PARAMETER:
+      return "bad parameter";
+    case ReturnCode_t::RETCODE_PRECONDITION_NOT_MET:
+      return "precondition not met";
+    case ReturnCode_t::RETCODE_NOT_ENABLED:
+      return "writer not enabled";
+    default:
+      return "error";
+  }
+}
+}  // namespace
+
 bool PublisherBase::write(const void* sample) {
-  const bool ok = writer_->write(const_cast<void*>(sample));
-  if (!ok && !write_failure_reported_) {
-    write_failure_reported_ = true;  // once: a camera at 30 Hz would flood the log
+  const ReturnCode_t rc = writer_->write(const_cast<void*>(sample), fdds::HANDLE_NIL);
+  if (rc == ReturnCode_t::RETCODE_OK) {
+    if (failures_since_ok_ != 0) {
+      make_logger("unav_runtime")
+          ->warn("topic '{}': the middleware accepts samples again after {} refused", topic_, failures_since_ok_);
+      failures_since_ok_ = 0;
+    }
+    return true;
+  }
+  ++write_failures_;
+  ++failures_since_ok_;
+  if ((write_failures_ & (write_failures_ - 1)) == 0) {  // 1st, 2nd, 4th, 8th ...
     make_logger("unav_runtime")
         ->error(
-            "topic '{}': the middleware refused a sample{}", topic_,
+            "topic '{}': the middleware refused a sample ({}{}); {} refused so far", topic_, return_code_name(rc),
             max_sample_bytes_ != 0
-                ? " (larger than the data-sharing bound max_sample_bytes = " + std::to_string(max_sample_bytes_) + "?)"
-                : std::string());
+                ? "; larger than the data-sharing bound max_sample_bytes = " + std::to_string(max_sample_bytes_) + "?"
+                : std::string(),
+            write_failures_);
   }
-  return ok;
+  return false;
 }
 
 SubscriptionBase::SubscriptionBase(Context& ctx, const std::string& topic, fdds::TopicDataType* type, const QoS&)

@@ -25,6 +25,8 @@ TEST(LockstepBarrier, OpensOnlyWhenEveryListedParticipantAckedTheInstant) {
   // Acks never go backwards: a late, older ack does not close an open barrier.
   b.on_ack("renderer", T - 50 * kMs);
   EXPECT_TRUE(b.open(T));
+  EXPECT_EQ(b.last_ack("renderer"), T);  // what the hold warning shows beside a missing name
+  EXPECT_EQ(b.last_ack("nobody"), INT64_MIN);
   EXPECT_TRUE(b.meets(T - kMs / 4, T));
   EXPECT_FALSE(b.meets(T - kMs, T));
 }

@@ -53,6 +53,11 @@ class Barrier {
   }
   /// Whether `who` has acked anything yet.
   bool has_acked(const std::string& who) const { return last_ack_.count(who) != 0; }
+  /// The latest instant `who` acked; INT64_MIN when it has acked nothing.
+  int64_t last_ack(const std::string& who) const {
+    const auto it = last_ack_.find(who);
+    return it == last_ack_.end() ? INT64_MIN : it->second;
+  }
   /// True when every participant acked an instant >= barrier (within the tolerance).
   bool open(int64_t barrier_ns) const { return missing(barrier_ns).empty(); }
   /// Participants that have not acked the barrier yet, in list order.

@@ -75,7 +75,10 @@ class PublisherBase {
   std::string topic_;
   eprosima::fastdds::dds::DataWriter* writer_ = nullptr;
   uint32_t max_sample_bytes_ = 0;  // data-sharing bound, for the error when a sample exceeds it
-  bool write_failure_reported_ = false;
+  // Refused writes: the 1st, 2nd, 4th, 8th ... are logged with the middleware's reason, and the
+  // first success after them (a camera at 30 Hz would flood the log; a writer that refuses for
+  // good must still show in a log's tail).
+  std::uint64_t write_failures_ = 0, failures_since_ok_ = 0;
 };
 
 template <typename Msg>
