@@ -5,8 +5,10 @@
 // --quick: one configuration's row (--config N, default 0) and the per-pass breakdown only (for A/B
 // runs of two builds or two configurations, interleaved: this VM's speed drifts by +-15 % over
 // minutes); --camera: that camera only
-// (w320x180, w640x480, w640x480_distorted). --callgrind: render `frames` frames of each camera with
-// callgrind's instrumentation on (after warm-up) and nothing else; run it as
+// (w320x180, w640x480, w640x480_distorted, demo_front). demo_front is the demo's front camera as
+// config/sensors/bluerov2_cameras.yaml has it (640x480 behind a flat port, lens distortion, shot
+// and read noise, vignetting): what the pipe-inspection demo renders. --callgrind: render `frames` frames of each
+// camera with callgrind's instrumentation on (after warm-up) and nothing else; run it as
 //   valgrind --tool=callgrind --instr-atstart=no bench_unav_renderer 4 --callgrind --camera w640x480
 // and divide "Collected" by the frames: instructions per frame compare two builds without this
 // VM's timing noise (texture and memory stalls are not counted: check the direction with fps).
@@ -88,7 +90,7 @@ double pool_fps(RendererPool& pool, const std::string& cam, int frames) {
 double pool_ticks_per_s(RendererPool& pool, int ticks) {
   const auto run = [&](int n) {
     for (int i = 0; i < n; ++i) {
-      pool.submit(pose_at(i), "w640x480", 0.1 * i);
+      pool.submit(pose_at(i), "demo_front", 0.1 * i);  // the demo's two cameras
       pool.submit(pose_at(i), "w320x180", 0.1 * i);
       if (pool.collect().rgb.empty() || pool.collect().rgb.empty()) std::abort();
     }
@@ -130,8 +132,13 @@ int main(int argc, char** argv) {
   CameraModel vga_dist = vga;
   vga_dist.name = "w640x480_distorted";
   vga_dist.distortion << -0.05, 0.01, 0, 0, 0;
+  CameraModel demo_front = load_camera(unav::common::find_resource("config/sensors/bluerov2_cameras.yaml"), "front");
+  demo_front.name = "demo_front";
+  const std::vector<CameraModel> cameras = {small, vga, vga_dist, demo_front};
+  const char* const names[] = {"w320x180", "w640x480", "w640x480_distorted", "demo_front"};
+  auto first_row_only = [](const std::string& cam) { return cam == "w640x480_distorted" || cam == "demo_front"; };
   RenderOptions opt;
-  Renderer r(world, {small, vga, vga_dist}, opt);
+  Renderer r(world, cameras, opt);
   std::printf("unav_renderer bench: %s via %s, GL %s, %zu triangles, %d frames each\n",
               r.context().gl_renderer().c_str(), r.context().platform().c_str(), r.context().gl_version().c_str(),
               r.triangle_count(), frames);
@@ -173,7 +180,7 @@ int main(int argc, char** argv) {
 #ifdef UNAV_HAVE_CALLGRIND
     r.set_options(configs[static_cast<std::size_t>(config_index)].o);
     std::printf("configuration: %s\n", configs[static_cast<std::size_t>(config_index)].name);
-    for (const char* cam : {"w320x180", "w640x480", "w640x480_distorted"}) {
+    for (const char* cam : names) {
       if (skip(cam)) continue;
       for (int i = 0; i < 3; ++i) r.render(pose_at(i), cam, 0.1 * i);  // warm-up (shader JIT)
       CALLGRIND_START_INSTRUMENTATION;
@@ -191,8 +198,8 @@ int main(int argc, char** argv) {
   if (quick) configs = {configs[static_cast<std::size_t>(config_index)]};
   for (const auto& c : configs) {
     r.set_options(c.o);
-    for (const char* cam : {"w320x180", "w640x480", "w640x480_distorted"}) {
-      if ((c.name != configs.front().name && std::string(cam) == "w640x480_distorted") || skip(cam)) continue;
+    for (const char* cam : names) {
+      if ((c.name != configs.front().name && first_row_only(cam)) || skip(cam)) continue;
       const Result res = measure(r, cam, frames);
       std::printf("%-34s %-20s %10.1f %10.1f %12.2f\n", c.name, cam, res.fps_sync, res.fps_pipelined, res.median_ms);
     }
@@ -203,11 +210,11 @@ int main(int argc, char** argv) {
     const Config& c = configs[quick ? 0 : static_cast<std::size_t>(config_index)];
     std::printf("\nframes per second of a RendererPool (%s; one EGL context and thread per worker, frames in order):\n",
                 c.name);
-    RendererPool one(world, {small, vga, vga_dist}, c.o, 1);
-    RendererPool two(world, {small, vga, vga_dist}, c.o, 2);
+    RendererPool one(world, cameras, c.o, 1);
+    RendererPool two(world, cameras, c.o, 2);
     std::printf("(2 workers on EGL platforms %s and %s)\n", two.platforms()[0].c_str(), two.platforms()[1].c_str());
     std::printf("%-20s %10s %10s %10s\n", "camera", "1 worker", "2 workers", "gain");
-    for (const char* cam : {"w320x180", "w640x480", "w640x480_distorted"}) {
+    for (const char* cam : names) {
       if (skip(cam)) continue;
       const double f1 = pool_fps(one, cam, frames), f2 = pool_fps(two, cam, frames);
       const double g1 = pool_fps(one, cam, frames), g2 = pool_fps(two, cam, frames);
@@ -217,7 +224,7 @@ int main(int argc, char** argv) {
     if (only.empty()) {  // the node's ticks: both cameras at each pose
       const double f1 = pool_ticks_per_s(one, frames), f2 = pool_ticks_per_s(two, frames);
       const double g1 = pool_ticks_per_s(one, frames), g2 = pool_ticks_per_s(two, frames);
-      std::printf("%-20s %10.1f %10.1f %9.0f %%   (ticks/s: 640x480 + 320x180 at each pose)\n", "node pattern",
+      std::printf("%-20s %10.1f %10.1f %9.0f %%   (ticks/s: demo_front + 320x180 at each pose)\n", "node pattern",
                   0.5 * (f1 + g1), 0.5 * (f2 + g2), 100.0 * ((f2 + g2) / (f1 + g1) - 1.0));
     }
   }
@@ -231,7 +238,7 @@ int main(int argc, char** argv) {
   std::printf("%-20s %8s %8s %8s %10s %8s %10s | %8s %8s %8s %10s %8s %9s\n", "camera", "shadows", "scene", "snow",
               "inscatter", "post", "readback", "cpu shad", "scene", "snow", "inscatter", "post", "cpu sum");
   std::vector<std::string> lookups;
-  for (const char* cam : {"w320x180", "w640x480", "w640x480_distorted"}) {
+  for (const char* cam : names) {
     if (skip(cam)) continue;
     std::vector<RenderTimings> t;
     for (int i = 0; i < frames; ++i) {
