@@ -5,6 +5,8 @@
 #include <cmath>
 #include <cstring>
 
+#include <spdlog/fmt/fmt.h>
+
 #include "unav_common/resources.hpp"
 #include "unav_runtime/conversions.hpp"
 #include "unav_scene/camera.hpp"
@@ -241,10 +243,16 @@ void UnderwaterRendererNode::publish_frame(CameraPorts& c, Frame& f, const std_m
 }
 
 void UnderwaterRendererNode::republish_last_frame() {
+  if (last_frame_ns_ != repeated_ns_) {
+    repeated_ns_ = last_frame_ns_;
+    repeats_ = 0;
+  }
+  ++repeats_;
+  std::string refused;
   for (auto& c : cameras_) {
-    c.image->publish(c.image_msg);
-    if (c.depth) c.depth->publish(c.depth_msg);
-    if (c.seg) c.seg->publish(c.seg_msg);
+    if (!c.image->publish(c.image_msg)) refused += " " + c.image->topic_name();
+    if (c.depth && !c.depth->publish(c.depth_msg)) refused += " " + c.depth->topic_name();
+    if (c.seg && !c.seg->publish(c.seg_msg)) refused += " " + c.seg->topic_name();
     c.info->publish(c.info_msg);
   }
   if (republished_++ == 0)
@@ -252,6 +260,22 @@ void UnderwaterRendererNode::republish_last_frame() {
         "lockstep: the state at t = {:.3f} s was sent again (the barrier holds): its frame published "
         "again for readers that missed it (said once)",
         static_cast<double>(last_frame_ns_) * 1e-9);
+  // A barrier held this long on a frame that went out: who reads each stream now, and whether the
+  // middleware still takes our samples (a stream that stopped reaching its readers shows here).
+  if (repeats_ == 3 || repeats_ % 10 == 0) {
+    std::string readers;
+    for (const auto& c : cameras_) {
+      readers += fmt::format(" {}: rgb {}", c.name, c.image->subscription_count());
+      if (c.depth) readers += fmt::format(", depth {}", c.depth->subscription_count());
+      if (c.seg) readers += fmt::format(", seg {}", c.seg->subscription_count());
+      readers += ";";
+    }
+    logger()->warn(
+        "lockstep: the state at t = {:.3f} s came {} times; its frame was published again each time ({}); "
+        "readers matched:{}",
+        static_cast<double>(last_frame_ns_) * 1e-9, repeats_,
+        refused.empty() ? std::string("all accepted") : "refused on" + refused, readers);
+  }
 }
 
 }  // namespace unav::renderer

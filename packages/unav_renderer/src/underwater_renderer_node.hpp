@@ -140,6 +140,8 @@ class UnderwaterRendererNode : public unav::Node {
   bool publish_depth_ = true, publish_seg_ = true;
   std::string ack_name_;
   std::uint64_t frames_ = 0, republished_ = 0;
+  std::int64_t repeated_ns_ = INT64_MIN;  ///< the instant republish_last_frame() last answered
+  int repeats_ = 0;                       ///< how many times in a row
   std::int64_t last_state_ns_ = INT64_MIN, last_frame_ns_ = INT64_MIN;
   std::shared_ptr<unav::Subscription<nav_msgs::msg::Odometry>> odom_sub_;
   std::unique_ptr<unav::lockstep::Acker> acker_;
