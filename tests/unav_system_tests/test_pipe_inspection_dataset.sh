@@ -9,11 +9,12 @@ set +u; source "$ws/install/setup.bash"; set -u
 source "$(dirname "$0")/test_domain.sh"  # a domain of our own (flock)
 out=$(mktemp -d)
 log="$out/launch.log"
-# On failure: every warning and error of the run (a lockstep hold's cause is usually said long
-# before the log's tail), then the tail.
+# On failure: every warning and error of the run, ours ("[WARN]") and Fast DDS' ("... Warning]",
+# between colour codes), since a lockstep hold's cause is usually said long before the log's
+# tail; then the tail.
 fail() {
   echo "FAIL: $*"
-  echo "--- warnings and errors:"; { grep -E "\[(WARN|ERROR)\]" "$log" || true; } | head -60
+  echo "--- warnings and errors:"; { grep -E "\[(WARN|ERROR)\]| (Warning|Error)\]" "$log" || true; } | head -60
   echo "--- launch log:"; tail -30 "$log"
   exit 1
 }
