@@ -221,11 +221,10 @@ std::string PhysicsServer::missing_with_acks() const {
   // Each with what it acked last: a participant one frame short (an input lost on the way) reads
   // differently from one that never answered (not started, or acking under another name).
   std::string missing;
-  for (const auto& p : barrier_->missing(barrier_ns())) {
-    const int64_t last = barrier_->last_ack(p);
-    missing += last == INT64_MIN ? fmt::format(" {} (nothing acked)", p)
-                                 : fmt::format(" {} (acked t = {:.3f} s)", p, static_cast<double>(last) * 1e-9);
-  }
+  for (const auto& p : barrier_->missing(barrier_ns()))
+    missing += barrier_->has_acked(p)
+                   ? fmt::format(" {} (acked t = {:.3f} s)", p, static_cast<double>(barrier_->last_ack(p)) * 1e-9)
+                   : fmt::format(" {} (nothing acked)", p);
   if (wait_for_command_ && !barrier_->meets(last_command_ns_, barrier_ns()))
     missing += last_command_ns_ == INT64_MIN ? std::string(" (thruster command: none yet)")
                                              : fmt::format(" (thruster command: last stamped t = {:.3f} s)",
