@@ -172,6 +172,9 @@ int main(int argc, char** argv) {
   o.marine_snow = false;
   o.noise = false;
   configs.push_back({"+ no snow, no noise", o});
+  o = opt;
+  o.terrain_lod_px = 0.0;
+  configs.push_back({"no terrain LOD (full mesh)", o});
   if (config_index < 0 || config_index >= static_cast<int>(configs.size())) {
     std::fprintf(stderr, "bench_unav_renderer: --config must be 0..%zu\n", configs.size() - 1);
     return 2;
@@ -267,22 +270,25 @@ int main(int argc, char** argv) {
                 med(&RenderTimings::snow_pass_ms), med(&RenderTimings::inscatter_pass_ms),
                 med(&RenderTimings::post_pass_ms), med(&RenderTimings::readback_ms), cpu[0], cpu[1], cpu[2], cpu[3],
                 cpu[4], cpu[0] + cpu[1] + cpu[2] + cpu[3] + cpu[4]);
+    const RenderTimings& last = t.back();
     char line[240];
-    std::snprintf(line, sizeof line, "%-20s %10.0f %12.0f %10.0f (%4.1f %%) %10.0f (%4.1f %%) %10.0f %10.0f", cam,
+    std::snprintf(line, sizeof line,
+                  "%-20s %10.0f %12.0f %10.0f (%4.1f %%) %10.0f (%4.1f %%) %10.0f %10.0f %5zu/%zu/%zu", cam,
                   medz(&RenderTimings::scene_fragments), medz(&RenderTimings::scene_invocations),
                   medz(&RenderTimings::sun_lookup_fragments),
                   100.0 * medz(&RenderTimings::sun_lookup_fragments) / medz(&RenderTimings::scene_fragments),
                   medz(&RenderTimings::lamp_lookup_fragments),
                   100.0 * medz(&RenderTimings::lamp_lookup_fragments) / medz(&RenderTimings::scene_fragments),
-                  medz(&RenderTimings::lamp_map_triangles), medz(&RenderTimings::lamp_map_culled));
+                  medz(&RenderTimings::lamp_map_triangles), medz(&RenderTimings::lamp_map_culled),
+                  last.terrain_tiles[0], last.terrain_tiles[1], last.terrain_tiles[2]);
     lookups.emplace_back(line);
   }
   std::printf(
       "\nscene fragments per frame (median; shaded: fragment shader invocations, llvmpipe counts 4x4 blocks)"
       " and those with shadow lookups (receiver culling on); triangles drawn into the lamps' shadow maps and those"
-      " caster culling left out:\n");
-  std::printf("%-20s %10s %12s %19s %19s %10s %10s\n", "camera", "fragments", "shaded", "sun lookups", "lamp lookups",
-              "lamp map", "culled");
+      " caster culling left out; terrain tiles in view (last frame) by level of detail, every point / 2nd / 4th:\n");
+  std::printf("%-20s %10s %12s %19s %19s %10s %10s %s\n", "camera", "fragments", "shaded", "sun lookups",
+              "lamp lookups", "lamp map", "culled", "   LOD tiles");
   for (const auto& l : lookups) std::puts(l.c_str());
   return 0;
 }

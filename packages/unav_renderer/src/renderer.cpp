@@ -49,11 +49,32 @@ double process_cpu_ms() {
 // outside their view frustum (the seabed patch is ~29k triangles; a lamp sees a few metres).
 struct Chunk {
   GLsizei first = 0, count = 0;  // in indices
-  Eigen::Vector3f lo, hi;
+  Eigen::Vector3f lo = Eigen::Vector3f::Zero(), hi = Eigen::Vector3f::Zero();
   bool sun_free = false;  ///< terrain that nothing can shadow from the sun (mark_sun_free())
   /// Terrain wholly under another terrain mesh (index; -1 none): the far seabed under the patch,
   /// which nobody standing over the patch can see (build_caster_boxes()).
   long under = -1;
+};
+
+// Terrain level of detail: a height field on a regular vertex grid is drawn in tiles of
+// kTileCells x kTileCells cells, each with its full mesh (its chunks) or a coarser one that keeps
+// every 2nd or 4th grid point (kLodLevels: 1x, 2x, 4x the cell). Far seabed seen at a grazing angle
+// is sliver triangles a few pixels high, and llvmpipe shades every 4x4 block a triangle touches:
+// beyond ~15 m the patch's 1 m cells cost ~20 % of a 640x480 frame for a few % of its pixels.
+constexpr int kTileCells = 8;
+constexpr int kChunkCells = 2;  // a chunk of a grid terrain: 2 x 2 cells (~kChunkM at 1 m cells)
+constexpr int kLodLevels = 3;
+struct TerrainTile {
+  std::size_t chunk_begin = 0, chunk_end = 0;  // its full mesh: chunks [begin, end) of the mesh
+  Chunk box;                                   // all of it, skirts included (culling, shadow bits)
+  /// Level k's coarse triangles (k >= 1; level[0] unused) and their largest vertical distance from
+  /// the full mesh [m] (infinite where the tile's cells do not divide by 2^k).
+  std::array<Chunk, kLodLevels> level;
+  std::array<float, kLodLevels> error{};
+  /// Level k's skirts by side (-x, +x, -y, +y): vertical strips hanging from the tile's edge, drawn
+  /// where the neighbour on that side has another level, so that the two edges (each a different
+  /// polyline through the grid points they share) leave no crack between them.
+  std::array<std::array<Chunk, 4>, kLodLevels> skirt;
 };
 
 // A box as seen from a lamp: its azimuths (mid, half-width; all of them when the lamp stands over
@@ -138,9 +159,15 @@ class LampCasters {
 };
 
 struct GpuMesh {
-  GLuint vao = 0, vbo[3] = {0, 0, 0}, ebo = 0;
+  GLuint vao = 0, vbo[4] = {0, 0, 0, 0}, ebo = 0;  // positions, normals, uvs, skirt drops (terrain LOD)
   GLsizei index_count = 0;
   std::vector<Chunk> chunks;
+  /// Terrain level of detail (a height field on a regular grid, terrain_lod()): its tiles, in the
+  /// grid's order (tile_cols a row), and by level how far the shadow lookups of a coarse tile are
+  /// lifted (up, metres) to stay above the full mesh the shadow maps hold: its deepest sag below it.
+  std::vector<TerrainTile> tiles;
+  int tile_cols = 0;
+  std::array<float, kLodLevels> lift{};
   SegClass seg_class = SegClass::kOther;
   Material material;
   /// A height field (the seabed patch, the far seabed): it can shadow itself only where the light
@@ -197,6 +224,9 @@ void validate_options(const RenderOptions& o, const std::string& where) {
     throw ConfigError(where, "shadow_map_size", std::to_string(o.shadow_map_size), "must be in [16, 8192] px");
   if (!(o.shadow_bias >= 0.0) || !std::isfinite(o.shadow_bias))
     throw ConfigError(where, "shadow_bias", std::to_string(o.shadow_bias), "must be finite and >= 0");
+  if (!(o.terrain_lod_px >= 0.0) || !std::isfinite(o.terrain_lod_px))
+    throw ConfigError(where, "terrain_lod_px", std::to_string(o.terrain_lod_px),
+                      "must be finite and >= 0 (0: terrain always at full detail)");
   if (o.lamp_scatter_downsample < 1)
     throw ConfigError(where, "lamp_scatter_downsample", std::to_string(o.lamp_scatter_downsample), "must be >= 1");
   // A compile-time count in the in-scatter shader (one program per value).
@@ -307,6 +337,182 @@ std::vector<std::uint32_t> chunked_indices(const MeshData& mesh, std::vector<Chu
     chunks->push_back(ch);
   }
   return out;
+}
+
+// A height field's vertex grid as make_seabed_mesh lays it out: rows x cols points, vertex (i, j)
+// at index i * cols + j, x the same along a row and y along a column, two triangles a cell,
+// (i, j) (i, j+1) (i+1, j) and (i, j+1) (i+1, j+1) (i+1, j), cell after cell. False for any other
+// mesh (it is then drawn without levels of detail).
+bool grid_layout(const MeshData& m, int* rows, int* cols) {
+  const auto& P = m.positions;
+  const std::size_t nv = m.vertex_count();
+  std::size_t c = 1;
+  while (c < nv && P[3 * c] == P[0]) ++c;
+  if (c < 2 || nv % c != 0 || nv / c < 2 || nv > (std::size_t{1} << 30)) return false;
+  const std::size_t r = nv / c;
+  for (std::size_t i = 0; i < r; ++i)
+    for (std::size_t j = 0; j < c; ++j) {
+      const std::size_t v = 3 * (i * c + j);
+      if (P[v] != P[3 * i * c] || P[v + 1] != P[3 * j + 1]) return false;
+    }
+  if (m.indices.size() != 6 * (r - 1) * (c - 1)) return false;
+  std::size_t k = 0;
+  for (std::size_t i = 0; i + 1 < r; ++i)
+    for (std::size_t j = 0; j + 1 < c; ++j) {
+      const std::size_t a = i * c + j, b = a + 1, e = a + c, d = e + 1;
+      for (const std::size_t v : {a, b, e, b, d, e})
+        if (m.indices[k++] != v) return false;
+    }
+  *rows = static_cast<int>(r);
+  *cols = static_cast<int>(c);
+  return true;
+}
+
+// The index buffer of a grid terrain (grid_layout()) with its level-of-detail tiles (TerrainTile):
+// the full mesh in chunks of kChunkCells x kChunkCells cells, tile after tile (a tile's chunks are
+// one run), then each tile's coarse levels and skirts. The skirts' lower points are appended to
+// `mesh` (copies of the edge's points) with their `drop` below them [m] (0 for the grid's points).
+std::vector<std::uint32_t> terrain_lod(MeshData* mesh, int rows, int cols, std::vector<float>* drop,
+                                       std::vector<Chunk>* chunks, std::vector<TerrainTile>* tiles, int* tile_cols,
+                                       std::array<float, kLodLevels>* lift) {
+  const auto id = [cols](int i, int j) { return static_cast<std::uint32_t>(i * cols + j); };
+  const auto z = [&](int i, int j) { return mesh->positions[std::size_t{3} * id(i, j) + 2]; };
+  std::vector<std::uint32_t> out;
+  out.reserve(mesh->indices.size() * 2);
+  const auto cell = [&](int i, int j, int s) {
+    const std::uint32_t a = id(i, j), b = id(i, j + s), c = id(i + s, j), d = id(i + s, j + s);
+    out.insert(out.end(), {a, b, c, b, d, c});
+  };
+  drop->assign(mesh->vertex_count(), 0.0f);
+  // The chunk of indices [first, end), its box as drawn (skirt points dropped).
+  const auto close = [&](std::size_t first) {
+    Chunk ch;
+    ch.first = static_cast<GLsizei>(first);
+    ch.count = static_cast<GLsizei>(out.size() - first);
+    ch.lo.setConstant(std::numeric_limits<float>::infinity());
+    ch.hi.setConstant(-std::numeric_limits<float>::infinity());
+    for (std::size_t k = first; k < out.size(); ++k) {
+      const std::size_t b = std::size_t{3} * out[k];
+      const Eigen::Vector3f p(mesh->positions[b], mesh->positions[b + 1], mesh->positions[b + 2] + (*drop)[out[k]]);
+      ch.lo = ch.lo.cwiseMin(p);
+      ch.hi = ch.hi.cwiseMax(p);
+    }
+    return ch;
+  };
+  const int ni = rows - 1, nj = cols - 1;  // cells
+  const int tr = (ni + kTileCells - 1) / kTileCells, tc = (nj + kTileCells - 1) / kTileCells;
+  *tile_cols = tc;
+  tiles->assign(static_cast<std::size_t>(tr) * static_cast<std::size_t>(tc), TerrainTile{});
+  struct Span {
+    int i0, i1, j0, j1;  // the tile's cells
+  };
+  std::vector<Span> span(tiles->size());
+  for (int a = 0; a < tr; ++a)
+    for (int b = 0; b < tc; ++b) {
+      const std::size_t ti = static_cast<std::size_t>(a) * static_cast<std::size_t>(tc) + static_cast<std::size_t>(b);
+      Span& sp = span[ti];
+      sp = {a * kTileCells, std::min((a + 1) * kTileCells, ni), b * kTileCells, std::min((b + 1) * kTileCells, nj)};
+      TerrainTile& t = (*tiles)[ti];
+      t.chunk_begin = chunks->size();
+      for (int ci = sp.i0; ci < sp.i1; ci += kChunkCells)
+        for (int cj = sp.j0; cj < sp.j1; cj += kChunkCells) {
+          const std::size_t first = out.size();
+          for (int i = ci; i < std::min(ci + kChunkCells, sp.i1); ++i)
+            for (int j = cj; j < std::min(cj + kChunkCells, sp.j1); ++j) cell(i, j, 1);
+          chunks->push_back(close(first));
+        }
+      t.chunk_end = chunks->size();
+    }
+  // Each coarse level's distance from the full mesh. Both are linear over the triangles of the
+  // full mesh (a coarse cell's diagonal runs along the fine cells' diagonals), so the largest
+  // distance lies at a grid point.
+  std::array<float, kLodLevels> sink{};
+  float worst = 0.0f;
+  for (std::size_t ti = 0; ti < tiles->size(); ++ti) {
+    const Span& sp = span[ti];
+    TerrainTile& t = (*tiles)[ti];
+    for (int k = 1; k < kLodLevels; ++k) {
+      const int s = 1 << k;
+      t.error[static_cast<std::size_t>(k)] = std::numeric_limits<float>::infinity();
+      if ((sp.i1 - sp.i0) % s != 0 || (sp.j1 - sp.j0) % s != 0) continue;
+      float e = 0.0f;
+      for (int i = sp.i0; i <= sp.i1; ++i)
+        for (int j = sp.j0; j <= sp.j1; ++j) {
+          const int ci = sp.i0 + std::min((i - sp.i0) / s, (sp.i1 - sp.i0) / s - 1) * s;
+          const int cj = sp.j0 + std::min((j - sp.j0) / s, (sp.j1 - sp.j0) / s - 1) * s;
+          const float u = static_cast<float>(i - ci) / static_cast<float>(s);
+          const float v = static_cast<float>(j - cj) / static_cast<float>(s);
+          const float zc = u + v <= 1.0f ? z(ci, cj) + v * (z(ci, cj + s) - z(ci, cj)) + u * (z(ci + s, cj) - z(ci, cj))
+                                         : z(ci + s, cj + s) + (1.0f - v) * (z(ci + s, cj) - z(ci + s, cj + s)) +
+                                               (1.0f - u) * (z(ci, cj + s) - z(ci + s, cj + s));
+          const float dz = zc - z(i, j);  // z down: > 0 where the coarse surface sags below the full one
+          e = std::max(e, std::abs(dz));
+          sink[static_cast<std::size_t>(k)] = std::max(sink[static_cast<std::size_t>(k)], dz);
+        }
+      t.error[static_cast<std::size_t>(k)] = e;
+      worst = std::max(worst, e);
+    }
+  }
+  // Neighbours at levels a and b part by at most error_a + error_b: skirts twice the worst, 2 cm more.
+  const float skirt_m = 2.0f * worst + 0.02f;
+  for (int k = 0; k < kLodLevels; ++k)
+    (*lift)[static_cast<std::size_t>(k)] = k == 0 ? 0.0f : sink[static_cast<std::size_t>(k)] + 0.005f;
+  const auto hang = [&](std::uint32_t v) {  // a copy of point v, drawn skirt_m below it
+    const auto n = static_cast<std::uint32_t>(mesh->vertex_count());
+    for (int a = 0; a < 3; ++a) mesh->positions.push_back(mesh->positions[std::size_t{3} * v + a]);
+    for (int a = 0; a < 3; ++a) mesh->normals.push_back(mesh->normals[std::size_t{3} * v + a]);
+    for (int a = 0; a < 2; ++a) mesh->uvs.push_back(mesh->uvs[std::size_t{2} * v + a]);
+    drop->push_back(skirt_m);
+    return n;
+  };
+  for (std::size_t ti = 0; ti < tiles->size(); ++ti) {
+    const Span& sp = span[ti];
+    TerrainTile& t = (*tiles)[ti];
+    for (int k = 0; k < kLodLevels; ++k) {
+      const auto kk = static_cast<std::size_t>(k);
+      if (!std::isfinite(t.error[kk])) continue;
+      const int s = 1 << k;
+      if (k > 0) {
+        const std::size_t first = out.size();
+        for (int i = sp.i0; i < sp.i1; i += s)
+          for (int j = sp.j0; j < sp.j1; j += s) cell(i, j, s);
+        t.level[kk] = close(first);
+      }
+      for (int side = 0; side < 4; ++side) {
+        std::vector<std::uint32_t> top;
+        if (side < 2) {
+          for (int j = sp.j0; j <= sp.j1; j += s) top.push_back(id(side == 0 ? sp.i0 : sp.i1, j));
+        } else {
+          for (int i = sp.i0; i <= sp.i1; i += s) top.push_back(id(i, side == 2 ? sp.j0 : sp.j1));
+        }
+        std::vector<std::uint32_t> bottom;
+        bottom.reserve(top.size());
+        for (const std::uint32_t v : top) bottom.push_back(hang(v));
+        const std::size_t first = out.size();
+        for (std::size_t m = 0; m + 1 < top.size(); ++m)
+          out.insert(out.end(), {top[m], top[m + 1], bottom[m + 1], top[m], bottom[m + 1], bottom[m]});
+        t.skirt[kk][static_cast<std::size_t>(side)] = close(first);
+      }
+    }
+    t.box.lo.setConstant(std::numeric_limits<float>::infinity());
+    t.box.hi.setConstant(-std::numeric_limits<float>::infinity());
+    for (std::size_t c = t.chunk_begin; c < t.chunk_end; ++c) {
+      t.box.lo = t.box.lo.cwiseMin((*chunks)[c].lo);
+      t.box.hi = t.box.hi.cwiseMax((*chunks)[c].hi);
+    }
+    t.box.hi.z() += skirt_m;
+  }
+  return out;
+}
+
+// The level a terrain tile is drawn at: the coarsest whose height error, seen from `eye` with fx
+// pixels per radian, stays within px pixels (fx x error / distance to the tile's box).
+int lod_level(const TerrainTile& t, const Eigen::Vector3f& eye, float fx, double px) {
+  if (!(px > 0.0)) return 0;
+  const float d = (eye.cwiseMax(t.box.lo).cwiseMin(t.box.hi) - eye).norm();
+  for (int k = kLodLevels - 1; k > 0; --k)
+    if (fx * t.error[static_cast<std::size_t>(k)] <= static_cast<float>(px) * d) return k;
+  return 0;
 }
 
 // False when the box lies entirely outside one plane of the clip volume of vp (conservative):
@@ -652,19 +858,33 @@ void Renderer::Impl::upload_scene(const SceneGeometry& geo) {
     g.specular = g.metallic > 0.0f || g.roughness < 0.7f || g.orm_map != 0;
     g.sediment_cover = static_cast<float>(material_sediment(sm.material));
     g.sediment = !g.macro && sm.seg_class != SegClass::kSeabed && g.sediment_cover > 0.0f;
+    // A height field on a grid is drawn by tiles at levels of detail (the skirts' points appended
+    // to a copy of its mesh); any other mesh in chunks.
+    MeshData lod_mesh;
+    const MeshData* mesh = &sm.mesh;
+    std::vector<float> drop;
+    std::vector<std::uint32_t> indices;
+    int rows = 0, cols = 0;
+    if (g.terrain && grid_layout(sm.mesh, &rows, &cols)) {
+      lod_mesh = sm.mesh;
+      indices = terrain_lod(&lod_mesh, rows, cols, &drop, &g.chunks, &g.tiles, &g.tile_cols, &g.lift);
+      mesh = &lod_mesh;
+    } else {
+      indices = chunked_indices(sm.mesh, &g.chunks);
+    }
     glGenVertexArrays(1, &g.vao);
     glBindVertexArray(g.vao);
-    glGenBuffers(3, g.vbo);
-    const std::vector<float>* attr[3] = {&sm.mesh.positions, &sm.mesh.normals, &sm.mesh.uvs};
-    const int comps[3] = {3, 3, 2};
-    for (int a = 0; a < 3; ++a) {
+    glGenBuffers(4, g.vbo);
+    const std::vector<float>* attr[4] = {&mesh->positions, &mesh->normals, &mesh->uvs, &drop};
+    const int comps[4] = {3, 3, 2, 1};
+    for (int a = 0; a < 4; ++a) {
+      if (a == 3 && drop.empty()) continue;  // no skirts: a_drop is the generic attribute's 0
       glBindBuffer(GL_ARRAY_BUFFER, g.vbo[a]);
       glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(attr[a]->size() * sizeof(float)), attr[a]->data(),
                    GL_STATIC_DRAW);
       glEnableVertexAttribArray(static_cast<GLuint>(a));
       glVertexAttribPointer(static_cast<GLuint>(a), comps[a], GL_FLOAT, GL_FALSE, 0, nullptr);
     }
-    const std::vector<std::uint32_t> indices = chunked_indices(sm.mesh, &g.chunks);
     glGenBuffers(1, &g.ebo);
     glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, g.ebo);
     glBufferData(GL_ELEMENT_ARRAY_BUFFER, static_cast<GLsizeiptr>(indices.size() * sizeof(std::uint32_t)),
@@ -675,6 +895,20 @@ void Renderer::Impl::upload_scene(const SceneGeometry& geo) {
   }
   build_caster_boxes(geo);
   mark_sun_free();
+  for (GpuMesh& m : meshes) {
+    bool mixed = false;               // a tile partly under another terrain mesh
+    for (TerrainTile& t : m.tiles) {  // sun-free and under another mesh when all its chunks are
+      t.box.sun_free = true;
+      t.box.under = t.chunk_begin < t.chunk_end ? m.chunks[t.chunk_begin].under : -1;
+      for (std::size_t c = t.chunk_begin; c < t.chunk_end; ++c) {
+        t.box.sun_free = t.box.sun_free && m.chunks[c].sun_free;
+        mixed = mixed || m.chunks[c].under != t.box.under;
+      }
+    }
+    // Terrain partly under other terrain (the far seabed, whose part under the patch occlusion
+    // culling leaves out chunk by chunk): drawn by chunks, without levels of detail.
+    if (mixed) m.tiles.clear();
+  }
   check_gl("scene upload");
 }
 
@@ -1249,7 +1483,12 @@ void Renderer::Impl::scene_pass(const Targets& t, const FrameSetup& f, double st
       }
     }
   }
-  std::vector<const Chunk*> bins[4];
+  // What to draw by level of detail (the shadow lift; non-terrain and full meshes: 0), then by
+  // the shadow lookups needed.
+  std::array<std::array<std::vector<const Chunk*>, 4>, std::size_t{2} * kLodLevels> bins;  // skirts: kLodLevels + level
+  const float fx = static_cast<float>(std::max(t.internal.fx, t.internal.fy));
+  std::vector<int> levels;
+  for (std::size_t& n : timings.terrain_tiles) n = 0;
   timings.shadow_lookups_drawn = timings.shadow_lookups_skipped = 0;
   timings.scene_fragments = timings.sun_lookup_fragments = timings.lamp_lookup_fragments = 0;
   timings.scene_invocations = 0;
@@ -1267,22 +1506,61 @@ void Renderer::Impl::scene_pass(const Targets& t, const FrameSetup& f, double st
       if (meshes[mi].terrain == terrain) order.push_back(mi);
   for (const std::size_t mi : order) {
     const GpuMesh& m = meshes[mi];
-    for (auto& b : bins) b.clear();
-    for (const Chunk& ch : m.chunks) {
-      if (!in_frustum(vp, ch) || (options.occlusion_culling && hidden_under(ch.under, cam))) continue;
+    for (auto& level : bins)
+      for (auto& b : level) b.clear();
+    // Chunk `draw` at `level` (a skirt: kLodLevels + level), its shadow lookups decided by `box`
+    // (the chunk, or its tile).
+    const auto add = [&](const Chunk& draw, const Chunk& box, int level) {
       unsigned bits = all_shadows;
       if (cull && m.terrain) {
-        bits = (f.sun_shadow && !ch.sun_free ? 1u : 0u) | (f.shadows ? lamp_shadow_bits(mi, ch, f, casters) : 0u);
+        bits = (f.sun_shadow && !box.sun_free ? 1u : 0u) | (f.shadows ? lamp_shadow_bits(mi, box, f, casters) : 0u);
         for (unsigned b : {1u, 2u}) {
           if (!(all_shadows & b)) continue;
           ++((bits & b) ? timings.shadow_lookups_drawn : timings.shadow_lookups_skipped);
         }
       }
-      bins[bits].push_back(&ch);
+      bins[static_cast<std::size_t>(level)][bits].push_back(&draw);
+    };
+    const auto seen = [&](const Chunk& ch) {
+      return in_frustum(vp, ch) && !(options.occlusion_culling && hidden_under(ch.under, cam));
+    };
+    if (m.tiles.empty()) {
+      for (const Chunk& ch : m.chunks)
+        if (seen(ch)) add(ch, ch, 0);
+    } else {
+      levels.resize(m.tiles.size());
+      for (std::size_t ti = 0; ti < m.tiles.size(); ++ti)
+        levels[ti] = lod_level(m.tiles[ti], cam, fx, options.terrain_lod_px);
+      const auto tc = static_cast<std::size_t>(m.tile_cols);
+      for (std::size_t ti = 0; ti < m.tiles.size(); ++ti) {
+        const TerrainTile& tile = m.tiles[ti];
+        if (!seen(tile.box)) continue;
+        const int k = levels[ti];
+        const auto kk = static_cast<std::size_t>(k);
+        ++timings.terrain_tiles[kk];
+        if (k == 0) {
+          for (std::size_t c = tile.chunk_begin; c < tile.chunk_end; ++c)
+            if (seen(m.chunks[c])) add(m.chunks[c], m.chunks[c], 0);
+        } else {
+          add(tile.level[kk], tile.box, k);
+        }
+        // Skirts towards the neighbours (-x, +x, -y, +y) drawn at another level. After all the
+        // surfaces: they lie under them but where the seam between two levels opens, and llvmpipe
+        // skips the shading of blocks whose depth test fails.
+        const std::size_t r = ti / tc, c = ti % tc;
+        const bool has[4] = {r > 0, (r + 1) * tc<m.tiles.size(), c> 0, c + 1 < tc};
+        const std::size_t nb[4] = {ti - tc, ti + tc, ti - 1, ti + 1};
+        for (std::size_t side = 0; side < 4; ++side)
+          if (has[side] && levels[nb[side]] != k) add(tile.skirt[kk][side], tile.box, kLodLevels + k);
+      }
     }
-    for (unsigned bits = 0; bits < 4; ++bits) {
-      if (bins[bits].empty()) continue;
+    for (std::size_t b = 0; b < bins.size() * 4; ++b) {
+      const std::size_t level = b / 4;
+      const unsigned bits = b % 4;
+      const auto& bin = bins[level][bits];
+      if (bin.empty()) continue;
       Program& scene = scene_program(m, bits, f, stamp_s, &set_up);
+      glUniform1f(scene["u_shadow_lift"], m.lift[level % kLodLevels]);
       set3(scene["u_albedo"], m.material.albedo);
       glUniform1f(scene["u_uv_scale"], static_cast<float>(m.material.uv_scale_m));
       const Look k = look(m);
@@ -1313,7 +1591,7 @@ void Renderer::Impl::scene_pass(const Targets& t, const FrameSetup& f, double st
         glBeginQuery(GL_SAMPLES_PASSED, fragment_query);
         if (invocation_query) glBeginQuery(GL_FRAGMENT_SHADER_INVOCATIONS_ARB, invocation_query);
       }
-      draw_chunks(bins[bits]);
+      draw_chunks(bin);
       if (options.profile_passes) {  // fragments shaded (the depth test passed) with and without lookups
         glEndQuery(GL_SAMPLES_PASSED);
         GLuint n = 0, inv = 0;
@@ -1724,7 +2002,7 @@ void Renderer::Impl::release_scene() {
   image_textures.clear();
   mesh_images.clear();
   for (auto& m : meshes) {
-    glDeleteBuffers(3, m.vbo);
+    glDeleteBuffers(4, m.vbo);
     glDeleteBuffers(1, &m.ebo);
     glDeleteVertexArrays(1, &m.vao);
   }

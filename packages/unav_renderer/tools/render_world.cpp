@@ -1,6 +1,7 @@
 // Render one frame per camera of a world to PNG (gallery, quick looks):
 //   unav_render_world WORLD.yaml CAMERAS.yaml OUT_PREFIX [--water NAME|FILE.yaml]
 //       [--pose N E D YAW_DEG] [--camera NAME] [--no-snow] [--no-noise] [--no-shadows] [--no-materials] [--samples N]
+//       [--lod PX]
 // Writes OUT_PREFIX_<camera>.png and prints timings.
 #include <cstdlib>
 #include <cstring>
@@ -14,7 +15,7 @@ int main(int argc, char** argv) {
   if (argc < 4) {
     std::cerr << "usage: unav_render_world WORLD.yaml CAMERAS.yaml OUT_PREFIX [--water NAME|FILE] "
                  "[--pose N E D YAW_DEG] [--camera NAME] [--no-snow] [--no-noise] [--no-shadows] [--no-materials] "
-                 "[--samples N]\n";
+                 "[--samples N] [--lod PX]\n";
     return 2;
   }
   try {
@@ -40,6 +41,8 @@ int main(int argc, char** argv) {
         opt.shadows = false;
       } else if (a == "--no-noise") {
         opt.noise = false;
+      } else if (a == "--lod" && i + 1 < argc) {
+        opt.terrain_lod_px = std::atof(argv[++i]);
       } else if (a == "--samples" && i + 1 < argc) {
         opt.lamp_scatter_samples = std::atoi(argv[++i]);
       } else {

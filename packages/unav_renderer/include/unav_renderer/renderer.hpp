@@ -59,6 +59,13 @@ struct RenderOptions {
   /// standing over it. No pixel changes (a camera inside a solid would see through it); false only
   /// to measure or to check that.
   bool occlusion_culling = true;
+  /// Terrain level of detail: a seabed height field (a regular grid of points) is drawn in tiles
+  /// of 8 x 8 cells, each with every point or every 2nd or 4th, the coarsest whose largest height
+  /// difference from the full mesh, seen from the camera (fx x difference / distance to the tile),
+  /// stays within terrain_lod_px pixels; skirts close the seams between levels. The far seabed seen
+  /// at a grazing angle is sliver triangles, each shaded in whole 4x4 blocks by llvmpipe. Shadow
+  /// maps hold the full mesh. 0: always the full mesh (depth exact to the mesh). >= 0, finite.
+  double terrain_lod_px = 2.0;
   /// Scale of the shadow maps' depth bias (slope-scaled polygon offset) against self-shadowing
   /// ("acne"): larger removes acne on steep terrain and detaches contact shadows. >= 0.
   double shadow_bias = 1.0;
@@ -125,6 +132,9 @@ struct RenderTimings {
   /// else 0): fragment shader invocations of the scene pass. llvmpipe shades 4x4 blocks, so a block
   /// a triangle's edge crosses costs 16, and a face hidden by a later one was shaded anyway.
   std::size_t scene_invocations = 0;
+  /// Terrain tiles in the camera's view in the last frame by level of detail (every point, every
+  /// 2nd, every 4th; RenderOptions::terrain_lod_px).
+  std::size_t terrain_tiles[3] = {0, 0, 0};
 };
 
 /// The vehicle's velocity in base_link_frd (nav_msgs/Odometry's twist) at a frame's stamp: for
