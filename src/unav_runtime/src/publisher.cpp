@@ -30,8 +30,9 @@ class ReaderListener : public fdds::DataReaderListener {
 }  // namespace
 
 PublisherBase::PublisherBase(Context& ctx, const std::string& topic, fdds::TopicDataType* type, const QoS& qos)
-    : ctx_(ctx), topic_(topic), max_sample_bytes_(qos.data_sharing ? qos.max_sample_bytes : 0) {
-  writer_ = ctx_.create_writer(ctx_.topic(topic, type), qos);
+    : ctx_(ctx), topic_(topic), max_sample_bytes_(qos.data_sharing ? qos.max_sample_bytes : 0), qos_(qos) {
+  dds_topic_ = ctx_.topic(topic, type);
+  writer_ = ctx_.create_writer(dds_topic_, qos);
 }
 
 PublisherBase::~PublisherBase() { ctx_.delete_writer(writer_); }
@@ -62,7 +63,8 @@ const char* return_code_name(const ReturnCode_t& rc) {
 }  // namespace
 
 bool PublisherBase::write(const void* sample) {
-  const ReturnCode_t rc = writer_->write(const_cast<void*>(sample), fdds::HANDLE_NIL);
+  const ReturnCode_t rc = refuse_for_test_ > 0 ? (--refuse_for_test_, ReturnCode_t::RETCODE_OUT_OF_RESOURCES)
+                                               : writer_->write(const_cast<void*>(sample), fdds::HANDLE_NIL);
   if (rc == ReturnCode_t::RETCODE_OK) {
     if (failures_since_ok_ != 0) {
       make_logger("unav_runtime")
@@ -72,7 +74,32 @@ bool PublisherBase::write(const void* sample) {
     return true;
   }
   ++write_failures_;
-  ++failures_since_ok_;
+  const auto now = std::chrono::steady_clock::now();
+  if (failures_since_ok_++ == 0) first_refusal_ = now;
+  // Out of resources twice in a row over at least 0.5 s (a lockstep frame is sent again each
+  // second; a camera at 10+ Hz refuses several times in that span), at most once every 10 s (a
+  // sample over the bound is refused by any pool: no churn).
+  using std::chrono::milliseconds;
+  if (rc == ReturnCode_t::RETCODE_OUT_OF_RESOURCES && max_sample_bytes_ != 0 && failures_since_ok_ >= 2 &&
+      now - first_refusal_ >= milliseconds(500) &&
+      (recreations_ == 0 || now - last_recreation_ >= milliseconds(10000))) {
+    make_logger("unav_runtime")
+        ->warn(
+            "topic '{}': the data-sharing writer refused {} samples in a row over {:.1f} s (out of resources: its "
+            "payload pool stays full); creating it again (readers match the new one)",
+            topic_, failures_since_ok_, std::chrono::duration<double>(now - first_refusal_).count());
+    ctx_.delete_writer(writer_);
+    writer_ = ctx_.create_writer(dds_topic_, qos_);
+    ++recreations_;
+    last_recreation_ = now;
+    ctx_.publish_graph();  // the node's writer has a new GUID (ros_discovery_info)
+    if (writer_->write(const_cast<void*>(sample), fdds::HANDLE_NIL) == ReturnCode_t::RETCODE_OK) {
+      make_logger("unav_runtime")
+          ->warn("topic '{}': the middleware accepts samples again after {} refused", topic_, failures_since_ok_);
+      failures_since_ok_ = 0;
+      return true;
+    }
+  }
   if ((write_failures_ & (write_failures_ - 1)) == 0) {  // 1st, 2nd, 4th, 8th ...
     make_logger("unav_runtime")
         ->error(

@@ -9,11 +9,13 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <atomic>
 #include <cstdint>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <string>
+#include <thread>
 
 #include <fastdds/dds/publisher/DataWriter.hpp>
 #include <fastdds/dds/subscriber/DataReader.hpp>
@@ -173,4 +175,47 @@ int main(int argc, char** argv) {
     return run_reader(std::string(argv[2]) == "shared", std::stoi(argv[3]), std::stoi(argv[4]), argv[5]);
   ::testing::InitGoogleTest(&argc, argv);
   return RUN_ALL_TESTS();
+}
+
+// A data-sharing writer refused out of resources twice in a row over 0.5 s is deleted and created
+// again, and its readers match the new one. (The stall it answers, a pool that stays full with
+// several data-sharing readers, is Fast DDS's and not reproducible on demand: the refusals are
+// injected.)
+TEST(DataSharing, WriterStuckOutOfResourcesIsCreatedAgain) {
+  unav::Context ctx(unav::testing::test_context_options());
+  unav::Node cam("camera", {&ctx});
+  unav::Node viewer("viewer", {&ctx});
+  std::atomic<int> received{0};
+  auto pub = cam.create_publisher<sensor_msgs::msg::Image>(
+      "/camera/image_raw", unav::QoS::reliable(4).with_data_sharing(unav::serialized_bytes(make_image(0))));
+  auto sub = viewer.create_subscription<sensor_msgs::msg::Image>(
+      "/camera/image_raw", unav::QoS::reliable(4).with_data_sharing(),
+      [&](const sensor_msgs::msg::Image& m) { received += m.data() == make_image(7).data() ? 1 : 0; });
+  ASSERT_TRUE(ctx.spin_until([&] { return pub->subscription_count() == 1 && sub->publisher_count() == 1; }, 30s));
+  const auto guid = pub->writer()->guid();
+
+  EXPECT_FALSE(pub->publish(make_image(1, 481)));  // over the bound: an error, not out of resources
+  std::this_thread::sleep_for(600ms);
+  EXPECT_FALSE(pub->publish(make_image(2, 481)));
+  EXPECT_EQ(pub->writer_recreations(), 0);
+  EXPECT_TRUE(pub->publish(make_image(0)));
+
+  pub->refuse_writes_for_test(2);
+  EXPECT_FALSE(pub->publish(make_image(1)));
+  EXPECT_EQ(pub->writer_recreations(), 0);  // one refusal is not a stuck writer
+  std::this_thread::sleep_for(600ms);
+  EXPECT_TRUE(pub->publish(make_image(2)));  // 2nd in a row, 0.6 s on: created again, and sent by the new one
+  ASSERT_EQ(pub->writer_recreations(), 1);
+  EXPECT_NE(pub->writer()->guid(), guid);
+  pub->refuse_writes_for_test(2);
+  EXPECT_FALSE(pub->publish(make_image(3)));
+  std::this_thread::sleep_for(600ms);
+  EXPECT_FALSE(pub->publish(make_image(4)));  // at most once every 10 s
+  EXPECT_EQ(pub->writer_recreations(), 1);
+
+  // The reader matches the new writer, and a sample within the bound gets through.
+  ASSERT_TRUE(ctx.spin_until([&] { return pub->subscription_count() == 1 && sub->publisher_count() == 1; }, 30s));
+  std::this_thread::sleep_for(500ms);  // the reader's side of the match (see testing.hpp)
+  ASSERT_TRUE(pub->publish(make_image(7)));
+  EXPECT_TRUE(ctx.spin_until([&] { return received.load() == 1; }, 30s));
 }

@@ -2,6 +2,7 @@
 #pragma once
 
 #include <atomic>
+#include <chrono>
 #include <cstdint>
 #include <functional>
 #include <memory>
@@ -65,7 +66,13 @@ class PublisherBase {
   const std::string& topic_name() const { return topic_; }
   /// Number of matched subscriptions (any process, any vendor).
   int subscription_count() const;
+  /// The current DataWriter: a data-sharing writer stuck out of resources is replaced (see write()).
   eprosima::fastdds::dds::DataWriter* writer() const { return writer_; }
+  /// How many times write() replaced a stuck data-sharing writer.
+  int writer_recreations() const { return recreations_; }
+  /// Tests only: the next n writes are refused out of resources without reaching the middleware
+  /// (the Fast DDS stall write() answers cannot be produced on demand).
+  void refuse_writes_for_test(int n) { refuse_for_test_ = n; }
 
  protected:
   bool write(const void* sample);
@@ -79,6 +86,14 @@ class PublisherBase {
   // first success after them (a camera at 30 Hz would flood the log; a writer that refuses for
   // good must still show in a log's tail).
   std::uint64_t write_failures_ = 0, failures_since_ok_ = 0;
+  // A data-sharing writer whose payload pool stays full (Fast DDS 2.9 with several data-sharing
+  // readers: seen in lockstep runs, every write refused out of resources for good while its readers
+  // stay matched) is deleted and created again: readers match the new one, the pool starts empty.
+  eprosima::fastdds::dds::Topic* dds_topic_ = nullptr;
+  QoS qos_;
+  std::chrono::steady_clock::time_point first_refusal_{}, last_recreation_{};
+  int recreations_ = 0;
+  int refuse_for_test_ = 0;
 };
 
 template <typename Msg>
