@@ -84,7 +84,8 @@ TEST(TerrainLod, CoarseTilesStayWithinTheirPixelBudget) {
     // make_seabed_mesh() lays them (the full image's points lie on it to float rounding: slack).
     const World w = pipe_world();
     const Eigen::Vector2d size = w.seabed.size_m, o = w.seabed.center_ne - 0.5 * size;
-    const Eigen::Vector2d cells(std::ceil(size.x() / w.seabed.resolution_m), std::ceil(size.y() / w.seabed.resolution_m));
+    const Eigen::Vector2d cells(std::ceil(size.x() / w.seabed.resolution_m),
+                                std::ceil(size.y() / w.seabed.resolution_m));
     const Eigen::Vector2d step = size.cwiseQuotient(cells);
     const auto mesh_depth = [&](double n, double e) {
       const double gi = (n - o.x()) / step.x(), gj = (e - o.y()) / step.y();
@@ -101,7 +102,8 @@ TEST(TerrainLod, CoarseTilesStayWithinTheirPixelBudget) {
       const Eigen::Vector2d c = w.seabed.center_ne, half = 0.5 * size - Eigen::Vector2d::Constant(0.5);
       for (int y = 0; y < f.height; ++y)
         for (int x = 0; x < f.width; ++x) {
-          const std::size_t i = static_cast<std::size_t>(y) * static_cast<std::size_t>(f.width) + static_cast<std::size_t>(x);
+          const std::size_t i =
+              static_cast<std::size_t>(y) * static_cast<std::size_t>(f.width) + static_cast<std::size_t>(x);
           if (f.seg[i] != kSeabed) continue;
           const double z = f.depth[i];
           const Eigen::Vector3d p_C(z * (x - cx) / fx, z * (y - cy) / fy, z);  // K: pixel centres at integers
