@@ -91,7 +91,9 @@ TEST(TerrainLod, CoarseTilesStayWithinTheirPixelBudget) {
       const double gi = (n - o.x()) / step.x(), gj = (e - o.y()) / step.y();
       const double i = std::min(std::floor(gi), cells.x() - 1), j = std::min(std::floor(gj), cells.y() - 1);
       const double u = gi - i, v = gj - j;
-      const auto z = [&](double ri, double rj) { return w.seabed.depth_at(o.x() + ri * step.x(), o.y() + rj * step.y()); };
+      const auto z = [&](double ri, double rj) {
+        return w.seabed.depth_at(o.x() + ri * step.x(), o.y() + rj * step.y());
+      };
       return u + v <= 1.0 ? z(i, j) + v * (z(i, j + 1) - z(i, j)) + u * (z(i + 1, j) - z(i, j))
                           : z(i + 1, j + 1) + (1.0 - v) * (z(i + 1, j) - z(i + 1, j + 1)) +
                                 (1.0 - u) * (z(i, j + 1) - z(i + 1, j + 1));
