@@ -88,8 +88,11 @@ bool PublisherBase::write(const void* sample) {
             "topic '{}': the data-sharing writer refused {} samples in a row over {:.1f} s (out of resources: its "
             "payload pool stays full); creating it again (readers match the new one)",
             topic_, failures_since_ok_, std::chrono::duration<double>(now - first_refusal_).count());
-    ctx_.delete_writer(writer_);
+    // The new writer first, then the old one goes: writer() never points at a deleted writer for
+    // longer than the assignment (Context::publish_graph() reads it from other threads).
+    fdds::DataWriter* old = writer_;
     writer_ = ctx_.create_writer(dds_topic_, qos_);
+    ctx_.delete_writer(old);
     ++recreations_;
     last_recreation_ = now;
     ctx_.publish_graph();  // the node's writer has a new GUID (ros_discovery_info)
