@@ -63,16 +63,18 @@ const char* return_code_name(const ReturnCode_t& rc) {
 }  // namespace
 
 bool PublisherBase::write(const void* sample) {
-  const ReturnCode_t rc = refuse_for_test_ > 0 ? (--refuse_for_test_, ReturnCode_t::RETCODE_OUT_OF_RESOURCES)
-                                               : writer_->write(const_cast<void*>(sample), fdds::HANDLE_NIL);
-  if (rc == ReturnCode_t::RETCODE_OK) {
+  // A sample taken after refusals ends their run (logged once).
+  const auto accepted = [this] {
     if (failures_since_ok_ != 0) {
       make_logger("unav_runtime")
           ->warn("topic '{}': the middleware accepts samples again after {} refused", topic_, failures_since_ok_);
       failures_since_ok_ = 0;
     }
     return true;
-  }
+  };
+  const ReturnCode_t rc = refuse_for_test_ > 0 ? (--refuse_for_test_, ReturnCode_t::RETCODE_OUT_OF_RESOURCES)
+                                               : writer_->write(const_cast<void*>(sample), fdds::HANDLE_NIL);
+  if (rc == ReturnCode_t::RETCODE_OK) return accepted();
   ++write_failures_;
   const auto now = std::chrono::steady_clock::now();
   if (failures_since_ok_++ == 0) first_refusal_ = now;
@@ -96,12 +98,7 @@ bool PublisherBase::write(const void* sample) {
     ++recreations_;
     last_recreation_ = now;
     ctx_.publish_graph();  // the node's writer has a new GUID (ros_discovery_info)
-    if (writer_->write(const_cast<void*>(sample), fdds::HANDLE_NIL) == ReturnCode_t::RETCODE_OK) {
-      make_logger("unav_runtime")
-          ->warn("topic '{}': the middleware accepts samples again after {} refused", topic_, failures_since_ok_);
-      failures_since_ok_ = 0;
-      return true;
-    }
+    if (writer_->write(const_cast<void*>(sample), fdds::HANDLE_NIL) == ReturnCode_t::RETCODE_OK) return accepted();
   }
   if ((write_failures_ & (write_failures_ - 1)) == 0) {  // 1st, 2nd, 4th, 8th ...
     make_logger("unav_runtime")
