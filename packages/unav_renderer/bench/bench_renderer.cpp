@@ -175,6 +175,9 @@ int main(int argc, char** argv) {
   o = opt;
   o.terrain_lod_px = 0.0;
   configs.push_back({"no terrain LOD (full mesh)", o});
+  o = opt;
+  o.noise = false;
+  configs.push_back({"no sensor noise", o});
   if (config_index < 0 || config_index >= static_cast<int>(configs.size())) {
     std::fprintf(stderr, "bench_unav_renderer: --config must be 0..%zu\n", configs.size() - 1);
     return 2;
@@ -272,23 +275,24 @@ int main(int argc, char** argv) {
                 cpu[4], cpu[0] + cpu[1] + cpu[2] + cpu[3] + cpu[4]);
     const RenderTimings& last = t.back();
     char line[240];
-    std::snprintf(line, sizeof line,
-                  "%-20s %10.0f %12.0f %10.0f (%4.1f %%) %10.0f (%4.1f %%) %10.0f %10.0f %5zu/%zu/%zu", cam,
-                  medz(&RenderTimings::scene_fragments), medz(&RenderTimings::scene_invocations),
-                  medz(&RenderTimings::sun_lookup_fragments),
-                  100.0 * medz(&RenderTimings::sun_lookup_fragments) / medz(&RenderTimings::scene_fragments),
-                  medz(&RenderTimings::lamp_lookup_fragments),
-                  100.0 * medz(&RenderTimings::lamp_lookup_fragments) / medz(&RenderTimings::scene_fragments),
-                  medz(&RenderTimings::lamp_map_triangles), medz(&RenderTimings::lamp_map_culled),
-                  last.terrain_tiles[0], last.terrain_tiles[1], last.terrain_tiles[2]);
+    std::snprintf(
+        line, sizeof line, "%-20s %10.0f %12.0f %10.0f (%4.1f %%) %10.0f (%4.1f %%) %10.0f %10.0f %5zu/%zu/%zu %6dx%d",
+        cam, medz(&RenderTimings::scene_fragments), medz(&RenderTimings::scene_invocations),
+        medz(&RenderTimings::sun_lookup_fragments),
+        100.0 * medz(&RenderTimings::sun_lookup_fragments) / medz(&RenderTimings::scene_fragments),
+        medz(&RenderTimings::lamp_lookup_fragments),
+        100.0 * medz(&RenderTimings::lamp_lookup_fragments) / medz(&RenderTimings::scene_fragments),
+        medz(&RenderTimings::lamp_map_triangles), medz(&RenderTimings::lamp_map_culled), last.terrain_tiles[0],
+        last.terrain_tiles[1], last.terrain_tiles[2], last.internal_width, last.internal_height);
     lookups.emplace_back(line);
   }
   std::printf(
       "\nscene fragments per frame (median; shaded: fragment shader invocations, llvmpipe counts 4x4 blocks)"
       " and those with shadow lookups (receiver culling on); triangles drawn into the lamps' shadow maps and those"
-      " caster culling left out; terrain tiles in view (last frame) by level of detail, every point / 2nd / 4th:\n");
-  std::printf("%-20s %10s %12s %19s %19s %10s %10s %s\n", "camera", "fragments", "shaded", "sun lookups",
-              "lamp lookups", "lamp map", "culled", "   LOD tiles");
+      " caster culling left out; terrain tiles in view (last frame) by level of detail, every point / 2nd / 4th;"
+      " the internal (undistorted, water-side) image the scene is rendered at:\n");
+  std::printf("%-20s %10s %12s %19s %19s %10s %10s %s %s\n", "camera", "fragments", "shaded", "sun lookups",
+              "lamp lookups", "lamp map", "culled", "   LOD tiles", "  internal");
   for (const auto& l : lookups) std::puts(l.c_str());
   return 0;
 }

@@ -533,14 +533,21 @@ uint pcg(uint v) {
   uint word = ((state >> ((state >> 28u) + 4u)) ^ state) * 277803737u;
   return (word >> 22u) ^ word;
 }
-float u01(uint h) { return (float(h >> 8u) + 0.5) / 16777216.0; }
-// Two independent standard normal numbers (Box-Muller, both outputs used).
-vec2 gauss2(uint seed) {
-  uint h1 = pcg(seed);
-  uint h2 = pcg(h1);
-  float r = sqrt(-2.0 * log(u01(h1)));
-  float a = 2.0 * PI * u01(h2);
-  return r * vec2(cos(a), sin(a));
+// sin(x) for |x| <= pi: folded to [-pi/2, pi/2], degree-9 Taylor (error 3.6e-6). llvmpipe's
+// sin() and cos() reduce any argument and evaluate two polynomials each: several times this.
+float sin_pi(float x) {
+  float r = abs(x) > 1.5707964 ? 3.1415927 * sign(x) - x : x;
+  float r2 = r * r;
+  return r * (1.0 + r2 * (-0.16666667 + r2 * (0.0083333333 + r2 * (-1.9841270e-4 + r2 * 2.7557319e-6))));
+}
+// Two independent standard normal numbers from one 32-bit hash (Box-Muller, both outputs used):
+// 20 bits for the radius (|z| up to sqrt(2 ln 2^21) = 5.4), 12 bits for the angle; cos(a) =
+// sin(pi/2 - |a|) needs no folding.
+vec2 gauss2(uint h) {
+  float u = (float(h >> 12u) + 0.5) / 1048576.0;
+  float a = (float(h & 4095u) + 0.5) * (2.0 * PI / 4096.0) - PI;   // (-pi, pi)
+  float r = sqrt(-2.0 * log(u));
+  return r * vec2(sin_pi(0.5 * PI - abs(a)), sin_pi(a));
 }
 
 vec3 encode(vec3 x) {
@@ -700,11 +707,11 @@ void main() {
   // first three, read noise the next three.
   uint h = pcg(uint(pix.x) + 8192u * uint(pix.y) + pcg(u_seed));
 #if SHOT || READ_NOISE
-  vec2 g01 = gauss2(h + 0x27D4EB2Fu);
-  vec2 g23 = gauss2(h + 0x85EBCA6Bu);
+  vec2 g01 = gauss2(h);
+  vec2 g23 = gauss2(pcg(h + 0x85EBCA6Bu));
 #endif
 #if SHOT && READ_NOISE
-  vec2 g45 = gauss2(h + 0x9E3779B9u);
+  vec2 g45 = gauss2(pcg(h + 0x9E3779B9u));
   vec3 g_read = vec3(g23.y, g45);
 #elif READ_NOISE
   vec3 g_read = vec3(g01, g23.x);

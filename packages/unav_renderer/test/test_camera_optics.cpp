@@ -3,8 +3,10 @@
 
 #include <opencv2/calib3d.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <vector>
 
 #include "render_test_util.hpp"
 #include "unav_renderer/errors.hpp"
@@ -109,6 +111,43 @@ TEST(CameraOptics, WaterEquivalentModelPredictsFarOffAxisPixels) {
   }
 }
 
+TEST(CameraOptics, FlatPortRendersACroppedFieldAndKeepsItsBorder) {
+  // Behind a flat port the field narrows (80 -> ~57 deg here), so the scene is rendered at the
+  // water-side focal length over the output frame cropped to the rays its pixels see
+  // (RenderTimings::internal_width/height). The crop must not cut what the border sees: a marker
+  // placed where the reported model (K, D) puts a corner or edge-middle pixel covers that pixel
+  // (the edge middles reach farthest out: the port's pincushion pulls the corners in).
+  CameraModel cam = forward_camera(320, 240, 200.0);
+  cam.port.type = CameraPort::Type::kFlat;
+  Frame model;
+  {
+    Renderer r(empty_world(), {cam}, exact_options());
+    model = r.render(Pose::Identity(), "cam");
+    const RenderTimings t = r.last_timings();
+    std::printf("flat port 320x240: internal image %dx%d\n", t.internal_width, t.internal_height);
+    EXPECT_LT(t.internal_width, cam.width);
+    EXPECT_LE(t.internal_height, cam.height);
+  }
+  cv::Mat K(3, 3, CV_64F), D(1, 5, CV_64F);
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) K.at<double>(i, j) = model.K(i, j);
+  for (int k = 0; k < 5; ++k) D.at<double>(0, k) = model.D[k];
+  for (const cv::Point2f px :
+       {cv::Point2f(1, 1), cv::Point2f(318, 1), cv::Point2f(1, 238), cv::Point2f(318, 238), cv::Point2f(1, 120),
+        cv::Point2f(318, 120), cv::Point2f(160, 1), cv::Point2f(160, 238)}) {
+    std::vector<cv::Point2f> in = {px}, ray;
+    cv::undistortPoints(in, ray, K, D);
+    // Camera optical (x right, y down, z forward) -> body (x forward, y right, z down): 4 m ahead.
+    const Eigen::Vector3d p_body = cam.X_BC * (4.0 * Eigen::Vector3d(ray[0].x, ray[0].y, 1.0));
+    World w = empty_world();
+    w.objects.push_back(marker(p_body, 0.25));  // ~17 px wide: the model's ~1 px error is far inside
+    Renderer r(w, {cam}, exact_options());
+    const Frame f = r.render(Pose::Identity(), "cam");
+    const auto u = static_cast<std::size_t>(px.x), v = static_cast<std::size_t>(px.y);
+    EXPECT_EQ(f.seg[v * 320 + u], static_cast<std::uint8_t>(SegClass::kOther)) << "border pixel " << px;
+  }
+}
+
 TEST(CameraOptics, VignettingFollowsCosFourOfTheFieldAngle) {
   // Water only (veiling light everywhere, no noise, linear 8-bit): the image with full
   // vignetting over the one without is cos^4 of each pixel's field angle. 8-bit quantisation
@@ -164,6 +203,75 @@ TEST(CameraOptics, ShotNoiseStdGrowsAsTheSquareRootOfTheSignal) {
     ASSERT_LT(mean_level + 3 * expected, 0.8);  // below the encoder's shoulder: linear
     EXPECT_NEAR(std_meas / expected, 1.0, 0.05);
   }
+}
+
+TEST(CameraOptics, ReadNoiseIsGaussianAndIndependent) {
+  // Read noise only (shot 0), linear 8-bit, water: green and blue levels 71..162, over 9 sigma
+  // from black and white (red, near black, is clamped there and left out). The noisy minus the
+  // clean image over 38400 samples has
+  //  - standard deviation noise_stddev (estimate to 0.4 %; 8-bit rounding adds 1/12 level^2,
+  //    +0.07 %): 2 % bound;
+  //  - mean 0 (+-0.04 level expected): 0.15 level bound;
+  //  - a normal shape: kurtosis 3 (its estimate +-0.025; a sum of 4 uniforms would give 2.7, a
+  //    uniform 1.8) and the share beyond 3 sigma: differences are whole levels, so those beyond
+  //    22.95 levels are the ones beyond 22.5 before rounding (2.94 sigma): 0.33 % (127 +-11
+  //    samples): [0.22 %, 0.44 %];
+  //  - no correlation between neighbouring pixels or between the two channels (|r| < 0.03; the
+  //    estimate is +-0.005 for independent samples).
+  CameraModel cam = forward_camera(160, 120, 120.0);
+  cam.exposure = 2.5;
+  cam.noise_stddev = 0.03;
+  RenderOptions noisy = exact_options();
+  noisy.noise = true;
+  Renderer clean_r(empty_world(), {cam}, exact_options());
+  Renderer noisy_r(empty_world(), {cam}, noisy);
+  const Frame c = clean_r.render(body_at({0, 0, 5.0}), "cam");
+  const Frame n = noisy_r.render(body_at({0, 0, 5.0}), "cam");
+  const std::size_t npx = c.rgb.size() / 3;
+  std::vector<double> d[2];  // green, blue
+  double mean = 0.0;
+  int lo = 255, hi = 0;
+  for (std::size_t ch = 0; ch < 2; ++ch)
+    for (std::size_t p = 0; p < npx; ++p) {
+      const std::size_t i = 3 * p + 1 + ch;
+      ASSERT_GT(c.rgb[i], 60) << "too dark: the clamp at black would cut the noise";
+      ASSERT_LT(c.rgb[i], 200) << "too bright: the clamp at white would cut the noise";
+      lo = std::min<int>(lo, c.rgb[i]);
+      hi = std::max<int>(hi, c.rgb[i]);
+      d[ch].push_back(static_cast<double>(n.rgb[i]) - c.rgb[i]);
+      mean += d[ch].back();
+    }
+  mean /= 2.0 * static_cast<double>(npx);
+  const double sigma = 0.03 * 255.0;  // levels
+  double m2 = 0.0, m4 = 0.0;
+  std::size_t tail = 0;
+  for (const auto& dc : d)
+    for (const double x : dc) {
+      m2 += x * x;
+      m4 += x * x * x * x;
+      tail += std::abs(x) > 3.0 * sigma ? 1 : 0;
+    }
+  m2 /= 2.0 * static_cast<double>(npx);
+  m4 /= 2.0 * static_cast<double>(npx);
+  const double kurtosis = m4 / (m2 * m2), tail_share = static_cast<double>(tail) / (2.0 * static_cast<double>(npx));
+  auto corr = [&](const std::vector<double>& a, const std::vector<double>& b, std::size_t step) {  // a[i], b[i + step]
+    double sxy = 0.0;
+    for (std::size_t i = 0; i + step < a.size(); ++i) sxy += a[i] * b[i + step];
+    return sxy / static_cast<double>(a.size() - step) / m2;
+  };
+  const double r_channel = corr(d[0], d[1], 0), r_pixel = corr(d[0], d[0], 1), r_row = corr(d[1], d[1], 160);
+  std::printf(
+      "read noise: std %.3f levels (expected %.3f), mean %.3f, kurtosis %.3f, beyond 3 sigma %.3f %%, "
+      "r channel %.4f pixel %.4f row %.4f; clean levels %d..%d\n",
+      std::sqrt(m2), sigma, mean, kurtosis, 100.0 * tail_share, r_channel, r_pixel, r_row, lo, hi);
+  EXPECT_NEAR(std::sqrt(m2) / sigma, 1.0, 0.02);
+  EXPECT_NEAR(mean, 0.0, 0.15);
+  EXPECT_NEAR(kurtosis, 3.0, 0.1);
+  EXPECT_GT(tail_share, 0.0022);
+  EXPECT_LT(tail_share, 0.0044);
+  EXPECT_LT(std::abs(r_channel), 0.03);
+  EXPECT_LT(std::abs(r_pixel), 0.03);
+  EXPECT_LT(std::abs(r_row), 0.03);
 }
 
 TEST(CameraOptics, CentredDomeChangesNothingAndBadPortsAreErrors) {

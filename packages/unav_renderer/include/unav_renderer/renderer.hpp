@@ -135,6 +135,10 @@ struct RenderTimings {
   /// Terrain tiles in the camera's view in the last frame by level of detail (every point, every
   /// 2nd, every 4th; RenderOptions::terrain_lod_px).
   std::size_t terrain_tiles[3] = {0, 0, 0};
+  /// Size of the internal image the last frame's scene was rendered at [px]: the undistorted
+  /// (water-side) pinhole view the post pass resamples; larger than the output where distortion
+  /// pulls in rays from beyond its field, cropped where the field stays inside it (flat port).
+  int internal_width = 0, internal_height = 0;
 };
 
 /// The vehicle's velocity in base_link_frd (nav_msgs/Odometry's twist) at a frame's stamp: for
