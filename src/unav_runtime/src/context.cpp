@@ -6,6 +6,7 @@
 
 #include <cstdlib>
 #include <cstring>
+#include <utility>
 
 #include <fastdds/rtps/transport/UDPv4TransportDescriptor.h>
 #include <fastdds/rtps/transport/shared_mem/SharedMemTransportDescriptor.h>
@@ -363,6 +364,15 @@ fdds::DataReader* Context::create_reader(fdds::Topic* t, const QoS& q, void* lis
 
 void Context::delete_writer(fdds::DataWriter* w) {
   if (w && participant_) publisher_->delete_datawriter(w);
+}
+
+void Context::replace_writer(fdds::DataWriter*& slot, fdds::DataWriter* fresh) {
+  fdds::DataWriter* old = nullptr;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    old = std::exchange(slot, fresh);
+  }
+  delete_writer(old);
 }
 
 void Context::delete_reader(fdds::DataReader* r) {

@@ -82,7 +82,9 @@ bool PublisherBase::write(const void* sample) {
   // second; a camera at 10+ Hz refuses several times in that span), at most once every 10 s (a
   // sample over the bound is refused by any pool: no churn).
   using std::chrono::milliseconds;
-  if (rc == ReturnCode_t::RETCODE_OUT_OF_RESOURCES && max_sample_bytes_ != 0 && failures_since_ok_ >= 2 &&
+  // (A writer that fell back to the transports, data-sharing off, keeps its history: not this case.)
+  if (rc == ReturnCode_t::RETCODE_OUT_OF_RESOURCES && failures_since_ok_ >= 2 &&
+      writer_->get_qos().data_sharing().kind() != fdds::DataSharingKind::OFF &&
       now - first_refusal_ >= milliseconds(500) &&
       (recreations_ == 0 || now - last_recreation_ >= milliseconds(10000))) {
     make_logger("unav_runtime")
@@ -90,11 +92,9 @@ bool PublisherBase::write(const void* sample) {
             "topic '{}': the data-sharing writer refused {} samples in a row over {:.1f} s (out of resources: its "
             "payload pool stays full); creating it again (readers match the new one)",
             topic_, failures_since_ok_, std::chrono::duration<double>(now - first_refusal_).count());
-    // The new writer first, then the old one goes: writer() never points at a deleted writer for
-    // longer than the assignment (Context::publish_graph() reads it from other threads).
-    fdds::DataWriter* old = writer_;
-    writer_ = ctx_.create_writer(dds_topic_, qos_);
-    ctx_.delete_writer(old);
+    // The new writer first, swapped in under the graph's lock, then the old one goes:
+    // Context::publish_graph() reads writer() from other threads under that lock.
+    ctx_.replace_writer(writer_, ctx_.create_writer(dds_topic_, qos_));
     ++recreations_;
     last_recreation_ = now;
     ctx_.publish_graph();  // the node's writer has a new GUID (ros_discovery_info)

@@ -150,6 +150,15 @@ TEST(DataSharing, OffByOptionKeepsUnboundedTransport) {
       "/camera/image_raw", unav::QoS::reliable(10).with_data_sharing(unav::serialized_bytes(make_image(0))));
   EXPECT_FALSE(has_data_sharing_segment(pub->writer()->guid()));
   EXPECT_TRUE(pub->publish(make_image(1, 481)));  // no pool, no bound
+  // Refused out of resources twice over 0.6 s: a transports writer has no payload pool to be
+  // stuck in, so it is kept (only a data-sharing writer is created again).
+  const auto guid = pub->writer()->guid();
+  pub->refuse_writes_for_test(2);
+  EXPECT_FALSE(pub->publish(make_image(2)));
+  std::this_thread::sleep_for(std::chrono::milliseconds(600));
+  EXPECT_FALSE(pub->publish(make_image(3)));
+  EXPECT_EQ(pub->writer_recreations(), 0);
+  EXPECT_EQ(pub->writer()->guid(), guid);
 }
 
 TEST(DataSharing, WriterWithoutABoundIsAConfigError) {

@@ -100,6 +100,9 @@ class Context {
   eprosima::fastdds::dds::DataReader* create_reader(eprosima::fastdds::dds::Topic* topic, const QoS& qos,
                                                     void* listener);
   void delete_writer(eprosima::fastdds::dds::DataWriter* w);
+  /// Puts `fresh` in `slot` under the graph's lock (publish_graph() reads the publishers' writers
+  /// from any thread) and deletes the writer it held after that, outside the lock.
+  void replace_writer(eprosima::fastdds::dds::DataWriter*& slot, eprosima::fastdds::dds::DataWriter* fresh);
   void delete_reader(eprosima::fastdds::dds::DataReader* r);
   void add_node(Node* node);
   void remove_node(Node* node);
