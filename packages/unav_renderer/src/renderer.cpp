@@ -207,6 +207,9 @@ struct Targets {
   GLuint scene_fbo = 0, scene_color = 0, scene_zc = 0, scene_depth = 0;
   GLuint post_fbo = 0, post_rgba = 0, post_zc = 0;
   GLuint distmap = 0;
+  /// The forward-scatter blur's levels: scene_color's means over 4 x 4 and 16 x 16 pixels.
+  GLuint blur_fbo[2] = {0, 0}, blur_tex[2] = {0, 0};
+  int blur_width[2] = {0, 0}, blur_height[2] = {0, 0};
   /// No distortion: the post pass reads pixel for pixel and draws geometry and water apart, by a
   /// depth test against scene_depth (attached to post_fbo too).
   bool split_post = false;
@@ -639,6 +642,7 @@ struct Renderer::Impl {
   std::map<unsigned, Program> snow_variants;
   std::map<unsigned, Program> inscatter_variants;
   Program shadow;
+  Program blur_down;                      // kBlurDownFS: the forward-scatter blur's levels
   GLuint shadow_tex = 0, shadow_fbo = 0;  // depth array, one layer per lamp
   GLuint shadow_nearest = 0;              // sampler: one depth test per lookup (the in-scatter march, smooth anyway)
   // Sampler: one texel, unfiltered. texture() at a texel's centre through it reads what texelFetch
@@ -743,6 +747,7 @@ struct Renderer::Impl {
   unsigned lamp_shadow_bits(std::size_t mesh, const Chunk& ch, const FrameSetup& f,
                             const std::vector<LampCasters>& casters) const;
   Program& post_program(const std::array<bool, 8>& features, int pixels = 0);
+  void blur_levels(const Targets& t);
   void snow_pass(const FrameSetup& f, const CameraModel& c, double stamp_s);
   bool inscatter_pass(const Targets& t, const FrameSetup& f, const CameraModel& c, float* march_max_out);
   void post_pass(const Targets& t, const FrameSetup& f, const CameraModel& c, std::uint64_t seq, bool do_inscatter,
@@ -1126,9 +1131,6 @@ Targets& Renderer::Impl::targets_for(const CameraModel& c) {
   glGenFramebuffers(1, &t.scene_fbo);
   glBindFramebuffer(GL_FRAMEBUFFER, t.scene_fbo);
   t.scene_color = make_tex(GL_RGBA16F, t.width, t.height, GL_RGBA, GL_FLOAT, GL_LINEAR);
-  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR_MIPMAP_LINEAR);
-  glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAX_LEVEL, 5);  // blur radius <= 16 px
-  glGenerateMipmap(GL_TEXTURE_2D);                          // allocate the chain (forward-scatter blur)
   t.scene_zc = make_tex(GL_R32F, t.width, t.height, GL_RED, GL_FLOAT, GL_NEAREST);
   t.scene_depth = make_tex(GL_DEPTH_COMPONENT32F, t.width, t.height, GL_DEPTH_COMPONENT, GL_FLOAT, GL_NEAREST);
   glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, t.scene_color, 0);
@@ -1150,6 +1152,19 @@ Targets& Renderer::Impl::targets_for(const CameraModel& c) {
   glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT1, GL_TEXTURE_2D, t.is_water_tex, 0);
   glDrawBuffers(2, bufs);
   check_fbo("in-scatter");
+
+  // 32-bit floats: the post pass reads two a pixel, without a half-float conversion each.
+  for (int k = 0; k < 2; ++k) {
+    const int step = k == 0 ? 4 : 16;
+    t.blur_width[k] = (t.width + step - 1) / step;
+    t.blur_height[k] = (t.height + step - 1) / step;
+    t.blur_tex[k] = make_tex(GL_RGBA32F, t.blur_width[k], t.blur_height[k], GL_RGBA, GL_FLOAT, GL_LINEAR);
+    glGenFramebuffers(1, &t.blur_fbo[k]);
+    glBindFramebuffer(GL_FRAMEBUFFER, t.blur_fbo[k]);
+    glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, t.blur_tex[k], 0);
+    glDrawBuffers(1, bufs);
+    check_fbo("forward-scatter blur");
+  }
 
   glGenFramebuffers(1, &t.post_fbo);
   glBindFramebuffer(GL_FRAMEBUFFER, t.post_fbo);
@@ -1720,10 +1735,7 @@ bool Renderer::Impl::inscatter_pass(const Targets& t, const FrameSetup& f, const
     glBindSampler(0, 0);
   }
 
-  if (options.forward_scatter) {
-    glBindTexture(GL_TEXTURE_2D, t.scene_color);
-    glGenerateMipmap(GL_TEXTURE_2D);
-  }
+  if (options.forward_scatter) blur_levels(t);
   *march_max_out = march_max_m;
   return do_inscatter;
 }
@@ -1756,6 +1768,23 @@ double max_up_component(const CameraModel& c, const Eigen::Matrix3d& R_WC) {
 }
 
 }  // namespace
+
+// The forward-scatter blur's levels: scene_color -> its 4 x 4 means -> their 4 x 4 means.
+void Renderer::Impl::blur_levels(const Targets& t) {
+  blur_down.use();
+  glUniform1i(blur_down["u_src"], 0);
+  glActiveTexture(GL_TEXTURE0);
+  glBindVertexArray(empty_vao);
+  for (int k = 0; k < 2; ++k) {
+    const GLuint src = k == 0 ? t.scene_color : t.blur_tex[0];
+    const int sw = k == 0 ? t.width : t.blur_width[0], sh = k == 0 ? t.height : t.blur_height[0];
+    glBindFramebuffer(GL_FRAMEBUFFER, t.blur_fbo[k]);
+    glViewport(0, 0, t.blur_width[k], t.blur_height[k]);
+    glBindTexture(GL_TEXTURE_2D, src);
+    glUniform2f(blur_down["u_src_texel"], 1.0f / static_cast<float>(sw), 1.0f / static_cast<float>(sh));
+    glDrawArrays(GL_TRIANGLES, 0, 3);
+  }
+}
 
 // The post program with these features compiled in (compiled on first use).
 // pixels: 0 every pixel, 1 those with geometry, 2 the water (see PIXELS in kPostFS).
@@ -1831,7 +1860,13 @@ void Renderer::Impl::post_draw(Program& post, const Targets& t, const FrameSetup
   glActiveTexture(GL_TEXTURE7);
   glBindTexture(GL_TEXTURE_2D, t.scene_color);
   glBindSampler(7, nearest);
+  glActiveTexture(GL_TEXTURE8);
+  glBindTexture(GL_TEXTURE_2D, t.blur_tex[0]);
+  glActiveTexture(GL_TEXTURE9);
+  glBindTexture(GL_TEXTURE_2D, t.blur_tex[1]);
   glActiveTexture(GL_TEXTURE0);
+  glUniform1i(post["u_blur4"], 8);
+  glUniform1i(post["u_blur16"], 9);
   glUniform1i(post["u_color"], 0);
   glUniform1i(post["u_color_px"], 7);
   glUniform1i(post["u_depth"], 1);
@@ -2011,6 +2046,7 @@ Renderer::Renderer(World world, std::vector<CameraModel> cameras, RenderOptions 
       {false, true, true, false, false, true, true, false});  // the common one; a shader error shows here
   if (nlamps > 0) impl_->inscatter_program(nlamps, std::max(1, options.lamp_scatter_samples), true);
   impl_->shadow = Program(detail::kShadowVS, detail::kShadowFS, "lamp_shadow");
+  impl_->blur_down = Program(detail::kPostVS, detail::kBlurDownFS, "forward_scatter_blur");
   impl_->upload_scene(geo);
   impl_->upload_snow();
   impl_->slots.resize(static_cast<std::size_t>(std::max(1, options.readback_slots)));
@@ -2062,10 +2098,10 @@ Renderer::~Renderer() {
     if (s.pbo_depth) glDeleteBuffers(1, &s.pbo_depth);
   }
   for (auto& [name, t] : impl_->targets) {
-    GLuint fbos[3] = {t.scene_fbo, t.post_fbo, t.is_fbo};
+    GLuint fbos[5] = {t.scene_fbo, t.post_fbo, t.is_fbo, t.blur_fbo[0], t.blur_fbo[1]};
     glDeleteFramebuffers(static_cast<GLsizei>(std::size(fbos)), fbos);
-    GLuint texs[8] = {t.scene_color, t.scene_zc, t.scene_depth, t.post_rgba,
-                      t.post_zc,     t.distmap,  t.is_tex,      t.is_water_tex};
+    GLuint texs[10] = {t.scene_color, t.scene_zc, t.scene_depth,  t.post_rgba,   t.post_zc,
+                       t.distmap,     t.is_tex,   t.is_water_tex, t.blur_tex[0], t.blur_tex[1]};
     glDeleteTextures(static_cast<GLsizei>(std::size(texs)), texs);
   }
   impl_->release_scene();
@@ -2081,6 +2117,7 @@ Renderer::~Renderer() {
   for (const auto& [v, p] : impl_->scene_variants)
     if (p.id()) glDeleteProgram(p.id());
   glDeleteProgram(impl_->shadow.id());
+  glDeleteProgram(impl_->blur_down.id());
   if (impl_->shadow_tex) glDeleteTextures(1, &impl_->shadow_tex);
   if (impl_->sun_tex) glDeleteTextures(1, &impl_->sun_tex);
   if (impl_->shadow_fbo) glDeleteFramebuffers(1, &impl_->shadow_fbo);

@@ -493,6 +493,8 @@ uniform sampler2D u_color;     // RGBA16F: D and seg
 uniform sampler2D u_color_px;  // the same through a nearest sampler: texel centres read one texel
 uniform sampler2D u_depth;     // R32F: z_C
 uniform sampler2D u_distmap;   // RG32F: undistorted pixel for each output pixel
+uniform sampler2D u_blur4;     // RGBA32F, 1/4 resolution: means of 4 x 4 pixels of u_color (kBlurDownFS)
+uniform sampler2D u_blur16;    // RGBA32F, 1/16 resolution: means of 16 x 16 pixels
 uniform vec4 u_K;              // fx, fy, cx, cy
 uniform ivec2 u_size;
 uniform vec3 u_betaD;
@@ -618,14 +620,16 @@ void main() {
   }
 #endif
 
-  // Forward scattering: a share 1 - exp(-f z) of the direct signal spreads over a disc
-  // whose radius grows with range (blur read from the mip chain: smooth, no ghost taps).
+  // Forward scattering: a share 1 - exp(-f z) of the direct signal spreads over a disc whose
+  // radius grows with range: the image blended towards its 4 x 4 and 16 x 16 means (bilinear:
+  // smooth, no ghost taps) by the radius's octave, as a mip chain's levels 0, 2 and 4 would be
+  // (two fetches at a fixed level: llvmpipe's cheap path, where a per-pixel level is not).
 #if FWD && PIXELS != 2
   if (hit) {
     float w = 1.0 - exp(-u_fwd_per_m * range);
-    float rad = clamp(u_blur_px_per_m * range, 0.0, 16.0);
-    float lod = min(log2(max(rad, 1.0)), 4.0);
-    vec3 blur = textureLod(u_color, uv, lod).rgb;   // trilinear mip sample: a smooth disc
+    float lod = log2(clamp(u_blur_px_per_m * range, 1.0, 16.0));   // 0..4
+    vec3 b4 = textureLod(u_blur4, uv, 0.0).rgb, b16 = textureLod(u_blur16, uv, 0.0).rgb;
+    vec3 blur = lod < 2.0 ? mix(D, b4, 0.5 * lod) : mix(b4, b16, 0.5 * lod - 1.0);
     D = mix(D, blur, w);
   }
 #endif
@@ -726,6 +730,24 @@ void main() {
 #endif
   o_rgba = vec4(col, seg / 255.0);
   o_depth = hit ? z : uintBitsToFloat(0x7f800000u);
+}
+)GLSL";
+
+// ---------------------------------------------------------------- forward-scatter blur levels
+// One texel of a 4x downsample: the mean of the 4 x 4 source texels it covers, as four bilinear
+// taps at the centres of its 2 x 2 quads (the source clamps to its edges). Drawn twice: the
+// scene's colour -> 1/4, then 1/4 -> 1/16 (kPostFS's forward scatter).
+inline constexpr const char* kBlurDownFS = R"GLSL(
+#version 330 core
+uniform sampler2D u_src;     // bilinear
+uniform vec2 u_src_texel;    // 1 / the source's size
+layout(location = 0) out vec4 o_mean;
+void main() {
+  vec2 c = gl_FragCoord.xy * 4.0 * u_src_texel;   // the block's centre (texel (i, j) covers 4i .. 4i + 3)
+  vec2 d = u_src_texel;
+  o_mean = vec4(0.25 * (textureLod(u_src, c - d, 0.0).rgb + textureLod(u_src, c + vec2(d.x, -d.y), 0.0).rgb +
+                        textureLod(u_src, c + vec2(-d.x, d.y), 0.0).rgb + textureLod(u_src, c + d, 0.0).rgb),
+                1.0);
 }
 )GLSL";
 

@@ -148,6 +148,88 @@ TEST(CameraOptics, FlatPortRendersACroppedFieldAndKeepsItsBorder) {
   }
 }
 
+namespace {
+// Green levels (linear 8-bit) of a grey wall 10 m ahead with a dark 2 m square on it, direct signal
+// only, forward scattering at `per_m` with a blur of `rad_px` pixels at 10 m.
+std::vector<double> wall_levels(double range, double per_m, double rad_px, int* square_px) {
+  World w = empty_world();
+  w.water.B_inf.setZero();
+  w.water.beta_D.setConstant(0.01);  // nearly clear: the wall's brightness nearly uniform
+  w.water.K_d.setConstant(0.01);
+  w.water.forward_scatter_per_m = per_m;
+  CameraModel cam = forward_camera(160, 120, 120.0);
+  cam.exposure = 12.0;
+  w.water.forward_blur_rad_per_m = rad_px / (cam.fx * 10.0);
+  Object wall = marker({range, 0.0, 5.0}, 40.0);  // on the axis of the camera at 5 m depth
+  Object square = marker({range - 0.05, 0.0, 5.0}, 2.0 * range / 10.0);
+  square.material.albedo = {0.02, 0.02, 0.02};
+  w.objects = {wall, square};
+  RenderOptions o = exact_options();
+  o.forward_scatter = true;
+  Renderer r(w, {cam}, o);
+  const Frame f = r.render(body_at({0.0, 0.0, 5.0}), "cam");
+  std::vector<double> g;
+  for (std::size_t i = 1; i < f.rgb.size(); i += 3) g.push_back(f.rgb[i]);
+  if (square_px) *square_px = static_cast<int>(std::lround(cam.fx * 2.0 / 10.0));
+  return g;
+}
+}  // namespace
+
+TEST(CameraOptics, ForwardScatterSpreadsTheDirectSignalAndKeepsIt) {
+  // A share 1 - exp(-f z) of the direct signal spreads over a disc growing with range. A grey wall
+  // at 10 m with a dark 24 px square on it, f = 0.1 / m (63 % scattered), 8 px radius there:
+  //  - the mean over the image is kept (box means of a wall that fills the view; measured 0.1 %): 1 %;
+  //  - the square's edge, a 1 px step without scattering, spreads: the row through its centre
+  //    takes >= 4 px from 10 % to 90 % of the step;
+  //  - the wall far from the square is unchanged (+-1 level; nearly clear water keeps it nearly
+  //    uniform, as a blur of a curved profile would not be): > 32 px away (the 16 x 16 means are
+  //    read bilinearly: a block's mean reaches 16 px beyond it) and 16 px inside the image (its
+  //    edges clamp);
+  //  - at 1 m the disc is under a pixel: the same image as without scattering (+-1 level).
+  int sq = 0;
+  const auto sharp = wall_levels(10.0, 0.0, 8.0, &sq);
+  const auto blurred = wall_levels(10.0, 0.1, 8.0, nullptr);
+  double m0 = 0.0, m1 = 0.0;
+  for (std::size_t i = 0; i < sharp.size(); ++i) {
+    m0 += sharp[i];
+    m1 += blurred[i];
+  }
+  const std::size_t row = std::size_t{60} * 160;
+  const double lo = sharp[row + 80], hi = sharp[row + 10];
+  ASSERT_GT(hi, 80.0) << "the wall is too dark to measure: " << hi;
+  ASSERT_LT(hi, 230.0) << "the wall is too bright: " << hi;
+  ASSERT_LT(lo, 0.2 * hi);
+  auto width_10_90 = [&](const std::vector<double>& g) {  // left edge of the square, along the row
+    int a = -1, b = -1;
+    for (int u = 80; u >= 0; --u) {
+      const double x = (g[row + static_cast<std::size_t>(u)] - lo) / (hi - lo);
+      if (b < 0 && x >= 0.1) b = u;
+      if (a < 0 && x >= 0.9) a = u;
+    }
+    return b - a;
+  };
+  const int w_sharp = width_10_90(sharp), w_blur = width_10_90(blurred);
+  double far_worst = 0.0;
+  for (int v = 16; v < 120 - 16; ++v)
+    for (int u = 16; u < 160 - 16; ++u)
+      if (std::abs(u - 80) > sq / 2 + 32 || std::abs(v - 60) > sq / 2 + 32) {
+        const std::size_t i = static_cast<std::size_t>(v) * 160 + static_cast<std::size_t>(u);
+        far_worst = std::max(far_worst, std::abs(blurred[i] - sharp[i]));
+      }
+  const auto near_sharp = wall_levels(1.0, 0.0, 8.0, nullptr), near_blur = wall_levels(1.0, 0.1, 8.0, nullptr);
+  double near_worst = 0.0;
+  for (std::size_t i = 0; i < near_sharp.size(); ++i)
+    near_worst = std::max(near_worst, std::abs(near_blur[i] - near_sharp[i]));
+  std::printf(
+      "forward scatter: mean %.2f -> %.2f, edge 10-90 %% %d px -> %d px, far wall worst %.0f, at 1 m worst %.0f\n",
+      m0 / sharp.size(), m1 / sharp.size(), w_sharp, w_blur, far_worst, near_worst);
+  EXPECT_NEAR(m1 / m0, 1.0, 0.01);
+  EXPECT_LE(w_sharp, 2);
+  EXPECT_GE(w_blur, 4);
+  EXPECT_LE(far_worst, 1.0);
+  EXPECT_LE(near_worst, 1.0);
+}
+
 TEST(CameraOptics, VignettingFollowsCosFourOfTheFieldAngle) {
   // Water only (veiling light everywhere, no noise, linear 8-bit): the image with full
   // vignetting over the one without is cos^4 of each pixel's field angle. 8-bit quantisation
