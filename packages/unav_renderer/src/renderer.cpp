@@ -1867,6 +1867,9 @@ void Renderer::Impl::post_draw(Program& post, const Targets& t, const FrameSetup
   glActiveTexture(GL_TEXTURE0);
   glUniform1i(post["u_blur4"], 8);
   glUniform1i(post["u_blur16"], 9);
+  glUniform4f(post["u_blur_uv"], 1.0f / static_cast<float>(4 * t.blur_width[0]),
+              1.0f / static_cast<float>(4 * t.blur_height[0]), 1.0f / static_cast<float>(16 * t.blur_width[1]),
+              1.0f / static_cast<float>(16 * t.blur_height[1]));
   glUniform1i(post["u_color"], 0);
   glUniform1i(post["u_color_px"], 7);
   glUniform1i(post["u_depth"], 1);

@@ -497,6 +497,7 @@ uniform sampler2D u_depth;     // R32F: z_C
 uniform sampler2D u_distmap;   // RG32F: undistorted pixel for each output pixel
 uniform sampler2D u_blur4;     // RGBA32F, 1/4 resolution: means of 4 x 4 pixels of u_color (kBlurDownFS)
 uniform sampler2D u_blur16;    // RGBA32F, 1/16 resolution: means of 16 x 16 pixels
+uniform vec4 u_blur_uv;        // pixel coordinates -> u_blur4's, u_blur16's texture coordinates (xy, zw)
 uniform vec4 u_K;              // fx, fy, cx, cy
 uniform ivec2 u_size;
 uniform vec3 u_betaD;
@@ -630,7 +631,10 @@ void main() {
   if (hit) {
     float w = 1.0 - exp(-u_fwd_per_m * range);
     float lod = log2(clamp(u_blur_px_per_m * range, 1.0, 16.0));   // 0..4
-    vec3 b4 = textureLod(u_blur4, uv, 0.0).rgb, b16 = textureLod(u_blur16, uv, 0.0).rgb;
+    // Texel i of a level covers pixels 4i .. 4i + 3 (16i .. 16i + 15): its centre at pixel 4i + 2,
+    // also where the image's size is not a multiple of 4 (16) and the level has a part-covered texel.
+    vec3 b4 = textureLod(u_blur4, (src + 0.5) * u_blur_uv.xy, 0.0).rgb;
+    vec3 b16 = textureLod(u_blur16, (src + 0.5) * u_blur_uv.zw, 0.0).rgb;
     vec3 blur = lod < 2.0 ? mix(D, b4, 0.5 * lod) : mix(b4, b16, 0.5 * lod - 1.0);
     D = mix(D, blur, w);
   }
