@@ -1061,8 +1061,9 @@ namespace {
 // read. A field inside the frame (behind a flat port, whose magnification narrows the view) gives a
 // negative margin: the internal image is cropped to what the post pass reads, in steps of 4 px, so
 // that the pixels kept lie at the same place relative to the principal point, and the in-scatter's
-// low-resolution texels (4 x 4 by default) and the blur's first two mip levels group the same
-// pixels as without the crop (demo front camera: mean difference 0.03 of 255, at most 9 levels).
+// low-resolution texels (4 x 4 by default) and the forward-scatter blur's 4 x 4 means group the same
+// pixels as without the crop (its 16 x 16 means may not; demo front camera, measured before those
+// replaced a mip chain: mean difference 0.03 of 255, at most 9 levels).
 int internal_margin(float over, int size) {
   const int need = static_cast<int>(std::ceil(std::max(over, -0.5f * size))) + 2;
   if (need >= 2) return std::min(need, size / 2);

@@ -4,6 +4,17 @@
 
 namespace unav::renderer::detail {
 
+// sin(x) for |x| <= pi, spliced into the scene and post shaders: folded to [-pi/2, pi/2], degree-9
+// Taylor (error (pi/2)^11 / 11! = 3.6e-6). llvmpipe's sin() and cos() reduce any argument and
+// evaluate two polynomials each: several times this.
+#define UNAV_GLSL_SIN_PI                                                                \
+  "float sin_pi(float x) {\n"                                                           \
+  "  float r = abs(x) > 1.5707964 ? 3.1415927 * sign(x) - x : x;\n"                     \
+  "  float r2 = r * r;\n"                                                               \
+  "  return r * (1.0 + r2 * (-0.16666667 + r2 * (0.0083333333 + r2 * (-1.9841270e-4 + " \
+  "r2 * 2.7557319e-6))));\n"                                                            \
+  "}\n"
+
 // ---------------------------------------------------------------- scene pass (geometry)
 inline constexpr const char* kSceneVS = R"GLSL(
 #version 330 core
@@ -140,17 +151,13 @@ layout(location = 1) out float o_depth;  // z along the optical axis [m]
 
 vec4 tex_at(vec2 uv) { return texture(u_tex, uv / u_uv_scale); }  // rgb albedo, a relief height
 
+)GLSL" UNAV_GLSL_SIN_PI R"GLSL(
 // sin(x) to ~4e-6 absolute for |x| < 4e5: Cody-Waite reduction to [-pi, pi] (2 pi split in a
-// short head, exact times k, and a tail), folded to [-pi/2, pi/2], degree-9 Taylor (error
-// (pi/2)^11 / 11! = 3.6e-6). llvmpipe's sin() reduces to [0, pi/4] and evaluates two polynomials:
-// about twice the instructions, and the caustics make 8 of them a pixel.
+// short head, exact times k, and a tail), then sin_pi. llvmpipe's sin() reduces to [0, pi/4] and
+// evaluates two polynomials: about twice the instructions, and the caustics make 8 of them a pixel.
 float sin_fast(float x) {
   float k = floor(x * 0.15915494 + 0.5);
-  float r = (x - k * 6.28125) - k * 0.0019353072;
-  float h = 3.1415927 * sign(r);
-  r = abs(r) > 1.5707964 ? h - r : r;
-  float r2 = r * r;
-  return r * (1.0 + r2 * (-0.16666667 + r2 * (0.0083333333 + r2 * (-1.9841270e-4 + r2 * 2.7557319e-6))));
+  return sin_pi((x - k * 6.28125) - k * 0.0019353072);
 }
 
 // Zero-mean caustic network at horizontal position p [m], time t [s]: two domain-warped,
@@ -538,13 +545,7 @@ uint pcg(uint v) {
   uint word = ((state >> ((state >> 28u) + 4u)) ^ state) * 277803737u;
   return (word >> 22u) ^ word;
 }
-// sin(x) for |x| <= pi: folded to [-pi/2, pi/2], degree-9 Taylor (error 3.6e-6). llvmpipe's
-// sin() and cos() reduce any argument and evaluate two polynomials each: several times this.
-float sin_pi(float x) {
-  float r = abs(x) > 1.5707964 ? 3.1415927 * sign(x) - x : x;
-  float r2 = r * r;
-  return r * (1.0 + r2 * (-0.16666667 + r2 * (0.0083333333 + r2 * (-1.9841270e-4 + r2 * 2.7557319e-6))));
-}
+)GLSL" UNAV_GLSL_SIN_PI R"GLSL(
 // Two independent standard normal numbers from one 32-bit hash (Box-Muller, both outputs used):
 // 20 bits for the radius (|z| up to sqrt(2 ln 2^21) = 5.4), 12 bits for the angle; cos(a) =
 // sin(pi/2 - |a|) needs no folding.

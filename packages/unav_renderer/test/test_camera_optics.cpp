@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <utility>
 #include <vector>
 
 #include "render_test_util.hpp"
@@ -56,6 +57,15 @@ Eigen::Vector2d centroid(const Frame& f) {
       }
   EXPECT_GT(n, 0);
   return s / std::max(n, 1);
+}
+
+// The same frame of water without and with sensor noise (the camera's noise settings).
+std::pair<Frame, Frame> clean_and_noisy(const CameraModel& cam) {
+  RenderOptions noisy = exact_options();
+  noisy.noise = true;
+  Renderer clean_r(empty_world(), {cam}, exact_options());
+  Renderer noisy_r(empty_world(), {cam}, noisy);
+  return {clean_r.render(body_at({0, 0, 5.0}), "cam"), noisy_r.render(body_at({0, 0, 5.0}), "cam")};
 }
 
 }  // namespace
@@ -265,12 +275,7 @@ TEST(CameraOptics, ShotNoiseStdGrowsAsTheSquareRootOfTheSignal) {
     CameraModel cam = forward_camera(160, 120, 120.0);
     cam.exposure = exposure;
     cam.shot_noise = 0.004;
-    RenderOptions noisy = exact_options();
-    noisy.noise = true;
-    Renderer clean_r(empty_world(), {cam}, exact_options());
-    Renderer noisy_r(empty_world(), {cam}, noisy);
-    const Frame c = clean_r.render(body_at({0, 0, 5.0}), "cam");
-    const Frame n = noisy_r.render(body_at({0, 0, 5.0}), "cam");
+    const auto [c, n] = clean_and_noisy(cam);
     double s2 = 0.0, level = 0.0;
     std::size_t count = 0;
     for (std::size_t i = 1; i < c.rgb.size(); i += 3) {  // green
@@ -303,12 +308,7 @@ TEST(CameraOptics, ReadNoiseIsGaussianAndIndependent) {
   CameraModel cam = forward_camera(160, 120, 120.0);
   cam.exposure = 2.5;
   cam.noise_stddev = 0.03;
-  RenderOptions noisy = exact_options();
-  noisy.noise = true;
-  Renderer clean_r(empty_world(), {cam}, exact_options());
-  Renderer noisy_r(empty_world(), {cam}, noisy);
-  const Frame c = clean_r.render(body_at({0, 0, 5.0}), "cam");
-  const Frame n = noisy_r.render(body_at({0, 0, 5.0}), "cam");
+  const auto [c, n] = clean_and_noisy(cam);
   const std::size_t npx = c.rgb.size() / 3;
   std::vector<double> d[2];  // green, blue
   double mean = 0.0;
