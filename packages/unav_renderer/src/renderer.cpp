@@ -168,6 +168,17 @@ struct GpuMesh {
   std::vector<TerrainTile> tiles;
   int tile_cols = 0;
   std::array<float, kLodLevels> lift{};
+  /// How far the lamp maps' lookups are lifted by level (the terrain: as `lift`; rocks, whose lamp
+  /// maps hold the level drawn: 0).
+  std::array<float, kLodLevels> lamp_lift{};
+  /// Parts drawn at levels of detail (rocks, SceneMesh::lod_parts): part i's chunk by level (its
+  /// finest is chunks[i]) and the level's error [m]. `lift` holds each level's largest error: its
+  /// sun lookups are made that far up, over the finest surface the sun's map holds.
+  struct LodChunks {
+    std::vector<Chunk> level;
+    std::vector<float> error_m;
+  };
+  std::vector<LodChunks> lod;
   SegClass seg_class = SegClass::kOther;
   Material material;
   /// A height field (the seabed patch, the far seabed): it can shadow itself only where the light
@@ -510,6 +521,55 @@ std::vector<std::uint32_t> terrain_lod(MeshData* mesh, int rows, int cols, std::
 
 // The level a terrain tile is drawn at: the coarsest whose height error, seen from `eye` with fx
 // pixels per radian, stays within px pixels (fx x error / distance to the tile's box).
+// The index buffer of a mesh drawn by parts at levels of detail: level by level (neighbours at the
+// same level merge into one draw), a chunk per part and level, boxed by the part's vertices (a
+// coarse level's surface lies inside their hull). Each part's finest chunk goes to `chunks`.
+std::vector<std::uint32_t> lod_indices(const SceneMesh& sm, std::vector<Chunk>* chunks,
+                                       std::vector<GpuMesh::LodChunks>* lod, std::array<float, kLodLevels>* lift) {
+  std::vector<std::uint32_t> out;
+  lod->assign(sm.lod_parts.size(), {});
+  lift->fill(0.0f);
+  std::size_t levels = 0;
+  for (const LodPart& p : sm.lod_parts) levels = std::max(levels, p.levels.size());
+  if (levels > static_cast<std::size_t>(kLodLevels))
+    throw std::invalid_argument(sm.name + ": " + std::to_string(levels) + " levels of detail (at most " +
+                                std::to_string(kLodLevels) + ")");
+  for (std::size_t k = 0; k < levels; ++k)
+    for (std::size_t i = 0; i < sm.lod_parts.size(); ++i) {
+      const LodPart& p = sm.lod_parts[i];
+      if (k >= p.levels.size()) continue;
+      Chunk ch;
+      ch.first = static_cast<GLsizei>(out.size());
+      ch.count = static_cast<GLsizei>(p.levels[k].size());
+      ch.lo.setConstant(std::numeric_limits<float>::infinity());
+      ch.hi.setConstant(-std::numeric_limits<float>::infinity());
+      for (const std::uint32_t v : p.levels[0]) {
+        const Eigen::Vector3f q(sm.mesh.positions[3 * std::size_t{v}], sm.mesh.positions[3 * std::size_t{v} + 1],
+                                sm.mesh.positions[3 * std::size_t{v} + 2]);
+        ch.lo = ch.lo.cwiseMin(q);
+        ch.hi = ch.hi.cwiseMax(q);
+      }
+      out.insert(out.end(), p.levels[k].begin(), p.levels[k].end());
+      (*lod)[i].level.push_back(ch);
+      (*lod)[i].error_m.push_back(static_cast<float>(p.error_m[k]));
+      (*lift)[k] = std::max((*lift)[k], static_cast<float>(p.error_m[k]));
+    }
+  chunks->clear();
+  for (const auto& l : *lod) chunks->push_back(l.level.front());
+  return out;
+}
+
+// The coarsest level of a part whose error, seen from `eye` at its box's nearest point, stays
+// within px pixels (fx: pixels per unit of the focal plane); 0 with px = 0 (levels off).
+std::size_t lod_level(const GpuMesh::LodChunks& p, const Eigen::Vector3f& eye, float fx, double px) {
+  if (!(px > 0.0)) return 0;
+  const Chunk& box = p.level.front();
+  const float d = (eye.cwiseMax(box.lo).cwiseMin(box.hi) - eye).norm();
+  for (std::size_t k = p.level.size(); k-- > 1;)
+    if (fx * p.error_m[k] <= static_cast<float>(px) * d) return k;
+  return 0;
+}
+
 int lod_level(const TerrainTile& t, const Eigen::Vector3f& eye, float fx, double px) {
   if (!(px > 0.0)) return 0;
   const float d = (eye.cwiseMax(t.box.lo).cwiseMin(t.box.hi) - eye).norm();
@@ -873,7 +933,10 @@ void Renderer::Impl::upload_scene(const SceneGeometry& geo) {
     if (g.terrain && grid_layout(sm.mesh, &rows, &cols)) {
       lod_mesh = sm.mesh;
       indices = terrain_lod(&lod_mesh, rows, cols, &drop, &g.chunks, &g.tiles, &g.tile_cols, &g.lift);
+      g.lamp_lift = g.lift;
       mesh = &lod_mesh;
+    } else if (!sm.lod_parts.empty()) {
+      indices = lod_indices(sm, &g.chunks, &g.lod, &g.lift);
     } else {
       indices = chunked_indices(sm.mesh, &g.chunks);
     }
@@ -1198,6 +1261,7 @@ struct Renderer::Impl::FrameSetup {
   float lamp_texel_per_m[4];               // per lamp: its shadow map's texel at 1 m [m]
   bool sun_shadow = false;
   float sun_vp[16];  // world -> sun clip (orthographic)
+  float lod_fx = 0;  // the internal camera's larger focal length [px]: levels of detail
 };
 
 Renderer::Impl::FrameSetup Renderer::Impl::setup_frame(const Pose& X_WB, const CameraModel& c) const {
@@ -1208,6 +1272,7 @@ Renderer::Impl::FrameSetup Renderer::Impl::setup_frame(const Pose& X_WB, const C
   f.view = f.X_CW.matrix().cast<float>();
   f.proj = projection_from_K(c);
   f.cam_W = f.X_WC.translation();
+  f.lod_fx = static_cast<float>(std::max(c.fx, c.fy));
   // Lamps in world and camera frames.
   f.nl = options.lamps ? static_cast<int>(std::min<std::size_t>(4, world.lamps.size())) : 0;
   for (int i = 0; i < f.nl; ++i) {
@@ -1345,12 +1410,17 @@ void Renderer::Impl::shadow_pass(const FrameSetup& f) {
       glBindVertexArray(m.vao);
       std::vector<const Chunk*> visible;
       visible.reserve(m.chunks.size());
-      for (const Chunk& ch : m.chunks) {
+      for (std::size_t ci = 0; ci < m.chunks.size(); ++ci) {
+        const Chunk& ch = m.chunks[ci];
         if (!in_frustum(vp, ch)) continue;
-        if (sun) {
+        if (sun) {  // the finest (the map is kept while the sun stands still; see GpuMesh::lift)
           visible.push_back(&ch);
           continue;
         }
+        // A part at levels of detail: the level the camera sees (the lamps ride with it), which its
+        // lookups of the lamp maps then find there.
+        const Chunk& draw =
+            m.lod.empty() ? ch : m.lod[ci].level[lod_level(m.lod[ci], cam, f.lod_fx, options.terrain_lod_px)];
         if (options.occlusion_culling && hidden_under(ch.under, lamp)) continue;
         bool culled = false;
         if (options.shadow_caster_culling) {
@@ -1358,8 +1428,8 @@ void Renderer::Impl::shadow_pass(const FrameSetup& f) {
           culled = (m.terrain && casts_nothing(mi, ch, lamp, cam)) ||
                    shadow_out_of_view(cam_vp, lamp, axis, kLampFarM, ch.lo.array() - pad, ch.hi.array() + pad);
         }
-        (culled ? timings.lamp_map_culled : timings.lamp_map_triangles) += static_cast<std::size_t>(ch.count) / 3;
-        if (!culled) visible.push_back(&ch);
+        (culled ? timings.lamp_map_culled : timings.lamp_map_triangles) += static_cast<std::size_t>(draw.count) / 3;
+        if (!culled) visible.push_back(&draw);
       }
       draw_chunks(visible);
     }
@@ -1523,6 +1593,7 @@ void Renderer::Impl::scene_pass(const Targets& t, const FrameSetup& f, double st
   const float fx = static_cast<float>(std::max(t.internal.fx, t.internal.fy));
   std::vector<int> levels;
   for (std::size_t& n : timings.terrain_tiles) n = 0;
+  for (std::size_t& n : timings.object_parts) n = 0;
   timings.shadow_lookups_drawn = timings.shadow_lookups_skipped = 0;
   timings.scene_fragments = timings.sun_lookup_fragments = timings.lamp_lookup_fragments = 0;
   timings.scene_invocations = 0;
@@ -1558,7 +1629,14 @@ void Renderer::Impl::scene_pass(const Targets& t, const FrameSetup& f, double st
     const auto seen = [&](const Chunk& ch) {
       return in_frustum(vp, ch) && !(options.occlusion_culling && hidden_under(ch.under, cam));
     };
-    if (m.tiles.empty()) {
+    if (!m.lod.empty()) {
+      for (std::size_t ci = 0; ci < m.chunks.size(); ++ci) {
+        if (!seen(m.chunks[ci])) continue;
+        const std::size_t k = lod_level(m.lod[ci], cam, fx, options.terrain_lod_px);
+        ++timings.object_parts[k];
+        add(m.lod[ci].level[k], m.chunks[ci], static_cast<int>(k));
+      }
+    } else if (m.tiles.empty()) {
       for (const Chunk& ch : m.chunks)
         if (seen(ch)) add(ch, ch, 0);
     } else {
@@ -1594,7 +1672,7 @@ void Renderer::Impl::scene_pass(const Targets& t, const FrameSetup& f, double st
       const auto& bin = bins[level][bits];
       if (bin.empty()) continue;
       Program& scene = scene_program(m, bits, f, stamp_s, &set_up);
-      glUniform1f(scene["u_shadow_lift"], m.lift[level % kLodLevels]);
+      glUniform2f(scene["u_shadow_lift"], m.lift[level % kLodLevels], m.lamp_lift[level % kLodLevels]);
       set3(scene["u_albedo"], m.material.albedo);
       glUniform1f(scene["u_uv_scale"], static_cast<float>(m.material.uv_scale_m));
       const Look k = look(m);

@@ -33,9 +33,10 @@ layout(location = 2) in vec2 a_uv;
 layout(location = 3) in float a_drop;  // terrain skirts: drawn this far below the point [m] (else 0)
 uniform mat4 u_view;   // world -> optical
 uniform mat4 u_proj;   // optical -> clip (from K)
-// Coarse terrain (a level of detail): its shadow lookups are made this far above it [m], over the
-// full mesh that the shadow maps hold (see Renderer's terrain tiles); a skirt takes its edge's.
-uniform float u_shadow_lift;
+// A coarse level of detail: its shadow lookups are made this far above it [m] (sun's map, lamps'
+// maps), over the finest surface the maps hold (see Renderer's terrain tiles and rock levels); a
+// skirt takes its edge's.
+uniform vec2 u_shadow_lift;
 out vec3 v_pos_W;
 out vec3 v_nrm_W;
 out vec2 v_uv;
@@ -52,14 +53,12 @@ uniform mat4 u_sun_vp;   // world -> sun clip (orthographic: no division)
 out vec3 v_sun_q;        // sun map coordinates and depth
 #endif
 void main() {
-#if (LAMP_SHADOWS && NLAMPS > 0) || SUN_SHADOW
-  vec3 s_W = a_pos_W - vec3(0.0, 0.0, u_shadow_lift);
-#endif
 #if LAMP_SHADOWS && NLAMPS > 0
-  for (int i = 0; i < NLAMPS; ++i) v_lamp_clip[i] = u_shadow_vp[i] * vec4(s_W, 1.0);
+  vec4 s_lamp = vec4(a_pos_W - vec3(0.0, 0.0, u_shadow_lift.y), 1.0);
+  for (int i = 0; i < NLAMPS; ++i) v_lamp_clip[i] = u_shadow_vp[i] * s_lamp;
 #endif
 #if SUN_SHADOW
-  v_sun_q = (u_sun_vp * vec4(s_W, 1.0)).xyz * 0.5 + 0.5;
+  v_sun_q = (u_sun_vp * vec4(a_pos_W - vec3(0.0, 0.0, u_shadow_lift.x), 1.0)).xyz * 0.5 + 0.5;
 #endif
   vec3 p_W = a_pos_W + vec3(0.0, 0.0, a_drop);
   vec4 p_C = u_view * vec4(p_W, 1.0);

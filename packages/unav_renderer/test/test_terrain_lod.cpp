@@ -1,6 +1,7 @@
 // Terrain level of detail (RenderOptions::terrain_lod_px) on worlds/pipe_inspection's seabed
 // patch (65 x 65 points, 1 m apart, 0.15 m relief): the coarse tiles stay within their pixel
-// budget of the full mesh, the skirts leave no seam open, and the image hardly changes.
+// budget of the full mesh, the skirts leave no seam open, and the image hardly changes. Its rocks'
+// levels keep their outlines within the same budget.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -47,8 +48,10 @@ struct Shot {
   RenderTimings timings;
 };
 
-Shot shoot(double lod_px, const Pose& X_WB) {
-  Renderer r(pipe_world(), {front_camera()}, options(lod_px));
+Shot shoot(double lod_px, const Pose& X_WB, bool seabed = true) {
+  World w = pipe_world();
+  w.seabed.enabled = seabed;
+  Renderer r(w, {front_camera()}, options(lod_px));
   Shot s;
   s.frame = r.render(X_WB, "front", 0.0);
   s.timings = r.last_timings();
@@ -136,6 +139,51 @@ TEST(TerrainLod, CoarseTilesStayWithinTheirPixelBudget) {
     for (std::size_t k = 0; k < a.rgb.size(); ++k) sum += std::abs(int{a.rgb[k]} - int{b.rgb[k]});
     EXPECT_LT(sum / static_cast<double>(a.rgb.size()), 0.25);
   }
+}
+
+// Rocks at levels of detail (320 / 80 / 20 triangles, the same bound): the far ones coarser, their
+// outlines within the budget of the finest mesh's, fewer triangles in the lamps' maps.
+TEST(TerrainLod, RocksStayWithinTheirPixelBudget) {
+  constexpr auto kRock = static_cast<std::uint8_t>(SegClass::kRock);
+  std::size_t coarse = 0;
+  for (const Pose& X_WB : {kLevel, kPitched}) {
+    // Without the seabed: its own levels would hide or bare the rocks' feet.
+    const Shot full = shoot(0.0, X_WB, false), lod = shoot(2.0, X_WB, false);
+    const std::size_t* f = full.timings.object_parts;
+    const std::size_t* l = lod.timings.object_parts;
+    EXPECT_GT(f[0], 0u);
+    EXPECT_EQ(f[1] + f[2], 0u);
+    EXPECT_EQ(l[0] + l[1] + l[2], f[0]);  // the same rocks in view
+    coarse += l[1] + l[2];
+    EXPECT_LT(lod.timings.lamp_map_triangles, full.timings.lamp_map_triangles);
+    // A pixel that is rock in one image and not in the other lies within 2 px (the budget) + 1 px
+    // (the pixel grid: an outline moved by 2 px covers or bares a pixel up to 3 px off) of a rock
+    // pixel of the other (or of the border: the rest of its outline may lie beyond the frame).
+    const Frame &a = full.frame, &b = lod.frame;
+    const auto rock_near = [](const Frame& im, int x, int y) {
+      for (int dy = -3; dy <= 3; ++dy)
+        for (int dx = -3; dx <= 3; ++dx) {
+          const int u = x + dx, v = y + dy;
+          if (dx * dx + dy * dy > 9) continue;
+          if (u < 0 || v < 0 || u >= im.width || v >= im.height) return true;
+          if (im.seg[static_cast<std::size_t>(v) * static_cast<std::size_t>(im.width) + static_cast<std::size_t>(u)] ==
+              kRock)
+            return true;
+        }
+      return false;
+    };
+    std::size_t changed = 0, stray = 0;
+    for (int y = 0; y < a.height; ++y)
+      for (int x = 0; x < a.width; ++x) {
+        const std::size_t i =
+            static_cast<std::size_t>(y) * static_cast<std::size_t>(a.width) + static_cast<std::size_t>(x);
+        if ((a.seg[i] == kRock) == (b.seg[i] == kRock)) continue;
+        ++changed;
+        stray += !rock_near(a.seg[i] == kRock ? b : a, x, y);
+      }
+    EXPECT_EQ(stray, 0u) << "of " << changed << " pixels whose rock cover changed";
+  }
+  EXPECT_GT(coarse, 0u);
 }
 
 TEST(TerrainLod, SkirtsCloseTheSeamsAtAnyLevel) {

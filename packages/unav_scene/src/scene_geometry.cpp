@@ -12,7 +12,9 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <map>
+#include <stdexcept>
 
 #include "unav_scene/errors.hpp"
 #include "unav_scene/noise.hpp"
@@ -138,6 +140,64 @@ MeshData make_rock_mesh(std::uint32_t seed, const Eigen::Vector3d& radii_m, int 
   }
   compute_smooth_normals(m);
   return m;
+}
+
+namespace {
+
+// Distance from p to the triangle (a, b, c) (Ericson, Real-Time Collision Detection 5.1.5).
+double point_triangle_distance(const Eigen::Vector3d& p, const Eigen::Vector3d& a, const Eigen::Vector3d& b,
+                               const Eigen::Vector3d& c) {
+  const Eigen::Vector3d ab = b - a, ac = c - a, ap = p - a;
+  const double d1 = ab.dot(ap), d2 = ac.dot(ap);
+  if (d1 <= 0 && d2 <= 0) return ap.norm();
+  const Eigen::Vector3d bp = p - b;
+  const double d3 = ab.dot(bp), d4 = ac.dot(bp);
+  if (d3 >= 0 && d4 <= d3) return bp.norm();
+  const double vc = d1 * d4 - d3 * d2;
+  if (vc <= 0 && d1 >= 0 && d3 <= 0) return (p - (a + d1 / (d1 - d3) * ab)).norm();
+  const Eigen::Vector3d cp = p - c;
+  const double d5 = ab.dot(cp), d6 = ac.dot(cp);
+  if (d6 >= 0 && d5 <= d6) return cp.norm();
+  const double vb = d5 * d2 - d1 * d6;
+  if (vb <= 0 && d2 >= 0 && d6 <= 0) return (p - (a + d2 / (d2 - d6) * ac)).norm();
+  const double va = d3 * d6 - d5 * d4;
+  if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0)
+    return (p - (b + (d4 - d3) / ((d4 - d3) + (d5 - d6)) * (c - b))).norm();
+  const double denom = 1.0 / (va + vb + vc);
+  return (p - (a + ab * (vb * denom) + ac * (vc * denom))).norm();
+}
+
+}  // namespace
+
+LodPart rock_lods(const MeshData& rock, int subdivisions) {
+  LodPart part;
+  part.levels.push_back(rock.indices);
+  part.error_m.push_back(0.0);
+  const auto P = [&rock](std::uint32_t i) {
+    return Eigen::Vector3d(rock.positions[3 * std::size_t{i}], rock.positions[3 * std::size_t{i} + 1],
+                           rock.positions[3 * std::size_t{i} + 2]);
+  };
+  const MeshData fine = icosphere(subdivisions);
+  if (fine.vertex_count() != rock.vertex_count() || fine.triangle_count() != rock.triangle_count())
+    throw std::invalid_argument("rock_lods: a mesh of " + std::to_string(rock.vertex_count()) + " vertices and " +
+                                std::to_string(rock.triangle_count()) + " triangles is not an icosphere subdivided " +
+                                std::to_string(subdivisions) + " times");
+  for (int s = subdivisions - 1; s >= 0; --s) {
+    const MeshData coarse = icosphere(s);  // its vertices: the rock's first ones, in the same order
+    // The coarse surface's error: the farthest finest vertex from it (brute force: at most 320 x 642).
+    double err = 0.0;
+    for (std::size_t v = coarse.vertex_count(); v < rock.vertex_count(); ++v) {
+      const Eigen::Vector3d p = P(static_cast<std::uint32_t>(v));
+      double d = std::numeric_limits<double>::infinity();
+      for (std::size_t t = 0; t < coarse.triangle_count(); ++t)
+        d = std::min(d, point_triangle_distance(p, P(coarse.indices[3 * t]), P(coarse.indices[3 * t + 1]),
+                                                P(coarse.indices[3 * t + 2])));
+      err = std::max(err, d);
+    }
+    part.levels.push_back(coarse.indices);
+    part.error_m.push_back(err);
+  }
+  return part;
 }
 
 MeshData make_box_mesh(const Eigen::Vector3d& size_m) {
@@ -568,7 +628,9 @@ SceneGeometry build_scene_geometry(const World& w) {
   // Rocks sharing a material are merged into one draw.
   std::vector<SceneMesh> rock_groups;
   for (const auto& r : w.rocks) {
-    MeshData m = make_rock_mesh(r.seed, r.radii_m, r.radii_m.maxCoeff() < 0.2 ? 1 : 2);
+    const int subdivisions = r.radii_m.maxCoeff() < 0.2 ? 1 : 2;
+    MeshData m = make_rock_mesh(r.seed, r.radii_m, subdivisions);
+    LodPart lods = rock_lods(m, subdivisions);  // before the pose: the errors are lengths, the same after it
     m.transform(pose_from_xyz_rpy(r.p_W, {0, 0, r.yaw_rad}));
     SceneMesh* grp = nullptr;
     for (auto& gm : rock_groups)
@@ -577,7 +639,11 @@ SceneGeometry build_scene_geometry(const World& w) {
       rock_groups.push_back({"rocks", {}, SegClass::kRock, r.material, true, {}});
       grp = &rock_groups.back();
     }
+    const auto base = static_cast<std::uint32_t>(grp->mesh.vertex_count());
+    for (auto& level : lods.levels)
+      for (auto& i : level) i += base;
     grp->mesh.append(m);
+    grp->lod_parts.push_back(std::move(lods));
   }
   for (auto& gm : rock_groups) g.meshes.push_back(std::move(gm));
   if (w.seabed.enabled && w.seabed.far_extent_m > std::max(w.seabed.size_m.x(), w.seabed.size_m.y())) {

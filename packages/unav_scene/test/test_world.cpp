@@ -286,6 +286,38 @@ TEST(Meshes, ClosedOrientationOfTheGenerators) {
   EXPECT_EQ(closed_orientation(two), 1);
 }
 
+TEST(Meshes, RockLevelsOfDetail) {
+  // A unit icosphere (no noise): the coarse levels are the 80- and 20-face icospheres over its
+  // first 42 and 12 vertices. Their error is bounded by the sag of the icosahedron's faces,
+  // 1 - (distance of a face's plane from the centre) = 1 - 0.794654 (circumradius 1), and at least
+  // the sag over an icosahedron edge that a finer vertex (the edge's midpoint, pushed out to the
+  // sphere) lies over: 1 - cos(theta / 2) with cos(theta) = 1 / sqrt(5), 0.149349.
+  const MeshData sphere = make_sphere_mesh(1.0, 2);
+  const LodPart s = rock_lods(sphere, 2);
+  ASSERT_EQ(s.levels.size(), 3u);
+  ASSERT_EQ(s.error_m.size(), 3u);
+  EXPECT_EQ(s.levels[0], sphere.indices);
+  EXPECT_EQ(s.levels[1].size(), 3u * 80u);
+  EXPECT_EQ(s.levels[2].size(), 3u * 20u);
+  for (std::uint32_t i : s.levels[1]) EXPECT_LT(i, 42u);
+  for (std::uint32_t i : s.levels[2]) EXPECT_LT(i, 12u);
+  EXPECT_EQ(s.error_m[0], 0.0);
+  EXPECT_GE(s.error_m[2], 1.0 - std::sqrt((1.0 + 1.0 / std::sqrt(5.0)) / 2.0) - 1e-9);
+  EXPECT_LE(s.error_m[2], 1.0 - 0.794654);
+  EXPECT_GT(s.error_m[1], 0.0);
+  EXPECT_LT(s.error_m[1], 0.5 * s.error_m[2]);  // half the edge length: about a quarter of the sag
+  // A rock: the same triangle counts, and its errors scale with its size (same seed, same shape).
+  const LodPart r1 = rock_lods(make_rock_mesh(9, {0.4, 0.3, 0.2}, 2), 2);
+  const LodPart r2 = rock_lods(make_rock_mesh(9, {0.8, 0.6, 0.4}, 2), 2);
+  ASSERT_EQ(r1.levels.size(), 3u);
+  EXPECT_EQ(r1.levels[0].size(), 3u * 320u);
+  for (std::size_t k = 1; k < 3; ++k) {
+    EXPECT_GT(r1.error_m[k], r1.error_m[k - 1]);
+    EXPECT_NEAR(r2.error_m[k], 2.0 * r1.error_m[k], 1e-6);
+  }
+  EXPECT_THROW(rock_lods(make_rock_mesh(9, {0.4, 0.3, 0.2}, 1), 2), std::invalid_argument);
+}
+
 TEST(Meshes, SceneGeometryOfPipeInspection) {
   const World w = load_world(kRoot + "/worlds/pipe_inspection/world.yaml");
   const SceneGeometry g = build_scene_geometry(w);
@@ -297,6 +329,11 @@ TEST(Meshes, SceneGeometryOfPipeInspection) {
     other |= m.seg_class == SegClass::kOther;
     EXPECT_EQ(m.mesh.normals.size(), m.mesh.positions.size()) << m.name;
     EXPECT_EQ(m.mesh.uvs.size() / 2, m.mesh.positions.size() / 3) << m.name;
+    // Rocks come with levels of detail, one part a rock; their finest levels are the mesh.
+    EXPECT_EQ(m.seg_class == SegClass::kRock && m.name == "rocks", !m.lod_parts.empty()) << m.name;
+    std::vector<std::uint32_t> finest;
+    for (const LodPart& p : m.lod_parts) finest.insert(finest.end(), p.levels[0].begin(), p.levels[0].end());
+    if (!m.lod_parts.empty()) EXPECT_EQ(finest, m.mesh.indices) << m.name;
   }
   EXPECT_TRUE(seabed && pipe && rock && other);
   // Every tube vertex lies one radius from the bent centre line (bends included).

@@ -65,6 +65,10 @@ struct RenderOptions {
   /// stays within terrain_lod_px pixels; skirts close the seams between levels. The far seabed seen
   /// at a grazing angle is sliver triangles, each shaded in whole 4x4 blocks by llvmpipe. Shadow
   /// maps hold the full mesh. 0: always the full mesh (depth exact to the mesh). >= 0, finite.
+  /// The same bound picks the level of each procedural rock (its icosphere subdivided 2, 1 or 0
+  /// times: 320, 80, 20 triangles; the coarse levels' corners lie on the finest surface, their
+  /// error is the farthest finest vertex from them): a rock a few pixels wide is no longer
+  /// hundreds of sub-pixel triangles. Its lamp maps hold the level drawn, the sun's the finest.
   double terrain_lod_px = 2.0;
   /// Scale of the shadow maps' depth bias (slope-scaled polygon offset) against self-shadowing
   /// ("acne"): larger removes acne on steep terrain and detaches contact shadows. >= 0.
@@ -135,6 +139,9 @@ struct RenderTimings {
   /// Terrain tiles in the camera's view in the last frame by level of detail (every point, every
   /// 2nd, every 4th; RenderOptions::terrain_lod_px).
   std::size_t terrain_tiles[3] = {0, 0, 0};
+  /// Parts drawn at levels of detail (procedural rocks) in the camera's view in the last frame, by
+  /// level (finest first; RenderOptions::terrain_lod_px).
+  std::size_t object_parts[3] = {0, 0, 0};
   /// Size of the internal image the last frame's scene was rendered at [px]: the undistorted
   /// (water-side) pinhole view the post pass resamples; larger than the output where distortion
   /// pulls in rays from beyond its field, cropped where the field stays inside it (flat port).

@@ -46,6 +46,21 @@ struct SurfaceMaps {
   bool any() const { return base_color || normal || orm; }
 };
 
+/// A part of a mesh that can be drawn coarser far away (a procedural rock): its triangles at
+/// each level of detail as indices into the mesh's vertices, finest first (levels[0] is the part's
+/// share of MeshData::indices), and how far each level's surface lies from the finest one's
+/// vertices [m] (error_m[0] = 0; a renderer picks the coarsest level whose error stays under its
+/// screen-space bound).
+struct LodPart {
+  std::vector<std::vector<std::uint32_t>> levels;
+  std::vector<double> error_m;
+};
+
+/// The levels of detail of make_rock_mesh(seed, radii_m, subdivisions): the coarser icospheres'
+/// triangles over the same vertices (each subdivision keeps its parent's vertices, in front), so a
+/// coarse level's corners lie on the finest surface; `subdivisions` + 1 levels.
+LodPart rock_lods(const MeshData& rock, int subdivisions);
+
 struct SceneMesh {
   std::string name;
   MeshData mesh;
@@ -54,6 +69,9 @@ struct SceneMesh {
   bool triplanar = false;  ///< texture by world position (meshes without UVs: rocks, files)
   /// The mesh file's own maps (by its UVs); none: the material's procedural texture.
   SurfaceMaps maps;
+  /// Parts drawn at levels of detail (rocks); empty: the mesh is drawn whole. When present,
+  /// mesh.indices is their finest levels, in order.
+  std::vector<LodPart> lod_parts;
 };
 
 /// A mesh file's triangles grouped by their maps: one part per material with maps of its own
