@@ -561,7 +561,12 @@ vec3 encode(vec3 x) {
   x = mix(x, s, step(vec3(0.8), x));
   x = clamp(x, 0.0, 1.0);
   if (!u_srgb) return x;
-  return mix(12.92 * x, 1.055 * pow(x, vec3(1.0 / 2.4)) - 0.055, step(vec3(0.0031308), x));
+  // 1.055 x^(1 / 2.4) - 0.055 from three nested square roots (a minimax fit over [0.0031308, 1],
+  // within 0.012 of an 8-bit level): a square root is one instruction, where pow() is a log2 and
+  // an exp2 polynomial each on llvmpipe.
+  vec3 s1 = sqrt(x), s2 = sqrt(s1), s3 = sqrt(s2);
+  vec3 hi = 0.64236626 * s1 + 0.71210972 * s2 - 0.33686962 * s3 - 0.01756329 * x;
+  return mix(12.92 * x, hi, step(vec3(0.0031308), x));
 }
 
 void main() {
