@@ -708,7 +708,12 @@ struct Renderer::Impl {
   // Sampler: one texel, unfiltered. texture() at a texel's centre through it reads what texelFetch
   // does, for fewer instructions on llvmpipe (texelFetch checks every lane's bounds).
   GLuint nearest = 0;
-  GLuint sun_tex = 0;                // the sun's depth map
+  GLuint sun_tex = 0;  // the sun's depth map
+  // Sampler: bilinear in the nearest mip level, repeating. For the relief's slope and the seabed's
+  // macro modulation: llvmpipe's trilinear fetch is two bilinear ones (-6 M and -5 M instructions
+  // a 640x480 frame), and a mip level's step in sharpness does not show in either (images: <= 3
+  // levels apart for the macro, scattered pixels up to 20 for the slope, no seam).
+  GLuint mip_nearest = 0;
   std::vector<float> sun_vp_cached;  // the matrix sun_tex was rendered with (empty: none)
   int shadow_size = 0;
   GLuint snow_vao = 0, snow_vbo = 0;
@@ -1503,6 +1508,7 @@ Program& Renderer::Impl::scene_program(const GpuMesh& m, unsigned shadow_bits, c
     glUniform1i(p["u_shadow"], 5);
   }
   glUniform1i(p["u_tex"], 0);
+  if (v & 2u) glUniform1i(p["u_tex_macro"], 4);
   if (v & 8u) glUniform1i(p["u_grad"], 1);
   if (v & kNormalMapBit) glUniform1i(p["u_normal_map"], 2);
   if (v & kOrmBit) glUniform1i(p["u_orm"], 3);
@@ -1566,6 +1572,8 @@ void Renderer::Impl::scene_pass(const Targets& t, const FrameSetup& f, double st
   glActiveTexture(GL_TEXTURE5);
   glBindTexture(GL_TEXTURE_2D_ARRAY, f.shadows ? shadow_tex : 0);
   glActiveTexture(GL_TEXTURE0);
+  glBindSampler(1, mip_nearest);  // u_grad
+  glBindSampler(4, mip_nearest);  // u_tex_macro
   const Eigen::Matrix4f vp = f.proj * f.view;
   const Eigen::Vector3f cam = f.cam_W.cast<float>();
   std::set<unsigned> set_up;  // variants whose frame uniforms are set
@@ -1697,6 +1705,11 @@ void Renderer::Impl::scene_pass(const Targets& t, const FrameSetup& f, double st
       }
       glActiveTexture(GL_TEXTURE0);
       glBindTexture(GL_TEXTURE_2D, m.texture);
+      if (m.macro) {  // the same texture at a larger scale, through mip_nearest
+        glActiveTexture(GL_TEXTURE4);
+        glBindTexture(GL_TEXTURE_2D, m.texture);
+        glActiveTexture(GL_TEXTURE0);
+      }
       glBindVertexArray(m.vao);
       cull_back_faces(m, vp);
       if (options.profile_passes) {
@@ -1720,6 +1733,8 @@ void Renderer::Impl::scene_pass(const Targets& t, const FrameSetup& f, double st
     }
   }
   glDisable(GL_CULL_FACE);
+  glBindSampler(1, 0);
+  glBindSampler(4, 0);
 }
 
 Program& Renderer::Impl::snow_program(int nlamps) {
@@ -2118,6 +2133,11 @@ Renderer::Renderer(World world, std::vector<CameraModel> cameras, RenderOptions 
   glSamplerParameteri(impl_->shadow_nearest, GL_TEXTURE_COMPARE_MODE, GL_COMPARE_REF_TO_TEXTURE);
   glSamplerParameteri(impl_->shadow_nearest, GL_TEXTURE_COMPARE_FUNC, GL_LEQUAL);
   impl_->nearest = nearest_sampler();
+  glGenSamplers(1, &impl_->mip_nearest);
+  glSamplerParameteri(impl_->mip_nearest, GL_TEXTURE_MIN_FILTER, GL_LINEAR_MIPMAP_NEAREST);
+  glSamplerParameteri(impl_->mip_nearest, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+  glSamplerParameteri(impl_->mip_nearest, GL_TEXTURE_WRAP_S, GL_REPEAT);
+  glSamplerParameteri(impl_->mip_nearest, GL_TEXTURE_WRAP_T, GL_REPEAT);
   impl_->self_test();
   // Scene programs are compiled per material variant on first use (scene_program()); the plain one now.
   impl_->scene_variants[0] = Program(detail::kSceneVS, detail::kSceneFS, "scene", scene_defines(0));
@@ -2193,6 +2213,7 @@ Renderer::~Renderer() {
   }
   glDeleteVertexArrays(1, &impl_->empty_vao);
   glDeleteSamplers(1, &impl_->shadow_nearest);
+  glDeleteSamplers(1, &impl_->mip_nearest);
   glDeleteSamplers(1, &impl_->nearest);
   if (impl_->fragment_query) glDeleteQueries(1, &impl_->fragment_query);
   if (impl_->invocation_query) glDeleteQueries(1, &impl_->invocation_query);

@@ -77,6 +77,7 @@ in vec3 v_nrm_W;
 in vec2 v_uv;
 in float v_z_C;
 uniform sampler2D u_tex;
+uniform sampler2D u_tex_macro;  // u_tex again, bilinear in the nearest mip level (MACRO)
 uniform vec3 u_albedo;
 uniform float u_uv_scale;
 // Material variants, compiled separately (Renderer picks one per mesh): a branch on a uniform
@@ -116,7 +117,7 @@ uniform float u_uv_scale;
 #define ORM_MAP 0     // a mesh file's occlusion-roughness-metallic map (u_orm, by v_uv)
 #endif
 uniform float u_relief;          // peak-to-trough height of the texture's relief [m]
-uniform sampler2D u_grad;        // the relief height's slope per unit of texture coordinate
+uniform sampler2D u_grad;        // the relief height's slope per unit of texture coordinate (nearest mip level)
 uniform float u_roughness;       // perceptual (alpha = roughness^2); times the ORM map's green
 uniform float u_metallic;        // times the ORM map's blue
 uniform sampler2D u_normal_map;  // rgb = (n + 1) / 2 in the (+u, +v, normal) frame
@@ -257,7 +258,7 @@ void main() {
   vec3 albedo = t.rgb;
   float relief = u_relief;
 #if MACRO
-  albedo *= 0.7 + 0.6 * texture(u_tex, v_uv / (u_uv_scale * 7.31) + vec2(0.37, 0.11)).g;
+  albedo *= 0.7 + 0.6 * texture(u_tex_macro, v_uv / (u_uv_scale * 7.31) + vec2(0.37, 0.11)).g;
 #endif
   albedo *= u_albedo;
 #if SEDIMENT
