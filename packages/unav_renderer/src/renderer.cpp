@@ -249,6 +249,17 @@ void validate_options(const RenderOptions& o, const std::string& where) {
                       "must be in [0, 256] (0: no lamp in-scattering)");
 }
 
+// A sampler object reading bilinear in the nearest mip level, repeating (surface maps).
+GLuint mip_nearest_sampler() {
+  GLuint s = 0;
+  glGenSamplers(1, &s);
+  glSamplerParameteri(s, GL_TEXTURE_MIN_FILTER, GL_LINEAR_MIPMAP_NEAREST);
+  glSamplerParameteri(s, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+  glSamplerParameteri(s, GL_TEXTURE_WRAP_S, GL_REPEAT);
+  glSamplerParameteri(s, GL_TEXTURE_WRAP_T, GL_REPEAT);
+  return s;
+}
+
 // A sampler object reading one texel, unfiltered, clamped to the edges.
 GLuint nearest_sampler() {
   GLuint s = 0;
@@ -519,8 +530,6 @@ std::vector<std::uint32_t> terrain_lod(MeshData* mesh, int rows, int cols, std::
   return out;
 }
 
-// The level a terrain tile is drawn at: the coarsest whose height error, seen from `eye` with fx
-// pixels per radian, stays within px pixels (fx x error / distance to the tile's box).
 // The index buffer of a mesh drawn by parts at levels of detail: level by level (neighbours at the
 // same level merge into one draw), a chunk per part and level, boxed by the part's vertices (a
 // coarse level's surface lies inside their hull). Each part's finest chunk goes to `chunks`.
@@ -534,21 +543,25 @@ std::vector<std::uint32_t> lod_indices(const SceneMesh& sm, std::vector<Chunk>* 
   if (levels > static_cast<std::size_t>(kLodLevels))
     throw std::invalid_argument(sm.name + ": " + std::to_string(levels) + " levels of detail (at most " +
                                 std::to_string(kLodLevels) + ")");
+  std::vector<Chunk> boxes(sm.lod_parts.size());  // each part's, shared by its levels
+  for (std::size_t i = 0; i < sm.lod_parts.size(); ++i) {
+    Chunk& box = boxes[i];
+    box.lo.setConstant(std::numeric_limits<float>::infinity());
+    box.hi.setConstant(-std::numeric_limits<float>::infinity());
+    for (const std::uint32_t v : sm.lod_parts[i].levels[0]) {
+      const Eigen::Vector3f q(sm.mesh.positions[3 * std::size_t{v}], sm.mesh.positions[3 * std::size_t{v} + 1],
+                              sm.mesh.positions[3 * std::size_t{v} + 2]);
+      box.lo = box.lo.cwiseMin(q);
+      box.hi = box.hi.cwiseMax(q);
+    }
+  }
   for (std::size_t k = 0; k < levels; ++k)
     for (std::size_t i = 0; i < sm.lod_parts.size(); ++i) {
       const LodPart& p = sm.lod_parts[i];
       if (k >= p.levels.size()) continue;
-      Chunk ch;
+      Chunk ch = boxes[i];
       ch.first = static_cast<GLsizei>(out.size());
       ch.count = static_cast<GLsizei>(p.levels[k].size());
-      ch.lo.setConstant(std::numeric_limits<float>::infinity());
-      ch.hi.setConstant(-std::numeric_limits<float>::infinity());
-      for (const std::uint32_t v : p.levels[0]) {
-        const Eigen::Vector3f q(sm.mesh.positions[3 * std::size_t{v}], sm.mesh.positions[3 * std::size_t{v} + 1],
-                                sm.mesh.positions[3 * std::size_t{v} + 2]);
-        ch.lo = ch.lo.cwiseMin(q);
-        ch.hi = ch.hi.cwiseMax(q);
-      }
       out.insert(out.end(), p.levels[k].begin(), p.levels[k].end());
       (*lod)[i].level.push_back(ch);
       (*lod)[i].error_m.push_back(static_cast<float>(p.error_m[k]));
@@ -559,23 +572,24 @@ std::vector<std::uint32_t> lod_indices(const SceneMesh& sm, std::vector<Chunk>* 
   return out;
 }
 
-// The coarsest level of a part whose error, seen from `eye` at its box's nearest point, stays
-// within px pixels (fx: pixels per unit of the focal plane); 0 with px = 0 (levels off).
-std::size_t lod_level(const GpuMesh::LodChunks& p, const Eigen::Vector3f& eye, float fx, double px) {
+// The coarsest of `levels` levels whose error [m], seen from `eye` with fx pixels per unit of the
+// focal plane, stays within px pixels (fx x error / distance to `box`); 0 with px = 0 (levels off).
+int coarsest_level(const Chunk& box, const float* error, std::size_t levels, const Eigen::Vector3f& eye, float fx,
+                   double px) {
   if (!(px > 0.0)) return 0;
-  const Chunk& box = p.level.front();
   const float d = (eye.cwiseMax(box.lo).cwiseMin(box.hi) - eye).norm();
-  for (std::size_t k = p.level.size(); k-- > 1;)
-    if (fx * p.error_m[k] <= static_cast<float>(px) * d) return k;
+  for (std::size_t k = levels; k-- > 1;)
+    if (fx * error[k] <= static_cast<float>(px) * d) return static_cast<int>(k);
   return 0;
 }
 
+// The level a terrain tile is drawn at (its height error against the full mesh), and a part's
+// (a rock's, against its finest level).
 int lod_level(const TerrainTile& t, const Eigen::Vector3f& eye, float fx, double px) {
-  if (!(px > 0.0)) return 0;
-  const float d = (eye.cwiseMax(t.box.lo).cwiseMin(t.box.hi) - eye).norm();
-  for (int k = kLodLevels - 1; k > 0; --k)
-    if (fx * t.error[static_cast<std::size_t>(k)] <= static_cast<float>(px) * d) return k;
-  return 0;
+  return coarsest_level(t.box, t.error.data(), t.error.size(), eye, fx, px);
+}
+std::size_t lod_level(const GpuMesh::LodChunks& p, const Eigen::Vector3f& eye, float fx, double px) {
+  return static_cast<std::size_t>(coarsest_level(p.level.front(), p.error_m.data(), p.error_m.size(), eye, fx, px));
 }
 
 // False when the box lies entirely outside one plane of the clip volume of vp (conservative):
@@ -1422,11 +1436,11 @@ void Renderer::Impl::shadow_pass(const FrameSetup& f) {
           visible.push_back(&ch);
           continue;
         }
+        if (options.occlusion_culling && hidden_under(ch.under, lamp)) continue;
         // A part at levels of detail: the level the camera sees (the lamps ride with it), which its
         // lookups of the lamp maps then find there.
         const Chunk& draw =
             m.lod.empty() ? ch : m.lod[ci].level[lod_level(m.lod[ci], cam, f.lod_fx, options.terrain_lod_px)];
-        if (options.occlusion_culling && hidden_under(ch.under, lamp)) continue;
         bool culled = false;
         if (options.shadow_caster_culling) {
           const float pad = pcf_pad(f.lamp_texel_per_m[i], lamp, ch.lo, ch.hi);
@@ -1598,7 +1612,7 @@ void Renderer::Impl::scene_pass(const Targets& t, const FrameSetup& f, double st
   // What to draw by level of detail (the shadow lift; non-terrain and full meshes: 0), then by
   // the shadow lookups needed.
   std::array<std::array<std::vector<const Chunk*>, 4>, std::size_t{2} * kLodLevels> bins;  // skirts: kLodLevels + level
-  const float fx = static_cast<float>(std::max(t.internal.fx, t.internal.fy));
+  const float fx = f.lod_fx;
   std::vector<int> levels;
   for (std::size_t& n : timings.terrain_tiles) n = 0;
   for (std::size_t& n : timings.object_parts) n = 0;
@@ -2133,11 +2147,7 @@ Renderer::Renderer(World world, std::vector<CameraModel> cameras, RenderOptions 
   glSamplerParameteri(impl_->shadow_nearest, GL_TEXTURE_COMPARE_MODE, GL_COMPARE_REF_TO_TEXTURE);
   glSamplerParameteri(impl_->shadow_nearest, GL_TEXTURE_COMPARE_FUNC, GL_LEQUAL);
   impl_->nearest = nearest_sampler();
-  glGenSamplers(1, &impl_->mip_nearest);
-  glSamplerParameteri(impl_->mip_nearest, GL_TEXTURE_MIN_FILTER, GL_LINEAR_MIPMAP_NEAREST);
-  glSamplerParameteri(impl_->mip_nearest, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
-  glSamplerParameteri(impl_->mip_nearest, GL_TEXTURE_WRAP_S, GL_REPEAT);
-  glSamplerParameteri(impl_->mip_nearest, GL_TEXTURE_WRAP_T, GL_REPEAT);
+  impl_->mip_nearest = mip_nearest_sampler();
   impl_->self_test();
   // Scene programs are compiled per material variant on first use (scene_program()); the plain one now.
   impl_->scene_variants[0] = Program(detail::kSceneVS, detail::kSceneFS, "scene", scene_defines(0));
