@@ -18,6 +18,7 @@
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
+#include <ctime>
 #include <string>
 #include <vector>
 
@@ -40,8 +41,20 @@ Pose pose_at(int i) {
   return pose_from_xyz_rpy({-1.0 + 0.05 * i, 0.3, 8.0}, {0.0, 0.0, 0.05});
 }
 
+double process_cpu_ms() {
+  timespec ts{};
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+  return static_cast<double>(ts.tv_sec) * 1e3 + static_cast<double>(ts.tv_nsec) * 1e-6;
+}
+
+double median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  return v.empty() ? 0.0 : v[v.size() / 2];
+}
+
 struct Result {
   double fps_sync, fps_pipelined, median_ms;
+  double cpu_ms_pipelined;  // the process's CPU time a frame (all threads) in the pipelined run
 };
 
 Result measure(Renderer& r, const std::string& cam, int frames) {
@@ -56,6 +69,7 @@ Result measure(Renderer& r, const std::string& cam, int frames) {
   }
   const double sync_s = std::chrono::duration<double>(Clock::now() - t0).count();
   const auto t1 = Clock::now();
+  const double cpu0 = process_cpu_ms();
   int got = 0;
   for (int i = 0; i < frames; ++i) {
     r.submit(pose_at(i), cam, 0.1 * i);
@@ -64,8 +78,7 @@ Result measure(Renderer& r, const std::string& cam, int frames) {
   }
   while (auto f = r.collect()) ++got;
   const double pipe_s = std::chrono::duration<double>(Clock::now() - t1).count();
-  std::sort(ms.begin(), ms.end());
-  return {frames / sync_s, got / pipe_s, ms[ms.size() / 2]};
+  return {frames / sync_s, got / pipe_s, median(ms), (process_cpu_ms() - cpu0) / got};
 }
 
 // Frames per second of a RendererPool: `frames` frames in flight two per worker, collected in order.
@@ -142,7 +155,8 @@ int main(int argc, char** argv) {
   std::printf("unav_renderer bench: %s via %s, GL %s, %zu triangles, %d frames each\n",
               r.context().gl_renderer().c_str(), r.context().platform().c_str(), r.context().gl_version().c_str(),
               r.triangle_count(), frames);
-  std::printf("%-34s %-20s %10s %10s %12s\n", "configuration", "camera", "fps sync", "fps pipe", "median ms");
+  std::printf("%-34s %-20s %10s %10s %12s %10s\n", "configuration", "camera", "fps sync", "fps pipe", "median ms",
+              "cpu ms/fr");
   struct Config {
     const char* name;
     RenderOptions o;
@@ -178,6 +192,12 @@ int main(int argc, char** argv) {
   o = opt;
   o.noise = false;
   configs.push_back({"no sensor noise", o});
+  // The three culls trade CPU work for fragments (what llvmpipe lacks); none changes a pixel.
+  o = opt;
+  o.shadow_receiver_culling = false;
+  o.shadow_caster_culling = false;
+  o.occlusion_culling = false;
+  configs.push_back({"no CPU culling (receiver/caster/occl.)", o});
   if (config_index < 0 || config_index >= static_cast<int>(configs.size())) {
     std::fprintf(stderr, "bench_unav_renderer: --config must be 0..%zu\n", configs.size() - 1);
     return 2;
@@ -207,7 +227,8 @@ int main(int argc, char** argv) {
     for (const char* cam : names) {
       if ((c.name != configs.front().name && first_row_only(cam)) || skip(cam)) continue;
       const Result res = measure(r, cam, frames);
-      std::printf("%-34s %-20s %10.1f %10.1f %12.2f\n", c.name, cam, res.fps_sync, res.fps_pipelined, res.median_ms);
+      std::printf("%-34s %-20s %10.1f %10.1f %12.2f %10.2f\n", c.name, cam, res.fps_sync, res.fps_pipelined,
+                  res.median_ms, res.cpu_ms_pipelined);
     }
   }
   // Throughput with several contexts at once (RendererPool), alternated with one context so that
@@ -232,6 +253,44 @@ int main(int argc, char** argv) {
       const double g1 = pool_ticks_per_s(one, frames), g2 = pool_ticks_per_s(two, frames);
       std::printf("%-20s %10.1f %10.1f %9.0f %%   (ticks/s: demo_front + 320x180 at each pose)\n", "node pattern",
                   0.5 * (f1 + g1), 0.5 * (f2 + g2), 100.0 * ((f2 + g2) / (f1 + g1) - 1.0));
+    }
+  }
+  // The GPU's time for each pass (timestamp queries, nothing serialised) and the calling thread's
+  // time in submit() and collect(), pipelined as a node runs it.
+  {
+    RenderOptions timed = configs[static_cast<std::size_t>(config_index)].o;
+    timed.gpu_timers = true;
+    r.set_options(timed);
+    std::printf(
+        "\nGPU time per pass (%s; timestamp queries, pipelined, median of %d frames) [ms], then the calling"
+        " thread's wall time in submit() and collect():\n",
+        configs[static_cast<std::size_t>(config_index)].name, frames);
+    std::printf("%-20s %8s %8s %8s %10s %8s %10s %9s | %8s %8s\n", "camera", "shadows", "scene", "snow", "inscatter",
+                "post", "readback", "gpu sum", "submit", "collect");
+    for (const char* cam : names) {
+      if (skip(cam)) continue;
+      for (int i = 0; i < 3; ++i) r.render(pose_at(i), cam, 0.0);
+      std::vector<double> g[6], sum, sub, col;
+      for (int i = 0; i < frames; ++i) {
+        r.submit(pose_at(i), cam, 0.1 * i);
+        sub.push_back(r.last_timings().render_ms);
+        if (r.in_flight() < 2) continue;
+        if (!r.collect()) std::abort();
+        const RenderTimings& t = r.last_timings();
+        const double v[6] = {t.gpu_shadow_ms,    t.gpu_scene_ms, t.gpu_snow_ms,
+                             t.gpu_inscatter_ms, t.gpu_post_ms,  t.gpu_readback_ms};
+        double s6 = 0;
+        for (int k = 0; k < 6; ++k) {
+          g[k].push_back(v[k]);
+          s6 += v[k];
+        }
+        sum.push_back(s6);
+        col.push_back(t.readback_ms);
+      }
+      while (r.collect()) {
+      }
+      std::printf("%-20s %8.3f %8.3f %8.3f %10.3f %8.3f %10.3f %9.3f | %8.3f %8.3f\n", cam, median(g[0]), median(g[1]),
+                  median(g[2]), median(g[3]), median(g[4]), median(g[5]), median(sum), median(sub), median(col));
     }
   }
   // Where the time goes (glFinish after each pass; default options, or those of --config N).

@@ -201,4 +201,10 @@ void EglContext::make_current() {
     throw EglError("eglMakeCurrent failed (" + egl_error_name(eglGetError()) + ")");
 }
 
+bool EglContext::is_software_renderer(const std::string& gl_renderer) {
+  for (const char* name : {"llvmpipe", "softpipe", "swrast", "Software Rasterizer"})
+    if (gl_renderer.find(name) != std::string::npos) return true;
+  return false;
+}
+
 }  // namespace unav::renderer

@@ -228,6 +228,10 @@ struct Targets {
 
 struct Slot {
   GLuint pbo_rgba = 0, pbo_depth = 0;
+  // RenderOptions::gpu_timers: timestamps at the frame's start, after each of the five passes and
+  // after the readback's copies; `timed` when this slot's frame took them.
+  GLuint stamps[7] = {};
+  bool timed = false;
   std::size_t capacity_px = 0;
   GLsync fence = nullptr;
   Frame meta;  // everything but the pixels
@@ -695,6 +699,7 @@ void detail::split_rgba(const std::uint8_t* rgba, std::size_t px, std::uint8_t* 
 
 struct Renderer::Impl {
   std::shared_ptr<EglContext> ctx;  // shared by every Renderer made with the same context
+  bool software_gl = true;          // llvmpipe, softpipe or swrast: fragments cost CPU time
   World world;
   std::vector<CameraModel> cameras;
   RenderOptions options;
@@ -814,6 +819,13 @@ struct Renderer::Impl {
   /// Back-face culling for a solid (GpuMesh::winding) drawn through vp, else both sides. Where vp
   /// keeps orientation (determinant > 0), a face whose right-hand normal points at the eye points
   /// to -z in normalised device coordinates: clockwise in window x (right), y (up).
+  /// The shadow culls in force (RenderOptions::shadow_culling_on_gpu).
+  bool receiver_culling() const {
+    return options.shadow_receiver_culling && (software_gl || options.shadow_culling_on_gpu);
+  }
+  bool caster_culling() const {
+    return options.shadow_caster_culling && (software_gl || options.shadow_culling_on_gpu);
+  }
   void cull_back_faces(const GpuMesh& m, const Eigen::Matrix4f& vp) const {
     if (!options.occlusion_culling || m.winding == 0) {
       glDisable(GL_CULL_FACE);
@@ -833,7 +845,8 @@ struct Renderer::Impl {
                  float march_max_m);
   void post_draw(Program& post, const Targets& t, const FrameSetup& f, const CameraModel& c, std::uint64_t seq,
                  float march_max_m, bool window, bool motion, const Eigen::Vector3d& v_C, const Eigen::Vector3d& w_C);
-  void draw(const Pose& X_WB, const CameraModel& out_cam, double stamp_s, std::uint64_t seq);
+  /// stamps: the slot's 7 timestamp queries (RenderOptions::gpu_timers) or nullptr.
+  void draw(const Pose& X_WB, const CameraModel& out_cam, double stamp_s, std::uint64_t seq, const GLuint* stamps);
   void start_readback(Slot& s, const Targets& t);
   Frame finish_readback(Slot& s);
   void collect_oldest();
@@ -1442,7 +1455,7 @@ void Renderer::Impl::shadow_pass(const FrameSetup& f) {
         const Chunk& draw =
             m.lod.empty() ? ch : m.lod[ci].level[lod_level(m.lod[ci], cam, f.lod_fx, options.terrain_lod_px)];
         bool culled = false;
-        if (options.shadow_caster_culling) {
+        if (caster_culling()) {
           const float pad = pcf_pad(f.lamp_texel_per_m[i], lamp, ch.lo, ch.hi);
           culled = (m.terrain && casts_nothing(mi, ch, lamp, cam)) ||
                    shadow_out_of_view(cam_vp, lamp, axis, kLampFarM, ch.lo.array() - pad, ch.hi.array() + pad);
@@ -1594,7 +1607,7 @@ void Renderer::Impl::scene_pass(const Targets& t, const FrameSetup& f, double st
   const unsigned all_shadows = (f.sun_shadow ? 1u : 0u) | (f.shadows ? 2u : 0u);
   // Shadow receiver culling: the terrain's visible chunks by the shadow lookups they need (llvmpipe
   // pays for a lookup on every pixel of a draw that compiles it, lit or not).
-  const bool cull = options.shadow_receiver_culling && all_shadows != 0;
+  const bool cull = receiver_culling() && all_shadows != 0;
   std::vector<LampCasters> casters;  // per lamp: the caster boxes in its frustum, seen from it
   if (cull && f.shadows) {
     casters.resize(static_cast<std::size_t>(f.nl));
@@ -2032,7 +2045,8 @@ void Renderer::Impl::post_draw(Program& post, const Targets& t, const FrameSetup
   glBindSampler(7, 0);
 }
 
-void Renderer::Impl::draw(const Pose& X_WB, const CameraModel& out_cam, double stamp_s, std::uint64_t seq) {
+void Renderer::Impl::draw(const Pose& X_WB, const CameraModel& out_cam, double stamp_s, std::uint64_t seq,
+                          const GLuint* stamps) {
   Targets& t = targets_for(out_cam);
   const CameraModel& c = t.internal;
   const FrameSetup f = setup_frame(X_WB, c);
@@ -2040,7 +2054,10 @@ void Renderer::Impl::draw(const Pose& X_WB, const CameraModel& out_cam, double s
   timings.internal_height = t.height;
   auto tp = Clock::now();
   double cpu = options.profile_passes ? process_cpu_ms() : 0.0;
+  int stamp = 0;
+  if (stamps) glQueryCounter(stamps[stamp++], GL_TIMESTAMP);
   auto lap = [&](double* out, double* out_cpu) {
+    if (stamps) glQueryCounter(stamps[stamp++], GL_TIMESTAMP);
     if (!options.profile_passes) return;
     glFinish();
     *out = ms_since(tp);
@@ -2083,6 +2100,7 @@ void Renderer::Impl::start_readback(Slot& s, const Targets& t) {
   glBindBuffer(GL_PIXEL_PACK_BUFFER, s.pbo_depth);
   glReadPixels(0, 0, t.out_width, t.out_height, GL_RED, GL_FLOAT, nullptr);
   glBindBuffer(GL_PIXEL_PACK_BUFFER, 0);
+  if (s.timed) glQueryCounter(s.stamps[6], GL_TIMESTAMP);
   s.fence = glFenceSync(GL_SYNC_GPU_COMMANDS_COMPLETE, 0);
   glFlush();
   check_gl("readback");
@@ -2095,6 +2113,13 @@ Frame Renderer::Impl::finish_readback(Slot& s) {
     glClientWaitSync(s.fence, GL_SYNC_FLUSH_COMMANDS_BIT, 10'000'000'000ULL);
     glDeleteSync(s.fence);
     s.fence = nullptr;
+  }
+  if (s.timed) {  // all done with the fence: the results wait for nothing
+    GLuint64 ns[7] = {};
+    for (int i = 0; i < 7; ++i) glGetQueryObjectui64v(s.stamps[i], GL_QUERY_RESULT, &ns[i]);
+    double* const out[6] = {&timings.gpu_shadow_ms,    &timings.gpu_scene_ms, &timings.gpu_snow_ms,
+                            &timings.gpu_inscatter_ms, &timings.gpu_post_ms,  &timings.gpu_readback_ms};
+    for (int i = 0; i < 6; ++i) *out[i] = 1e-6 * static_cast<double>(ns[i + 1] - ns[i]);
   }
   f.rgb.resize(px * 3);
   f.seg.resize(px);
@@ -2142,6 +2167,7 @@ Renderer::Renderer(World world, std::vector<CameraModel> cameras, RenderOptions 
   const SceneGeometry geo = build_scene_geometry(impl_->world);
   impl_->ctx = context ? std::move(context) : std::shared_ptr<EglContext>(EglContext::create(options.egl));
   impl_->ctx->make_current();
+  impl_->software_gl = impl_->ctx->software();
   glGenVertexArrays(1, &impl_->empty_vao);
   impl_->shadow_nearest = nearest_sampler();
   glSamplerParameteri(impl_->shadow_nearest, GL_TEXTURE_COMPARE_MODE, GL_COMPARE_REF_TO_TEXTURE);
@@ -2208,6 +2234,7 @@ Renderer::~Renderer() {
     if (s.fence) glDeleteSync(s.fence);
     if (s.pbo_rgba) glDeleteBuffers(1, &s.pbo_rgba);
     if (s.pbo_depth) glDeleteBuffers(1, &s.pbo_depth);
+    if (s.stamps[0]) glDeleteQueries(7, s.stamps);
   }
   for (auto& [name, t] : impl_->targets) {
     GLuint fbos[5] = {t.scene_fbo, t.post_fbo, t.is_fbo, t.blur_fbo[0], t.blur_fbo[1]};
@@ -2247,10 +2274,12 @@ void Renderer::submit(const Pose& X_WB, const std::string& camera, double stamp_
   const auto t0 = Clock::now();
   const std::uint64_t seq = I.sequence++;
   I.velocity = velocity;
-  I.draw(X_WB, c, stamp_s, seq);
   const std::size_t idx = I.next_slot;
   I.next_slot = (I.next_slot + 1) % I.slots.size();
   Slot& s = I.slots[idx];
+  s.timed = I.options.gpu_timers;
+  if (s.timed && s.stamps[0] == 0) glGenQueries(7, s.stamps);
+  I.draw(X_WB, c, stamp_s, seq, s.timed ? s.stamps : nullptr);
   s.meta = Frame{};
   s.meta.camera = c.name;
   s.meta.stamp_s = stamp_s;

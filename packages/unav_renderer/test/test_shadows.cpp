@@ -305,6 +305,7 @@ TEST(Shadows, ReceiverCullingChangesNoPixel) {
     // Enough depth bias that the shadow maps show no acne on the rough seabed's 45-degree slopes:
     // culling removes acne (a lookup it skips reads "lit"), which is not what this test is about.
     o.shadow_bias = 4.0;
+    o.shadow_culling_on_gpu = true;  // the culls under test, on a hardware GPU too
     RenderOptions no_cull = o;
     no_cull.shadow_receiver_culling = false;
     Renderer culled(world, front_and_down(), o);
@@ -352,6 +353,7 @@ TEST(Culling, ShadowCasterCullingChangesNoPixel) {
     RenderOptions o = unav::renderer::test::exact_options();
     o.lamps = true;  // and their in-scattering, with its shadow lookups (shafts)
     o.materials = true;
+    o.shadow_culling_on_gpu = true;  // the cull under test, on a hardware GPU too
     RenderOptions all = o;
     all.shadow_caster_culling = false;
     Renderer culled(*world, front_and_down(), o);
@@ -376,6 +378,32 @@ TEST(Culling, ShadowCasterCullingChangesNoPixel) {
     std::printf("lamp-map triangles: %zu drawn, %zu left out\n", drawn, left_out);
     EXPECT_GT(left_out, world == &base ? drawn / 5 : 0);  // measured: base 42 % of them
   }
+}
+
+// The shadow culls run on a software rasterizer, and on a hardware GPU only when asked
+// (RenderOptions::shadow_culling_on_gpu): there a frame is CPU-bound and they cost more than they save.
+TEST(Culling, ShadowCullsRunOnHardwareGpusOnlyWhenAsked) {
+  EXPECT_TRUE(EglContext::is_software_renderer("llvmpipe (LLVM 15.0.6, 256 bits)"));
+  EXPECT_TRUE(EglContext::is_software_renderer("softpipe"));
+  EXPECT_FALSE(EglContext::is_software_renderer("NVIDIA H100 80GB HBM3/PCIe/SSE2"));
+  EXPECT_FALSE(EglContext::is_software_renderer("AMD Radeon RX 7900 XTX (radeonsi, navi31, LLVM 15.0.6)"));
+  const World world = load_world(std::string(UNAV_REPO_ROOT) + "/worlds/pipe_inspection/world.yaml");
+  RenderOptions o = unav::renderer::test::exact_options();
+  o.lamps = true;
+  Renderer r(world, front_and_down(), o);
+  const bool software = r.context().software();
+  r.render(kOverPipe, "front", 1.0);
+  const RenderTimings by_default = r.last_timings();
+  o.shadow_culling_on_gpu = true;
+  r.set_options(o);
+  r.render(kOverPipe, "front", 1.0);
+  const RenderTimings asked = r.last_timings();
+  std::printf("%s: lamp-map triangles culled %zu by default, %zu when asked\n", r.context().gl_renderer().c_str(),
+              by_default.lamp_map_culled, asked.lamp_map_culled);
+  EXPECT_GT(asked.lamp_map_culled, 0u);
+  EXPECT_GT(asked.shadow_lookups_skipped, 0u);
+  EXPECT_EQ(by_default.lamp_map_culled > 0, software);
+  EXPECT_EQ(by_default.shadow_lookups_skipped > 0, software);
 }
 
 TEST(Culling, OcclusionCullingChangesNoPixelAndShadesLess) {

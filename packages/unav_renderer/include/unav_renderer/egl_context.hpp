@@ -31,6 +31,10 @@ class EglContext {
   const std::string& platform() const { return platform_; }  ///< "device[0]" or "surfaceless"
   const std::string& gl_vendor() const { return vendor_; }
   const std::string& gl_renderer() const { return renderer_; }
+  /// Whether GL_RENDERER names a software rasterizer (llvmpipe, softpipe, swrast): fragments cost
+  /// CPU time there, and work that trades CPU for fragments pays.
+  bool software() const { return is_software_renderer(renderer_); }
+  static bool is_software_renderer(const std::string& gl_renderer);
   const std::string& gl_version() const { return version_; }
 
  private:

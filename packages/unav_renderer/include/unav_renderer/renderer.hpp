@@ -52,6 +52,12 @@ struct RenderOptions {
   /// every lamp ray sinks faster than the terrain's steepest slope (what they hide from the lamp
   /// lies under the terrain). Same image (conservative tests); false only to measure or to check.
   bool shadow_caster_culling = true;
+  /// The two shadow culls above trade CPU work for fragment work, which llvmpipe lacks and a
+  /// hardware GPU has to spare: there (GL_RENDERER not llvmpipe/softpipe/swrast) a frame is
+  /// CPU-bound and the culls cost more than they save (H100, 640x480: submit() 1.14 -> 0.47 ms,
+  /// GPU 0.87 -> 0.62 ms a frame), so they run on a hardware GPU only when this is true. Same
+  /// pixels either way.
+  bool shadow_culling_on_gpu = false;
   /// Occlusion culling: what cannot be seen is not drawn. Back faces of solids (closed,
   /// consistently wound meshes: pipes, rocks, boxes, closed mesh files) in the camera's view: seen
   /// from outside a solid they lie behind its front faces, yet llvmpipe shades a face that a later
@@ -98,6 +104,10 @@ struct RenderOptions {
   std::uint64_t seed = 1;  ///< noise seed (frame noise = f(seed, sequence))
   /// glFinish after each pass to time them (RenderTimings::*_pass_ms); serialises the GPU.
   bool profile_passes = false;
+  /// GL timestamp queries between the passes (no glFinish, nothing serialised): the GPU time of each
+  /// pass of the frame last collected (RenderTimings::gpu_*_ms). Where the GPU waits for the CPU
+  /// between passes, that wait is in the next pass's share.
+  bool gpu_timers = false;
   EglOptions egl;
 };
 
@@ -127,6 +137,11 @@ struct RenderTimings {
   /// Shadow receiver culling in the last frame: visible terrain chunks times the shadow maps in
   /// use (sun, lamps), drawn with the lookup and drawn without it (nothing can shadow them).
   std::size_t shadow_lookups_drawn = 0, shadow_lookups_skipped = 0;
+  /// Only with RenderOptions::gpu_timers: the GPU's time for each pass of the frame last collected
+  /// (differences of GL timestamps taken as the GPU reached each pass's end), and from the end of the
+  /// post pass to the readback's copies done.
+  double gpu_shadow_ms = 0, gpu_scene_ms = 0, gpu_snow_ms = 0, gpu_inscatter_ms = 0, gpu_post_ms = 0,
+         gpu_readback_ms = 0;
   /// Triangles drawn into the lamps' shadow maps (all lamps), and those shadow caster culling left out.
   std::size_t lamp_map_triangles = 0, lamp_map_culled = 0;
   /// Only with profile_passes (occlusion queries): fragments the scene pass shaded, and how many
