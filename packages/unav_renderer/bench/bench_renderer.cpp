@@ -19,6 +19,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <ctime>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -74,11 +75,24 @@ Result measure(Renderer& r, const std::string& cam, int frames) {
   for (int i = 0; i < frames; ++i) {
     r.submit(pose_at(i), cam, 0.1 * i);
     if (r.in_flight() >= 2)
-      if (auto f = r.collect()) ++got;
+      if (auto f = r.collect()) {
+        ++got;
+        r.recycle(std::move(*f));  // as the node does
+      }
   }
-  while (auto f = r.collect()) ++got;
+  while (auto f = r.collect()) {
+    ++got;
+    r.recycle(std::move(*f));
+  }
   const double pipe_s = std::chrono::duration<double>(Clock::now() - t1).count();
   return {frames / sync_s, got / pipe_s, median(ms), (process_cpu_ms() - cpu0) / got};
+}
+
+// The oldest frame of the pool, its buffers handed back as the node does.
+void take(RendererPool& pool) {
+  Frame f = pool.collect();
+  if (f.rgb.empty()) std::abort();
+  pool.recycle(std::move(f));
 }
 
 // Frames per second of a RendererPool: `frames` frames in flight two per worker, collected in order.
@@ -87,10 +101,10 @@ double pool_fps(RendererPool& pool, const std::string& cam, int frames) {
     for (int i = 0; i < n; ++i) {
       pool.submit(pose_at(first + i), cam, 0.1 * (first + i));
       if (pool.in_flight() >= 2 * static_cast<std::size_t>(pool.workers()))
-        if (pool.collect().rgb.empty()) std::abort();
+        take(pool);
     }
     while (pool.in_flight() > 0)
-      if (pool.collect().rgb.empty()) std::abort();
+      take(pool);
   };
   run(3 * pool.workers(), 0);  // warm-up: every worker compiles its shaders
   const auto t0 = Clock::now();
@@ -105,7 +119,8 @@ double pool_ticks_per_s(RendererPool& pool, int ticks) {
     for (int i = 0; i < n; ++i) {
       pool.submit(pose_at(i), "demo_front", 0.1 * i);  // the demo's two cameras
       pool.submit(pose_at(i), "w320x180", 0.1 * i);
-      if (pool.collect().rgb.empty() || pool.collect().rgb.empty()) std::abort();
+      take(pool);
+      take(pool);
     }
   };
   run(3);  // warm-up
@@ -275,7 +290,9 @@ int main(int argc, char** argv) {
         r.submit(pose_at(i), cam, 0.1 * i);
         sub.push_back(r.last_timings().render_ms);
         if (r.in_flight() < 2) continue;
-        if (!r.collect()) std::abort();
+        std::optional<Frame> f = r.collect();
+        if (!f) std::abort();
+        r.recycle(std::move(*f));
         const RenderTimings& t = r.last_timings();
         const double v[6] = {t.gpu_shadow_ms,    t.gpu_scene_ms, t.gpu_snow_ms,
                              t.gpu_inscatter_ms, t.gpu_post_ms,  t.gpu_readback_ms};

@@ -14,6 +14,7 @@
 #include <deque>
 #include <limits>
 #include <map>
+#include <mutex>
 #include <set>
 #include <stdexcept>
 #include <unordered_map>
@@ -700,6 +701,8 @@ void detail::split_rgba(const std::uint8_t* rgba, std::size_t px, std::uint8_t* 
 struct Renderer::Impl {
   std::shared_ptr<EglContext> ctx;  // shared by every Renderer made with the same context
   bool software_gl = true;          // llvmpipe, softpipe or swrast: fragments cost CPU time
+  std::mutex spare_mutex;  // recycle() may come from another thread
+  std::vector<Frame> spare;  // frames handed back: their buffers fill later frames
   World world;
   std::vector<CameraModel> cameras;
   RenderOptions options;
@@ -2109,6 +2112,16 @@ void Renderer::Impl::start_readback(Slot& s, const Targets& t) {
 Frame Renderer::Impl::finish_readback(Slot& s) {
   Frame f = s.meta;
   const std::size_t px = static_cast<std::size_t>(f.width) * f.height;
+  {
+    const std::lock_guard<std::mutex> lock(spare_mutex);
+    if (!spare.empty()) {  // its buffers: resize() below keeps their pages (same size: no writes)
+      Frame& b = spare.back();
+      f.rgb.swap(b.rgb);
+      f.seg.swap(b.seg);
+      f.depth.swap(b.depth);
+      spare.pop_back();
+    }
+  }
   if (s.fence) {
     glClientWaitSync(s.fence, GL_SYNC_FLUSH_COMMANDS_BIT, 10'000'000'000ULL);
     glDeleteSync(s.fence);
@@ -2305,6 +2318,17 @@ std::optional<Frame> Renderer::collect() {
   Frame f = std::move(I.done.front());
   I.done.pop_front();
   return f;
+}
+
+void Renderer::recycle(Frame&& frame) {
+  Impl& I = *impl_;
+  const std::lock_guard<std::mutex> lock(I.spare_mutex);
+  if (I.spare.size() >= static_cast<std::size_t>(I.options.readback_slots) + 2) return;
+  Frame b;  // the buffers only
+  b.rgb = std::move(frame.rgb);
+  b.seg = std::move(frame.seg);
+  b.depth = std::move(frame.depth);
+  I.spare.push_back(std::move(b));
 }
 
 std::size_t Renderer::in_flight() const { return impl_->in_flight.size() + impl_->done.size(); }

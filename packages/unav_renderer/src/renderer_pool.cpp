@@ -40,6 +40,7 @@ struct RendererPool::Impl {
   std::deque<std::future<Frame>> pending;  // in submission order
   std::uint64_t sequence = 0;
   std::size_t next_worker = 0;
+  std::size_t next_recycle = 0;
 };
 
 RendererPool::RendererPool(const World& world, const std::vector<CameraModel>& cameras, const RenderOptions& options,
@@ -86,6 +87,12 @@ Frame RendererPool::collect() {
   std::future<Frame> f = std::move(I.pending.front());
   I.pending.pop_front();
   return f.get();
+}
+
+void RendererPool::recycle(Frame&& frame) {
+  Impl& I = *impl_;
+  I.workers[I.next_recycle]->renderer->recycle(std::move(frame));  // thread-safe
+  I.next_recycle = (I.next_recycle + 1) % I.workers.size();
 }
 
 std::size_t RendererPool::in_flight() const { return impl_->pending.size(); }

@@ -214,6 +214,7 @@ void UnderwaterRendererNode::publish_next() {
   Instant& k = in_flight_.front();
   Frame f = renderer_->collect();  // in submission order: the oldest instant's next camera
   publish_frame(cameras_[k.published], f, k.header);
+  renderer_->recycle(std::move(f));  // its buffers (the messages' previous ones) for a later frame
   if (++k.published == cameras_.size()) {
     in_flight_.pop_front();
     ++frames_;

@@ -272,6 +272,44 @@ TEST(Render, AsyncReadbackReturnsFramesInOrderAndMatchesSync) {
   EXPECT_FALSE(r.collect().has_value());
 }
 
+// Frames handed back (recycle()) lend their buffers to later ones: the same pixels as fresh
+// buffers, also when a frame's buffers are larger or smaller than the next camera's, and the
+// memory is reused (the buffer a frame returned is the one the next fills).
+TEST(Render, RecycledBuffersFillLaterFramesExactly) {
+  World w = empty_world();
+  w.objects.push_back(plane({0, 0, 10.0}, {0, 0, 0}, 20.0, SegClass::kSeabed));
+  w.objects.push_back(plane({0.5, 0, 9.0}, {0, 0, 0}, 0.6, SegClass::kRock));
+  CameraModel big = down_camera();
+  big.name = "big";
+  big.width *= 2;
+  big.height *= 2;
+  big.fx *= 2;
+  big.fy *= 2;
+  big.cx = big.width / 2.0;
+  big.cy = big.height / 2.0;
+  const std::vector<CameraModel> cams = {down_camera(), big};
+  Renderer fresh(w, cams, exact_options());
+  Renderer reused(w, cams, exact_options());
+  const char* order[] = {"down", "down", "big", "down", "big", "big"};
+  const std::uint8_t* handed_back = nullptr;
+  for (int i = 0; i < 6; ++i) {
+    const Pose X_WB = body_at({0.1 * i, 0, 8.0 - 0.2 * i});
+    const Frame a = fresh.render(X_WB, order[i], 1.0 + i);
+    Frame b = reused.render(X_WB, order[i], 1.0 + i);
+    ASSERT_EQ(b.rgb.size(), a.rgb.size()) << i;
+    ASSERT_EQ(b.seg.size(), a.seg.size()) << i;
+    ASSERT_EQ(b.depth.size(), a.depth.size()) << i;
+    EXPECT_EQ(b.rgb, a.rgb) << i;
+    EXPECT_EQ(b.seg, a.seg) << i;
+    EXPECT_EQ(b.depth, a.depth) << i;
+    if (i == 1) {
+      EXPECT_EQ(b.rgb.data(), handed_back) << "the buffer frame 0 handed back, reused in place";
+    }
+    handed_back = b.rgb.data();
+    reused.recycle(std::move(b));
+  }
+}
+
 TEST(RenderErrors, CausesAreNamed) {
   World w = empty_world();
   EXPECT_THROW(

@@ -193,6 +193,12 @@ class Renderer {
   /// on a full ring first completes the oldest (retrieve it with collect()).
   void submit(const Pose& X_WB, const std::string& camera, double stamp_s = 0.0, const BodyVelocity& velocity = {});
   std::optional<Frame> collect();
+  /// Optional: hands a frame's pixel buffers (rgb, depth, seg) back for a later frame to fill. A
+  /// frame's fresh 2.4 MB (640x480) cost more than the readback itself: the allocation, zeroing
+  /// and first-touch page faults (measured on the 2-core VM: 2.3 ms a frame, 0.6 ms with
+  /// recycled buffers). Keeps up to readback_slots + 2 frames' buffers. Thread-safe: may be
+  /// called while another thread renders.
+  void recycle(Frame&& frame);
   std::size_t in_flight() const;
 
   /// Replace the scene (new episode, domain randomisation) keeping the context, the shaders, the

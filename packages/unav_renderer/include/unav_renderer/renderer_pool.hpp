@@ -44,6 +44,8 @@ class RendererPool {
   /// The oldest frame submitted, waiting for it; rethrows the error its worker met. Throws
   /// std::logic_error when nothing is in flight.
   Frame collect();
+  /// Optional: a frame's pixel buffers back to a worker, for a later frame (Renderer::recycle()).
+  void recycle(Frame&& frame);
   std::size_t in_flight() const;
   /// True when a frame is in flight and the oldest is rendered: collect() returns at once.
   bool ready() const;
