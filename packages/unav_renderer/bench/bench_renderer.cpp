@@ -1,7 +1,9 @@
 // Frames per second of the underwater renderer on worlds/pipe_inspection, RGB + depth +
 // segmentation with readback, at 320x180 and 640x480, synchronous and pipelined (PBO ring).
 // Prints a table; also a breakdown by switching effects off, to show what dominates.
-//   bench_unav_renderer [frames=40] [world.yaml] [--quick] [--camera NAME] [--config N] [--callgrind]
+//   bench_unav_renderer [frames=40] [world.yaml] [--quick] [--camera NAME] [--config N] [--in-flight N]
+//                       [--callgrind]
+// --in-flight N: frames in flight in the pipelined runs (RenderOptions::readback_slots, default 2).
 // --quick: one configuration's row (--config N, default 0) and the per-pass breakdown only (for A/B
 // runs of two builds or two configurations, interleaved: this VM's speed drifts by +-15 % over
 // minutes); --camera: that camera only
@@ -74,7 +76,7 @@ Result measure(Renderer& r, const std::string& cam, int frames) {
   int got = 0;
   for (int i = 0; i < frames; ++i) {
     r.submit(pose_at(i), cam, 0.1 * i);
-    if (r.in_flight() >= 2)
+    if (r.in_flight() >= static_cast<std::size_t>(r.options().readback_slots))
       if (auto f = r.collect()) {
         ++got;
         r.recycle(std::move(*f));  // as the node does
@@ -134,6 +136,7 @@ double pool_ticks_per_s(RendererPool& pool, int ticks) {
 int main(int argc, char** argv) {
   bool quick = false, callgrind = false;
   int config_index = 0;  // --callgrind and the per-pass table: which configuration (0 = default options)
+  int in_flight = 2;     // pipelined runs: frames in flight (RenderOptions::readback_slots)
   std::string only;
   std::vector<std::string> args;
   for (int i = 1; i < argc; ++i) {
@@ -143,6 +146,8 @@ int main(int argc, char** argv) {
       callgrind = true;
     else if (std::string(argv[i]) == "--camera" && i + 1 < argc)
       only = argv[++i];
+    else if (std::string(argv[i]) == "--in-flight" && i + 1 < argc)
+      in_flight = std::atoi(argv[++i]);
     else if (std::string(argv[i]) == "--config" && i + 1 < argc)
       config_index = std::atoi(argv[++i]);
     else
@@ -165,11 +170,16 @@ int main(int argc, char** argv) {
   const std::vector<CameraModel> cameras = {small, vga, vga_dist, demo_front};
   const char* const names[] = {"w320x180", "w640x480", "w640x480_distorted", "demo_front"};
   auto first_row_only = [](const std::string& cam) { return cam == "w640x480_distorted" || cam == "demo_front"; };
+  if (in_flight < 1) {
+    std::fprintf(stderr, "bench_unav_renderer: --in-flight must be >= 1\n");
+    return 2;
+  }
   RenderOptions opt;
+  opt.readback_slots = in_flight;
   Renderer r(world, cameras, opt);
-  std::printf("unav_renderer bench: %s via %s, GL %s, %zu triangles, %d frames each\n",
+  std::printf("unav_renderer bench: %s via %s, GL %s, %zu triangles, %d frames each, %d in flight when pipelined\n",
               r.context().gl_renderer().c_str(), r.context().platform().c_str(), r.context().gl_version().c_str(),
-              r.triangle_count(), frames);
+              r.triangle_count(), frames, in_flight);
   std::printf("%-34s %-20s %10s %10s %12s %10s\n", "configuration", "camera", "fps sync", "fps pipe", "median ms",
               "cpu ms/fr");
   struct Config {
@@ -289,7 +299,7 @@ int main(int argc, char** argv) {
       for (int i = 0; i < frames; ++i) {
         r.submit(pose_at(i), cam, 0.1 * i);
         sub.push_back(r.last_timings().render_ms);
-        if (r.in_flight() < 2) continue;
+        if (r.in_flight() < static_cast<std::size_t>(r.options().readback_slots)) continue;
         std::optional<Frame> f = r.collect();
         if (!f) std::abort();
         r.recycle(std::move(*f));
