@@ -134,6 +134,7 @@ double pool_ticks_per_s(RendererPool& pool, int ticks) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  std::setvbuf(stdout, nullptr, _IOLBF, 0);  // each row as it comes (a run cut short keeps them)
   bool quick = false, callgrind = false;
   int config_index = 0;  // --callgrind and the per-pass table: which configuration (0 = default options)
   int in_flight = 2;     // pipelined runs: frames in flight (RenderOptions::readback_slots)
