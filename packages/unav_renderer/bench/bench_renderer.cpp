@@ -102,11 +102,9 @@ double pool_fps(RendererPool& pool, const std::string& cam, int frames) {
   const auto run = [&](int n, int first) {
     for (int i = 0; i < n; ++i) {
       pool.submit(pose_at(first + i), cam, 0.1 * (first + i));
-      if (pool.in_flight() >= 2 * static_cast<std::size_t>(pool.workers()))
-        take(pool);
+      if (pool.in_flight() >= 2 * static_cast<std::size_t>(pool.workers())) take(pool);
     }
-    while (pool.in_flight() > 0)
-      take(pool);
+    while (pool.in_flight() > 0) take(pool);
   };
   run(3 * pool.workers(), 0);  // warm-up: every worker compiles its shaders
   const auto t0 = Clock::now();

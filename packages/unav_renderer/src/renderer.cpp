@@ -701,8 +701,8 @@ void detail::split_rgba(const std::uint8_t* rgba, std::size_t px, std::uint8_t* 
 struct Renderer::Impl {
   std::shared_ptr<EglContext> ctx;  // shared by every Renderer made with the same context
   bool software_gl = true;          // llvmpipe, softpipe or swrast: fragments cost CPU time
-  std::mutex spare_mutex;  // recycle() may come from another thread
-  std::vector<Frame> spare;  // frames handed back: their buffers fill later frames
+  std::mutex spare_mutex;           // recycle() may come from another thread
+  std::vector<Frame> spare;         // frames handed back: their buffers fill later frames
   World world;
   std::vector<CameraModel> cameras;
   RenderOptions options;
