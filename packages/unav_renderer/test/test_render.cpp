@@ -3,6 +3,7 @@
 
 #include <opencv2/calib3d.hpp>
 
+#include <chrono>
 #include <cmath>
 
 #include "../src/pixel_ops.hpp"
@@ -307,6 +308,39 @@ TEST(Render, RecycledBuffersFillLaterFramesExactly) {
     }
     handed_back = b.rgb.data();
     reused.recycle(std::move(b));
+  }
+}
+
+// RenderOptions::gpu_timers: the GPU's time for each pass of the frame last collected, from GL
+// timestamps taken inside the call: each finite and >= 0, their sum within the call's wall time;
+// all zero when off.
+TEST(Render, GpuTimersSplitTheFrameIntoItsPasses) {
+  World w = empty_world();
+  w.objects.push_back(plane({0, 0, 10.0}, {0, 0, 0}, 20.0, SegClass::kSeabed));
+  RenderOptions o = exact_options();
+  Renderer r(w, {down_camera()}, o);
+  r.render(body_at({0, 0, 8.0}), "down", 0.5);
+  const RenderTimings off = r.last_timings();
+  EXPECT_EQ(off.gpu_shadow_ms + off.gpu_scene_ms + off.gpu_snow_ms + off.gpu_inscatter_ms + off.gpu_post_ms +
+                off.gpu_readback_ms,
+            0.0);
+  o.gpu_timers = true;
+  r.set_options(o);
+  for (int i = 0; i < 3; ++i) {
+    const auto t0 = std::chrono::steady_clock::now();
+    r.render(body_at({0, 0, 8.0 - 0.1 * i}), "down", 1.0 + i);
+    const double wall_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    const RenderTimings t = r.last_timings();
+    const double parts[6] = {t.gpu_shadow_ms,    t.gpu_scene_ms, t.gpu_snow_ms,
+                             t.gpu_inscatter_ms, t.gpu_post_ms,  t.gpu_readback_ms};
+    double sum = 0.0;
+    for (double p : parts) {
+      EXPECT_TRUE(std::isfinite(p));
+      EXPECT_GE(p, 0.0);
+      sum += p;
+    }
+    EXPECT_GT(t.gpu_scene_ms + t.gpu_post_ms, 0.0);  // a frame was drawn
+    EXPECT_LE(sum, wall_ms) << "timestamps taken inside render()";
   }
 }
 
