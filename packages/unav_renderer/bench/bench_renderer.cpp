@@ -340,15 +340,13 @@ int main(int argc, char** argv) {
       std::vector<double> v;
       v.reserve(t.size());
       for (const auto& x : t) v.push_back(x.*m);
-      std::sort(v.begin(), v.end());
-      return v[v.size() / 2];
+      return median(std::move(v));
     };
     auto medz = [&](std::size_t RenderTimings::*m) {
       std::vector<double> v;
       v.reserve(t.size());
       for (const auto& x : t) v.push_back(static_cast<double>(x.*m));
-      std::sort(v.begin(), v.end());
-      return v[v.size() / 2];
+      return median(std::move(v));
     };
     const double cpu[5] = {med(&RenderTimings::shadow_pass_cpu_ms), med(&RenderTimings::scene_pass_cpu_ms),
                            med(&RenderTimings::snow_pass_cpu_ms), med(&RenderTimings::inscatter_pass_cpu_ms),

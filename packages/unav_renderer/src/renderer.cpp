@@ -227,11 +227,13 @@ struct Targets {
   bool split_post = false;
 };
 
+// RenderOptions::gpu_timers: timestamps at a frame's start, after each of its five passes and
+// after the readback's copies.
+constexpr int kStamps = 7;
+
 struct Slot {
   GLuint pbo_rgba = 0, pbo_depth = 0;
-  // RenderOptions::gpu_timers: timestamps at the frame's start, after each of the five passes and
-  // after the readback's copies; `timed` when this slot's frame took them.
-  GLuint stamps[7] = {};
+  GLuint stamps[kStamps] = {};  // gpu_timers; `timed` when this slot's frame took them
   bool timed = false;
   std::size_t capacity_px = 0;
   GLsync fence = nullptr;
@@ -254,27 +256,22 @@ void validate_options(const RenderOptions& o, const std::string& where) {
                       "must be in [0, 256] (0: no lamp in-scattering)");
 }
 
-// A sampler object reading bilinear in the nearest mip level, repeating (surface maps).
-GLuint mip_nearest_sampler() {
+// A sampler object with these filters and this wrap mode in s and t.
+GLuint make_sampler(GLint min_filter, GLint mag_filter, GLint wrap) {
   GLuint s = 0;
   glGenSamplers(1, &s);
-  glSamplerParameteri(s, GL_TEXTURE_MIN_FILTER, GL_LINEAR_MIPMAP_NEAREST);
-  glSamplerParameteri(s, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
-  glSamplerParameteri(s, GL_TEXTURE_WRAP_S, GL_REPEAT);
-  glSamplerParameteri(s, GL_TEXTURE_WRAP_T, GL_REPEAT);
+  glSamplerParameteri(s, GL_TEXTURE_MIN_FILTER, min_filter);
+  glSamplerParameteri(s, GL_TEXTURE_MAG_FILTER, mag_filter);
+  glSamplerParameteri(s, GL_TEXTURE_WRAP_S, wrap);
+  glSamplerParameteri(s, GL_TEXTURE_WRAP_T, wrap);
   return s;
 }
 
+// A sampler object reading bilinear in the nearest mip level, repeating (surface maps).
+GLuint mip_nearest_sampler() { return make_sampler(GL_LINEAR_MIPMAP_NEAREST, GL_LINEAR, GL_REPEAT); }
+
 // A sampler object reading one texel, unfiltered, clamped to the edges.
-GLuint nearest_sampler() {
-  GLuint s = 0;
-  glGenSamplers(1, &s);
-  glSamplerParameteri(s, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
-  glSamplerParameteri(s, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
-  glSamplerParameteri(s, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
-  glSamplerParameteri(s, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
-  return s;
-}
+GLuint nearest_sampler() { return make_sampler(GL_NEAREST, GL_NEAREST, GL_CLAMP_TO_EDGE); }
 
 // A bound depth texture as a shadow map: bilinear depth comparison (hardware PCF), clamped.
 void shadow_sampling(GLenum target) {
@@ -819,16 +816,13 @@ struct Renderer::Impl {
     const auto& [lo, hi] = terrain_bounds[mesh];
     return eye.x() >= lo.x() && eye.y() >= lo.y() && eye.x() <= hi.x() && eye.y() <= hi.y() && eye.z() < lo.z();
   }
+  /// The shadow culls in force: on a hardware GPU only when asked (RenderOptions::shadow_culling_on_gpu).
+  bool shadow_culls_pay() const { return software_gl || options.shadow_culling_on_gpu; }
+  bool receiver_culling() const { return options.shadow_receiver_culling && shadow_culls_pay(); }
+  bool caster_culling() const { return options.shadow_caster_culling && shadow_culls_pay(); }
   /// Back-face culling for a solid (GpuMesh::winding) drawn through vp, else both sides. Where vp
   /// keeps orientation (determinant > 0), a face whose right-hand normal points at the eye points
   /// to -z in normalised device coordinates: clockwise in window x (right), y (up).
-  /// The shadow culls in force (RenderOptions::shadow_culling_on_gpu).
-  bool receiver_culling() const {
-    return options.shadow_receiver_culling && (software_gl || options.shadow_culling_on_gpu);
-  }
-  bool caster_culling() const {
-    return options.shadow_caster_culling && (software_gl || options.shadow_culling_on_gpu);
-  }
   void cull_back_faces(const GpuMesh& m, const Eigen::Matrix4f& vp) const {
     if (!options.occlusion_culling || m.winding == 0) {
       glDisable(GL_CULL_FACE);
@@ -848,7 +842,7 @@ struct Renderer::Impl {
                  float march_max_m);
   void post_draw(Program& post, const Targets& t, const FrameSetup& f, const CameraModel& c, std::uint64_t seq,
                  float march_max_m, bool window, bool motion, const Eigen::Vector3d& v_C, const Eigen::Vector3d& w_C);
-  /// stamps: the slot's 7 timestamp queries (RenderOptions::gpu_timers) or nullptr.
+  /// stamps: the slot's kStamps timestamp queries (RenderOptions::gpu_timers) or nullptr.
   void draw(const Pose& X_WB, const CameraModel& out_cam, double stamp_s, std::uint64_t seq, const GLuint* stamps);
   void start_readback(Slot& s, const Targets& t);
   Frame finish_readback(Slot& s);
@@ -2103,7 +2097,7 @@ void Renderer::Impl::start_readback(Slot& s, const Targets& t) {
   glBindBuffer(GL_PIXEL_PACK_BUFFER, s.pbo_depth);
   glReadPixels(0, 0, t.out_width, t.out_height, GL_RED, GL_FLOAT, nullptr);
   glBindBuffer(GL_PIXEL_PACK_BUFFER, 0);
-  if (s.timed) glQueryCounter(s.stamps[6], GL_TIMESTAMP);
+  if (s.timed) glQueryCounter(s.stamps[kStamps - 1], GL_TIMESTAMP);
   s.fence = glFenceSync(GL_SYNC_GPU_COMMANDS_COMPLETE, 0);
   glFlush();
   check_gl("readback");
@@ -2128,11 +2122,11 @@ Frame Renderer::Impl::finish_readback(Slot& s) {
     s.fence = nullptr;
   }
   if (s.timed) {  // all done with the fence: the results wait for nothing
-    GLuint64 ns[7] = {};
-    for (int i = 0; i < 7; ++i) glGetQueryObjectui64v(s.stamps[i], GL_QUERY_RESULT, &ns[i]);
-    double* const out[6] = {&timings.gpu_shadow_ms,    &timings.gpu_scene_ms, &timings.gpu_snow_ms,
-                            &timings.gpu_inscatter_ms, &timings.gpu_post_ms,  &timings.gpu_readback_ms};
-    for (int i = 0; i < 6; ++i) *out[i] = 1e-6 * static_cast<double>(ns[i + 1] - ns[i]);
+    GLuint64 ns[kStamps] = {};
+    for (int i = 0; i < kStamps; ++i) glGetQueryObjectui64v(s.stamps[i], GL_QUERY_RESULT, &ns[i]);
+    double* const out[kStamps - 1] = {&timings.gpu_shadow_ms,    &timings.gpu_scene_ms, &timings.gpu_snow_ms,
+                                      &timings.gpu_inscatter_ms, &timings.gpu_post_ms,  &timings.gpu_readback_ms};
+    for (int i = 0; i + 1 < kStamps; ++i) *out[i] = 1e-6 * static_cast<double>(ns[i + 1] - ns[i]);
   }
   f.rgb.resize(px * 3);
   f.seg.resize(px);
@@ -2247,7 +2241,7 @@ Renderer::~Renderer() {
     if (s.fence) glDeleteSync(s.fence);
     if (s.pbo_rgba) glDeleteBuffers(1, &s.pbo_rgba);
     if (s.pbo_depth) glDeleteBuffers(1, &s.pbo_depth);
-    if (s.stamps[0]) glDeleteQueries(7, s.stamps);
+    if (s.stamps[0]) glDeleteQueries(kStamps, s.stamps);
   }
   for (auto& [name, t] : impl_->targets) {
     GLuint fbos[5] = {t.scene_fbo, t.post_fbo, t.is_fbo, t.blur_fbo[0], t.blur_fbo[1]};
@@ -2291,7 +2285,7 @@ void Renderer::submit(const Pose& X_WB, const std::string& camera, double stamp_
   I.next_slot = (I.next_slot + 1) % I.slots.size();
   Slot& s = I.slots[idx];
   s.timed = I.options.gpu_timers;
-  if (s.timed && s.stamps[0] == 0) glGenQueries(7, s.stamps);
+  if (s.timed && s.stamps[0] == 0) glGenQueries(kStamps, s.stamps);
   I.draw(X_WB, c, stamp_s, seq, s.timed ? s.stamps : nullptr);
   s.meta = Frame{};
   s.meta.camera = c.name;
