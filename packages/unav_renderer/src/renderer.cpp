@@ -219,13 +219,18 @@ struct Targets {
   GLuint scene_fbo = 0, scene_color = 0, scene_zc = 0, scene_depth = 0;
   GLuint post_fbo = 0, post_rgba = 0, post_zc = 0;
   GLuint distmap = 0;
+  /// Distortion / port: the post pass's radiance at the internal size (RGBA32F: linear I and seg;
+  /// scene_depth attached for the geometry / water split), which the remap resamples into post_fbo.
+  GLuint lin_fbo = 0, lin_tex = 0;
   /// The forward-scatter blur's levels: scene_color's means over 4 x 4 and 16 x 16 pixels.
   GLuint blur_fbo[2] = {0, 0}, blur_tex[2] = {0, 0};
   int blur_width[2] = {0, 0}, blur_height[2] = {0, 0};
-  /// No distortion: the post pass reads pixel for pixel and draws geometry and water apart, by a
-  /// depth test against scene_depth (attached to post_fbo too).
-  bool split_post = false;
 };
+
+// The post program's compiled-in features, in kPostFS's order: REMAP, FWD, INSCATTER, VIGNETTING,
+// SHOT, READ_NOISE, SNELL, MOTION, RADIANCE.
+constexpr std::size_t kPostFeatures = 9;
+using PostFeatures = std::array<bool, kPostFeatures>;
 
 // RenderOptions::gpu_timers: timestamps at a frame's start, after each of its five passes and
 // after the readback's copies.
@@ -834,14 +839,17 @@ struct Renderer::Impl {
   }
   unsigned lamp_shadow_bits(std::size_t mesh, const Chunk& ch, const FrameSetup& f,
                             const std::vector<LampCasters>& casters) const;
-  Program& post_program(const std::array<bool, 8>& features, int pixels = 0);
+  Program& post_program(const PostFeatures& features, int pixels = 0);
   void blur_levels(const Targets& t);
   void snow_pass(const FrameSetup& f, const CameraModel& c, double stamp_s);
   bool inscatter_pass(const Targets& t, const FrameSetup& f, const CameraModel& c, float* march_max_out);
   void post_pass(const Targets& t, const FrameSetup& f, const CameraModel& c, std::uint64_t seq, bool do_inscatter,
                  float march_max_m);
-  void post_draw(Program& post, const Targets& t, const FrameSetup& f, const CameraModel& c, std::uint64_t seq,
-                 float march_max_m, bool window, bool motion, const Eigen::Vector3d& v_C, const Eigen::Vector3d& w_C);
+  /// color, depth: what u_color and u_depth read (the scene's colour and z_C, or the radiance and
+  /// seg + z_C a remap resamples).
+  void post_draw(Program& post, const Targets& t, GLuint color, GLuint depth, const FrameSetup& f, const CameraModel& c,
+                 std::uint64_t seq, float march_max_m, bool window, bool motion, const Eigen::Vector3d& v_C,
+                 const Eigen::Vector3d& w_C);
   /// stamps: the slot's kStamps timestamp queries (RenderOptions::gpu_timers) or nullptr.
   void draw(const Pose& X_WB, const CameraModel& out_cam, double stamp_s, std::uint64_t seq, const GLuint* stamps);
   void start_readback(Slot& s, const Targets& t);
@@ -1265,13 +1273,22 @@ Targets& Renderer::Impl::targets_for(const CameraModel& c) {
   t.post_zc = make_tex(GL_R32F, c.width, c.height, GL_RED, GL_FLOAT, GL_NEAREST);
   glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, t.post_rgba, 0);
   glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT1, GL_TEXTURE_2D, t.post_zc, 0);
-  t.split_post = dst.empty() && t.width == c.width && t.height == c.height;
-  if (t.split_post) glFramebufferTexture2D(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_TEXTURE_2D, t.scene_depth, 0);
+  // The post pass draws geometry and water apart, by a depth test against scene_depth: attached
+  // to post_fbo where it reads pixel for pixel, else to the radiance target it remaps from.
+  if (dst.empty()) glFramebufferTexture2D(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_TEXTURE_2D, t.scene_depth, 0);
   glDrawBuffers(2, bufs);
   check_fbo("post");
   if (!dst.empty()) {
     t.distmap = make_tex(GL_RG32F, c.width, c.height, GL_RG, GL_FLOAT, GL_NEAREST);
     glTexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, c.width, c.height, GL_RG, GL_FLOAT, dst.data());
+    glGenFramebuffers(1, &t.lin_fbo);
+    glBindFramebuffer(GL_FRAMEBUFFER, t.lin_fbo);
+    // 32-bit floats: the remap reads them without a half-float conversion, and seg exactly.
+    t.lin_tex = make_tex(GL_RGBA32F, t.width, t.height, GL_RGBA, GL_FLOAT, GL_LINEAR);
+    glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, t.lin_tex, 0);
+    glFramebufferTexture2D(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_TEXTURE_2D, t.scene_depth, 0);
+    glDrawBuffers(1, bufs);
+    check_fbo("post radiance");
   }
   glBindFramebuffer(GL_FRAMEBUFFER, 0);
   check_gl("render targets");
@@ -1906,9 +1923,9 @@ void Renderer::Impl::blur_levels(const Targets& t) {
 
 // The post program with these features compiled in (compiled on first use).
 // pixels: 0 every pixel, 1 those with geometry, 2 the water (see PIXELS in kPostFS).
-Program& Renderer::Impl::post_program(const std::array<bool, 8>& features, int pixels) {
-  static constexpr std::array<const char*, 8> kNames = {"DISTMAP", "FWD",        "INSCATTER", "VIGNETTING",
-                                                        "SHOT",    "READ_NOISE", "SNELL",     "MOTION"};
+Program& Renderer::Impl::post_program(const PostFeatures& features, int pixels) {
+  static constexpr std::array<const char*, kPostFeatures> kNames = {
+      "REMAP", "FWD", "INSCATTER", "VIGNETTING", "SHOT", "READ_NOISE", "SNELL", "MOTION", "RADIANCE"};
   unsigned key = 0;
   for (std::size_t i = 0; i < features.size(); ++i) key |= (features[i] ? 1u : 0u) << i;
   key |= static_cast<unsigned>(pixels) << features.size();
@@ -1937,38 +1954,50 @@ void Renderer::Impl::post_pass(const Targets& t, const FrameSetup& f, const Came
   const double critical_up = std::sqrt(1.0 - 1.0 / (water.refractive_index * water.refractive_index));
   const bool window =
       options.snell_window && f.cam_W.z() > 0.0 && max_up_component(c, f.X_WC.linear()) > critical_up - 1e-3;
-  const std::array<bool, 8> features{
-      t.distmap != 0, options.forward_scatter, do_inscatter, c.vignetting > 0.0, shot, read_noise, window, motion};
-  if (!t.split_post) {
-    post_draw(post_program(features), t, f, c, seq, march_max_m, window, motion, v_C, w_C);
-    return;
+  const bool remap = t.lin_fbo != 0;
+  // REMAP, FWD, INSCATTER, VIGNETTING, SHOT, READ_NOISE, SNELL, MOTION, RADIANCE (kPostFS). With a
+  // remap, the sensor's stage (vignetting, noise) runs there, per output pixel.
+  const bool vignetting = c.vignetting > 0.0;
+  const PostFeatures features{false,          options.forward_scatter, do_inscatter, vignetting && !remap,
+                              shot && !remap, read_noise && !remap,    window,       motion,
+                              remap};
+  if (remap) {
+    glBindFramebuffer(GL_FRAMEBUFFER, t.lin_fbo);
+    glViewport(0, 0, t.width, t.height);
   }
   // Geometry and water apart: the water's pixels (depth still at its clear value 1) skip the
   // forward scatter and the depth read, the geometry's skip Snell's window; llvmpipe shades only
   // the blocks whose depth test passes. Every pixel is drawn by exactly one of the two.
   glEnable(GL_DEPTH_TEST);
   glDepthMask(GL_FALSE);
-  std::array<bool, 8> geometry = features, water_only = features;
+  PostFeatures geometry = features, water_only = features;
   geometry[6] = false;      // no Snell's window
   water_only[1] = false;    // no forward scatter
   glDepthFunc(GL_GREATER);  // the triangle lies at depth 1: passes where the scene drew
-  post_draw(post_program(geometry, 1), t, f, c, seq, march_max_m, false, motion, v_C, w_C);
+  post_draw(post_program(geometry, 1), t, t.scene_color, t.scene_zc, f, c, seq, march_max_m, false, motion, v_C, w_C);
   glDepthFunc(GL_EQUAL);  // where it did not
-  post_draw(post_program(water_only, 2), t, f, c, seq, march_max_m, window, motion, v_C, w_C);
+  post_draw(post_program(water_only, 2), t, t.scene_color, t.scene_zc, f, c, seq, march_max_m, window, motion, v_C,
+            w_C);
   glDepthFunc(GL_LESS);
   glDepthMask(GL_TRUE);
   glDisable(GL_DEPTH_TEST);
+  if (remap) {  // each output pixel resamples the radiance through the distortion map, + the sensor
+    glBindFramebuffer(GL_FRAMEBUFFER, t.post_fbo);
+    glViewport(0, 0, t.out_width, t.out_height);
+    const PostFeatures sensor{true, false, false, vignetting, shot, read_noise, false, false, false};
+    post_draw(post_program(sensor), t, t.lin_tex, t.scene_zc, f, c, seq, march_max_m, false, false, v_C, w_C);
+  }
 }
 
 // One draw of the post pass with program `post` (post_pass()).
-void Renderer::Impl::post_draw(Program& post, const Targets& t, const FrameSetup& f, const CameraModel& c,
-                               std::uint64_t seq, float march_max_m, bool window, bool motion,
+void Renderer::Impl::post_draw(Program& post, const Targets& t, GLuint color, GLuint depth, const FrameSetup& f,
+                               const CameraModel& c, std::uint64_t seq, float march_max_m, bool window, bool motion,
                                const Eigen::Vector3d& v_C, const Eigen::Vector3d& w_C) {
   post.use();
   glActiveTexture(GL_TEXTURE0);
-  glBindTexture(GL_TEXTURE_2D, t.scene_color);
+  glBindTexture(GL_TEXTURE_2D, color);
   glActiveTexture(GL_TEXTURE1);
-  glBindTexture(GL_TEXTURE_2D, t.scene_zc);
+  glBindTexture(GL_TEXTURE_2D, depth);
   glActiveTexture(GL_TEXTURE2);
   glBindTexture(GL_TEXTURE_2D, t.distmap);
   glActiveTexture(GL_TEXTURE3);
@@ -1976,7 +2005,7 @@ void Renderer::Impl::post_draw(Program& post, const Targets& t, const FrameSetup
   glActiveTexture(GL_TEXTURE4);
   glBindTexture(GL_TEXTURE_2D, t.is_water_tex);
   glActiveTexture(GL_TEXTURE7);
-  glBindTexture(GL_TEXTURE_2D, t.scene_color);
+  glBindTexture(GL_TEXTURE_2D, color);
   glBindSampler(7, nearest);
   glActiveTexture(GL_TEXTURE8);
   glBindTexture(GL_TEXTURE_2D, t.blur_tex[0]);
@@ -2187,8 +2216,8 @@ Renderer::Renderer(World world, std::vector<CameraModel> cameras, RenderOptions 
   // The lamp count's programs now: a shader error shows here, not in the first frame.
   const int nlamps = static_cast<int>(std::min<std::size_t>(4, impl_->world.lamps.size()));
   impl_->snow_program(nlamps);
-  impl_->post_program(
-      {false, true, true, false, false, true, true, false});  // the common one; a shader error shows here
+  impl_->post_program({false, true, true, false, false, true, true, false, false},
+                      1);  // a common one; a shader error shows here
   if (nlamps > 0) impl_->inscatter_program(nlamps, std::max(1, options.lamp_scatter_samples), true);
   impl_->shadow = Program(detail::kShadowVS, detail::kShadowFS, "lamp_shadow");
   impl_->blur_down = Program(detail::kPostVS, detail::kBlurDownFS, "forward_scatter_blur");
@@ -2244,10 +2273,10 @@ Renderer::~Renderer() {
     if (s.stamps[0]) glDeleteQueries(kStamps, s.stamps);
   }
   for (auto& [name, t] : impl_->targets) {
-    GLuint fbos[5] = {t.scene_fbo, t.post_fbo, t.is_fbo, t.blur_fbo[0], t.blur_fbo[1]};
+    GLuint fbos[6] = {t.scene_fbo, t.post_fbo, t.is_fbo, t.blur_fbo[0], t.blur_fbo[1], t.lin_fbo};
     glDeleteFramebuffers(static_cast<GLsizei>(std::size(fbos)), fbos);
-    GLuint texs[10] = {t.scene_color, t.scene_zc, t.scene_depth,  t.post_rgba,   t.post_zc,
-                       t.distmap,     t.is_tex,   t.is_water_tex, t.blur_tex[0], t.blur_tex[1]};
+    GLuint texs[11] = {t.scene_color,  t.scene_zc,    t.scene_depth, t.post_rgba, t.post_zc, t.distmap,
+                       t.is_water_tex, t.blur_tex[0], t.blur_tex[1], t.is_tex,    t.lin_tex};
     glDeleteTextures(static_cast<GLsizei>(std::size(texs)), texs);
   }
   impl_->release_scene();

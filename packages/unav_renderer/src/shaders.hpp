@@ -446,9 +446,9 @@ void main() {
 // ---------------------------------------------------------------- full-screen post pass
 inline constexpr const char* kPostVS = R"GLSL(
 #version 330 core
-// The post pass without distortion: each pixel's view ray (camera and world frames) is affine in
-// its coordinates, so it is interpolated from the corners, not computed per pixel.
-#if defined(DISTMAP) && !DISTMAP
+// The post pass at the internal resolution (not REMAP): each pixel's view ray (camera and world
+// frames) is affine in its coordinates, so it is interpolated from the corners, not per pixel.
+#if defined(REMAP) && !REMAP
 #define POST_RAYS 1
 uniform vec4 u_K;      // fx, fy, cx, cy
 uniform ivec2 u_size;  // the viewport
@@ -471,8 +471,11 @@ inline constexpr const char* kPostFS = R"GLSL(
 #version 330 core
 // Features compiled in or out (Renderer keeps one program per combination in use): llvmpipe
 // pays for both sides of a branch on a uniform.
-#ifndef DISTMAP
-#define DISTMAP 1     // distortion / port: each output pixel reads its source through u_distmap
+#ifndef REMAP
+#define REMAP 0       // distortion / port: each output pixel resamples a RADIANCE pass through u_distmap
+#endif
+#ifndef RADIANCE
+#define RADIANCE 0    // write the linear radiance I (seg in alpha) for a REMAP pass, no sensor stage
 #endif
 #ifndef FWD
 #define FWD 1         // forward-scatter blur
@@ -496,12 +499,17 @@ inline constexpr const char* kPostFS = R"GLSL(
 #define MOTION 0      // motion blur over the exposure
 #endif
 #ifndef PIXELS
-#define PIXELS 0      // 0 every pixel; 1 those with geometry, 2 the water only (without distortion the
-#endif                // pass is drawn twice, split by a depth test against the scene's depth buffer)
-uniform sampler2D u_color;     // RGBA16F: D and seg
+#define PIXELS 0      // 0 every pixel; 1 those with geometry, 2 the water only (the pass is drawn
+#endif                // twice, split by a depth test against the scene's depth buffer)
+// A distorted camera (or one behind a port) runs two programs: the RADIANCE variant at the
+// internal (undistorted) resolution, split by PIXELS like a pinhole's, then the REMAP variant at
+// the output's, which resamples it (bilinear, as a lens images the radiance; seg and depth from
+// the nearest source pixel) and adds the sensor (vignetting, noise, encoding). One program doing
+// both per output pixel pays for the geometry's and the water's branches on every pixel.
+uniform sampler2D u_color;     // RGBA16F: D and seg (REMAP: RGBA32F, the RADIANCE pass's I and seg)
 uniform sampler2D u_color_px;  // the same through a nearest sampler: texel centres read one texel
 uniform sampler2D u_depth;     // R32F: z_C
-uniform sampler2D u_distmap;   // RG32F: undistorted pixel for each output pixel
+uniform sampler2D u_distmap;   // RG32F: undistorted pixel for each output pixel (REMAP)
 uniform sampler2D u_blur4;     // RGBA32F, 1/4 resolution: means of 4 x 4 pixels of u_color (kBlurDownFS)
 uniform sampler2D u_blur16;    // RGBA32F, 1/16 resolution: means of 16 x 16 pixels
 uniform vec4 u_blur_uv;        // pixel coordinates -> u_blur4's, u_blur16's texture coordinates (xy, zw)
@@ -531,9 +539,9 @@ uniform vec3 u_motion_v;       // camera translation over the exposure, optical 
 uniform vec3 u_motion_w;       // camera rotation over the exposure (angle x axis), optical frame
 uniform uint u_seed;
 uniform bool u_srgb;
-layout(location = 0) out vec4 o_rgba;   // rgb8 + seg id in alpha
+layout(location = 0) out vec4 o_rgba;   // rgb8 + seg id in alpha (RADIANCE: linear I and seg id)
 layout(location = 1) out float o_depth;
-#if !DISTMAP
+#if !REMAP
 noperspective in vec3 v_ray;    // the vertex shader's view rays (see kPostVS)
 noperspective in vec3 v_ray_W;
 #endif
@@ -572,35 +580,26 @@ vec3 encode(vec3 x) {
 
 void main() {
   ivec2 pix = ivec2(gl_FragCoord.xy);
-#if DISTMAP
+#if REMAP
   vec2 src = texture(u_distmap, gl_FragCoord.xy / vec2(textureSize(u_distmap, 0))).xy;   // nearest: pixel pix
-#else
-  vec2 src = vec2(pix);
-#endif
   ivec2 si = ivec2(floor(src + 0.5));
   bool inside = si.x >= 0 && si.y >= 0 && si.x < u_size.x && si.y < u_size.y;
+  vec2 tc = (vec2(si) + 0.5) / vec2(u_size);   // the centre of texel si (nearest samplers)
+  float seg = inside ? texture(u_color_px, tc).a : 0.0;
+  bool hit = seg > 0.5;
+  float z = texture(u_depth, tc).x;
+  vec3 I = textureLod(u_color, (src + 0.5) / vec2(u_size), 0.0).rgb;   // clamps to the edge outside
+#else
+  vec2 src = vec2(pix);
   vec2 uv = (src + 0.5) / vec2(u_size);
-  float seg = 0.0;
+  vec4 c = texture(u_color_px, uv);
+  float seg = c.a;
   float z = 0.0;
-  vec3 D = vec3(0.0);
-  if (inside) {
-    vec2 tc = (vec2(si) + 0.5) / vec2(u_size);   // the centre of texel si (nearest samplers)
-    vec4 c = texture(u_color_px, tc);
-    seg = c.a;
 #if PIXELS != 2
-    z = texture(u_depth, tc).x;
+  z = texture(u_depth, uv).x;
 #endif
-#if DISTMAP
-    D = textureLod(u_color, uv, 0.0).rgb;
-#else
-    D = c.rgb;
-#endif
-  }
-#if DISTMAP
-  vec3 ray = vec3((src.x - u_K.z) / u_K.x, (src.y - u_K.w) / u_K.y, 1.0);
-#else
+  vec3 D = c.rgb;
   vec3 ray = v_ray;
-#endif
   float raylen = length(ray);
   vec3 d = ray / raylen;
 #if PIXELS == 2
@@ -615,7 +614,7 @@ void main() {
   // P0 = P + w x P + v when the shutter opened; its image moved by g = here - there during the
   // exposure, so this pixel gathers the sharp frame along +g (a box filter over the exposure).
   // Depth and segmentation stay those of the stamp.
-  if (inside) {
+  {
     vec3 P = ray * (hit ? z : 1.0e3);
     vec3 P0 = P + cross(u_motion_w, P) + u_motion_v;
     if (P0.z > 1e-3) {
@@ -648,11 +647,7 @@ void main() {
 
   // Backscatter of ambient light towards the veiling light. The veiling light is brighter
   // looking up than down (downwelling radiance): factor 1 + gradient * up-component of the ray.
-#if DISTMAP
-  vec3 d_W = u_R_WC * d;
-#else
   vec3 d_W = v_ray_W / raylen;
-#endif
   vec3 Bdir = u_Binf * (1.0 + u_veil_gradient * (-d_W.z));
   vec3 B = Bdir * (1.0 - exp(-u_betaB * range));
 
@@ -713,6 +708,10 @@ void main() {
 #endif
 
   vec3 I = (D + B + Ls) * u_gain;
+#endif  // REMAP
+#if RADIANCE
+  o_rgba = vec4(I, seg);   // RGBA32F: seg exact for REMAP's nearest read
+#else
 #if VIGNETTING
   // Natural vignetting: cos^4 of the in-air field angle (1 / (1 + |x|^2)^2 for the normalized x).
   vec2 xn = (vec2(pix) - u_Kout.zw) / u_Kout.xy;
@@ -742,6 +741,7 @@ void main() {
 #endif
   o_rgba = vec4(col, seg / 255.0);
   o_depth = hit ? z : uintBitsToFloat(0x7f800000u);
+#endif  // RADIANCE
 }
 )GLSL";
 

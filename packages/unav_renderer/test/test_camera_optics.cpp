@@ -517,3 +517,78 @@ TEST(CameraOptics, MotionBlurSmearsOverTheExposureAndKeepsTheLight) {
   const Frame still = r.render(body_at(p_W), "down", 0.0, BodyVelocity{});
   EXPECT_EQ(still.rgb, sharp.rgb);
 }
+
+TEST(CameraOptics, DistortedImageIsThePinholeImageResampled) {
+  // A lens with distortion images the same radiance as the ideal pinhole with its K: each output
+  // pixel is the pinhole image at the undistorted point OpenCV gives for it (bilinear), its class
+  // and depth those of the nearest pinhole pixel. A floor seen at a slant (a smooth gradient),
+  // water above its edge and a marker give surfaces, water and silhouettes; the comparison skips
+  // pixels whose 2 x 2 bilinear neighbourhood spans two classes (an edge is no smooth function to
+  // interpolate). Both images are 8-bit linear (no shoulder below 0.8): a bilinear mean of rounded
+  // levels is within 1 level of the rounded value, +1 for float rounding of the two renders.
+  World w = empty_world();
+  Object f = unav::renderer::test::floor_object(3.0, 30.0);
+  f.X_WO.translation().x() = 14.0;  // its near edge 1 m ahead: water beyond its far edge, 29 m out
+  w.objects.push_back(f);
+  w.objects.push_back(marker({4.0, 0.4, 1.2}, 0.6));
+  CameraModel pin = forward_camera(160, 120, 90.0);
+  pin.exposure = 1.5;
+  CameraModel dist = pin;
+  dist.name = "dist";
+  dist.distortion << -0.25, 0.06, 0.002, -0.001, 0.0;
+  RenderOptions o = exact_options();
+  o.shadows = false;  // (this 30 m two-triangle plane shows sun-shadow acne streaks far off at grazing view)
+  Renderer r(w, {pin, dist}, o);
+  const Pose X_WB = pose_from_xyz_rpy({0.0, 0.0, 1.0}, {0.0, -0.35, 0.0});  // pitched down 20 deg
+  const Frame a = r.render(X_WB, "cam");
+  const Frame b = r.render(X_WB, "dist");
+  std::vector<cv::Point2f> px, q;
+  for (int v = 0; v < dist.height; ++v)
+    for (int u = 0; u < dist.width; ++u) px.emplace_back(static_cast<float>(u), static_cast<float>(v));
+  cv::Mat K = (cv::Mat_<double>(3, 3) << dist.fx, 0, dist.cx, 0, dist.fy, dist.cy, 0, 0, 1);
+  cv::Mat D(1, 5, CV_64F);
+  for (int k = 0; k < 5; ++k) D.at<double>(0, k) = dist.distortion[k];
+  cv::undistortPoints(px, q, K, D, cv::noArray(), K,
+                      cv::TermCriteria(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, 30, 1e-6));
+  const int W = pin.width, H = pin.height;
+  const auto at = [W](int u, int v) { return static_cast<std::size_t>(v) * static_cast<std::size_t>(W) + u; };
+  std::size_t n = 0, classes[5] = {0, 0, 0, 0, 0};
+  double sum = 0.0, worst = 0.0;
+  for (int v = 0; v < dist.height; ++v)
+    for (int u = 0; u < dist.width; ++u) {
+      const cv::Point2f& p = q[at(u, v)];
+      const int x0 = static_cast<int>(std::floor(p.x)), y0 = static_cast<int>(std::floor(p.y));
+      if (x0 < 0 || y0 < 0 || x0 + 1 >= W || y0 + 1 >= H) continue;  // the pinhole does not see it
+      const std::uint8_t s = a.seg[at(x0, y0)];
+      if (a.seg[at(x0 + 1, y0)] != s || a.seg[at(x0, y0 + 1)] != s || a.seg[at(x0 + 1, y0 + 1)] != s) continue;
+      const std::size_t i = at(u, v);
+      ASSERT_EQ(b.seg[i], s) << u << "," << v;
+      const std::size_t nearest = at(static_cast<int>(std::lround(p.x)), static_cast<int>(std::lround(p.y)));
+      if (s != 0)
+        EXPECT_NEAR(b.depth[i], a.depth[nearest], 1e-5 * a.depth[nearest]) << u << "," << v;
+      else
+        EXPECT_TRUE(std::isinf(b.depth[i])) << u << "," << v;
+      const double fx = p.x - x0, fy = p.y - y0;
+      for (int ch = 0; ch < 3; ++ch) {
+        const auto c = [&](int x, int y) { return static_cast<double>(a.rgb[3 * at(x, y) + ch]); };
+        const double expect = (1 - fy) * ((1 - fx) * c(x0, y0) + fx * c(x0 + 1, y0)) +
+                              fy * ((1 - fx) * c(x0, y0 + 1) + fx * c(x0 + 1, y0 + 1));
+        const double d = std::abs(b.rgb[3 * i + ch] - expect);
+        worst = std::max(worst, d);
+        sum += d;
+        EXPECT_LE(d, 2.0) << u << "," << v << " channel " << ch;
+      }
+      ++n;
+      ++classes[s];
+    }
+  std::printf(
+      "distorted vs resampled pinhole: %zu pixels (water %zu, floor %zu, marker %zu), mean |diff| %.3f, "
+      "worst %.2f levels\n",
+      n, classes[0], classes[1], classes[4], sum / (3.0 * static_cast<double>(std::max<std::size_t>(n, 1))), worst);
+  // Every kind of pixel took part, and most of the frame did.
+  EXPECT_GT(classes[0], 1000u);
+  EXPECT_GT(classes[1], 1000u);
+  EXPECT_GT(classes[4], 100u);
+  EXPECT_GT(n, static_cast<std::size_t>(dist.width * dist.height) / 2);
+  EXPECT_LT(sum / (3.0 * static_cast<double>(n)), 0.5);
+}
