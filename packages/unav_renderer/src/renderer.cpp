@@ -1877,6 +1877,13 @@ bool Renderer::Impl::inscatter_pass(const Targets& t, const FrameSetup& f, const
 
 namespace {
 
+// kPostFS's pcg() on the CPU: the frame's seed is hashed once here, not once per pixel.
+GLuint pcg_seed(std::uint32_t v) {
+  const std::uint32_t state = v * 747796405u + 2891336453u;
+  const std::uint32_t word = ((state >> ((state >> 28u) + 4u)) ^ state) * 277803737u;
+  return (word >> 22u) ^ word;
+}
+
 // Largest upward component (-z in world_ned) of the unit view rays of a pinhole camera with
 // rotation R_WC: 1 when the zenith is in view, else the maximum along the image border (sampled
 // every few pixels; the function is smooth there).
@@ -2048,8 +2055,8 @@ void Renderer::Impl::post_draw(Program& post, const Targets& t, GLuint color, GL
   // The output (in-air) camera's pinhole for the field angle of the vignetting.
   glUniform4f(post["u_Kout"], static_cast<float>(t.out_K[0]), static_cast<float>(t.out_K[1]),
               static_cast<float>(t.out_K[2]), static_cast<float>(t.out_K[3]));
-  glUniform1ui(post["u_seed"], static_cast<GLuint>(noise::hash32(static_cast<std::uint32_t>(options.seed) ^
-                                                                 static_cast<std::uint32_t>(seq * 2654435761ULL))));
+  glUniform1ui(post["u_seed"], pcg_seed(noise::hash32(static_cast<std::uint32_t>(options.seed) ^
+                                                      static_cast<std::uint32_t>(seq * 2654435761ULL))));
   glUniform1i(post["u_srgb"], options.srgb_output ? 1 : 0);
   if (motion) {
     set3(post["u_motion_v"], v_C);
