@@ -1,6 +1,7 @@
 // Lamp shadows (shadow maps with PCF) on surfaces and in the lamp in-scattering (llvmpipe).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <utility>
@@ -147,6 +148,43 @@ TEST(Shadows, SunShadowLeavesTheAmbientShareOnly) {
   Renderer r0(w, {down_camera()}, exact(false, false, 0));
   const Frame f0 = r0.render(kBody, "down");
   EXPECT_NEAR(green_at(f0, {0.0, 1.5, 10.0}), lit, 1);
+}
+
+TEST(Shadows, LargeFloorDoesNotShadowItself) {
+  // A 30 m floor of two triangles, nothing above it, seen at a slant out to its far edge: the sun's
+  // map holds the floor itself (clipped to the map's 24 m), and every floor pixel must compare as
+  // lit, so the image equals the one without shadows (8-bit rounding: <= 1 level). Before the
+  // receiver's depth bias along the sunlight, acne streaks 8-12 m away darkened 789 values, by up
+  // to 99 levels (the sun's direct share).
+  World w = unav::renderer::test::empty_world();  // the sun straight down, no lamps
+  w.objects.push_back(unav::renderer::test::floor_object(3.0, 30.0));
+  w.objects[0].X_WO.translation().x() = 14.0;  // from 1 m behind the camera to 29 m ahead
+  CameraModel cam;
+  cam.name = "front";
+  cam.width = 160;
+  cam.height = 120;
+  cam.fx = cam.fy = 90.0;
+  cam.cx = 79.5;
+  cam.cy = 59.5;
+  cam.X_BC.linear() = R_camera_body_to_optical();
+  cam.exposure = 1.5;
+  const Pose X_WB = pose_from_xyz_rpy({0.0, 0.0, 1.0}, {0.0, -0.35, 0.0});  // pitched down 20 deg
+  Renderer r(w, {cam}, exact(false, true, 0)), r0(w, {cam}, exact(false, false, 0));
+  const Frame a = r.render(X_WB, "front"), b = r0.render(X_WB, "front");
+  std::size_t floor_px = 0, off = 0;
+  int worst = 0;
+  for (std::size_t i = 0; i < a.seg.size(); ++i) {
+    if (a.seg[i] == 0) continue;
+    ++floor_px;
+    for (int ch = 0; ch < 3; ++ch) {
+      const int d = std::abs(static_cast<int>(a.rgb[3 * i + ch]) - static_cast<int>(b.rgb[3 * i + ch]));
+      worst = std::max(worst, d);
+      off += d > 1;
+    }
+  }
+  std::printf("large floor: %zu floor pixels, %zu values off by more than 1 level, worst %d\n", floor_px, off, worst);
+  EXPECT_GT(floor_px, 10000u);
+  EXPECT_EQ(off, 0u);
 }
 
 namespace {
