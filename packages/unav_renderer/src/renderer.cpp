@@ -845,9 +845,8 @@ struct Renderer::Impl {
   bool inscatter_pass(const Targets& t, const FrameSetup& f, const CameraModel& c, float* march_max_out);
   void post_pass(const Targets& t, const FrameSetup& f, const CameraModel& c, std::uint64_t seq, bool do_inscatter,
                  float march_max_m);
-  /// color, depth: what u_color and u_depth read (the scene's colour and z_C, or the radiance and
-  /// seg + z_C a remap resamples).
-  void post_draw(Program& post, const Targets& t, GLuint color, GLuint depth, const FrameSetup& f, const CameraModel& c,
+  /// color: what u_color reads (the scene's colour, or the radiance a remap resamples).
+  void post_draw(Program& post, const Targets& t, GLuint color, const FrameSetup& f, const CameraModel& c,
                  std::uint64_t seq, float march_max_m, bool window, bool motion, const Eigen::Vector3d& v_C,
                  const Eigen::Vector3d& w_C);
   /// stamps: the slot's kStamps timestamp queries (RenderOptions::gpu_timers) or nullptr.
@@ -1947,8 +1946,6 @@ Program& Renderer::Impl::post_program(const PostFeatures& features, int pixels) 
 // Post pass: forward scatter, backscatter, + in-scatter, distortion, noise, encoding.
 void Renderer::Impl::post_pass(const Targets& t, const FrameSetup& f, const CameraModel& c, std::uint64_t seq,
                                bool do_inscatter, float march_max_m) {
-  glBindFramebuffer(GL_FRAMEBUFFER, t.post_fbo);
-  glViewport(0, 0, t.out_width, t.out_height);
   const bool shot = options.noise && c.shot_noise > 0.0, read_noise = options.noise && c.noise_stddev > 0.0;
   // Motion over the exposure (ending at the stamp), in the optical frame: a world point P (camera
   // coordinates now) was at P + w x P + v when the shutter opened.
@@ -1968,10 +1965,8 @@ void Renderer::Impl::post_pass(const Targets& t, const FrameSetup& f, const Came
   const PostFeatures features{false,          options.forward_scatter, do_inscatter, vignetting && !remap,
                               shot && !remap, read_noise && !remap,    window,       motion,
                               remap};
-  if (remap) {
-    glBindFramebuffer(GL_FRAMEBUFFER, t.lin_fbo);
-    glViewport(0, 0, t.width, t.height);
-  }
+  glBindFramebuffer(GL_FRAMEBUFFER, remap ? t.lin_fbo : t.post_fbo);
+  glViewport(0, 0, t.width, t.height);  // the internal size (the output's without a remap)
   // Geometry and water apart: the water's pixels (depth still at its clear value 1) skip the
   // forward scatter and the depth read, the geometry's skip Snell's window; llvmpipe shades only
   // the blocks whose depth test passes. Every pixel is drawn by exactly one of the two.
@@ -1981,10 +1976,9 @@ void Renderer::Impl::post_pass(const Targets& t, const FrameSetup& f, const Came
   geometry[6] = false;      // no Snell's window
   water_only[1] = false;    // no forward scatter
   glDepthFunc(GL_GREATER);  // the triangle lies at depth 1: passes where the scene drew
-  post_draw(post_program(geometry, 1), t, t.scene_color, t.scene_zc, f, c, seq, march_max_m, false, motion, v_C, w_C);
+  post_draw(post_program(geometry, 1), t, t.scene_color, f, c, seq, march_max_m, false, motion, v_C, w_C);
   glDepthFunc(GL_EQUAL);  // where it did not
-  post_draw(post_program(water_only, 2), t, t.scene_color, t.scene_zc, f, c, seq, march_max_m, window, motion, v_C,
-            w_C);
+  post_draw(post_program(water_only, 2), t, t.scene_color, f, c, seq, march_max_m, window, motion, v_C, w_C);
   glDepthFunc(GL_LESS);
   glDepthMask(GL_TRUE);
   glDisable(GL_DEPTH_TEST);
@@ -1992,19 +1986,19 @@ void Renderer::Impl::post_pass(const Targets& t, const FrameSetup& f, const Came
     glBindFramebuffer(GL_FRAMEBUFFER, t.post_fbo);
     glViewport(0, 0, t.out_width, t.out_height);
     const PostFeatures sensor{true, false, false, vignetting, shot, read_noise, false, false, false};
-    post_draw(post_program(sensor), t, t.lin_tex, t.scene_zc, f, c, seq, march_max_m, false, false, v_C, w_C);
+    post_draw(post_program(sensor), t, t.lin_tex, f, c, seq, march_max_m, false, false, v_C, w_C);
   }
 }
 
 // One draw of the post pass with program `post` (post_pass()).
-void Renderer::Impl::post_draw(Program& post, const Targets& t, GLuint color, GLuint depth, const FrameSetup& f,
-                               const CameraModel& c, std::uint64_t seq, float march_max_m, bool window, bool motion,
+void Renderer::Impl::post_draw(Program& post, const Targets& t, GLuint color, const FrameSetup& f, const CameraModel& c,
+                               std::uint64_t seq, float march_max_m, bool window, bool motion,
                                const Eigen::Vector3d& v_C, const Eigen::Vector3d& w_C) {
   post.use();
   glActiveTexture(GL_TEXTURE0);
   glBindTexture(GL_TEXTURE_2D, color);
   glActiveTexture(GL_TEXTURE1);
-  glBindTexture(GL_TEXTURE_2D, depth);
+  glBindTexture(GL_TEXTURE_2D, t.scene_zc);
   glActiveTexture(GL_TEXTURE2);
   glBindTexture(GL_TEXTURE_2D, t.distmap);
   glActiveTexture(GL_TEXTURE3);
