@@ -563,9 +563,15 @@ uint pcg(uint v) {
 // sin(a) by a square root (one instruction, where sin_pi is a polynomial; within 5e-4 where
 // |cos| is smallest, a 1e-4 sigma shift of the output).
 vec2 gauss2(uint h) {
-  float u = (float(h >> 12u) + 0.5) / 1048576.0;
+  // ln u for u = (k + 0.5) / 2^20: log2 of x = k + 0.5 (exact in a float) from its exponent and a
+  // degree-6 polynomial in its mantissa (within 4.4e-6), minus 20.
+  float x = float(h >> 12u) + 0.5;
+  uint bits = floatBitsToUint(x);
+  float t = uintBitsToFloat((bits & 0x7FFFFFu) | 0x3F800000u) - 1.0;   // mantissa - 1, [0, 1)
+  float p = 0.456894174 + t * (-0.27736505 + t * (0.121914139 + t * -0.0260663015));
+  float lg = float(int(bits >> 23u) - 147) + t * (1.44251703 + t * (-0.717898381 + t * p));   // exponent - 127 - 20
   float a = (float(h & 4095u) + 0.5) * (2.0 * PI / 4096.0) - PI;   // (-pi, pi)
-  float r = sqrt(-2.0 * log(u));
+  float r = sqrt(max(-2.0 * 0.69314718 * lg, 0.0));
   float s = sin_pi(a), c = sqrt(max(1.0 - s * s, 0.0));
   return r * vec2(abs(a) > 0.5 * PI ? -c : c, s);
 }
