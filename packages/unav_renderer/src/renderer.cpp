@@ -2217,8 +2217,8 @@ Renderer::Renderer(World world, std::vector<CameraModel> cameras, RenderOptions 
   // The lamp count's programs now: a shader error shows here, not in the first frame.
   const int nlamps = static_cast<int>(std::min<std::size_t>(4, impl_->world.lamps.size()));
   impl_->snow_program(nlamps);
-  impl_->post_program({false, true, true, false, false, true, true, false, false},
-                      1);  // a common one; a shader error shows here
+  // A common one (geometry pixels of a pinhole camera with read noise): a shader error shows here.
+  impl_->post_program({false, true, true, false, false, true, false, false, false}, 1);
   if (nlamps > 0) impl_->inscatter_program(nlamps, std::max(1, options.lamp_scatter_samples), true);
   impl_->shadow = Program(detail::kShadowVS, detail::kShadowFS, "lamp_shadow");
   impl_->blur_down = Program(detail::kPostVS, detail::kBlurDownFS, "forward_scatter_blur");

@@ -42,6 +42,19 @@ inline Object floor_object(double depth_m, double size_m) {
   return f;
 }
 
+// A forward camera "cam" (optical axis = body x) with a centred principal point.
+inline CameraModel forward_camera(int w, int h, double f) {
+  CameraModel c;
+  c.name = "cam";
+  c.width = w;
+  c.height = h;
+  c.fx = c.fy = f;
+  c.cx = 0.5 * (w - 1);
+  c.cy = 0.5 * (h - 1);
+  c.X_BC.linear() = R_camera_body_to_optical();
+  return c;
+}
+
 // A level body at p_W (world_ned).
 inline Pose body_at(const Eigen::Vector3d& p_W) { return pose_from_xyz_rpy(p_W, Eigen::Vector3d::Zero()); }
 

@@ -17,21 +17,9 @@ using namespace unav::renderer;
 using unav::renderer::test::body_at;
 using unav::renderer::test::empty_world;
 using unav::renderer::test::exact_options;
+using unav::renderer::test::forward_camera;
 
 namespace {
-
-// A forward camera (optical axis = body x) with a centred principal point.
-CameraModel forward_camera(int w, int h, double f) {
-  CameraModel c;
-  c.name = "cam";
-  c.width = w;
-  c.height = h;
-  c.fx = c.fy = f;
-  c.cx = 0.5 * (w - 1);
-  c.cy = 0.5 * (h - 1);
-  c.X_BC.linear() = R_camera_body_to_optical();
-  return c;
-}
 
 // A small square marker (plane facing the camera) at body-frame position p (x forward).
 Object marker(const Eigen::Vector3d& p, double size) {

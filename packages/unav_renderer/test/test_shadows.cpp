@@ -159,18 +159,11 @@ TEST(Shadows, LargeFloorDoesNotShadowItself) {
   World w = unav::renderer::test::empty_world();  // the sun straight down, no lamps
   w.objects.push_back(unav::renderer::test::floor_object(3.0, 30.0));
   w.objects[0].X_WO.translation().x() = 14.0;  // from 1 m behind the camera to 29 m ahead
-  CameraModel cam;
-  cam.name = "front";
-  cam.width = 160;
-  cam.height = 120;
-  cam.fx = cam.fy = 90.0;
-  cam.cx = 79.5;
-  cam.cy = 59.5;
-  cam.X_BC.linear() = R_camera_body_to_optical();
+  CameraModel cam = unav::renderer::test::forward_camera(160, 120, 90.0);
   cam.exposure = 1.5;
   const Pose X_WB = pose_from_xyz_rpy({0.0, 0.0, 1.0}, {0.0, -0.35, 0.0});  // pitched down 20 deg
   Renderer r(w, {cam}, exact(false, true, 0)), r0(w, {cam}, exact(false, false, 0));
-  const Frame a = r.render(X_WB, "front"), b = r0.render(X_WB, "front");
+  const Frame a = r.render(X_WB, "cam"), b = r0.render(X_WB, "cam");
   std::size_t floor_px = 0, off = 0;
   int worst = 0;
   for (std::size_t i = 0; i < a.seg.size(); ++i) {
