@@ -70,6 +70,9 @@ TEST(RandomizationSpec, BadSpecsNameFileKeyValueAndRule) {
       {"{objects: {count: 3}}", "needs objects.folder"},
       {"{seed: {uniform: [0, 5]}}", "takes a fixed value"},
       {"{base_world: no/such/world.yaml}", "no such file"},
+      {"{render: {shadows: yes}}", "render.shadows = yes: must be one of: true false"},
+      {"{render: {caustics: {choice: [true, 0]}}}", "render.caustics.choice[1] = 0"},
+      {"{render: {shadow: false}}", "render.shadow"},  // typo
   };
   for (const auto& c : cases) {
     const std::string e = error_of(c.patch);
@@ -151,10 +154,36 @@ TEST(SampleWorld, LoadsAndCarriesTheSample) {
     for (size_t i = 0; i < path.size(); ++i) {
       EXPECT_NEAR(w.seabed.depth_at(path[i].p_W.x(), path[i].p_W.y()) - path[i].p_W.z(), alt, 1e-9);
       // Consecutive points 0.1 m apart along the path (closer across a corner).
-      if (i > 0) EXPECT_LE((path[i].p_W.head<2>() - path[i - 1].p_W.head<2>()).norm(), 0.1 + 1e-9);
+      if (i > 0) {
+        EXPECT_LE((path[i].p_W.head<2>() - path[i - 1].p_W.head<2>()).norm(), 0.1 + 1e-9);
+      }
     }
   }
   fs::remove_all(dir);
+}
+
+TEST(RandomizationSpec, RenderSwitchesDefaultOnAndRandomize) {
+  const auto spec = RandomizationSpec::load(kSpec);
+  for (const char* k : {"shadows", "caustics", "materials"})
+    EXPECT_EQ(spec.sample(0)["render"][k].as<std::string>(), "true") << k;
+  YAML::Node root = YAML::LoadFile(kSpec);
+  root["render"]["shadows"] = false;
+  root["render"]["caustics"] = YAML::Load("{choice: [true, false]}");
+  const auto r = RandomizationSpec::parse(root, kSpec);
+  int on = 0;
+  const int n = 400;
+  for (int k = 0; k < n; ++k) {
+    const YAML::Node s = r.sample(k);
+    EXPECT_EQ(s["render"]["shadows"].as<std::string>(), "false");
+    EXPECT_EQ(s["render"]["materials"].as<std::string>(), "true");
+    on += s["render"]["caustics"].as<std::string>() == "true";
+    // The switches draw from their own generators: the scene of a sample stays the same.
+    if (k < 5) {
+      EXPECT_EQ(emit(s["water"]), emit(spec.sample(k)["water"]));
+    }
+  }
+  // Binomial(400, 1/2): standard deviation 10; 5 sigma either side.
+  EXPECT_NEAR(on, n / 2, 50);
 }
 
 TEST(RandomizationSpec, DocumentationListsEveryKey) {

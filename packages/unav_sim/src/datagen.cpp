@@ -133,6 +133,10 @@ SampleResult generate_sample(const unav::datagen::RandomizationSpec& spec, std::
   p.cameras = {camera};
   p.image_width = s["output"]["width"].as<int>();
   p.image_height = s["output"]["height"].as<int>();
+  // Validated by the spec as "true" or "false".
+  p.shadows = s["render"]["shadows"].as<std::string>() == "true";
+  p.caustics = s["render"]["caustics"].as<std::string>() == "true";
+  p.materials = s["render"]["materials"].as<std::string>() == "true";
   EpisodeSetup setup = load_episode_setup(p);
   const double gain = s["camera"]["gain"].as<double>();
   setup.cameras[0].noise_stddev = s["camera"]["noise_stddev"].as<double>() * gain;

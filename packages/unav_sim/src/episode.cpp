@@ -75,6 +75,8 @@ EpisodeSetup load_episode_setup(const EpisodeParams& params) {
   s.render.forward_scatter = params.forward_scatter;
   s.render.noise = params.camera_noise;
   s.render.materials = params.materials;
+  s.render.shadows = params.shadows;
+  s.render.caustics = params.caustics;
   s.render.lamp_scatter_samples = params.lamp_scatter_samples;
   s.render.readback_slots = 1;
   return s;

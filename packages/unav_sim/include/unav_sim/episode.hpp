@@ -51,6 +51,8 @@ struct EpisodeParams {
   bool forward_scatter = true;
   bool camera_noise = true;
   bool materials = true;  ///< RenderOptions::materials: relief, highlights, sediment
+  bool shadows = true;    ///< RenderOptions::shadows: sun and lamp shadow maps
+  bool caustics = true;   ///< RenderOptions::caustics: sunlight caustics on the seabed
   int lamp_scatter_samples = 8;
 
   template <class Archive>
@@ -74,6 +76,8 @@ struct EpisodeParams {
     a->Visit(Field("forward_scatter", &forward_scatter));
     a->Visit(Field("camera_noise", &camera_noise));
     a->Visit(Field("materials", &materials).Doc("relief (bump), GGX highlights and sediment in the images"));
+    a->Visit(Field("shadows", &shadows).Doc("shadow maps of the sun and of every lamp"));
+    a->Visit(Field("caustics", &caustics).Doc("animated sunlight caustics on the seabed"));
     a->Visit(Field("lamp_scatter_samples", &lamp_scatter_samples).Range(0, 64).Doc("0 = no lamp in-scattering"));
   }
 };
