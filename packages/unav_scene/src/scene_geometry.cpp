@@ -616,7 +616,7 @@ void write_obj(const MeshData& m, const std::string& path) {
 SceneGeometry build_scene_geometry(const World& w) {
   SceneGeometry g;
   if (w.seabed.enabled) {
-    g.meshes.push_back({"seabed", make_seabed_mesh(w.seabed), SegClass::kSeabed, w.seabed.material, false, {}});
+    g.meshes.push_back({"seabed", make_seabed_mesh(w.seabed), SegClass::kSeabed, w.seabed.material, false, {}, {}});
   }
   for (const auto& p : w.pipelines)
     g.meshes.push_back({"pipeline:" + p.name,
@@ -624,6 +624,7 @@ SceneGeometry build_scene_geometry(const World& w) {
                         SegClass::kPipeline,
                         p.material,
                         false,
+                        {},
                         {}});
   // Rocks sharing a material are merged into one draw.
   std::vector<SceneMesh> rock_groups;
@@ -636,7 +637,7 @@ SceneGeometry build_scene_geometry(const World& w) {
     for (auto& gm : rock_groups)
       if (same_look(gm.material, r.material)) grp = &gm;
     if (!grp) {
-      rock_groups.push_back({"rocks", {}, SegClass::kRock, r.material, true, {}});
+      rock_groups.push_back({"rocks", {}, SegClass::kRock, r.material, true, {}, {}});
       grp = &rock_groups.back();
     }
     const auto base = static_cast<std::uint32_t>(grp->mesh.vertex_count());
@@ -656,7 +657,7 @@ SceneGeometry build_scene_geometry(const World& w) {
     far.hm_width = far.hm_height = 0;
     far.hm_values.clear();
     far.depth_m = w.seabed.depth_m + w.seabed.relief_amplitude_m + 0.2;
-    g.meshes.push_back({"seabed_far", make_seabed_mesh(far), SegClass::kSeabed, w.seabed.material, false, {}});
+    g.meshes.push_back({"seabed_far", make_seabed_mesh(far), SegClass::kSeabed, w.seabed.material, false, {}, {}});
   }
   for (const auto& o : w.objects) {
     MeshData m;
@@ -670,7 +671,7 @@ SceneGeometry build_scene_geometry(const World& w) {
       for (MeshPart& p : parts) {  // parts with maps by their UVs, the rest triplanar
         p.mesh.transform(o.X_WO, o.scale);
         const bool triplanar = !p.maps.any();
-        g.meshes.push_back({"object:" + o.name, std::move(p.mesh), o.seg_class, o.material, triplanar, p.maps});
+        g.meshes.push_back({"object:" + o.name, std::move(p.mesh), o.seg_class, o.material, triplanar, p.maps, {}});
       }
       continue;
     } else if (o.shape == "box") {
@@ -681,7 +682,7 @@ SceneGeometry build_scene_geometry(const World& w) {
       m = make_plane_mesh(o.size_m.x(), o.size_m.y());
     }
     m.transform(o.X_WO, o.scale);
-    g.meshes.push_back({"object:" + o.name, std::move(m), o.seg_class, o.material, o.shape != "plane", {}});
+    g.meshes.push_back({"object:" + o.name, std::move(m), o.seg_class, o.material, o.shape != "plane", {}, {}});
   }
   return g;
 }

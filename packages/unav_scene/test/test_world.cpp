@@ -333,7 +333,9 @@ TEST(Meshes, SceneGeometryOfPipeInspection) {
     EXPECT_EQ(m.seg_class == SegClass::kRock && m.name == "rocks", !m.lod_parts.empty()) << m.name;
     std::vector<std::uint32_t> finest;
     for (const LodPart& p : m.lod_parts) finest.insert(finest.end(), p.levels[0].begin(), p.levels[0].end());
-    if (!m.lod_parts.empty()) EXPECT_EQ(finest, m.mesh.indices) << m.name;
+    if (!m.lod_parts.empty()) {
+      EXPECT_EQ(finest, m.mesh.indices) << m.name;
+    }
   }
   EXPECT_TRUE(seabed && pipe && rock && other);
   // Every tube vertex lies one radius from the bent centre line (bends included).
