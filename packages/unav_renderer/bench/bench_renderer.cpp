@@ -201,7 +201,7 @@ int main(int argc, char** argv) {
   configs.push_back({"no occlusion culling", o});
   o = opt;
   o.shadows = false;
-  configs.push_back({"no lamp shadows", o});
+  configs.push_back({"no shadows (sun, lamps)", o});
   o = opt;
   o.lamp_scatter_samples = 0;
   configs.push_back({"no lamp in-scatter", o});
