@@ -183,7 +183,7 @@ TEST(RandomizationSpec, RenderSwitchesDefaultOnAndRandomize) {
     }
   }
   // Binomial(400, 1/2): standard deviation 10; 5 sigma either side.
-  EXPECT_NEAR(on, n / 2, 50);
+  EXPECT_NEAR(on, 0.5 * n, 50.0);
 }
 
 TEST(RandomizationSpec, DocumentationListsEveryKey) {
