@@ -56,6 +56,28 @@ grep -q "3 samples, 18 frames" "$out/a.log" || { cat "$out/a.log"; fail "summary
 unav datagen "$spec" --start 1 -n 1 --out "$out/b" >/dev/null 2>&1 || fail "single sample failed"
 cmp -s "$out/a/sample_000001/manifest.json" "$out/b/sample_000001/manifest.json" || fail "sample 1 not reproduced"
 
+# The renderer switches change the shading and nothing else: sample 1 without shadows, caustics
+# and materials has the same world, depth, segmentation, sonar and ground truth, other RGB images.
+{ cat "$spec"; printf 'render: {shadows: false, caustics: false, materials: false}\n'; } >"$out/flat.yaml"
+unav datagen "$out/flat.yaml" --start 1 -n 1 --out "$out/f" >/dev/null 2>&1 || fail "render switches: sample failed"
+"$ws/.venv/bin/python" - "$out/b/sample_000001/manifest.json" "$out/f/sample_000001/manifest.json" <<'PY' || fail "render switches"
+import json, sys
+a, b = (json.load(open(p)) for p in sys.argv[1:])
+assert a["randomization"]["render"] == {"shadows": True, "caustics": True, "materials": True}, a["randomization"]["render"]
+assert b["randomization"]["render"] == {"shadows": False, "caustics": False, "materials": False}, b["randomization"]["render"]
+fa = {f["path"]: f["sha256"] for f in a["files"]}
+fb = {f["path"]: f["sha256"] for f in b["files"]}
+assert fa.keys() == fb.keys()
+same = [p for p in fa if p.startswith(("depth/", "segmentation/", "sonar/")) or p == "groundtruth.txt"]
+assert len(same) >= 12 and all(fa[p] == fb[p] for p in same), [p for p in same if fa[p] != fb[p]]
+# The world file names the spec it came from in its description; the rest is the same.
+worlds = [[l for l in open(p.replace("manifest.json", "world/world.yaml")) if not l.startswith("description:")]
+          for p in sys.argv[1:]]
+assert worlds[0] == worlds[1]
+rgb = [p for p in fa if p.startswith("rgb/")]
+assert len(rgb) == 6 and sum(fa[p] != fb[p] for p in rgb) == 6, [p for p in rgb if fa[p] == fb[p]]
+PY
+
 # Resume: only the deleted sample is generated again, identically.
 cp "$out/a/sample_000001/manifest.json" "$out/m1.json"
 rm -rf "$out/a/sample_000001"
