@@ -67,7 +67,7 @@ def fmt_range(values, scale=1.0, digits=4):
 
 def summary(rows, conditions, variants, methods, seeds):
     out = ["| light | method | variant | APE [m] median (range) | tracked [%] median (range) | "
-           "APE / APE(on), per seed | median ratio |", "|---|---|---|---|---|---|---|"]
+           "APE / APE(on), per seed | median ratio, scenes with a lower APE |", "|---|---|---|---|---|---|---|"]
     for cond in conditions:
         for method in methods:
             for variant in variants:
@@ -85,7 +85,10 @@ def summary(rows, conditions, variants, methods, seeds):
                         ratios.append(a / b if ok else float("nan"))
                     per_seed = " ".join("-" if x != x else f"{x:.2f}" for x in ratios)
                 finite = [x for x in ratios if x == x]
-                med = f"{statistics.median(finite):.2f}" if finite else ""
+                # How many scenes this variant did better on (a sign test's count).
+                med = ""
+                if finite:
+                    med = f"{statistics.median(finite):.2f}, lower on {sum(x < 1 for x in finite)} of {len(finite)}"
                 out.append(f"| {cond} | {method} | {variant} | {fmt_range(apes)} | "
                            f"{fmt_range(tracked, 100.0, 0)} | {per_seed} | {med} |")
     return "\n".join(out) + "\n"
