@@ -7,6 +7,7 @@
 #include <limits>
 #include <set>
 #include <sstream>
+#include <utility>
 
 #include "unav_common/errors.hpp"
 #include "unav_common/resources.hpp"
@@ -296,42 +297,16 @@ const std::vector<KeyRule>& rules() {
          true,
          ""},
         {"trajectory.waypoints", "int", 2, 100, false, false, {}, "6", "random_waypoints: how many", true, ""},
-        // Renderer switches: A/B comparisons of the realism over many scenes, or domain
-        // randomisation ({choice: [true, false]}).
-        {"render.shadows",
-         "string",
-         0,
-         0,
-         false,
-         false,
-         {"true", "false"},
-         "true",
-         "shadow maps of the sun and of every lamp",
-         true,
-         ""},
-        {"render.caustics",
-         "string",
-         0,
-         0,
-         false,
-         false,
-         {"true", "false"},
-         "true",
-         "animated sunlight caustics on the seabed",
-         true,
-         ""},
-        {"render.materials",
-         "string",
-         0,
-         0,
-         false,
-         false,
-         {"true", "false"},
-         "true",
-         "relief (bump mapping), GGX highlights and sediment cover of the materials",
-         true,
-         ""},
     };
+    // Renderer switches (on by default): A/B comparisons of the realism over many scenes, or
+    // domain randomisation ({choice: [true, false]}).
+    const std::pair<const char*, const char*> switches[] = {
+        {"render.shadows", "shadow maps of the sun and of every lamp"},
+        {"render.caustics", "animated sunlight caustics on the seabed"},
+        {"render.materials", "relief (bump mapping), GGX highlights and sediment cover of the materials"},
+    };
+    for (const auto& [path, doc] : switches)
+      v.push_back({path, "string", 0, 0, false, false, {"true", "false"}, "true", doc, true, ""});
     return v;
   }();
   return r;
