@@ -14,7 +14,7 @@ resizes the 180x320 camera to the trained size). The policy is evaluated on held
 flying the waypoints. Outputs in --out: progress.csv (SB3 logger), monitor.csv, eval.csv,
 checkpoints/, best.zip (best held-out return), last.zip, policy.zip (= best), policy.onnx (+ .json:
 seed, steps, config), summary.json.
-Extra arguments key=value override config keys (max_steps=100, episode.marine_snow=false, ...).
+Extra arguments key=value override config keys (max_steps=100, scenario.render.marine_snow=false, ...).
 """
 from __future__ import annotations
 
@@ -30,7 +30,7 @@ import torch
 
 VARIANTS = {
     # The fast variant: what trains within a session on 2 CPU cores.
-    "fast": {"dynamics": "kinematic", "episode.image_width": 128, "episode.image_height": 72},
+    "fast": {"dynamics": "kinematic", "scenario.cameras.width": 128, "scenario.cameras.height": 72},
     # The paper's input size; kinematic waypoints for speed (the MPC flies them at deployment).
     "full": {"dynamics": "kinematic"},
 }

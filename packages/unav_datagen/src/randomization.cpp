@@ -11,6 +11,7 @@
 
 #include "unav_common/errors.hpp"
 #include "unav_common/resources.hpp"
+#include "unav_common/sampling.hpp"
 #include "unav_datagen/dataset_writer.hpp"
 #include "unav_scene/water.hpp"
 
@@ -334,24 +335,9 @@ std::string node_text(const YAML::Node& n) {
   return e.c_str();
 }
 
-// splitmix64: the per-key generator (a few lines, the same on every platform).
-struct Rng {
-  std::uint64_t s;
-  std::uint64_t next() {
-    std::uint64_t z = (s += 0x9E3779B97F4A7C15ull);
-    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-    return z ^ (z >> 31);
-  }
-  double uniform01() { return static_cast<double>(next() >> 11) * 0x1.0p-53; }  // [0, 1)
-};
-
-std::uint64_t key_seed(std::uint64_t seed, const std::string& path) {
-  std::uint64_t h = 1469598103934665603ull;  // FNV-1a
-  for (unsigned char ch : path) h = (h ^ ch) * 1099511628211ull;
-  Rng r{seed ^ h};
-  return r.next();
-}
+// The per-key generator: the workspace's SplitMix64, seeded from (sample seed, key path).
+using Rng = unav::common::SplitMix64;
+using unav::common::KeySeed;
 
 class Checker {
  public:
@@ -441,29 +427,7 @@ YAML::Node lookup(const YAML::Node& root, const std::string& path) {
 
 YAML::Node draw(const KeyRule& k, const YAML::Node& leaf, Rng& rng) {
   if (!leaf.IsMap()) return YAML::Clone(leaf);
-  const std::string kind = leaf.begin()->first.Scalar();
-  const YAML::Node a = leaf.begin()->second;
-  if (kind == "uniform") {
-    const double lo = a[0].as<double>(), hi = a[1].as<double>();
-    return YAML::Node(lo + (hi - lo) * rng.uniform01());
-  }
-  if (kind == "int") {
-    // The checker took integral numbers, also written as reals ("1.0"): read them as such.
-    const auto lo = static_cast<int64_t>(std::llround(a[0].as<double>()));
-    const auto hi = static_cast<int64_t>(std::llround(a[1].as<double>()));
-    const auto span = static_cast<std::uint64_t>(hi - lo + 1);
-    return YAML::Node(lo + static_cast<int64_t>(rng.next() % span));
-  }
-  if (kind == "normal") {
-    // Box-Muller; clipped to the key's range.
-    const double u1 = 1.0 - rng.uniform01(), u2 = rng.uniform01();
-    const double z = std::sqrt(-2.0 * std::log(u1)) * std::cos(2.0 * M_PI * u2);
-    double v = a["mean"].as<double>() + a["std"].as<double>() * z;
-    v = std::clamp(v, k.lo, k.hi);
-    return YAML::Node(v);
-  }
-  // choice
-  return YAML::Clone(a[static_cast<size_t>(rng.next() % a.size())]);
+  return unav::common::DrawDistribution(leaf, &rng, k.lo, k.hi);  // normal draws clipped to the key's range
 }
 
 std::string resolve_path(const std::string& value, const std::string& spec_dir) {
@@ -607,7 +571,7 @@ YAML::Node RandomizationSpec::sample_seed(std::uint64_t seed) const {
   for (size_t i = 1; i < rules().size(); ++i) {
     const KeyRule& k = rules()[i];
     const std::string path = k.path;
-    Rng rng{key_seed(seed, path)};
+    Rng rng{KeySeed(seed, path)};
     YAML::Node value;
     if (*k.per_item) {
       const int64_t n = drawn_ints.at(k.per_item);
@@ -757,15 +721,15 @@ SampleWorld write_sample_world(const RandomizationSpec& spec, const YAML::Node& 
 
   YAML::Node objects(YAML::NodeType::Sequence);
   const int n_objects = s["objects"]["count"].as<int>();
-  Rng orng{key_seed(seed, "objects.placement")};
+  Rng orng{KeySeed(seed, "objects.placement")};
   for (int i = 0; i < n_objects && !spec.object_meshes().empty(); ++i) {
     YAML::Node o;
     o["name"] = "object_" + std::to_string(i);
-    o["mesh"] = spec.object_meshes()[orng.next() % spec.object_meshes().size()];
-    const double n = lo.x() - 5.0 + (hi.x() - lo.x() + 10.0) * orng.uniform01();
-    const double e = lo.y() - 5.0 + (hi.y() - lo.y() + 10.0) * orng.uniform01();
+    o["mesh"] = spec.object_meshes()[orng.Next() % spec.object_meshes().size()];
+    const double n = lo.x() - 5.0 + (hi.x() - lo.x() + 10.0) * orng.Uniform01();
+    const double e = lo.y() - 5.0 + (hi.y() - lo.y() + 10.0) * orng.Uniform01();
     o["pose"]["xyz_m"] = vec3(n, e, s["seabed"]["depth_m"].as<double>() - 0.1);
-    o["pose"]["rpy_deg"] = vec3(0.0, 0.0, 360.0 * orng.uniform01());
+    o["pose"]["rpy_deg"] = vec3(0.0, 0.0, 360.0 * orng.Uniform01());
     const double sc = s["objects"]["scale"].as<double>();
     o["scale"] = vec3(sc, sc, sc);
     o["class"] = "other";
@@ -848,10 +812,10 @@ std::vector<PathPoint> plan_trajectory(const YAML::Node& s, const unav::scene::W
         up = !up;
       }
     } else {
-      Rng rng{key_seed(s["seed"].as<std::uint64_t>(), "trajectory.random_waypoints")};
+      Rng rng{KeySeed(s["seed"].as<std::uint64_t>(), "trajectory.random_waypoints")};
       const int n = s["trajectory"]["waypoints"].as<int>();
       for (int i = 0; i < n; ++i)
-        poly.emplace_back(lo.x() + (hi.x() - lo.x()) * rng.uniform01(), lo.y() + (hi.y() - lo.y()) * rng.uniform01());
+        poly.emplace_back(lo.x() + (hi.x() - lo.x()) * rng.Uniform01(), lo.y() + (hi.y() - lo.y()) * rng.Uniform01());
     }
   }
   // Resample every step_m along the polyline; heading along the path.

@@ -10,7 +10,7 @@ from stable_baselines3.common.env_checker import check_env as sb3_check_env
 
 import unav_gym  # noqa: F401  (registers the ids)
 
-SMALL = {"episode.image_width": 128, "episode.image_height": 72}
+SMALL = {"scenario.cameras.width": 128, "scenario.cameras.height": 72}
 
 
 def test_gymnasium_checker_passes_on_the_papers_env():

@@ -4,7 +4,7 @@ import numpy as np
 from unav_gym import _core
 from unav_gym.sb3 import PipeFollowingVecEnv
 
-KW = {"dynamics": '"kinematic"', "episode.image_width": "96", "episode.image_height": "54"}
+KW = {"dynamics": '"kinematic"', "scenario.cameras.width": "96", "scenario.cameras.height": "54"}
 
 
 def test_vector_core_matches_single_cores():
@@ -23,7 +23,7 @@ def test_vector_core_matches_single_cores():
 
 def test_sb3_vecenv_autoresets_in_the_same_step():
     env = PipeFollowingVecEnv(2, seed=0, dynamics="kinematic", max_steps=3,
-                              **{"episode.image_width": 96, "episode.image_height": 54})
+                              **{"scenario.cameras.width": 96, "scenario.cameras.height": 54})
     first = env.reset()
     assert first.shape == (2, 54, 96, 3)
     for k in range(3):

@@ -3,6 +3,7 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <optional>
 
 #include <spdlog/fmt/fmt.h>
 #include <fastdds/dds/publisher/DataWriter.hpp>
@@ -31,18 +32,21 @@ int64_t steps_in(double period, double dt, const std::string& name) {
 
 }  // namespace
 
-std::unique_ptr<Seabed> seabed_from_world(const unav::scene::World& world) {
-  const unav::scene::Seabed& sb = world.seabed;
-  if (!sb.enabled) return nullptr;
-  if (sb.is_flat()) return std::make_unique<FlatSeabed>(sb.depth_m);
-  unav::scene::SeabedGrid g = unav::scene::sample_seabed(sb);
-  return std::make_unique<GridSeabed>(g.origin_n, g.origin_e, g.resolution_m, std::move(g.depths_m));
-}
-
 PhysicsServer::PhysicsServer(const unav::NodeOptions& options) : Node("physics_server", options, "rov") {
   PhysicsServerParams p;
   p.vehicle_config = unav::common::try_find_resource("config/vehicles/bluerov2_heavy.yaml").value_or("");
   declare_params(&p);
+  // A scenario gives the plant (world, vehicle, step, initial state) as the in-process Episode
+  // takes it, through the same builder (unav_physics/scenario_builder.hpp).
+  std::optional<unav::scene::Scenario> scenario;
+  if (!p.scenario.empty()) {
+    scenario = unav::scene::load_scenario(
+        p.scenario, p.scenario_seed >= 0 ? std::optional<std::uint64_t>(p.scenario_seed) : std::nullopt);
+    p.vehicle_config = scenario->vehicle.model;
+    p.world = scenario->world;
+    p.dt = scenario->physics.dt;
+    p.integrator = scenario->physics.integrator;
+  }
   if (p.vehicle_config.empty())
     throw unav::ParameterError("node '" + name() +
                                "': parameter 'vehicle_config' is empty and the package "
@@ -70,31 +74,15 @@ PhysicsServer::PhysicsServer(const unav::NodeOptions& options) : Node("physics_s
   // Acks are integer-nanosecond stamps; half a physics step absorbs rounding from doubles.
   barrier_ = std::make_unique<unav::lockstep::Barrier>(participants_, std::llround(0.5 * so.dt * 1e9));
 
-  const VehicleParams vehicle = load_vehicle(p.vehicle_config);
-  // The world file (the renderer's scene) drives the seabed and the current unless a node
-  // parameter names its own.
-  unav::scene::World world;
-  if (!p.world.empty()) world = unav::scene::load_world(p.world);
-  std::string current_file = p.current_config;
-  if (current_file.empty()) current_file = world.current_file;
-  std::unique_ptr<CurrentModel> current = current_file.empty() ? nullptr : load_current(current_file);
-  std::unique_ptr<Seabed> seabed;
-  std::string seabed_from = "none";
-  if (!p.seabed_config.empty()) {
-    seabed = load_seabed(p.seabed_config);
-    seabed_from = p.seabed_config;
-  } else if (!p.world.empty()) {
-    seabed = seabed_from_world(world);
-    if (seabed) seabed_from = p.world + (world.seabed.is_flat() ? " (flat)" : " (sampled grid)");
-  } else if (p.seabed_depth > 0.0) {
-    seabed = std::make_unique<FlatSeabed>(p.seabed_depth);
-    seabed_from = "flat at " + std::to_string(p.seabed_depth) + " m";
+  if (scenario) {
+    const unav::scene::World world = unav::scene::load_world(scenario->world);
+    sim_ = build_simulator(*scenario, world, so);
+    logger()->info("scenario {} (seed {}): world {}, vehicle {}", p.scenario, scenario->seed, scenario->world,
+                   scenario->vehicle.model);
+  } else {
+    build_from_params(p, so);
   }
-  logger()->info("seabed: {}; current: {}", seabed_from, current_file.empty() ? "still water" : current_file);
-  RigidBodyState x0;
-  x0.p_WB_W = p.initial_position;
-  x0.q_WB = quaternion_from_rpy(p.initial_rpy.x(), p.initial_rpy.y(), p.initial_rpy.z());
-  sim_ = std::make_unique<Simulator>(vehicle, so, std::move(current), std::move(seabed), x0);
+  const VehicleParams vehicle = load_vehicle(p.vehicle_config);  // its sensors, to publish
   const SensorSuiteParams& sp = vehicle.sensors;
 
   // Ports.
@@ -377,6 +365,34 @@ void PhysicsServer::publish_sensors() {
     m.altitude(r.gps.altitude_m);
     gps_pub_->publish(m);
   }
+}
+
+void PhysicsServer::build_from_params(const PhysicsServerParams& p, const SimulatorOptions& so) {
+  const VehicleParams vehicle = load_vehicle(p.vehicle_config);
+  // The world file (the renderer's scene) drives the seabed and the current unless a node
+  // parameter names its own.
+  unav::scene::World world;
+  if (!p.world.empty()) world = unav::scene::load_world(p.world);
+  std::string current_file = p.current_config;
+  if (current_file.empty()) current_file = world.current_file;
+  std::unique_ptr<CurrentModel> current = current_file.empty() ? nullptr : load_current(current_file);
+  std::unique_ptr<Seabed> seabed;
+  std::string seabed_from = "none";
+  if (!p.seabed_config.empty()) {
+    seabed = load_seabed(p.seabed_config);
+    seabed_from = p.seabed_config;
+  } else if (!p.world.empty()) {
+    seabed = seabed_from_world(world);
+    if (seabed) seabed_from = p.world + (world.seabed.is_flat() ? " (flat)" : " (sampled grid)");
+  } else if (p.seabed_depth > 0.0) {
+    seabed = std::make_unique<FlatSeabed>(p.seabed_depth);
+    seabed_from = "flat at " + std::to_string(p.seabed_depth) + " m";
+  }
+  logger()->info("seabed: {}; current: {}", seabed_from, current_file.empty() ? "still water" : current_file);
+  RigidBodyState x0;
+  x0.p_WB_W = p.initial_position;
+  x0.q_WB = quaternion_from_rpy(p.initial_rpy.x(), p.initial_rpy.y(), p.initial_rpy.z());
+  sim_ = std::make_unique<Simulator>(vehicle, so, std::move(current), std::move(seabed), x0);
 }
 
 void PhysicsServer::on_command(const unav_msgs::msg::ThrusterCommand& msg) {

@@ -61,6 +61,7 @@
 #include "unav_msgs/msg/lockstep_ack.hpp"
 #include "unav_msgs/msg/thruster_command.hpp"
 #include "unav_msgs/msg/thruster_state.hpp"
+#include "unav_physics/scenario_builder.hpp"
 #include "unav_physics/simulator.hpp"
 #include "unav_runtime/lockstep.hpp"
 #include "unav_runtime/runtime.hpp"
@@ -69,12 +70,10 @@
 
 namespace unav::physics {
 
-/// The physics seabed of a world: flat when the world's is, else its patch sampled on the render
-/// grid (bilinear between nodes, nearest edge beyond); nullptr when the world disables its seabed.
-std::unique_ptr<Seabed> seabed_from_world(const unav::scene::World& world);
-
 /// The physics_server's parameters (params file or `-p name:=value`; `physics_server --help`).
 struct PhysicsServerParams {
+  std::string scenario;
+  int64_t scenario_seed = -1;
   std::string vehicle_config;  ///< default: the installed bluerov2_heavy.yaml
   std::string world;
   std::string current_config;
@@ -99,6 +98,11 @@ struct PhysicsServerParams {
   template <class Archive>
   void Serialize(Archive* a) {
     using unav::common::Field;
+    a->Visit(Field("scenario", &scenario)
+                 .Doc("scenario YAML: its world, vehicle, physics and initial state replace vehicle_config, world, "
+                      "dt, integrator, initial_position and initial_rpy (the in-process Episode builds the same)"));
+    a->Visit(
+        Field("scenario_seed", &scenario_seed).Min(-1.0).Doc("draw of the scenario's distributions; -1 = its seed"));
     a->Visit(Field("vehicle_config", &vehicle_config).Doc("vehicle YAML (config/vehicles/*.yaml)"));
     a->Visit(Field("world", &world)
                  .Doc("world.yaml: its seabed (relief, heightmap) and current drive the physics; "
@@ -137,6 +141,9 @@ class PhysicsServer : public unav::Node {
   void run_steps();
 
  private:
+  /// The simulator from the node's own parameters (no scenario): vehicle_config, world or
+  /// seabed_config/seabed_depth, current_config, initial_position/initial_rpy.
+  void build_from_params(const PhysicsServerParams& p, const SimulatorOptions& so);
   void on_command(const unav_msgs::msg::ThrusterCommand& msg);
   static constexpr double kMaxCommandLead = 1.0;  ///< s a command's stamp may be ahead of simulated time
   void on_ack(const unav_msgs::msg::LockstepAck& msg);

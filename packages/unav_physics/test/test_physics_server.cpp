@@ -313,3 +313,51 @@ TEST(LockstepAck, AnAckWrittenBeforeTheServerMatchedStillArrives) {
   EXPECT_EQ(got[0].header().stamp().sec(), 2);
   EXPECT_EQ(got[0].header().stamp().nanosec(), 500000000u);
 }
+
+// One scenario, two paths (DESIGN.md section 9): the physics server given `scenario:=FILE` over
+// DDS in lockstep and the simulator that physics::build_simulator() makes in process from the
+// same file, driven by the same commands at the same barriers, give the same trajectory bit for
+// bit (same code, same inputs, same order of floating-point operations: nothing to tolerate). The
+// thrust drives the vehicle down into the scenario world's seabed, where both stop on it.
+TEST(PhysicsServer, ScenarioRunsTheSameOverDdsAndInProcess) {
+  const std::string world_path = write_world("scenario", "seabed: {depth_m: 6.0}\n");
+  const std::string scenario_path = std::filesystem::path(world_path).parent_path().string() + "/scenario.yaml";
+  std::ofstream(scenario_path) << "name: dive\nworld: world.yaml\n"
+                               << "vehicle: {model: " << UNAV_CONFIG_DIR
+                               << "/vehicles/bluerov2_heavy.yaml, initial_position: [1.0, 2.0, 4.5],"
+                                  " initial_rpy_deg: [0, 0, 30]}\n";
+  // Down on the four vertical thrusters (their positive thrust is up: REFERENCE.md directions).
+  const std::vector<double> dive = {0, 0, 0, 0, -0.8, -0.8, -0.8, -0.8};
+  Harness h({"-p", "scenario:=" + scenario_path, "-p", "mode:=lockstep", "-p", "lockstep_wait_for_command:=true", "-p",
+             "lockstep_period:=0.05", "-p", "publish_rate:=20.0"});
+  const unav::scene::Scenario sc = unav::scene::load_scenario(scenario_path);
+  const unav::scene::World world = unav::scene::load_world(sc.world);
+  auto sim = unav::physics::build_simulator(sc, world, unav::physics::scenario_simulator_options(sc, 0.5));
+  constexpr int kBarriers = 100;  // 5 s: long enough to reach the seabed 1.5 m below and settle
+  double answered = -1.0;
+  for (int k = 0; k <= kBarriers; ++k) {
+    ASSERT_TRUE(h.spin_until([&] { return !h.odoms.empty() && stamp_s(h.odoms.back().header()) > answered; }, 10s))
+        << "no odometry after barrier " << answered;
+    answered = stamp_s(h.odoms.back().header());
+    ASSERT_NEAR(answered, 0.05 * k, 1e-9);
+    // The state the server published for this barrier = the in-process state after k periods.
+    const auto& p = h.odoms.back().pose().pose().position();
+    const auto& q = h.odoms.back().pose().pose().orientation();
+    const auto& x = sim->state();
+    ASSERT_EQ(p.x(), x.p_WB_W.x()) << "barrier " << k;
+    ASSERT_EQ(p.y(), x.p_WB_W.y()) << "barrier " << k;
+    ASSERT_EQ(p.z(), x.p_WB_W.z()) << "barrier " << k;
+    ASSERT_EQ(q.w(), x.q_WB.w()) << "barrier " << k;
+    ASSERT_EQ(q.z(), x.q_WB.z()) << "barrier " << k;
+    h.command(answered, dive);
+    sim->set_command(sim->time(), dive);
+    for (int i = 0; i < 50; ++i) sim->step();
+  }
+  // On the seabed: the bottom point (z + height/2 = z + 0.127) pressed in by at most the net
+  // downward force over the stiffness (4 x ~0.8 x 40 N thrust + ~2 N weight - buoyancy) / 2000 N/m
+  // = 0.07 m, and at rest vertically.
+  const double bottom = h.odoms.back().pose().pose().position().z() + 0.127;
+  EXPECT_GT(bottom, 6.0 - 1e-3);
+  EXPECT_LT(bottom, 6.0 + 0.07);
+  EXPECT_LT(std::abs(sim->state().v_WB_B.z()), 0.01);
+}

@@ -24,8 +24,8 @@ PipeFollowingConfig fixed(const std::string& dynamics, int w, int h) {
   c.env.start_offset_m = 0.0;
   c.env.start_heading_deg = 0.0;
   c.env.start_arc_fraction = 0.0;
-  c.episode.image_width = w;
-  c.episode.image_height = h;
+  c.scenario.cameras.width = w;
+  c.scenario.cameras.height = h;
   return c;
 }
 

@@ -12,6 +12,7 @@
 
 #include "gl_util.hpp"
 #include "unav_common/frames.hpp"
+#include "unav_common/sampling.hpp"
 #include "unav_renderer/errors.hpp"
 #include "unav_scene/scene_geometry.hpp"
 
@@ -59,17 +60,9 @@ void main() {
 constexpr double kMaxSliceRad = 32.0 * M_PI / 180.0;
 constexpr int kSideScanColumns = 4;  // along-track samples of a side-scan strip
 
-// splitmix64: a seeded stream for the noise, identical on every platform.
-struct SplitMix {
-  std::uint64_t s;
-  std::uint64_t next() {
-    std::uint64_t z = (s += 0x9E3779B97F4A7C15ULL);
-    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ULL;
-    z = (z ^ (z >> 27)) * 0x94D049BB133111EBULL;
-    return z ^ (z >> 31);
-  }
-  double uniform() { return static_cast<double>(next() >> 11) * 0x1.0p-53; }  // [0, 1)
-  double exponential() { return -std::log(1.0 - uniform()); }                 // mean 1: |Rayleigh|^2
+// The workspace's SplitMix64: a seeded stream for the noise, identical on every platform.
+struct SplitMix : unav::common::SplitMix64 {
+  double exponential() { return -std::log(1.0 - Uniform01()); }  // mean 1: |Rayleigh|^2
 };
 
 struct GpuMesh {
@@ -362,8 +355,8 @@ void SonarRenderer::Impl::accumulate(const SonarState& st, const Pose& X_WB, Son
   out->bins = B;
   out->intensity.resize(acc.size());
   out->image.resize(acc.size());
-  SplitMix rng{options.seed * 0x9E3779B97F4A7C15ULL ^
-               (std::hash<std::string>{}(m.name) + 0x632BE59BD9B4E019ULL * (out->sequence + 1))};
+  SplitMix rng{{options.seed * 0x9E3779B97F4A7C15ULL ^
+                (std::hash<std::string>{}(m.name) + 0x632BE59BD9B4E019ULL * (out->sequence + 1))}};
   const double n0 = std::pow(10.0, (m.noise_floor_db - m.gain_db) / 10.0);
   const double s = m.speckle;
   const double inv_bin = 1.0 / dr_bin;

@@ -4,12 +4,14 @@
 #include <chrono>
 #include <cmath>
 #include <cstring>
+#include <optional>
 
 #include <spdlog/fmt/fmt.h>
 
 #include "unav_common/resources.hpp"
 #include "unav_runtime/conversions.hpp"
 #include "unav_scene/camera.hpp"
+#include "unav_scene/scenario.hpp"
 #include "unav_scene/water.hpp"
 #include "unav_scene/world.hpp"
 
@@ -53,6 +55,18 @@ UnderwaterRendererNode::UnderwaterRendererNode(const unav::NodeOptions& options)
   prm.world = resource("worlds/pipe_inspection/world.yaml");
   prm.cameras_config = resource("config/sensors/bluerov2_cameras.yaml");
   declare_params(&prm);
+  std::vector<CameraModel> scenario_cams;
+  if (!prm.scenario.empty()) {  // the renderer's part of the scenario, as the in-process Episode takes it
+    const scene::Scenario sc = scene::load_scenario(
+        prm.scenario, prm.scenario_seed >= 0 ? std::optional<std::uint64_t>(prm.scenario_seed) : std::nullopt);
+    prm.world = sc.world;
+    prm.water = sc.water;
+    prm.cameras_config = sc.cameras.config;
+    prm.cameras = sc.cameras.names;
+    prm.render = sc.render;
+    prm.seed = sc.seed;
+    scenario_cams = scene::scenario_cameras(sc);
+  }
   const std::string& world_path = prm.world;
   const std::string& cameras_path = prm.cameras_config;
   const std::string& water = prm.water;
@@ -63,12 +77,7 @@ UnderwaterRendererNode::UnderwaterRendererNode(const unav::NodeOptions& options)
   publish_depth_ = prm.publish_depth;
   publish_seg_ = prm.publish_segmentation;
   RenderOptions ro;
-  ro.noise = prm.noise;
-  ro.marine_snow = prm.marine_snow;
-  ro.forward_scatter = prm.forward_scatter;
-  ro.shadows = prm.shadows;
-  ro.caustics = prm.caustics;
-  ro.materials = prm.materials;
+  static_cast<scene::RenderSettings&>(ro) = prm.render;
   ro.seed = static_cast<std::uint64_t>(prm.seed);
   period_ = 1.0 / rate;
   if (world_path.empty() || cameras_path.empty())
@@ -81,7 +90,9 @@ UnderwaterRendererNode::UnderwaterRendererNode(const unav::NodeOptions& options)
   try {
     world = load_world(world_path);
     cams = load_cameras(cameras_path);
-    if (!only.empty()) {
+    if (!scenario_cams.empty()) {
+      cams = std::move(scenario_cams);
+    } else if (!only.empty()) {
       std::vector<CameraModel> picked;
       picked.reserve(only.size());
       for (const auto& n : only) picked.push_back(load_camera(cameras_path, n));  // error lists the file's cameras

@@ -47,6 +47,8 @@ namespace unav::renderer {
 
 /// The underwater_renderer's parameters (params file or `-p name:=value`; `--help` lists them).
 struct UnderwaterRendererParams {
+  std::string scenario;
+  int64_t scenario_seed = -1;
   std::string world;           ///< default: the installed worlds/pipe_inspection/world.yaml
   std::string cameras_config;  ///< default: the installed config/sensors/bluerov2_cameras.yaml
   std::string water;
@@ -56,12 +58,7 @@ struct UnderwaterRendererParams {
   std::string lockstep_name = "renderer";
   bool publish_depth = true;
   bool publish_segmentation = true;
-  bool noise = true;
-  bool marine_snow = true;
-  bool forward_scatter = true;
-  bool shadows = true;
-  bool caustics = true;
-  bool materials = true;
+  scene::RenderSettings render;
   int64_t seed = 1;
   std::string body_frame = "base_link_frd";
   int64_t render_workers = 2;
@@ -69,6 +66,11 @@ struct UnderwaterRendererParams {
   template <class Archive>
   void Serialize(Archive* a) {
     using unav::common::Field;
+    a->Visit(Field("scenario", &scenario)
+                 .Doc("scenario YAML: its world, water, cameras (config, names, size), render switches and seed "
+                      "replace world, water, cameras_config, cameras, render and seed"));
+    a->Visit(
+        Field("scenario_seed", &scenario_seed).Min(-1.0).Doc("draw of the scenario's distributions; -1 = its seed"));
     a->Visit(Field("world", &world).Doc("world.yaml path"));
     a->Visit(Field("cameras_config", &cameras_config).Doc("camera YAML path"));
     a->Visit(Field("water", &water).Doc("Jerlov preset (I, II, 3C, ...) or water YAML path; empty = the world's"));
@@ -78,12 +80,7 @@ struct UnderwaterRendererParams {
     a->Visit(Field("lockstep_name", &lockstep_name).Doc("participant name in acks"));
     a->Visit(Field("publish_depth", &publish_depth).Doc("publish depth images"));
     a->Visit(Field("publish_segmentation", &publish_segmentation).Doc("publish segmentation images"));
-    a->Visit(Field("noise", &noise).Doc("camera noise"));
-    a->Visit(Field("marine_snow", &marine_snow).Doc("marine snow particles"));
-    a->Visit(Field("forward_scatter", &forward_scatter).Doc("range-dependent blur"));
-    a->Visit(Field("shadows", &shadows).Doc("lamp and sun shadow maps"));
-    a->Visit(Field("caustics", &caustics).Doc("animated sunlight caustics"));
-    a->Visit(Field("materials", &materials).Doc("relief (bump), GGX highlights, sediment (RenderOptions::materials)"));
+    a->Visit(Field("render", &render).Doc("realism switches (render.noise, render.shadows, ...)"));
     a->Visit(Field("seed", &seed).Min(0.0).Doc("noise seed"));
     a->Visit(Field("body_frame", &body_frame).Doc("vehicle body frame (tf parent of the cameras)"));
     a->Visit(Field("render_workers", &render_workers)

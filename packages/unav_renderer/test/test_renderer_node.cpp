@@ -42,7 +42,7 @@ struct LockstepRenderer {
                                    "-p",
                                    "rate:=10.0",
                                    "-p",
-                                   "noise:=false"};
+                                   "render.noise:=false"};
   unav::Context node_ctx{static_cast<int>(argv.size()), argv.data(), unav::testing::test_context_options()};
   unav::renderer::UnderwaterRendererNode node{{&node_ctx}};
   unav::Context test_ctx{unav::testing::test_context_options()};

@@ -332,4 +332,18 @@ CameraModel load_camera(const std::string& path, const std::string& name) {
   throw ConfigError(path, "cameras", name, "no camera of that name (cameras: " + names + ")");
 }
 
+CameraModel scale_camera(const CameraModel& camera, int width, int height) {
+  if (width <= 0 || height <= 0 || (width == camera.width && height == camera.height)) return camera;
+  CameraModel c = camera;
+  const double sx = static_cast<double>(width) / camera.width, sy = static_cast<double>(height) / camera.height;
+  c.width = width;
+  c.height = height;
+  c.fx *= sx;
+  c.fy *= sy;
+  // Pixel centres: u' + 0.5 = sx (u + 0.5).
+  c.cx = sx * (camera.cx + 0.5) - 0.5;
+  c.cy = sy * (camera.cy + 0.5) - 0.5;
+  return c;
+}
+
 }  // namespace unav::scene

@@ -4,7 +4,7 @@
 //   bench_pipe_env [--config F] [--steps 60] [--envs 4] [--dynamics mpc|kinematic] [key=value ...]
 // The vector env runs twice on one EGL context and twice as it chooses (two displays on llvmpipe),
 // alternated: this VM's speed drifts over minutes.
-// key=value: any config key (episode.image_width=80, episode.marine_snow=false, ...).
+// key=value: any config key (scenario.cameras.width=80, scenario.render.marine_snow=false, ...).
 #include <algorithm>
 #include <array>
 #include <chrono>

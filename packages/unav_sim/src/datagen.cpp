@@ -127,17 +127,22 @@ SampleResult generate_sample(const unav::datagen::RandomizationSpec& spec, std::
   const auto files = unav::datagen::write_sample_world(spec, s, (partial / "world").string());
   World world = unav::scene::load_world(files.world_file);
 
-  EpisodeParams p;
-  p.cameras_config = spec.cameras_config();
+  // The sample as a scenario, built by the one builder (load_episode_setup + Episode).
+  unav::scene::Scenario sc;
+  sc.name = sample_name(index);
+  sc.seed = static_cast<int64_t>(seed);
+  sc.world = files.world_file;
+  sc.cameras.config = spec.cameras_config();
   const std::string camera = s["output"]["camera"].as<std::string>();
-  p.cameras = {camera};
-  p.image_width = s["output"]["width"].as<int>();
-  p.image_height = s["output"]["height"].as<int>();
+  sc.cameras.names = {camera};
+  sc.cameras.width = s["output"]["width"].as<int>();
+  sc.cameras.height = s["output"]["height"].as<int>();
+  sc.cameras.rate_hz = s["output"]["rate_hz"].as<double>();
   // Validated by the spec as "true" or "false".
-  p.shadows = s["render"]["shadows"].as<std::string>() == "true";
-  p.caustics = s["render"]["caustics"].as<std::string>() == "true";
-  p.materials = s["render"]["materials"].as<std::string>() == "true";
-  EpisodeSetup setup = load_episode_setup(p);
+  sc.render.shadows = s["render"]["shadows"].as<std::string>() == "true";
+  sc.render.caustics = s["render"]["caustics"].as<std::string>() == "true";
+  sc.render.materials = s["render"]["materials"].as<std::string>() == "true";
+  EpisodeSetup setup = load_episode_setup(sc);
   const double gain = s["camera"]["gain"].as<double>();
   setup.cameras[0].noise_stddev = s["camera"]["noise_stddev"].as<double>() * gain;
   setup.cameras[0].exposure = s["camera"]["exposure"].as<double>() * gain;
@@ -188,7 +193,7 @@ SampleResult generate_sample(const unav::datagen::RandomizationSpec& spec, std::
     next_ping_t = sonar->period();
   }
   const std::uint64_t frames = s["output"]["frames"].as<std::uint64_t>();
-  const double control_period = setup.params.control_period;
+  const double control_period = setup.scenario.control.period;
   const Eigen::Vector3d g_W(0.0, 0.0, setup.simulator.environment.gravity);
   SampleResult r;
   double t = 0.0;

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <exception>
+#include <filesystem>
 #include <functional>
 #include <future>
 #include <mutex>
@@ -58,14 +59,17 @@ PipeFollowingConfig load_pipe_following_config(const std::string& path) {
   const YAML::Node root = unav::common::detail::ReadYamlFile(path);
   PipeFollowingConfig c;
   if (!root || root.IsNull()) return c;
-  if (!root.IsMap()) throw ConfigError(path, "", "", "expected a mapping with env, episode, pipe_scenes");
+  if (!root.IsMap()) throw ConfigError(path, "", "", "expected a mapping with env, scenario, pipe_scenes");
   for (const auto& kv : root) {
     const auto key = kv.first.as<std::string>();
-    if (key != "env" && key != "episode" && key != "pipe_scenes")
-      throw ConfigError(path, key, "", "unknown section (allowed: env, episode, pipe_scenes)");
+    if (key != "env" && key != "scenario" && key != "pipe_scenes")
+      throw ConfigError(path, key, "", "unknown section (allowed: env, scenario, pipe_scenes)");
   }
   if (root["env"]) unav::common::LoadYaml(root, path, &c.env, "env");
-  if (root["episode"]) unav::common::LoadYaml(root, path, &c.episode, "episode");
+  if (root["scenario"]) {
+    unav::common::LoadYaml(root, path, &c.scenario, "scenario");
+    scene::resolve_scenario_paths(&c.scenario, path, std::filesystem::path(path).parent_path().string());
+  }
   if (root["pipe_scenes"]) unav::common::LoadYaml(root, path, &c.scenes, "pipe_scenes");
   c.scenes.validate(path);
   return c;
@@ -77,8 +81,8 @@ void apply_override(PipeFollowingConfig* config, const std::string& key, const s
   const auto dot = key.find('.');
   const std::string section = dot == std::string::npos ? "" : key.substr(0, dot);
   const std::string rest = dot == std::string::npos ? key : key.substr(dot + 1);
-  if (section == "episode") {
-    unav::common::ApplyOverride(&c.episode, rest, yaml_value, source);
+  if (section == "scenario") {
+    unav::common::ApplyOverride(&c.scenario, rest, yaml_value, source);
   } else if (section == "pipe_scenes") {
     unav::common::ApplyOverride(&c.scenes, rest, yaml_value, source);
     c.scenes.validate(source);
@@ -94,10 +98,10 @@ PipeFollowingEnv::PipeFollowingEnv(PipeFollowingConfig config, std::shared_ptr<u
     : config_(std::move(config)) {
   unav::common::Validate(config_.env, "env");
   config_.scenes.validate("pipe_scenes");
-  if (std::find(config_.episode.cameras.begin(), config_.episode.cameras.end(), config_.env.camera) ==
-      config_.episode.cameras.end())
-    throw ConfigError("env", "camera", config_.env.camera, "must be one of episode.cameras");
-  EpisodeSetup setup = load_episode_setup(config_.episode);
+  const auto& cams = config_.scenario.cameras.names;
+  if (std::find(cams.begin(), cams.end(), config_.env.camera) == cams.end())
+    throw ConfigError("env", "camera", config_.env.camera, "must be one of scenario.cameras.names");
+  EpisodeSetup setup = load_episode_setup(config_.scenario);
   base_world_ = scene::load_world(resource(config_.scenes.base_world));
   scene::World first;
   if (config_.env.scenes == "fixed") {

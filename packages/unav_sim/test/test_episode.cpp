@@ -15,10 +15,10 @@ World pipe_world() {
 }
 
 EpisodeSetup small_setup() {
-  EpisodeParams p;
-  p.image_width = 160;  // half size: the tests check geometry and repeatability, not looks
-  p.image_height = 90;
-  return load_episode_setup(p);
+  unav::scene::Scenario s;
+  s.cameras.width = 160;  // half size: the tests check geometry and repeatability, not looks
+  s.cameras.height = 90;
+  return load_episode_setup(s);
 }
 
 RigidBodyState at(double n, double e, double d, double yaw = 0.0) {
@@ -32,7 +32,7 @@ RigidBodyState at(double n, double e, double d, double yaw = 0.0) {
 
 TEST(ScaleCamera, KeepsTheFieldOfViewAndTheOpticalCentre) {
   const auto c = unav::scene::CameraModel::from_hfov("c", 320, 180, M_PI / 2);
-  const auto s = scale_camera(c, 80, 45);
+  const auto s = unav::scene::scale_camera(c, 80, 45);
   EXPECT_EQ(s.width, 80);
   EXPECT_NEAR(2.0 * std::atan(s.width / (2.0 * s.fx)), M_PI / 2, 1e-12);
   // The image centre (159.5, 89.5) maps to the centre (39.5, 22).
@@ -55,6 +55,28 @@ TEST(Episode, FliesToASetpointAndHoldsIt) {
   EXPECT_EQ(ep.solver_failures(), 0);
   EXPECT_EQ(ep.timings().physics_steps, 6000u);
   EXPECT_EQ(ep.timings().control_steps, 120u);
+}
+
+// The in-process plant stands on the world's seabed, as the physics server's does (one builder:
+// physics::build_simulator). The MPC asks for a depth 2 m below the pipe world's seabed (10 m,
+// relief 0.15 m); the vehicle stops on it: its bottom point (z + 0.127 m) within the relief of
+// 10 m, pressed in by at most the MPC's ~170 N of vertical thrust over the 2000 N/m stiffness
+// (0.09 m). Without the seabed it reached 12 m.
+TEST(Episode, StandsOnTheWorldsSeabed) {
+  const World world = pipe_world();
+  Episode ep(small_setup(), world);
+  const double n = -6.0, e = -9.0;  // clear of the pipeline and the rocks' usual spots
+  ep.reset(1, at(n, e, 8.0));
+  ep.set_setpoint(PoseSetpoint::FromPositionYaw({n, e, 12.0}, 0.0));
+  ep.advance(12.0);
+  const auto& x = ep.state();
+  const double seabed = world.seabed.depth_at(x.p_WB_W.x(), x.p_WB_W.y());
+  EXPECT_NEAR(seabed, 10.0, 0.16);
+  EXPECT_GT(x.p_WB_W.z() + 0.127, seabed - 1e-3);
+  EXPECT_LT(x.p_WB_W.z() + 0.127, seabed + 0.09);
+  EXPECT_LT((x.q_WB.conjugate() * Eigen::Vector3d::UnitZ()).dot(x.v_WB_B), 0.02) << "at rest on the seabed";
+  ASSERT_NE(ep.simulator().seabed(), nullptr);
+  EXPECT_NEAR(ep.simulator().seabed()->depth_at(n, e), world.seabed.depth_at(n, e), 1e-9);
 }
 
 // Same seed, same calls: bit-identical states and images (the MPC runs on iterations only).

@@ -22,8 +22,8 @@ PipeFollowingConfig fixed_config(const std::string& dynamics) {
   c.env.start_offset_m = 0.0;
   c.env.start_heading_deg = 0.0;
   c.env.start_arc_fraction = 0.0;
-  c.episode.image_width = 80;
-  c.episode.image_height = 45;
+  c.scenario.cameras.width = 80;
+  c.scenario.cameras.height = 45;
   return c;
 }
 
@@ -186,8 +186,8 @@ TEST(PipeFollowingConfig, OverridesAreCheckedByName) {
   PipeFollowingConfig c;
   apply_override(&c, "max_steps", "50", "test");
   EXPECT_EQ(c.env.max_steps, 50);
-  apply_override(&c, "episode.image_width", "64", "test");
-  EXPECT_EQ(c.episode.image_width, 64);
+  apply_override(&c, "scenario.cameras.width", "64", "test");
+  EXPECT_EQ(c.scenario.cameras.width, 64);
   apply_override(&c, "pipe_scenes.turns", "[1, 2]", "test");
   EXPECT_EQ(c.scenes.turns[1], 2);
   EXPECT_THROW(apply_override(&c, "max_stepz", "5", "test"), unav::ConfigError);

@@ -283,6 +283,7 @@ int main(int argc, char** argv) {
     return run_package_tool("unav_localization", "unav_localize", argc, argv);
   if (argc >= 2 && std::string(argv[1]) == "eval") return run_package_tool("unav_evaluation", "unav_eval", argc, argv);
   if (argc >= 2 && std::string(argv[1]) == "datagen") return run_package_tool("unav_sim", "unav_datagen", argc, argv);
+  if (argc >= 2 && std::string(argv[1]) == "run") return run_package_tool("unav_sim", "unav_run", argc, argv);
   CLI::App app{"unav: command-line tool of UNav-Sim (like ros2)", "unav"};
   app.require_subcommand(1);
 
@@ -339,6 +340,8 @@ int main(int argc, char** argv) {
   app.add_subcommand("eval", "trajectory metrics on TUM files, as evo computes them (unav eval --help)");
 
   app.add_subcommand("datagen", "randomized synthetic datasets, locally or on Slurm (unav datagen --help)");
+
+  app.add_subcommand("run", "one scenario file flown in process: ground truth and images (unav run --help)");
 
   const auto run_bag = add_bag_command(app);
   const auto run_security = add_security_command(app);

@@ -765,10 +765,11 @@ class Describer final : public ConfigArchive {
 
  protected:
   void Leaf(const FieldSpec& spec, ValueRef value) override {
-    rows.push_back({Path(spec.name), TypeName(value.type), ValueText(value), spec.RuleText(), spec.unit, spec.doc});
+    rows.push_back(
+        {Path(spec.name), TypeName(value.type), ValueText(value), spec.RuleText(), spec.unit, spec.doc, spec});
   }
   bool BeginStruct(const FieldSpec& spec) override {
-    rows.push_back({Path(spec.name), "mapping", "", "", spec.unit, spec.doc});
+    rows.push_back({Path(spec.name), "mapping", "", "", spec.unit, spec.doc, spec});
     prefix_.push_back(rows.back().name);
     return true;
   }
@@ -776,7 +777,7 @@ class Describer final : public ConfigArchive {
   ListPlan BeginList(const FieldSpec& spec, std::size_t size) override {
     rows.push_back({Path(spec.name), "mapping[]",
                     size == 0 ? "[]" : "[" + std::to_string(size) + (size == 1 ? " element]" : " elements]"), "",
-                    spec.unit, spec.doc});
+                    spec.unit, spec.doc, spec});
     prefix_.push_back(rows.back().name);
     return {ListMode::kSchema, 0};
   }

@@ -21,6 +21,7 @@
 #include "unav_renderer/egl_context.hpp"
 #include "unav_scene/camera.hpp"
 #include "unav_scene/frames.hpp"
+#include "unav_scene/render_settings.hpp"
 #include "unav_scene/water.hpp"
 #include "unav_scene/world.hpp"
 
@@ -29,19 +30,30 @@ namespace unav::renderer {
 // The scene (world, water, cameras, frames) is described by unav_scene; the renderer draws it.
 using namespace unav::scene;  // NOLINT(google-build-using-namespace): World, CameraModel, Pose, ...
 
-struct RenderOptions {
-  bool forward_scatter = true;
-  bool marine_snow = true;
-  bool noise = true;
-  bool lamps = true;
-  int lamp_scatter_samples = 8;     ///< ray-march steps for lamp in-scattering, 0..256; 0 disables
+/// The realism switches (scene::RenderSettings: forward_scatter, marine_snow, noise, lamps,
+/// lamp_scatter_samples, shadows, caustics, materials, snell_window, auto_exposure; declared once,
+/// in the scenario) and the engine's own knobs. What the switches do:
+/// - shadows: a depth map per lamp (its cone as a perspective frustum, to 30 m) and one for the
+///   sun (orthographic along the sunlight, 24 m x 24 m around the camera, 4x the edge), looked up
+///   with bilinear PCF (soft edges) by the surfaces; the lamp maps also by the lamp in-scattering
+///   (shafts cut by objects). The sun's shadow removes its direct share (1 - ambient_fraction) only.
+/// - caustics: the sun's direct light on the seabed is focused by the moving surface into a
+///   drifting network of bright lines, modulation 1 + A g(x, t) with g of mean ~0 and
+///   A = caustic_strength exp(-d (2 K_d + 1 / 15 m)) at depth d (green K_d): clear shallow water
+///   shows them, depth and turbidity wash them out. Animated with the frame stamp.
+/// - snell_window: water rays within asin(1 / n) of the zenith leave through the surface and see
+///   the sky (radiance n^2 x the diffuse share of E0, Fresnel-weighted) and the sun's glint,
+///   attenuated over the path to the surface; beyond it total internal reflection (the veil).
+/// - materials: physically based materials (world Material keys roughness, metallic, relief_m,
+///   sediment): the texture's relief shaded by bump mapping (height in its alpha, screen-space
+///   surface gradient: any UV or triplanar mapping), GGX specular (Cook-Torrance, Smith-Schlick
+///   G, Schlick F, F0 = mix(0.0032: index 1.5 in water, albedo, metallic)) from the sun and the
+///   lamps, and sand settled on upward faces and near the seabed. false: Lambertian, flat, clean.
+/// - auto_exposure: deterministic metering of the ambient light at the camera depth: gain =
+///   clamp(0.45 / luminance(E0 exp(-K_d d)), 0.25, 5), times CameraModel::exposure.
+struct RenderOptions : scene::RenderSettings {
   int lamp_scatter_downsample = 4;  ///< in-scattering is computed at 1/N resolution (smooth)
-  /// Shadows: a depth map per lamp (its cone as a perspective frustum, to 30 m) and one for the
-  /// sun (orthographic along the sunlight, 24 m x 24 m around the camera, 4x the edge), looked up
-  /// with bilinear PCF (soft edges) by the surfaces; the lamp maps also by the lamp in-scattering (shafts cut
-  /// by objects). The sun's shadow removes its direct share (1 - ambient_fraction) only.
-  bool shadows = true;
-  int shadow_map_size = 256;  ///< edge [px] of each lamp's shadow map, 16..8192
+  int shadow_map_size = 256;        ///< edge [px] of each lamp's shadow map, 16..8192
   /// Shadow receiver culling: terrain chunks that nothing can shadow (no caster between them and
   /// the light, and the light steeper than the terrain's steepest slope) are drawn without the
   /// shadow lookups. Same image (conservative tests); false only to measure or to check that.
@@ -79,29 +91,11 @@ struct RenderOptions {
   /// Scale of the shadow maps' depth bias (slope-scaled polygon offset) against self-shadowing
   /// ("acne"): larger removes acne on steep terrain and detaches contact shadows. >= 0.
   double shadow_bias = 1.0;
-  /// Caustics: the sun's direct light on the seabed is focused by the moving surface into a
-  /// drifting network of bright lines, modulation 1 + A g(x, t) with g of mean ~0 and
-  /// A = caustic_strength exp(-d (2 K_d + 1 / 15 m)) at depth d (green K_d): clear shallow water
-  /// shows them, depth and turbidity wash them out. Animated with the frame stamp.
-  bool caustics = true;
   double caustic_strength = 0.8;
   bool srgb_output = true;  ///< encode rgb8 as sRGB (false: linear 0..1 -> 0..255)
-  /// Snell's window: water rays within asin(1 / n) of the zenith leave through the surface and
-  /// see the sky (radiance n^2 x the diffuse share of E0, Fresnel-weighted) and the sun's glint,
-  /// attenuated over the path to the surface; beyond it total internal reflection (the veil).
-  bool snell_window = true;
-  /// Physically based materials (world Material keys roughness, metallic, relief_m, sediment):
-  /// the texture's relief shaded by bump mapping (height in its alpha, screen-space surface
-  /// gradient: any UV or triplanar mapping), GGX specular (Cook-Torrance, Smith-Schlick G, Schlick
-  /// F, F0 = mix(0.0032: index 1.5 in water, albedo, metallic)) from the sun and the lamps, and
-  /// sand settled on upward faces and near the seabed. false: Lambertian, flat, clean.
-  bool materials = true;
-  /// Deterministic metering of the ambient light at the camera depth: gain =
-  /// clamp(0.45 / luminance(E0 exp(-K_d d)), 0.25, 5), times CameraModel::exposure.
-  bool auto_exposure = true;
-  int texture_size = 512;  ///< procedural texture edge [px]
-  int readback_slots = 2;  ///< PBO ring depth for submit()/collect()
-  std::uint64_t seed = 1;  ///< noise seed (frame noise = f(seed, sequence))
+  int texture_size = 512;   ///< procedural texture edge [px]
+  int readback_slots = 2;   ///< PBO ring depth for submit()/collect()
+  std::uint64_t seed = 1;   ///< noise seed (frame noise = f(seed, sequence))
   /// glFinish after each pass to time them (RenderTimings::*_pass_ms); serialises the GPU.
   bool profile_passes = false;
   /// GL timestamp queries between the passes (no glFinish, nothing serialised): the GPU time of each

@@ -82,4 +82,8 @@ CameraModel load_camera(const std::string& path, const std::string& name);
 /// The paper's default vehicle: "front" (640x480, 80 deg) and "down" (320x180, 90 deg).
 std::vector<CameraModel> default_cameras();
 
+/// The camera scaled to width x height (same field of view; principal point and distortion
+/// scaled with the image); itself when width or height is 0 or the size is unchanged.
+CameraModel scale_camera(const CameraModel& camera, int width, int height);
+
 }  // namespace unav::scene

@@ -2,7 +2,7 @@
 // stack's lower half), a renderer (one EGL context, one or more cameras) and a scene, stepped by
 // the caller with no DDS and no lockstep. The gym environment and data generation embed it.
 //
-//   unav::sim::Episode ep(unav::sim::load_episode_setup(params), world);
+//   unav::sim::Episode ep(unav::sim::load_episode_setup(scenario), world);
 //   ep.reset(seed, initial_state);             // new scene: ep.reset(seed, x0, &other_world)
 //   ep.set_setpoint(PoseSetpoint::FromPositionYaw(p, yaw));
 //   ep.advance(1.5);                           // MPC at control_period, physics at dt
@@ -25,6 +25,7 @@
 #include "unav_control/mpc.hpp"
 #include "unav_physics/simulator.hpp"
 #include "unav_renderer/renderer.hpp"
+#include "unav_scene/scenario.hpp"
 #include "unav_scene/world.hpp"
 
 namespace unav::sim {
@@ -33,71 +34,19 @@ using unav::physics::RigidBodyState;
 using unav::renderer::Frame;
 using unav::scene::World;
 
-/// What an episode is made of, as files (relative paths: under the resource roots' config/,
-/// see unav_common/resources.hpp) and switches. Config schema (config/learning/*.yaml `episode:`).
-struct EpisodeParams {
-  std::string vehicle_config = "vehicles/bluerov2_heavy.yaml";  ///< the plant
-  std::string mpc_config = "controllers/mpc.yaml";
-  std::string allocator_config = "controllers/allocator.yaml";
-  std::string cameras_config = "sensors/bluerov2_cameras.yaml";
-  std::vector<std::string> cameras{"down"};
-  /// Render size of every camera (intrinsics scaled); 0 = as in cameras_config.
-  int image_width = 0;
-  int image_height = 0;
-  double physics_dt = 0.001;
-  std::string integrator = "velocity_verlet";
-  double control_period = 0.05;
-  bool marine_snow = true;
-  bool forward_scatter = true;
-  bool camera_noise = true;
-  bool materials = true;  ///< RenderOptions::materials: relief, highlights, sediment
-  bool shadows = true;    ///< RenderOptions::shadows: sun and lamp shadow maps
-  bool caustics = true;   ///< RenderOptions::caustics: sunlight caustics on the seabed
-  int lamp_scatter_samples = 8;
-
-  template <class Archive>
-  void Serialize(Archive* a) {
-    using unav::common::Field;
-    a->Visit(Field("vehicle_config", &vehicle_config).Doc("plant vehicle YAML, relative to config/ or absolute"));
-    a->Visit(Field("mpc_config", &mpc_config).Doc("mpc_controller params file, relative to config/ or absolute"));
-    a->Visit(Field("allocator_config", &allocator_config).Doc("control_allocator params file"));
-    a->Visit(Field("cameras_config", &cameras_config).Doc("camera set (mounts, intrinsics)"));
-    a->Visit(Field("cameras", &cameras).Doc("cameras of cameras_config to render"));
-    a->Visit(Field("image_width", &image_width).Range(0, 8192).Unit("px").Doc("render width, 0 = camera's"));
-    a->Visit(Field("image_height", &image_height).Range(0, 8192).Unit("px").Doc("render height, 0 = camera's"));
-    a->Visit(Field("physics_dt", &physics_dt).Above(0.0).Max(0.05).Unit("s").Doc("physics step"));
-    a->Visit(Field("integrator", &integrator).OneOf({"velocity_verlet", "rk4"}));
-    a->Visit(Field("control_period", &control_period)
-                 .Above(0.0)
-                 .Max(1.0)
-                 .Unit("s")
-                 .Doc("MPC + allocator period; a multiple of physics_dt"));
-    a->Visit(Field("marine_snow", &marine_snow));
-    a->Visit(Field("forward_scatter", &forward_scatter));
-    a->Visit(Field("camera_noise", &camera_noise));
-    a->Visit(Field("materials", &materials).Doc("relief (bump), GGX highlights and sediment in the images"));
-    a->Visit(Field("shadows", &shadows).Doc("shadow maps of the sun and of every lamp"));
-    a->Visit(Field("caustics", &caustics).Doc("animated sunlight caustics on the seabed"));
-    a->Visit(Field("lamp_scatter_samples", &lamp_scatter_samples).Range(0, 64).Doc("0 = no lamp in-scattering"));
-  }
-};
-
-/// EpisodeParams resolved and loaded (vehicle, controllers, cameras).
+/// A scenario resolved and loaded for an episode (vehicle, controllers, cameras, renderer): the
+/// in-process half of the one builder (the plant: physics::build_simulator, as the physics server).
 struct EpisodeSetup {
-  EpisodeParams params;
-  physics::VehicleParams plant;
+  scene::Scenario scenario;  ///< with its file paths resolved
   physics::SimulatorOptions simulator;
   control::MpcConfig mpc;
   control::AllocatorConfig allocator;
   std::vector<scene::CameraModel> cameras;
   unav::renderer::RenderOptions render;
 };
-/// Loads every file of `params`; throws ConfigError naming the file/key on any problem.
-EpisodeSetup load_episode_setup(const EpisodeParams& params);
-
-/// The camera scaled to width x height (same field of view, principal point and distortion
-/// scaled with the image).
-scene::CameraModel scale_camera(const scene::CameraModel& camera, int width, int height);
+/// Loads every file the scenario names (relative paths resolved as load_scenario() does);
+/// throws ConfigError naming the file/key on any problem.
+EpisodeSetup load_episode_setup(const scene::Scenario& scenario);
 
 /// Wall time spent per part, accumulated since construction (for benchmarks).
 struct EpisodeTimings {
@@ -107,7 +56,8 @@ struct EpisodeTimings {
 
 class Episode {
  public:
-  /// Builds the simulator, controllers and renderer for `world`. `context`: an EGL context to
+  /// Builds the simulator (physics::build_simulator: the world's seabed and current, as the
+  /// physics server), controllers and renderer for `world`. `context`: an EGL context to
   /// share (vectorised environments); null = a new one. Throws ConfigError / EglError.
   Episode(EpisodeSetup setup, World world, std::shared_ptr<unav::renderer::EglContext> context = nullptr);
   ~Episode();
@@ -116,7 +66,8 @@ class Episode {
 
   /// Time 0, vehicle at `initial` at rest, controllers forgotten, setpoint = hold `initial`;
   /// every noise source (camera noise, marine snow phase) seeded from `seed`. `world`: replace
-  /// the scene (geometry re-uploaded, GL context, shaders and targets kept); null = keep it.
+  /// the scene (geometry re-uploaded, GL context, shaders and targets kept; the plant rebuilt on
+  /// its seabed and current); null = keep it.
   void reset(std::uint64_t seed, const RigidBodyState& initial, const World* world = nullptr);
 
   void set_setpoint(const control::PoseSetpoint& setpoint);

@@ -86,15 +86,16 @@ struct PipeFollowingParams {
   }
 };
 
-/// A learning config file (config/learning/pipe_following.yaml): the sections `env`, `episode`
-/// and `pipe_scenes`; each absent section keeps its defaults.
+/// A learning config file (config/learning/pipe_following.yaml): the sections `env`, `scenario`
+/// (scene::Scenario: vehicle, physics, control, cameras, render; its world and mission are the
+/// env's) and `pipe_scenes`; each absent section keeps its defaults.
 struct PipeFollowingConfig {
   PipeFollowingParams env;
-  EpisodeParams episode;
+  scene::Scenario scenario;
   PipeSceneRanges scenes;
 };
 PipeFollowingConfig load_pipe_following_config(const std::string& path);
-/// Sets "env.max_steps", "episode.image_width", "pipe_scenes.turns" ... or a bare env key
+/// Sets "env.max_steps", "scenario.cameras.width", "pipe_scenes.turns" ... or a bare env key
 /// ("max_steps") from YAML text. Unknown keys throw ConfigError listing the valid ones.
 void apply_override(PipeFollowingConfig* config, const std::string& key, const std::string& yaml_value,
                     const std::string& source);

@@ -252,6 +252,7 @@ struct FieldInfo {
   std::string rule;           ///< FieldSpec::RuleText(): "[1, 500]", "> 0", "{a, b}", ""
   std::string unit;
   std::string doc;
+  FieldSpec spec;  ///< the declared rule as data (bounds, allowed strings)
 };
 
 /// An aligned table, one row per field, columns name, type, default, rule, unit, doc (empty

@@ -1,0 +1,32 @@
+// The plant of a scenario (DESIGN.md section 9): the one place that turns a concrete
+// scene::Scenario and its world into a physics::Simulator, for the physics server node and the
+// in-process Episode alike: the vehicle file, the step and integrator, the world's seabed (flat,
+// or its relief sampled on the render grid) and water current, the initial state.
+#pragma once
+
+#include <memory>
+
+#include "unav_physics/seabed.hpp"
+#include "unav_physics/simulator.hpp"
+#include "unav_scene/scenario.hpp"
+#include "unav_scene/world.hpp"
+
+namespace unav::physics {
+
+/// The physics seabed of a world: flat when the world's is, else its patch sampled on the render
+/// grid (bilinear between nodes, nearest edge beyond); nullptr when the world disables its seabed.
+std::unique_ptr<Seabed> seabed_from_world(const unav::scene::World& world);
+
+/// The scenario's initial state: at vehicle.initial_position, vehicle.initial_rpy_deg, at rest.
+RigidBodyState scenario_initial_state(const unav::scene::Scenario& scenario);
+
+/// physics.dt and physics.integrator; `command_timeout` as the caller runs (0 in-process).
+SimulatorOptions scenario_simulator_options(const unav::scene::Scenario& scenario, double command_timeout);
+
+/// The simulator of a scenario in `world` (the world the scenario names, loaded by the caller,
+/// who also renders it): vehicle.model, the options above, the world's seabed and current, the
+/// initial state. Throws ConfigError naming the file and key on a bad vehicle or current file.
+std::unique_ptr<Simulator> build_simulator(const unav::scene::Scenario& scenario, const unav::scene::World& world,
+                                           const SimulatorOptions& options);
+
+}  // namespace unav::physics

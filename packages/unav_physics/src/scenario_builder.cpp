@@ -1,0 +1,47 @@
+#include "unav_physics/scenario_builder.hpp"
+
+#include <cmath>
+#include <utility>
+
+#include "unav_common/errors.hpp"
+#include "unav_physics/current.hpp"
+#include "unav_physics/dynamics.hpp"
+#include "unav_physics/vehicle.hpp"
+
+namespace unav::physics {
+
+std::unique_ptr<Seabed> seabed_from_world(const unav::scene::World& world) {
+  const unav::scene::Seabed& sb = world.seabed;
+  if (!sb.enabled) return nullptr;
+  if (sb.is_flat()) return std::make_unique<FlatSeabed>(sb.depth_m);
+  unav::scene::SeabedGrid g = unav::scene::sample_seabed(sb);
+  return std::make_unique<GridSeabed>(g.origin_n, g.origin_e, g.resolution_m, std::move(g.depths_m));
+}
+
+RigidBodyState scenario_initial_state(const unav::scene::Scenario& scenario) {
+  constexpr double kDeg = M_PI / 180.0;
+  RigidBodyState x0;
+  x0.p_WB_W = scenario.vehicle.initial_position;
+  const Eigen::Vector3d rpy = scenario.vehicle.initial_rpy_deg * kDeg;
+  x0.q_WB = quaternion_from_rpy(rpy.x(), rpy.y(), rpy.z());
+  return x0;
+}
+
+SimulatorOptions scenario_simulator_options(const unav::scene::Scenario& scenario, double command_timeout) {
+  SimulatorOptions so;
+  so.dt = scenario.physics.dt;
+  if (!parse_integrator(scenario.physics.integrator, &so.integrator))
+    throw unav::ConfigError(scenario.name, "physics.integrator", scenario.physics.integrator,
+                            "must be one of {velocity_verlet, rk4}");
+  so.command_timeout = command_timeout;
+  return so;
+}
+
+std::unique_ptr<Simulator> build_simulator(const unav::scene::Scenario& scenario, const unav::scene::World& world,
+                                           const SimulatorOptions& options) {
+  std::unique_ptr<CurrentModel> current = world.current_file.empty() ? nullptr : load_current(world.current_file);
+  return std::make_unique<Simulator>(load_vehicle(scenario.vehicle.model), options, std::move(current),
+                                     seabed_from_world(world), scenario_initial_state(scenario));
+}
+
+}  // namespace unav::physics

@@ -1,0 +1,164 @@
+// One run = one scenario (DESIGN.md section 9): the world, the vehicle and its initial state, the
+// physics step, the controller, the cameras, the renderer's realism switches, the mission and the
+// seed, as one typed struct whose sections each name their fields once (Serialize). Every run path
+// is built from it: the DDS nodes read their part of the same file (`scenario:=FILE`), the
+// in-process Episode (gym, `unav run --in-process`) and data generation call the same builders
+// (unav_physics/scenario_builder.hpp for the plant, unav_sim's load_episode_setup for the rest).
+//
+// Any leaf may be a distribution (unav_common/sampling.hpp); load_scenario() checks the file and
+// draws the concrete scenario for a seed:
+//   scene::Scenario s = scene::load_scenario("scenarios/pipe_hover.yaml");        // the file's seed
+//   scene::Scenario t = scene::load_scenario("scenarios/pipe_hover.yaml", 42);    // another draw
+// File paths (world, vehicle.model, control.*, cameras.config) are resolved to absolute paths:
+// relative to the scenario's folder first, then under the resource roots (config/..., worlds/...).
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <yaml-cpp/yaml.h>
+#include <Eigen/Core>
+
+#include "unav_common/config.hpp"
+#include "unav_scene/camera.hpp"
+#include "unav_scene/render_settings.hpp"
+
+namespace unav::scene {
+
+struct ScenarioVehicle {
+  std::string model = "vehicles/bluerov2_heavy.yaml";  ///< plant YAML (config/vehicles/...)
+  Eigen::Vector3d initial_position{0.0, 0.0, 0.0};     ///< m, world NED
+  Eigen::Vector3d initial_rpy_deg{0.0, 0.0, 0.0};      ///< roll, pitch, yaw [deg]
+
+  template <class Archive>
+  void Serialize(Archive* a) {
+    using unav::common::Field;
+    a->Visit(Field("model", &model).Doc("vehicle YAML: relative to the scenario, config/ or absolute"));
+    a->Visit(Field("initial_position", &initial_position).Range(-1e5, 1e5).Unit("m").Doc("start, world NED"));
+    a->Visit(Field("initial_rpy_deg", &initial_rpy_deg).Range(-360.0, 360.0).Unit("deg").Doc("start roll, pitch, yaw"));
+  }
+};
+
+struct ScenarioPhysics {
+  double dt = 0.001;
+  std::string integrator = "velocity_verlet";
+
+  template <class Archive>
+  void Serialize(Archive* a) {
+    using unav::common::Field;
+    a->Visit(Field("dt", &dt).Above(0.0).Max(0.05).Unit("s").Doc("physics step"));
+    a->Visit(Field("integrator", &integrator).OneOf({"velocity_verlet", "rk4"}));
+  }
+};
+
+struct ScenarioControl {
+  std::string mpc = "controllers/mpc.yaml";              ///< mpc_controller params file
+  std::string allocator = "controllers/allocator.yaml";  ///< control_allocator params file
+  double period = 0.05;                                  ///< s, a whole number of physics steps
+
+  template <class Archive>
+  void Serialize(Archive* a) {
+    using unav::common::Field;
+    a->Visit(Field("mpc", &mpc).Doc("mpc_controller params file"));
+    a->Visit(Field("allocator", &allocator).Doc("control_allocator params file"));
+    a->Visit(Field("period", &period).Above(0.0).Max(1.0).Unit("s").Doc("MPC + allocator period"));
+  }
+};
+
+struct ScenarioCameras {
+  std::string config = "sensors/bluerov2_cameras.yaml";  ///< camera set (mounts, intrinsics)
+  std::vector<std::string> names{"down"};                ///< cameras of `config` rendered
+  int width = 0;                                         ///< render size, 0 = the camera's
+  int height = 0;
+  double rate_hz = 10.0;
+
+  template <class Archive>
+  void Serialize(Archive* a) {
+    using unav::common::Field;
+    a->Visit(Field("config", &config).Doc("camera set YAML (mounts, intrinsics)"));
+    a->Visit(Field("names", &names).Doc("cameras of config to render"));
+    a->Visit(Field("width", &width).Range(0, 8192).Unit("px").Doc("render width, 0 = the camera's"));
+    a->Visit(Field("height", &height).Range(0, 8192).Unit("px").Doc("render height, 0 = the camera's"));
+    a->Visit(Field("rate_hz", &rate_hz).Above(0.0).Max(1000.0).Unit("Hz").Doc("frames per second per camera"));
+  }
+};
+
+/// A pose the controller holds for `hold_s` seconds (world NED, heading).
+struct ScenarioWaypoint {
+  Eigen::Vector3d position{0.0, 0.0, 0.0};
+  double yaw_deg = 0.0;
+  double hold_s = 5.0;
+
+  template <class Archive>
+  void Serialize(Archive* a) {
+    using unav::common::Field;
+    a->Visit(Field("position", &position).Range(-1e5, 1e5).Unit("m").Doc("setpoint, world NED"));
+    a->Visit(Field("yaw_deg", &yaw_deg).Range(-360.0, 360.0).Unit("deg").Doc("heading setpoint"));
+    a->Visit(Field("hold_s", &hold_s).Above(0.0).Unit("s").Doc("time this setpoint is held"));
+  }
+};
+
+/// What the vehicle does: the waypoints in order (each held for its hold_s), then the last one
+/// (or the initial pose) until duration_s.
+struct ScenarioMission {
+  double duration_s = 10.0;
+  std::vector<ScenarioWaypoint> waypoints;
+
+  template <class Archive>
+  void Serialize(Archive* a) {
+    using unav::common::Field;
+    a->Visit(Field("duration_s", &duration_s).Above(0.0).Max(1e6).Unit("s").Doc("simulated time of the run"));
+    a->Visit(Field("waypoints", &waypoints).Doc("setpoints flown in order"));
+  }
+};
+
+struct Scenario {
+  std::string name = "scenario";
+  int64_t seed = 0;  ///< draws of the file's distributions and every noise source
+  std::string world = "worlds/pipe_inspection/world.yaml";
+  std::string water;  ///< Jerlov preset or water YAML replacing the world's; "" = the world's
+  ScenarioVehicle vehicle;
+  ScenarioPhysics physics;
+  ScenarioControl control;
+  ScenarioCameras cameras;
+  RenderSettings render;
+  ScenarioMission mission;
+
+  template <class Archive>
+  void Serialize(Archive* a) {
+    using unav::common::Field;
+    a->Visit(Field("name", &name).Doc("run name (output folder)"));
+    a->Visit(Field("seed", &seed).Min(0.0).Doc("seed of the distributions and the noise sources"));
+    a->Visit(Field("world", &world).Doc("world.yaml: relative to the scenario, the resource roots or absolute"));
+    a->Visit(Field("water", &water).Doc("Jerlov preset (I, II, 3C, ...) or water YAML; empty = the world's"));
+    a->Visit(Field("vehicle", &vehicle));
+    a->Visit(Field("physics", &physics));
+    a->Visit(Field("control", &control));
+    a->Visit(Field("cameras", &cameras));
+    a->Visit(Field("render", &render));
+    a->Visit(Field("mission", &mission));
+  }
+};
+
+/// Reads, checks and samples the scenario file `path` with `seed` (default: the file's `seed`,
+/// which must then be a fixed value), and resolves its file paths (see above). Throws
+/// ConfigError(file, key path, value, rule) on any problem: missing file, unknown key, a value
+/// or a distribution's support outside its field's rule, a referenced file that does not exist.
+Scenario load_scenario(const std::string& path, std::optional<std::uint64_t> seed = std::nullopt);
+/// The same for a scenario given as YAML (`file` names it in errors; relative paths resolve
+/// against `dir`).
+Scenario parse_scenario(const YAML::Node& root, const std::string& file, const std::string& dir,
+                        std::optional<std::uint64_t> seed = std::nullopt);
+/// Resolves the scenario's file paths as load_scenario() does (for scenarios built in code).
+void resolve_scenario_paths(Scenario* s, const std::string& file, const std::string& dir);
+
+/// The scenario's cameras: cameras.names of cameras.config, scaled to cameras.width x height.
+/// Throws ConfigError (no camera, an unknown name: the error lists the file's cameras).
+std::vector<CameraModel> scenario_cameras(const Scenario& s);
+
+/// The concrete scenario as YAML (what a run records in its output folder).
+YAML::Node scenario_yaml(const Scenario& s);
+
+}  // namespace unav::scene

@@ -1,0 +1,88 @@
+#include "unav_scene/scenario.hpp"
+
+#include <cmath>
+#include <filesystem>
+
+#include "unav_common/errors.hpp"
+#include "unav_common/resources.hpp"
+#include "unav_common/sampling.hpp"
+
+namespace fs = std::filesystem;
+
+namespace unav::scene {
+namespace {
+
+// `value` as an absolute path: itself, under `dir`, or under the resource roots (first with
+// each of `prefixes`, e.g. "config/"). Throws ConfigError naming the key when none exists.
+std::string resolve(const std::string& value, const std::string& dir, const std::vector<std::string>& prefixes,
+                    const std::string& file, const std::string& key) {
+  if (value.empty()) throw unav::ConfigError(file, key, "\"\"", "a file path is required");
+  const fs::path p(value);
+  if (p.is_absolute()) {
+    if (!fs::exists(p)) throw unav::ConfigError(file, key, value, "no such file");
+    return value;
+  }
+  if (!dir.empty() && fs::exists(fs::path(dir) / p)) return fs::absolute(fs::path(dir) / p).lexically_normal().string();
+  for (const auto& prefix : prefixes)
+    if (auto r = unav::common::try_find_resource(prefix + value)) return fs::absolute(*r).lexically_normal().string();
+  std::string where = dir.empty() ? std::string() : dir + "/, ";
+  for (std::size_t i = 0; i < prefixes.size(); ++i)
+    where += (i ? ", " : "") + std::string("the resource roots' ") + (prefixes[i].empty() ? "top" : prefixes[i]);
+  throw unav::ConfigError(file, key, value, "no such file (looked under " + where + ")");
+}
+
+}  // namespace
+
+void resolve_scenario_paths(Scenario* s, const std::string& file, const std::string& dir) {
+  const std::vector<std::string> config{"config/", ""}, top{"", "config/"};
+  s->world = resolve(s->world, dir, top, file, "world");
+  // A water preset is a name ("3C", "jerlov_II"); a file has a '/' or ends in .yaml.
+  if (s->water.find('/') != std::string::npos || s->water.find(".yaml") != std::string::npos)
+    s->water = resolve(s->water, dir, config, file, "water");
+  s->vehicle.model = resolve(s->vehicle.model, dir, config, file, "vehicle.model");
+  s->control.mpc = resolve(s->control.mpc, dir, config, file, "control.mpc");
+  s->control.allocator = resolve(s->control.allocator, dir, config, file, "control.allocator");
+  s->cameras.config = resolve(s->cameras.config, dir, config, file, "cameras.config");
+  if ((s->cameras.width > 0) != (s->cameras.height > 0))
+    throw unav::ConfigError(file, "cameras.width/cameras.height",
+                            std::to_string(s->cameras.width) + "x" + std::to_string(s->cameras.height),
+                            "give both or neither");
+  const double ratio = s->control.period / s->physics.dt;
+  if (std::abs(ratio - std::round(ratio)) > 1e-6 * ratio)
+    throw unav::ConfigError(file, "control.period", std::to_string(s->control.period),
+                            "must be a whole number of physics.dt steps (" + std::to_string(s->physics.dt) + " s)");
+}
+
+Scenario parse_scenario(const YAML::Node& root, const std::string& file, const std::string& dir,
+                        std::optional<std::uint64_t> seed) {
+  const unav::common::Stochastic<Scenario> spec(root, file);
+  if (!seed) {
+    const YAML::Node s = spec.spec().IsMap() ? spec.spec()["seed"] : YAML::Node();
+    if (s.IsDefined() && unav::common::IsDistribution(s))
+      throw unav::ConfigError(file, "seed", "", "the seed that draws the distributions must be a fixed value");
+    seed = s.IsDefined() ? s.as<std::uint64_t>() : 0;
+  }
+  YAML::Node concrete = spec.SampledYaml(*seed);
+  concrete["seed"] = static_cast<int64_t>(*seed);
+  Scenario out;
+  unav::common::LoadYaml(concrete, file, &out);
+  resolve_scenario_paths(&out, file, dir);
+  return out;
+}
+
+Scenario load_scenario(const std::string& path, std::optional<std::uint64_t> seed) {
+  const YAML::Node root = unav::common::detail::ReadYamlFile(path);
+  return parse_scenario(root, path, fs::path(path).parent_path().string(), seed);
+}
+
+std::vector<CameraModel> scenario_cameras(const Scenario& s) {
+  if (s.cameras.names.empty()) throw unav::ConfigError(s.name, "cameras.names", "[]", "at least one camera to render");
+  std::vector<CameraModel> out;
+  for (const auto& name : s.cameras.names)
+    out.push_back(scale_camera(load_camera(s.cameras.config, name), s.cameras.width, s.cameras.height));
+  return out;
+}
+
+YAML::Node scenario_yaml(const Scenario& s) { return unav::common::ToYaml(s); }
+
+}  // namespace unav::scene

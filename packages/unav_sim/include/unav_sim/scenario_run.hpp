@@ -1,0 +1,37 @@
+// A scenario run in process (`unav run SCENARIO.yaml --in-process`): the Episode built from the
+// scenario by the one builder flies its mission (each waypoint held for its hold_s, then the last
+// one, until mission.duration_s), renders every camera at cameras.rate_hz and writes
+//   OUT/scenario.yaml          the concrete scenario (seed drawn, paths resolved)
+//   OUT/ground_truth.tum       base_link_frd in world_ned every control period (TUM: t x y z qx qy qz qw)
+//   OUT/<camera>/<t_ns>.png    rgb8 frames, named by their simulated time in nanoseconds
+#pragma once
+
+#include <atomic>
+#include <cstdint>
+#include <string>
+
+#include "unav_control/mpc.hpp"
+#include "unav_scene/scenario.hpp"
+
+namespace unav::sim {
+
+/// The setpoint the mission asks for at time `t` (s since the start).
+control::PoseSetpoint mission_setpoint(const scene::Scenario& scenario, double t);
+
+struct ScenarioRunOptions {
+  bool images = true;                       ///< false: ground truth only
+  const std::atomic<bool>* stop = nullptr;  ///< set (e.g. by SIGINT): stop after the current period
+};
+
+struct ScenarioRunResult {
+  std::uint64_t poses = 0, frames = 0;
+  double sim_s = 0.0, wall_s = 0.0;
+  int solver_failures = 0;
+  bool stopped = false;  ///< ended early by options.stop (every file written so far is complete)
+};
+
+/// Runs `scenario` into `out_dir` (created). Throws ConfigError / EglError / std::runtime_error.
+ScenarioRunResult run_scenario_in_process(const scene::Scenario& scenario, const std::string& out_dir,
+                                          const ScenarioRunOptions& options = {});
+
+}  // namespace unav::sim

@@ -1,0 +1,103 @@
+#include "unav_sim/scenario_run.hpp"
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <stdexcept>
+
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "unav_physics/scenario_builder.hpp"
+#include "unav_scene/water.hpp"
+#include "unav_sim/episode.hpp"
+
+namespace fs = std::filesystem;
+
+namespace unav::sim {
+
+control::PoseSetpoint mission_setpoint(const scene::Scenario& scenario, double t) {
+  constexpr double kDeg = M_PI / 180.0;
+  const auto& wps = scenario.mission.waypoints;
+  if (wps.empty())
+    return control::PoseSetpoint::FromPositionYaw(scenario.vehicle.initial_position,
+                                                  scenario.vehicle.initial_rpy_deg.z() * kDeg);
+  double end = 0.0;
+  for (const auto& w : wps) {
+    end += w.hold_s;
+    if (t < end) return control::PoseSetpoint::FromPositionYaw(w.position, w.yaw_deg * kDeg);
+  }
+  return control::PoseSetpoint::FromPositionYaw(wps.back().position, wps.back().yaw_deg * kDeg);
+}
+
+ScenarioRunResult run_scenario_in_process(const scene::Scenario& scenario, const std::string& out_dir,
+                                          const ScenarioRunOptions& options) {
+  const auto wall0 = std::chrono::steady_clock::now();
+  EpisodeSetup setup = load_episode_setup(scenario);
+  const scene::Scenario& sc = setup.scenario;
+  scene::World world = scene::load_world(sc.world);
+  if (!sc.water.empty()) world.water = scene::load_water_spec(sc.water);
+  fs::create_directories(out_dir);
+  {
+    YAML::Emitter e;
+    e.SetDoublePrecision(17);
+    e << scene::scenario_yaml(sc);
+    std::ofstream(fs::path(out_dir) / "scenario.yaml") << e.c_str() << "\n";
+  }
+  Episode ep(setup, world);
+  ep.reset(static_cast<std::uint64_t>(sc.seed), physics::scenario_initial_state(sc));
+
+  std::ofstream gt(fs::path(out_dir) / "ground_truth.tum");
+  if (!gt) throw std::runtime_error(out_dir + "/ground_truth.tum: cannot be written");
+  gt.precision(9);
+  ScenarioRunResult r;
+  auto write_pose = [&] {
+    const auto& x = ep.state();
+    gt << std::fixed << ep.time() << " " << x.p_WB_W.x() << " " << x.p_WB_W.y() << " " << x.p_WB_W.z() << " "
+       << x.q_WB.x() << " " << x.q_WB.y() << " " << x.q_WB.z() << " " << x.q_WB.w() << "\n";
+    ++r.poses;
+  };
+  const double frame_period = 1.0 / sc.cameras.rate_hz, period = sc.control.period;
+  if (options.images)
+    for (const auto& c : sc.cameras.names) fs::create_directories(fs::path(out_dir) / c);
+  std::int64_t next_frame = 0;  // frames at k * frame_period, rendered at the first control instant at or after
+  auto render_due = [&] {
+    if (!options.images) return;
+    while (static_cast<double>(next_frame) * frame_period <= ep.time() + 1e-9) {
+      for (const auto& c : sc.cameras.names) {
+        const Frame f = ep.render(c);
+        cv::Mat rgb(f.height, f.width, CV_8UC3, const_cast<std::uint8_t*>(f.rgb.data())), bgr;
+        cv::cvtColor(rgb, bgr, cv::COLOR_RGB2BGR);
+        char name[64];
+        std::snprintf(name, sizeof(name), "%019lld.png", static_cast<long long>(std::llround(ep.time() * 1e9)));
+        const fs::path file = fs::path(out_dir) / c / name;
+        if (!cv::imwrite(file.string(), bgr)) throw std::runtime_error(file.string() + ": cannot be written");
+        ++r.frames;
+      }
+      ++next_frame;
+    }
+  };
+  write_pose();
+  render_due();
+  const auto periods = static_cast<std::int64_t>(std::llround(sc.mission.duration_s / period));
+  for (std::int64_t k = 0; k < periods; ++k) {
+    if (options.stop != nullptr && options.stop->load()) {
+      r.stopped = true;
+      break;
+    }
+    ep.set_setpoint(mission_setpoint(sc, ep.time()));
+    ep.advance(period);
+    write_pose();
+    render_due();
+  }
+  gt.flush();
+  r.sim_s = ep.time();
+  r.solver_failures = ep.solver_failures();
+  r.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
+  return r;
+}
+
+}  // namespace unav::sim

@@ -1,0 +1,300 @@
+// The distribution language of sampling.hpp: checks against a config schema, and the sampler.
+#include "unav_common/sampling.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <functional>
+#include <limits>
+#include <map>
+#include <utility>
+#include <variant>
+
+namespace unav::common {
+namespace {
+
+constexpr const char* kKinds[] = {"uniform", "normal", "int", "choice"};
+constexpr const char* kForms = "{uniform: [lo, hi]}, {normal: {mean: m, std: s}}, {int: [lo, hi]} or {choice: [...]}";
+
+std::string Written(const YAML::Node& n) {
+  if (!n.IsDefined()) return "";
+  if (n.IsScalar()) return n.Scalar();
+  YAML::Emitter e;
+  e << YAML::Flow << n;
+  return e.c_str();
+}
+
+double Number(const YAML::Node& n, const std::string& file, const std::string& path) {
+  double v = 0;
+  if (!n.IsScalar() || !YAML::convert<double>::decode(n, v))
+    throw ConfigError(file, path, Written(n), "expected a number");
+  if (!std::isfinite(v)) throw ConfigError(file, path, Written(n), "must be finite");
+  return v;
+}
+
+// A step of a key path: a map key or a list index.
+using Step = std::variant<std::string, std::size_t>;
+
+std::string PathText(const std::vector<Step>& steps) {
+  std::string s;
+  for (const auto& st : steps) {
+    if (const auto* k = std::get_if<std::string>(&st))
+      s += (s.empty() ? "" : ".") + *k;
+    else
+      s += "[" + std::to_string(std::get<std::size_t>(st)) + "]";
+  }
+  return s;
+}
+
+// The schema row of a concrete path: list-of-struct indices become "[i]"; a trailing index of a
+// leaf list is an element of that leaf (element = true).
+const FieldInfo* Row(const std::map<std::string, FieldInfo>& rows, const std::vector<Step>& steps, bool* element) {
+  std::string pattern;
+  for (std::size_t i = 0; i < steps.size(); ++i) {
+    if (const auto* k = std::get_if<std::string>(&steps[i])) {
+      pattern += (pattern.empty() ? "" : ".") + *k;
+    } else if (i + 1 == steps.size()) {
+      const auto it = rows.find(pattern);
+      *element = true;
+      return it == rows.end() ? nullptr : &it->second;
+    } else {
+      pattern += "[i]";
+    }
+  }
+  *element = false;
+  const auto it = rows.find(pattern);
+  return it == rows.end() ? nullptr : &it->second;
+}
+
+struct Found {
+  std::vector<Step> steps;
+  YAML::Node node;
+};
+
+void Collect(const YAML::Node& n, std::vector<Step>* steps, std::vector<Found>* out) {
+  if (IsDistribution(n)) {
+    out->push_back({*steps, n});
+    return;
+  }
+  if (n.IsMap()) {
+    for (const auto& kv : n) {
+      steps->push_back(kv.first.Scalar());
+      Collect(kv.second, steps, out);
+      steps->pop_back();
+    }
+  } else if (n.IsSequence()) {
+    for (std::size_t i = 0; i < n.size(); ++i) {
+      steps->push_back(i);
+      Collect(n[i], steps, out);
+      steps->pop_back();
+    }
+  }
+}
+
+// Replaces the node at `steps` in `root` (a tree of its own, from YAML::Clone) by `value`.
+void Put(const YAML::Node& root, const std::vector<Step>& steps, const YAML::Node& value) {
+  YAML::Node at = root;
+  for (std::size_t i = 0; i + 1 < steps.size(); ++i) {
+    const YAML::Node next = std::holds_alternative<std::string>(steps[i]) ? at[std::get<std::string>(steps[i])]
+                                                                          : at[std::get<std::size_t>(steps[i])];
+    at.reset(next);
+  }
+  if (std::holds_alternative<std::string>(steps.back()))
+    at[std::get<std::string>(steps.back())] = value;
+  else
+    at[std::get<std::size_t>(steps.back())] = value;
+}
+
+std::map<std::string, FieldInfo> Rows(detail::Target defaults) {
+  std::map<std::string, FieldInfo> rows;
+  for (auto& r : detail::Describe(defaults)) rows.emplace(r.name, r);
+  return rows;
+}
+
+// The type of the value a distribution at this row stands for: "double", "int", "bool", "string".
+std::string ValueKind(const FieldInfo& row, bool element) {
+  const std::string& t = row.type;
+  if (element) {
+    if (t.rfind("double", 0) == 0) return "double";
+    if (t == "int[]") return "int";
+    if (t == "string[]") return "string";
+    return "";
+  }
+  if (t == "double") return "double";
+  if (t == "int" || t == "int64" || t == "uint32") return "int";
+  if (t == "bool" || t == "string") return t;
+  return "";
+}
+
+}  // namespace
+
+std::uint64_t KeySeed(std::uint64_t seed, const std::string& path) {
+  std::uint64_t h = 1469598103934665603ULL;  // FNV-1a of the path
+  for (const unsigned char ch : path) h = (h ^ ch) * 1099511628211ULL;
+  return SplitMix64{seed ^ h}.Next();
+}
+
+bool IsDistribution(const YAML::Node& node) {
+  if (!node.IsMap() || node.size() != 1) return false;
+  const YAML::Node key = node.begin()->first;
+  if (!key.IsScalar()) return false;
+  return std::any_of(std::begin(kKinds), std::end(kKinds), [&](const char* k) { return key.Scalar() == k; });
+}
+
+void CheckDistributionSyntax(const YAML::Node& node, const std::string& file, const std::string& path) {
+  if (!IsDistribution(node)) throw ConfigError(file, path, Written(node), std::string("a distribution is ") + kForms);
+  const std::string kind = node.begin()->first.Scalar();
+  const YAML::Node a = node.begin()->second;
+  const std::string at = path + "." + kind;
+  if (kind == "uniform" || kind == "int") {
+    if (!a.IsSequence() || a.size() != 2) throw ConfigError(file, at, Written(a), "expected [lo, hi]");
+    const double lo = Number(a[0], file, at + "[0]"), hi = Number(a[1], file, at + "[1]");
+    if (lo > hi) throw ConfigError(file, at, Written(a), "empty range: lo > hi");
+    if (kind == "int" && (lo != std::floor(lo) || hi != std::floor(hi)))
+      throw ConfigError(file, at, Written(a), "expected integer ends");
+  } else if (kind == "normal") {
+    if (!a.IsMap()) throw ConfigError(file, at, Written(a), "expected {mean: m, std: s}");
+    for (const auto& kv : a)
+      if (kv.first.Scalar() != "mean" && kv.first.Scalar() != "std")
+        throw ConfigError(file, at + "." + kv.first.Scalar(), Written(kv.second),
+                          "unknown key; allowed keys: mean, std");
+    if (!a["mean"] || !a["std"]) throw ConfigError(file, at, Written(a), "needs mean and std");
+    Number(a["mean"], file, at + ".mean");
+    if (!(Number(a["std"], file, at + ".std") >= 0.0))
+      throw ConfigError(file, at + ".std", Written(a["std"]), "must be >= 0");
+  } else {  // choice
+    if (!a.IsSequence() || a.size() == 0) throw ConfigError(file, at, Written(a), "expected a non-empty list");
+    for (std::size_t i = 0; i < a.size(); ++i)
+      if (!a[i].IsScalar() && !a[i].IsSequence())
+        throw ConfigError(file, at + "[" + std::to_string(i) + "]", Written(a[i]), "expected a value");
+  }
+}
+
+std::vector<YAML::Node> DistributionSupport(const YAML::Node& node) {
+  const std::string kind = node.begin()->first.Scalar();
+  const YAML::Node a = node.begin()->second;
+  std::vector<YAML::Node> out;
+  if (kind == "normal") {
+    out.push_back(YAML::Clone(a["mean"]));
+  } else {
+    for (std::size_t i = 0; i < a.size(); ++i) out.push_back(YAML::Clone(a[i]));
+  }
+  if (kind == "int")  // written as reals ("1.0") they still stand for integers
+    for (auto& v : out) v = YAML::Node(static_cast<int64_t>(std::llround(v.as<double>())));
+  return out;
+}
+
+YAML::Node DrawDistribution(const YAML::Node& node, SplitMix64* rng, double lo, double hi) {
+  const std::string kind = node.begin()->first.Scalar();
+  const YAML::Node a = node.begin()->second;
+  if (kind == "uniform") {
+    const double l = a[0].as<double>(), h = a[1].as<double>();
+    return YAML::Node(l + (h - l) * rng->Uniform01());
+  }
+  if (kind == "int") {
+    const auto l = static_cast<int64_t>(std::llround(a[0].as<double>()));
+    const auto h = static_cast<int64_t>(std::llround(a[1].as<double>()));
+    const auto span = static_cast<std::uint64_t>(h - l) + 1;
+    return YAML::Node(l + static_cast<int64_t>(rng->Next() % span));
+  }
+  if (kind == "normal") {  // Box-Muller, clipped
+    const double u1 = 1.0 - rng->Uniform01(), u2 = rng->Uniform01();
+    const double z = std::sqrt(-2.0 * std::log(u1)) * std::cos(2.0 * M_PI * u2);
+    return YAML::Node(std::clamp(a["mean"].as<double>() + a["std"].as<double>() * z, lo, hi));
+  }
+  return YAML::Clone(a[static_cast<std::size_t>(rng->Next() % a.size())]);
+}
+
+namespace detail {
+
+YAML::Node CheckStochastic(const YAML::Node& spec, const std::string& file, Target defaults,
+                           const std::function<void(const YAML::Node&)>& check) {
+  if (spec.IsDefined() && !spec.IsNull() && !spec.IsMap())
+    throw ConfigError(file, "", Written(spec), "must be a mapping of config keys");
+  const YAML::Node tree = spec.IsDefined() && !spec.IsNull() ? YAML::Clone(spec) : YAML::Node(YAML::NodeType::Map);
+  const auto rows = Rows(defaults);
+  std::vector<Found> found;
+  std::vector<Step> steps;
+  Collect(tree, &steps, &found);
+  // Kind against type: a distribution stands for one leaf value (or one element of a list).
+  for (const auto& f : found) {
+    const std::string path = PathText(f.steps);
+    CheckDistributionSyntax(f.node, file, path);
+    bool element = false;
+    const FieldInfo* row = Row(rows, f.steps, &element);
+    if (row == nullptr) continue;  // an unknown key: the load below names it
+    const std::string vk = ValueKind(*row, element);
+    const std::string kind = f.node.begin()->first.Scalar();
+    if (vk.empty())
+      throw ConfigError(file, path, Written(f.node),
+                        row->type.back() == ']' && row->type != "mapping[]"
+                            ? "a distribution stands for one value: write one per element of the list"
+                            : "a distribution stands for one value, not a " + row->type);
+    if ((kind == "uniform" || kind == "normal") && vk != "double")
+      throw ConfigError(file, path + "." + kind, Written(f.node.begin()->second),
+                        "a " + vk + " field takes " + (vk == "int" ? "{int: [lo, hi]} or " : "") + "{choice: [...]}");
+    if (kind == "int" && vk != "int" && vk != "double")
+      throw ConfigError(file, path + ".int", Written(f.node.begin()->second),
+                        "a " + vk + " field takes {choice: [...]}");
+  }
+  // Support against the rules: the tree with each distribution at its first support value is a
+  // valid config (unknown keys, types, other fields), and so is every end, choice and mean.
+  const auto owner = [&](const ConfigError& e) -> const Found* {
+    if (e.rule().rfind("unknown key", 0) == 0) return nullptr;
+    for (const auto& f : found) {
+      const std::string path = PathText(f.steps);
+      if (e.key() == path || path.rfind(e.key() + "[", 0) == 0 || e.key().rfind(path + "[", 0) == 0) return &f;
+    }
+    return nullptr;
+  };
+  const auto reaches = [&](const Found& f, const YAML::Node& v, const ConfigError& e) {
+    return ConfigError(file, PathText(f.steps), Written(f.node),
+                       "the distribution reaches " + Written(v) + ", which " + e.rule());
+  };
+  YAML::Node base = YAML::Clone(tree);
+  for (const auto& f : found) Put(base, f.steps, DistributionSupport(f.node).front());
+  try {
+    check(base);
+  } catch (const ConfigError& e) {
+    const Found* f = owner(e);
+    if (f == nullptr) throw;
+    throw reaches(*f, DistributionSupport(f->node).front(), e);
+  }
+  for (const auto& f : found) {
+    for (const YAML::Node& v : DistributionSupport(f.node)) {
+      YAML::Node probe = YAML::Clone(base);
+      Put(probe, f.steps, v);
+      try {
+        check(probe);
+      } catch (const ConfigError& e) {
+        if (owner(e) != &f) throw;
+        throw reaches(f, v, e);
+      }
+    }
+  }
+  return tree;
+}
+
+YAML::Node SampleStochastic(const YAML::Node& spec, std::uint64_t seed, Target defaults) {
+  YAML::Node out = YAML::Clone(spec);
+  std::vector<Found> found;
+  std::vector<Step> steps;
+  Collect(spec, &steps, &found);
+  if (found.empty()) return out;
+  const auto rows = Rows(defaults);
+  for (const auto& f : found) {
+    const std::string path = PathText(f.steps);
+    double lo = -std::numeric_limits<double>::max(), hi = std::numeric_limits<double>::max();
+    bool element = false;
+    if (const FieldInfo* row = Row(rows, f.steps, &element)) {
+      const FieldSpec& s = row->spec;
+      if (s.has_lo) lo = s.lo_open ? std::nextafter(s.lo, hi) : s.lo;
+      if (s.has_hi) hi = s.hi_open ? std::nextafter(s.hi, lo) : s.hi;
+    }
+    SplitMix64 rng{KeySeed(seed, path)};
+    Put(out, f.steps, DrawDistribution(f.node, &rng, lo, hi));
+  }
+  return out;
+}
+
+}  // namespace detail
+}  // namespace unav::common

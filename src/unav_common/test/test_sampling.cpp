@@ -1,0 +1,148 @@
+// Distributions in configs (sampling.hpp): draws per key path, reproducible by seed, support
+// checked against the fields' rules, clear errors.
+#include "unav_common/sampling.hpp"
+
+#include <cmath>
+#include <set>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+namespace uc = unav::common;
+using unav::ConfigError;
+
+namespace {
+
+struct Leg {
+  Eigen::Vector3d position{0.0, 0.0, 0.0};
+  double yaw_deg = 0.0;
+  template <class Archive>
+  void Serialize(Archive* a) {
+    a->Visit(uc::Field("position", &position).Range(-100.0, 100.0));
+    a->Visit(uc::Field("yaw_deg", &yaw_deg).Range(-180.0, 180.0));
+  }
+};
+
+struct Water {
+  std::string preset = "I";
+  double turbidity = 1.0;
+  template <class Archive>
+  void Serialize(Archive* a) {
+    a->Visit(uc::Field("preset", &preset).OneOf({"I", "II", "3C"}));
+    a->Visit(uc::Field("turbidity", &turbidity).Above(0.0).Max(10.0));
+  }
+};
+
+struct Config {
+  int64_t seed = 0;
+  int lamps = 2;
+  bool shadows = true;
+  double depth_m = 10.0;
+  Water water;
+  std::vector<Leg> legs;
+  template <class Archive>
+  void Serialize(Archive* a) {
+    a->Visit(uc::Field("seed", &seed).Min(0.0));
+    a->Visit(uc::Field("lamps", &lamps).Range(0, 8));
+    a->Visit(uc::Field("shadows", &shadows));
+    a->Visit(uc::Field("depth_m", &depth_m).Range(1.0, 1000.0));
+    a->Visit(uc::Field("water", &water));
+    a->Visit(uc::Field("legs", &legs));
+  }
+};
+
+uc::Stochastic<Config> Parse(const std::string& text) { return uc::Stochastic<Config>(YAML::Load(text), "s.yaml"); }
+
+std::string ErrorOf(const std::string& text) {
+  try {
+    Parse(text);
+  } catch (const ConfigError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+}  // namespace
+
+TEST(Sampling, ValuesPassThroughAndDistributionsStayInTheirSupport) {
+  const auto s = Parse(R"(
+    lamps: {int: [1, 3]}
+    shadows: {choice: [true, false]}
+    depth_m: {uniform: [5.0, 7.5]}
+    water: {preset: {choice: [I, 3C]}, turbidity: 2.0}
+    legs:
+      - {position: [1.0, {uniform: [-2.0, 2.0]}, 5.0], yaw_deg: {normal: {mean: 0.0, std: 30.0}}}
+  )");
+  std::set<int> lamps;
+  std::set<std::string> presets;
+  int shadows_on = 0;
+  constexpr int kN = 2000;
+  for (int seed = 0; seed < kN; ++seed) {
+    const Config c = s.Sample(static_cast<std::uint64_t>(seed));
+    lamps.insert(c.lamps);
+    presets.insert(c.water.preset);
+    shadows_on += c.shadows ? 1 : 0;
+    EXPECT_GE(c.depth_m, 5.0);
+    EXPECT_LT(c.depth_m, 7.5);
+    EXPECT_EQ(c.water.turbidity, 2.0);
+    ASSERT_EQ(c.legs.size(), 1u);
+    EXPECT_EQ(c.legs[0].position.x(), 1.0);
+    EXPECT_GE(c.legs[0].position.y(), -2.0);
+    EXPECT_LE(c.legs[0].position.y(), 2.0);
+    EXPECT_EQ(c.legs[0].position.z(), 5.0);
+    EXPECT_LE(std::abs(c.legs[0].yaw_deg), 180.0);  // normal draws clipped to the rule
+  }
+  EXPECT_EQ(lamps, (std::set<int>{1, 2, 3}));
+  EXPECT_EQ(presets, (std::set<std::string>{"I", "3C"}));
+  // Binomial(2000, 0.5): mean 1000, sigma 22.4; 5 sigma (112) is a false alarm once in ~3.5e6 runs.
+  EXPECT_NEAR(shadows_on, kN / 2.0, 112);
+}
+
+TEST(Sampling, SameSeedSameConfigAndAddingAKeyShiftsNoOther) {
+  const auto a = Parse("depth_m: {uniform: [1, 100]}\nlamps: {int: [0, 8]}");
+  const auto b = Parse("depth_m: {uniform: [1, 100]}\nlamps: {int: [0, 8]}\nwater: {turbidity: {uniform: [0.5, 2]}}");
+  for (std::uint64_t seed : {0ULL, 1ULL, 77ULL, 123456789ULL}) {
+    const Config x = a.Sample(seed), y = a.Sample(seed), z = b.Sample(seed);
+    EXPECT_EQ(x.depth_m, y.depth_m);  // bit for bit
+    EXPECT_EQ(x.lamps, y.lamps);
+    EXPECT_EQ(x.depth_m, z.depth_m);  // the new key has its own generator
+    EXPECT_EQ(x.lamps, z.lamps);
+  }
+  EXPECT_NE(a.Sample(0).depth_m, a.Sample(1).depth_m);
+}
+
+TEST(Sampling, DrawsAreUniformOverTheRange) {
+  // Mean of N uniform draws on [0, 1]: sigma = 1 / sqrt(12 N) = 0.0029 for N = 10000; 5 sigma.
+  const auto s = Parse("water: {turbidity: {uniform: [1.0, 2.0]}}");
+  double sum = 0;
+  constexpr int kN = 10000;
+  for (int i = 0; i < kN; ++i) sum += s.Sample(static_cast<std::uint64_t>(i)).water.turbidity - 1.0;
+  EXPECT_NEAR(sum / kN, 0.5, 5 * 0.0029);
+}
+
+TEST(Sampling, KeySeedIsSplitMixOfTheSeedAndThePathHash) {
+  EXPECT_NE(uc::KeySeed(1, "a.b"), uc::KeySeed(1, "a.c"));
+  EXPECT_NE(uc::KeySeed(1, "a.b"), uc::KeySeed(2, "a.b"));
+  // SplitMix64's first output for state 0 (published reference value).
+  EXPECT_EQ(uc::SplitMix64{0}.Next(), 0xE220A8397B1DCDAFULL);
+}
+
+TEST(Sampling, BadDistributionsAreNamedWithFileKeyValueAndRule) {
+  EXPECT_EQ(ErrorOf("depth_m: {uniform: [0.5, 20]}"),
+            "s.yaml: depth_m = {uniform: [0.5, 20]}: the distribution reaches 0.5, which must be in [1, 1000]");
+  EXPECT_EQ(ErrorOf("depth_m: {uniform: [20, 5]}"), "s.yaml: depth_m.uniform = [20, 5]: empty range: lo > hi");
+  EXPECT_EQ(ErrorOf("lamps: {uniform: [1, 3]}"),
+            "s.yaml: lamps.uniform = [1, 3]: a int field takes {int: [lo, hi]} or {choice: [...]}");
+  EXPECT_EQ(ErrorOf("water: {preset: {choice: [I, IX]}}"),
+            "s.yaml: water.preset = {choice: [I, IX]}: the distribution reaches IX, which must be one of {I, II, 3C}");
+  EXPECT_EQ(ErrorOf("depth_m: {normal: {mean: 5}}"), "s.yaml: depth_m.normal = {mean: 5}: needs mean and std");
+  EXPECT_EQ(ErrorOf("depth_m: {normal: {mean: 5, std: -1}}"), "s.yaml: depth_m.normal.std = -1: must be >= 0");
+  EXPECT_EQ(ErrorOf("depht_m: {uniform: [2, 3]}").rfind("s.yaml: depht_m = 2: unknown key", 0), 0u);
+  EXPECT_EQ(ErrorOf("water: {uniform: [2, 3]}"),
+            "s.yaml: water = {uniform: [2, 3]}: a distribution stands for one value, not a mapping");
+  EXPECT_EQ(ErrorOf("legs: [{yaw_deg: {int: [0, 400]}}]"),
+            "s.yaml: legs[0].yaw_deg = {int: [0, 400]}: the distribution reaches 400, which must be in [-180, 180]");
+  EXPECT_EQ(ErrorOf("depth_m: {uniform: [2, .nan]}"), "s.yaml: depth_m.uniform[1] = .nan: must be finite");
+  EXPECT_EQ(ErrorOf("[1, 2]"), "s.yaml: [1, 2]: must be a mapping of config keys");
+}
