@@ -25,10 +25,17 @@ control::PoseSetpoint mission_setpoint(const scene::Scenario& scenario, double t
   if (wps.empty())
     return control::PoseSetpoint::FromPositionYaw(scenario.vehicle.initial_position,
                                                   scenario.vehicle.initial_rpy_deg.z() * kDeg);
-  double end = 0.0;
+  double begin = 0.0;
+  Eigen::Vector3d from = scenario.vehicle.initial_position;
   for (const auto& w : wps) {
-    end += w.hold_s;
-    if (t < end) return control::PoseSetpoint::FromPositionYaw(w.position, w.yaw_deg * kDeg);
+    if (t < begin + w.hold_s) {
+      const Eigen::Vector3d leg = w.position - from;
+      const double travelled = scenario.mission.speed_mps * (t - begin), length = leg.norm();
+      const Eigen::Vector3d p = travelled >= length ? w.position : Eigen::Vector3d(from + leg * (travelled / length));
+      return control::PoseSetpoint::FromPositionYaw(p, w.yaw_deg * kDeg);
+    }
+    begin += w.hold_s;
+    from = w.position;
   }
   return control::PoseSetpoint::FromPositionYaw(wps.back().position, wps.back().yaw_deg * kDeg);
 }

@@ -35,13 +35,20 @@ Scenario short_run() {
 
 }  // namespace
 
-TEST(ScenarioRun, MissionHoldsEachWaypointForItsTime) {
-  const Scenario s = short_run();  // waypoints held 4, 8, 7 and 11 s
-  EXPECT_EQ(unav::sim::mission_setpoint(s, 0.0).p_W, Eigen::Vector3d(0.0, 0.0, 8.35));
-  EXPECT_EQ(unav::sim::mission_setpoint(s, 3.99).p_W, Eigen::Vector3d(0.0, 0.0, 8.35));
-  EXPECT_EQ(unav::sim::mission_setpoint(s, 4.0).p_W, Eigen::Vector3d(7.0, 0.0, 8.35));
-  EXPECT_EQ(unav::sim::mission_setpoint(s, 12.5).p_W, Eigen::Vector3d(11.0, -4.0, 8.35));
-  EXPECT_EQ(unav::sim::mission_setpoint(s, 99.0).p_W, Eigen::Vector3d(20.0, -4.0, 8.35));  // the last, held
+TEST(ScenarioRun, MissionTravelsEachLegAtItsSpeedThenHolds) {
+  Scenario s = short_run();
+  s.mission.speed_mps = 0.5;
+  s.mission.waypoints = {{Eigen::Vector3d(0.0, 0.0, 8.35), 0.0, 4.0}, {Eigen::Vector3d(4.0, 0.0, 8.35), 90.0, 10.0}};
+  const auto at = [&](double t) { return unav::sim::mission_setpoint(s, t).p_W; };
+  EXPECT_TRUE(at(0.0).isApprox(Eigen::Vector3d(-1.5, 0.0, 8.35)));  // from the start (-1.5, 0, 8.35)
+  EXPECT_TRUE(at(1.0).isApprox(Eigen::Vector3d(-1.0, 0.0, 8.35)));  // 0.5 m/s
+  EXPECT_EQ(at(3.5), Eigen::Vector3d(0.0, 0.0, 8.35));              // reached after 3 s, held
+  EXPECT_TRUE(at(6.0).isApprox(Eigen::Vector3d(1.0, 0.0, 8.35)));   // the second leg began at 4 s
+  EXPECT_EQ(at(13.0), Eigen::Vector3d(4.0, 0.0, 8.35));
+  EXPECT_EQ(at(99.0), Eigen::Vector3d(4.0, 0.0, 8.35));  // the last, held
+  EXPECT_NEAR(unav::sim::mission_setpoint(s, 5.0).q_WB.angularDistance(
+                  Eigen::Quaterniond(Eigen::AngleAxisd(M_PI / 2, Eigen::Vector3d::UnitZ()))),
+              0.0, 1e-12);
   Scenario hover = s;
   hover.mission.waypoints.clear();
   EXPECT_EQ(unav::sim::mission_setpoint(hover, 3.0).p_W, s.vehicle.initial_position);

@@ -85,7 +85,8 @@ struct ScenarioCameras {
   }
 };
 
-/// A pose the controller holds for `hold_s` seconds (world NED, heading).
+/// A waypoint: the setpoint travels to it from the previous one (or the start) at the mission's
+/// speed, then stays on it until `hold_s` seconds after the leg began (world NED, heading).
 struct ScenarioWaypoint {
   Eigen::Vector3d position{0.0, 0.0, 0.0};
   double yaw_deg = 0.0;
@@ -96,20 +97,22 @@ struct ScenarioWaypoint {
     using unav::common::Field;
     a->Visit(Field("position", &position).Range(-1e5, 1e5).Unit("m").Doc("setpoint, world NED"));
     a->Visit(Field("yaw_deg", &yaw_deg).Range(-360.0, 360.0).Unit("deg").Doc("heading setpoint"));
-    a->Visit(Field("hold_s", &hold_s).Above(0.0).Unit("s").Doc("time this setpoint is held"));
+    a->Visit(Field("hold_s", &hold_s).Above(0.0).Unit("s").Doc("time of this leg: travel, then hold"));
   }
 };
 
-/// What the vehicle does: the waypoints in order (each held for its hold_s), then the last one
-/// (or the initial pose) until duration_s.
+/// What the vehicle does: the waypoints in order (each leg hold_s long: the setpoint travels at
+/// speed_mps, then holds), then the last one (or the initial pose) until duration_s.
 struct ScenarioMission {
   double duration_s = 10.0;
+  double speed_mps = 0.5;
   std::vector<ScenarioWaypoint> waypoints;
 
   template <class Archive>
   void Serialize(Archive* a) {
     using unav::common::Field;
     a->Visit(Field("duration_s", &duration_s).Above(0.0).Max(1e6).Unit("s").Doc("simulated time of the run"));
+    a->Visit(Field("speed_mps", &speed_mps).Above(0.0).Max(10.0).Unit("m/s").Doc("setpoint speed along a leg"));
     a->Visit(Field("waypoints", &waypoints).Doc("setpoints flown in order"));
   }
 };

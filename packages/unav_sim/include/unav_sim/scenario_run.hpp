@@ -1,6 +1,7 @@
 // A scenario run in process (`unav run SCENARIO.yaml --in-process`): the Episode built from the
-// scenario by the one builder flies its mission (each waypoint held for its hold_s, then the last
-// one, until mission.duration_s), renders every camera at cameras.rate_hz and writes
+// scenario by the one builder flies its mission (leg by leg: the setpoint travels to the waypoint
+// at mission.speed_mps and holds it until the leg's hold_s is over; then the last waypoint until
+// mission.duration_s), renders every camera at cameras.rate_hz and writes
 //   OUT/scenario.yaml          the concrete scenario (seed drawn, paths resolved)
 //   OUT/ground_truth.tum       base_link_frd in world_ned every control period (TUM: t x y z qx qy qz qw)
 //   OUT/<camera>/<t_ns>.png    rgb8 frames, named by their simulated time in nanoseconds
