@@ -28,7 +28,7 @@ FLOORS = {
     "unav_physics": 2, "unav_scene": 2,
     # floor 3: capabilities (DDS-free cores + their thin nodes)
     "unav_renderer": 3, "unav_control": 3, "unav_localization": 3, "unav_evaluation": 3,
-    "unav_datagen": 3,
+    "unav_datagen": 3, "unav_autopilot": 3,
     # floor 4: in-process composition of capabilities (episode, environment core)
     "unav_sim": 4,
     # floor 5: what embeds the composition: the Gymnasium binding, the planners (whose tests fly
@@ -39,8 +39,9 @@ FLOORS = {
     "unav_system_tests": 6, "unav_fuzz": 6,
 }
 # Allowed arrows within one floor (a capability reusing another's DDS-free core).
-# The physics server node reads the world file (seabed, current) through unav_scene; the physics
-# core itself does not (its CMake target links only unav_common).
+# The plant builder of a scenario (unav_physics_scenario: the world's seabed and current) and the
+# physics server node read the scene through unav_scene; the physics model (target unav_physics)
+# links only unav_common.
 SAME_FLOOR_OK = {("unav_physics", "unav_scene")}
 # Known violations being removed, printed as warnings with what removes them. Do not add to this
 # list: fix the arrow instead.
@@ -50,7 +51,7 @@ PENDING = {}
 FRAMEWORK = {"unav_runtime", "unav_introspection", "unav_launch", "unav_bag", "unav_cli", "unav_examples", "unav_common",
              "unav_cmake", "unav_resources"}
 CAPABILITIES = {"unav_physics", "unav_scene", "unav_renderer", "unav_control", "unav_localization",
-                "unav_evaluation", "unav_datagen", "unav_sim", "unav_gym", "unav_planning"}
+                "unav_evaluation", "unav_datagen", "unav_sim", "unav_gym", "unav_planning", "unav_autopilot"}
 # Headers a DDS-free core must never include.
 FORBIDDEN_IN_CORE = re.compile(
     r'#\s*include\s*[<"](unav_runtime/|unav_launch/|unav_introspection/|fastdds/|fastrtps/|fastcdr/|'
