@@ -83,6 +83,12 @@ ArduSubBridge::ArduSubBridge(const unav::NodeOptions& options) : Node("ardusub_b
 }
 
 ArduSubBridge::~ArduSubBridge() {
+  const BackendStats& s = backend_->stats();
+  logger()->info(
+      "{} packets: {} frames, {} physics steps ({:.3f} s), {} repeats, {} restarts, {} gaps, {} dropped; "
+      "handle() p50 {:.1f} us, p99 {:.1f} us",
+      s.packets, s.frames, s.steps, backend_->simulator().time(), s.repeats, s.resets, s.gaps, s.dropped_total(),
+      handle_us_percentile(0.5), handle_us_percentile(0.99));
   if (fd_ >= 0) ::close(fd_);
 }
 

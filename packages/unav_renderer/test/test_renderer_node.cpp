@@ -222,3 +222,34 @@ TEST(UnderwaterRendererNode, FreeRunningRendersSuccessiveFramesAtOnceInOrder) {
   }
   EXPECT_NE(images[0].data(), images[n - 1].data());  // 1.25 m apart: the poses were applied
 }
+
+// `scenario:=FILE` gives the renderer its part of a scenario (world, water, cameras with their
+// render size, realism switches, seed), as the in-process Episode takes it: here the small down
+// camera of small_cameras() rendered at the scenario's 40 x 24.
+TEST(UnderwaterRendererNode, TakesItsPartOfAScenario) {
+  const std::string scenario = ::testing::TempDir() + "renderer_scenario.yaml";
+  std::ofstream(scenario) << "world: " << UNAV_REPO_ROOT << "/worlds/pipe_inspection/world.yaml\nwater: 3C\n"
+                          << "cameras: {config: " << small_cameras() << ", names: [down], width: 40, height: 24}\n"
+                          << "render: {noise: false, marine_snow: false}\n";
+  const std::string scenario_arg = "scenario:=" + scenario;
+  std::vector<const char*> argv = {"underwater_renderer", "--ros-args", "-p", scenario_arg.c_str(), "-p",
+                                   "lockstep:=true"};
+  unav::Context node_ctx{static_cast<int>(argv.size()), argv.data(), unav::testing::test_context_options()};
+  unav::renderer::UnderwaterRendererNode node{{&node_ctx}};
+  unav::Context test_ctx{unav::testing::test_context_options()};
+  unav::Node probe{"probe", {&test_ctx}};
+  auto odom_pub = probe.create_publisher<nav_msgs::msg::Odometry>("/rov/ground_truth/odom", unav::QoS::reliable());
+  std::vector<sensor_msgs::msg::Image> images;
+  auto img_sub = probe.create_subscription<sensor_msgs::msg::Image>(
+      "/rov/camera/down/image_raw", unav::QoS::reliable(),
+      [&images](const sensor_msgs::msg::Image& m) { images.push_back(m); });
+  const std::vector<unav::testing::Link> links = {make_link(*odom_pub, node), make_link(node, *img_sub)};
+  ASSERT_TRUE(unav::testing::wait_for_match({&node_ctx, &test_ctx}, links)) << unav::testing::describe(links);
+  nav_msgs::msg::Odometry o;
+  o.pose().pose().position().z(8.0);
+  odom_pub->publish(o);
+  ASSERT_TRUE(unav::testing::spin_until({&node_ctx, &test_ctx}, [&] { return !images.empty(); }));
+  EXPECT_EQ(images[0].width(), 40u);
+  EXPECT_EQ(images[0].height(), 24u);
+  EXPECT_EQ(images[0].data().size(), 40u * 24u * 3u);
+}

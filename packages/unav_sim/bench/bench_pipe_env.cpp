@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "unav_common/resources.hpp"
+#include "unav_physics/scenario_builder.hpp"
 #include "unav_sim/pipe_following_env.hpp"
 
 using namespace unav::sim;
@@ -81,6 +82,28 @@ void run(const PipeFollowingConfig& cfg, int num_envs, int steps, int contexts) 
       1e3 * (wall - d.physics_s - d.control_s - d.render_s - d.readback_s) / n, resets);
 }
 
+// reset() of one env: a new random scene (geometry upload, the plant rebuilt on its seabed and
+// current) and the first observation; median of `n`.
+void time_resets(const PipeFollowingConfig& cfg, int n) {
+  PipeFollowingEnv env(cfg);
+  std::vector<double> ms, plant_ms;
+  for (int i = 0; i < n; ++i) {
+    const auto t0 = Clock::now();
+    env.reset(static_cast<std::uint64_t>(1000 + i));
+    env.observe();
+    ms.push_back(1e3 * std::chrono::duration<double>(Clock::now() - t0).count());
+    const auto t1 = Clock::now();  // the plant alone, as reset() rebuilt it for this scene
+    const auto sim = unav::physics::build_simulator(env.episode().setup().scenario, env.episode().world(),
+                                                    env.episode().setup().simulator);
+    plant_ms.push_back(1e3 * std::chrono::duration<double>(Clock::now() - t1).count());
+  }
+  std::sort(ms.begin(), ms.end());
+  std::sort(plant_ms.begin(), plant_ms.end());
+  std::printf("reset (new %s scene + first observation): median %.2f ms, max %.2f ms over %d; of which the plant "
+              "(vehicle file, seabed grid, current): median %.2f ms\n",
+              cfg.env.scenes.c_str(), ms[ms.size() / 2], ms.back(), n, plant_ms[plant_ms.size() / 2]);
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -111,6 +134,7 @@ int main(int argc, char** argv) {
   PipeFollowingConfig cfg = load_pipe_following_config(path);
   for (const auto& [k, v] : overrides) apply_override(&cfg, k, v, "command line");
   std::printf("pipe-following env throughput (%s), expert actions, random scenes\n", path.c_str());
+  time_resets(cfg, 20);
   for (const auto& dyn : dynamics) {
     cfg.env.dynamics = dyn;
     run(cfg, 1, steps, 1);
