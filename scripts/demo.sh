@@ -7,7 +7,8 @@
 set -eo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/install_deps.sh
-bash scripts/build.sh
+# Only what the demo runs: no tests, benchmarks or fuzz targets (README command 2 builds those).
+bash scripts/build.sh -DBUILD_TESTING=OFF --packages-skip unav_fuzz unav_system_tests
 source install/setup.bash
 set -u
 OUT="${UNAV_OUT:-$PWD/out/demo}"

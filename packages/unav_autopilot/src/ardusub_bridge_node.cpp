@@ -13,19 +13,12 @@
 
 #include "unav_common/errors.hpp"
 #include "unav_common/resources.hpp"
-#include "unav_runtime/conversions.hpp"
+#include "unav_physics/vehicle.hpp"
 
 namespace unav::autopilot {
 namespace {
 
 std::string resource(const std::string& rel) { return unav::common::try_find_resource(rel).value_or(""); }
-
-void fill_header(std_msgs::msg::dds_::Header_& h, double t, const std::string& frame) {
-  const unav::Time stamp{std::llround(t * 1e9)};
-  h.stamp().sec(stamp.sec());
-  h.stamp().nanosec(stamp.nanosec());
-  h.frame_id(frame);
-}
 
 }  // namespace
 
@@ -43,8 +36,6 @@ ArduSubBridge::ArduSubBridge(const unav::NodeOptions& options) : Node("ardusub_b
   backend_ =
       std::make_unique<JsonBackend>(sc, unav::scene::load_world(sc.world), load_motor_map(p.motor_map), p.motor_map);
   publish_period_ = p.publish_period;
-  world_frame_ = p.world_frame;
-  body_frame_ = p.body_frame;
 
   in_addr addr{};
   if (::inet_pton(AF_INET, p.address.c_str(), &addr) != 1)
@@ -68,14 +59,9 @@ ArduSubBridge::ArduSubBridge(const unav::NodeOptions& options) : Node("ardusub_b
   ::getsockname(fd_, reinterpret_cast<sockaddr*>(&sa), &len);
   bound_port_ = ntohs(sa.sin_port);
 
-  clock_pub_ = create_publisher<rosgraph_msgs::msg::Clock>("/clock", unav::QoS::reliable(1));
-  odom_pub_ = create_publisher<nav_msgs::msg::Odometry>("ground_truth/odom", unav::QoS::reliable(100));
-  tf_pub_ = create_publisher<tf2_msgs::msg::TFMessage>("/tf", unav::QoS::reliable(100));
-  command_pub_ = create_publisher<unav_msgs::msg::ThrusterCommand>("autopilot/command", unav::QoS::reliable());
-  tf_.transforms().resize(1);
-  odom_.header().frame_id(world_frame_);
-  odom_.child_frame_id(body_frame_);
-  publish_state();
+  ports_ = std::make_unique<physics::VehiclePorts>(*this, physics::load_vehicle(sc.vehicle.model).sensors,
+                                                   p.world_frame, p.body_frame);
+  ports_->publish_state(backend_->simulator());
   next_publish_ = publish_period_;
   timer_ = create_wall_timer(std::chrono::milliseconds(1), [this] { drain(); });
   logger()->info("ArduPilot JSON backend on udp {}:{} (scenario {}, motor map {}); waiting for SITL", p.address,
@@ -122,37 +108,16 @@ void ArduSubBridge::drain() {
     if (handle_us_.size() < 1000000)
       handle_us_.push_back(
           static_cast<float>(std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - t0).count()));
-    const double t = backend_->simulator().time();
+    const physics::Simulator& sim = backend_->simulator();
+    ports_->publish_sensors(sim);
+    const double t = sim.time();
     if (t + 1e-9 >= next_publish_ || t + 1e-9 < next_publish_ - 2 * publish_period_) {
-      publish_state();  // (the second case: SITL restarted, time went back)
+      ports_->publish_state(sim);  // (the second case: SITL restarted, time went back)
+      ports_->publish_thruster_state(sim);
       next_publish_ = t + publish_period_;
     }
   }
   log_drops();
-}
-
-void ArduSubBridge::publish_state() {
-  const auto& sim = backend_->simulator();
-  const double t = sim.time();
-  const unav::Time stamp{std::llround(t * 1e9)};
-  clock_.clock().sec(stamp.sec());
-  clock_.clock().nanosec(stamp.nanosec());
-  clock_pub_->publish(clock_);
-  const auto& x = sim.state();
-  fill_header(odom_.header(), t, world_frame_);
-  odom_.pose().pose() = unav::to_msg(x.p_WB_W, x.q_WB);
-  odom_.twist().twist().linear() = unav::to_vector3_msg(x.v_WB_B);
-  odom_.twist().twist().angular() = unav::to_vector3_msg(x.w_WB_B);
-  odom_pub_->publish(odom_);
-  auto& tf = tf_.transforms()[0];
-  tf.header() = odom_.header();
-  tf.child_frame_id(body_frame_);
-  tf.transform().translation() = unav::to_vector3_msg(x.p_WB_W);
-  tf.transform().rotation() = odom_.pose().pose().orientation();
-  tf_pub_->publish(tf_);
-  fill_header(command_.header(), t, body_frame_);
-  command_.u(backend_->command());
-  command_pub_->publish(command_);
 }
 
 void ArduSubBridge::log_drops() {

@@ -5,10 +5,10 @@
 //
 //   UDP  <address>:<port> (default 127.0.0.1:9002): ArduPilot's servo packets in, the state out
 //        (to the sender's address and port)
-//   pub  /clock                rosgraph_msgs/Clock    reliable       every publish_period of simulated time
-//   pub  ground_truth/odom     nav_msgs/Odometry      reliable 100   (cameras, recorders, evaluators)
-//   pub  /tf                   tf2_msgs/TFMessage     reliable 100   world_frame -> body_frame
-//   pub  autopilot/command     unav_msgs/ThrusterCommand reliable    the autopilot's PWM as thruster commands
+//   pub  the physics server's vehicle topics (unav_physics/vehicle_ports.hpp): /clock,
+//        ground_truth/odom, /tf and thrusters/state every publish_period of simulated time (the
+//        autopilot's commands as thrusters/state.commanded), imu, pressure, depth, dvl, range,
+//        mag, gps as their readings come
 // Simulated time advances only with the autopilot's packets; malformed packets are counted by
 // reason and logged at most once per second. A bridge bound to a non-loopback address warns.
 #pragma once
@@ -17,12 +17,9 @@
 #include <memory>
 #include <string>
 
-#include "nav_msgs/msg/odometry.hpp"
-#include "rosgraph_msgs/msg/clock.hpp"
-#include "tf2_msgs/msg/tf_message.hpp"
 #include "unav_autopilot/ardupilot_json.hpp"
 #include "unav_common/config.hpp"
-#include "unav_msgs/msg/thruster_command.hpp"
+#include "unav_physics/vehicle_ports.hpp"
 #include "unav_runtime/runtime.hpp"
 
 namespace unav::autopilot {
@@ -71,25 +68,16 @@ class ArduSubBridge : public unav::Node {
 
  private:
   void drain();  // reads and answers every datagram waiting (bounded per call)
-  void publish_state();
   void log_drops();
 
   std::unique_ptr<JsonBackend> backend_;
   int fd_ = -1;
   int bound_port_ = 0;
   double publish_period_ = 0.02, next_publish_ = 0.0;
-  std::string world_frame_, body_frame_;
+  std::unique_ptr<physics::VehiclePorts> ports_;
   std::vector<float> handle_us_;
   std::uint64_t logged_drops_ = 0;
   std::chrono::steady_clock::time_point last_drop_log_{};
-  rosgraph_msgs::msg::Clock clock_;
-  nav_msgs::msg::Odometry odom_;
-  tf2_msgs::msg::TFMessage tf_;
-  unav_msgs::msg::ThrusterCommand command_;
-  std::shared_ptr<unav::Publisher<rosgraph_msgs::msg::Clock>> clock_pub_;
-  std::shared_ptr<unav::Publisher<nav_msgs::msg::Odometry>> odom_pub_;
-  std::shared_ptr<unav::Publisher<tf2_msgs::msg::TFMessage>> tf_pub_;
-  std::shared_ptr<unav::Publisher<unav_msgs::msg::ThrusterCommand>> command_pub_;
   std::shared_ptr<unav::Timer> timer_;
 };
 

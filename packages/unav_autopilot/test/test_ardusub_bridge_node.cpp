@@ -74,7 +74,11 @@ TEST(ArduSubBridge, AnswersServoPacketsAndPublishesTheVehicle) {
   auto odom_sub =
       probe.create_subscription<nav_msgs::msg::Odometry>("/rov/ground_truth/odom", unav::QoS::reliable(100),
                                                          [&](const nav_msgs::msg::Odometry& m) { odoms.push_back(m); });
-  ASSERT_TRUE(unav::testing::wait_for_match({node_ctx.get(), &test_ctx}, {make_link(bridge, *odom_sub)}));
+  std::vector<sensor_msgs::msg::Imu> imus;
+  auto imu_sub = probe.create_subscription<sensor_msgs::msg::Imu>(
+      "/rov/imu", unav::QoS::sensor_data(), [&](const sensor_msgs::msg::Imu& m) { imus.push_back(m); });
+  ASSERT_TRUE(unav::testing::wait_for_match({node_ctx.get(), &test_ctx},
+                                            {make_link(bridge, *odom_sub), make_link(bridge, *imu_sub)}));
 
   Peer peer(bridge.bound_port());
   std::vector<std::uint16_t> pwm(16, 1500);
@@ -106,5 +110,7 @@ TEST(ArduSubBridge, AnswersServoPacketsAndPublishesTheVehicle) {
   EXPECT_EQ(odoms.back().pose().pose().position().z(), bridge.backend().simulator().state().p_WB_W.z());
   EXPECT_NEAR(odoms.back().pose().pose().position().z(), j["position"][2].get<double>(), 1e-8);
   EXPECT_GE(odoms.size(), 40u);
+  // The vehicle's sensors as the physics server publishes them (the IMU at its configured rate).
+  EXPECT_FALSE(imus.empty());
   EXPECT_GT(bridge.handle_us_percentile(0.5), 0.0);
 }

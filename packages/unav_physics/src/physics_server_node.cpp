@@ -83,26 +83,9 @@ PhysicsServer::PhysicsServer(const unav::NodeOptions& options) : Node("physics_s
     build_from_params(p, so);
   }
   const VehicleParams vehicle = load_vehicle(p.vehicle_config);  // its sensors, to publish
-  const SensorSuiteParams& sp = vehicle.sensors;
 
   // Ports.
-  clock_pub_ = create_publisher<rosgraph_msgs::msg::Clock>("/clock", unav::QoS::reliable(1));
-  // 100 deep (5 s of lockstep barriers, ~80 kB): a consumer stalled for a while (or dropped from
-  // the lockstep) catches up on what its own reader history can hold.
-  odom_pub_ = create_publisher<nav_msgs::msg::Odometry>("ground_truth/odom", unav::QoS::reliable(100));
-  tf_pub_ = create_publisher<tf2_msgs::msg::TFMessage>("/tf", unav::QoS::reliable(100));
-  tf_.transforms().resize(1);
-  thruster_pub_ = create_publisher<unav_msgs::msg::ThrusterState>("thrusters/state", unav::QoS::reliable());
-  if (sp.imu.enabled) imu_pub_ = create_publisher<sensor_msgs::msg::Imu>("imu", unav::QoS::sensor_data());
-  if (sp.pressure.enabled) {
-    pressure_pub_ = create_publisher<sensor_msgs::msg::FluidPressure>("pressure", unav::QoS::sensor_data());
-    depth_pub_ = create_publisher<geometry_msgs::msg::PointStamped>("depth", unav::QoS::sensor_data());
-  }
-  if (sp.dvl.enabled) dvl_pub_ = create_publisher<unav_msgs::msg::Dvl>("dvl", unav::QoS::sensor_data());
-  if (sp.altimeter.enabled) range_pub_ = create_publisher<sensor_msgs::msg::Range>("range", unav::QoS::sensor_data());
-  if (sp.magnetometer.enabled)
-    mag_pub_ = create_publisher<sensor_msgs::msg::MagneticField>("mag", unav::QoS::sensor_data());
-  if (sp.gps.enabled) gps_pub_ = create_publisher<sensor_msgs::msg::NavSatFix>("gps", unav::QoS::sensor_data());
+  ports_ = std::make_unique<VehiclePorts>(*this, vehicle.sensors, world_frame_, body_frame_);
   command_sub_ = create_subscription<unav_msgs::msg::ThrusterCommand>(
       "thrusters/command", unav::QoS::reliable(), [this](const unav_msgs::msg::ThrusterCommand& m) { on_command(m); });
   reset_sub_ = create_subscription<geometry_msgs::msg::Pose>(
@@ -113,10 +96,6 @@ PhysicsServer::PhysicsServer(const unav::NodeOptions& options) : Node("physics_s
     drop_sub_ = create_subscription<std_msgs::msg::String>(
         "/lockstep/drop", unav::QoS::reliable(), [this](const std_msgs::msg::String& m) { on_drop(m.data()); });
   }
-
-  odom_.header().frame_id(world_frame_);
-  odom_.child_frame_id(body_frame_);
-  thruster_state_.header().frame_id(body_frame_);
 
   publish_state();
   if (lockstep_) {
@@ -130,13 +109,6 @@ PhysicsServer::PhysicsServer(const unav::NodeOptions& options) : Node("physics_s
   logger()->info("{} ({} thrusters), {} at {:.0f} Hz ({}), {}{}", vehicle.name, vehicle.thrusters.size(), p.mode,
                  1.0 / so.dt, to_string(so.integrator), lockstep_ ? "barrier every " : "real_time_factor ",
                  lockstep_ ? lockstep_period_ : real_time_factor_);
-}
-
-void PhysicsServer::fill_header(std_msgs::msg::dds_::Header_& h, double t, const std::string& frame) const {
-  const unav::Time stamp{std::llround(t * 1e9)};
-  h.stamp().sec(stamp.sec());
-  h.stamp().nanosec(stamp.nanosec());
-  h.frame_id(frame);
 }
 
 int64_t PhysicsServer::barrier_ns() const { return std::llround(barrier_t_ * 1e9); }
@@ -255,117 +227,14 @@ void PhysicsServer::finish() {
     logger()->warn("lockstep: the last state was not acked within 10 s by:{}", missing_with_acks());
   }
   const eprosima::fastrtps::Duration_t wait(2, 0);
-  for (auto* w : {odom_pub_->writer(), tf_pub_->writer(), clock_pub_->writer()}) w->wait_for_acknowledgments(wait);
+  for (auto* w : ports_->state_writers()) w->wait_for_acknowledgments(wait);
   finishing_ = false;
   context().shutdown();
 }
 
-void PhysicsServer::publish_state() {
-  const double t = sim_->time();
-  const unav::Time stamp{std::llround(t * 1e9)};
-  clock_.clock().sec(stamp.sec());
-  clock_.clock().nanosec(stamp.nanosec());
-  clock_pub_->publish(clock_);
-  const RigidBodyState& x = sim_->state();
-  fill_header(odom_.header(), t, world_frame_);
-  odom_.pose().pose() = unav::to_msg(x.p_WB_W, x.q_WB);
-  odom_.twist().twist().linear() = unav::to_vector3_msg(x.v_WB_B);
-  odom_.twist().twist().angular() = unav::to_vector3_msg(x.w_WB_B);
-  odom_pub_->publish(odom_);
-  // The vehicle on /tf (world_frame -> body_frame), for RViz, Foxglove and tf2 users.
-  auto& tf = tf_.transforms()[0];
-  tf.header() = odom_.header();
-  tf.child_frame_id(body_frame_);
-  tf.transform().translation() = unav::to_vector3_msg(x.p_WB_W);
-  tf.transform().rotation() = odom_.pose().pose().orientation();
-  tf_pub_->publish(tf_);
-}
-
-void PhysicsServer::publish_thruster_state() {
-  const auto& bank = sim_->thrusters();
-  const int n = bank.size();
-  thruster_state_.commanded().resize(static_cast<size_t>(n));
-  thruster_state_.filtered().resize(static_cast<size_t>(n));
-  thruster_state_.thrust().resize(static_cast<size_t>(n));
-  for (int i = 0; i < n; ++i) {
-    thruster_state_.commanded()[static_cast<size_t>(i)] = sim_->command()[i];
-    thruster_state_.filtered()[static_cast<size_t>(i)] = bank.filtered_command()[i];
-    thruster_state_.thrust()[static_cast<size_t>(i)] = bank.thrust()[i];
-  }
-  fill_header(thruster_state_.header(), sim_->time(), body_frame_);
-  thruster_pub_->publish(thruster_state_);
-}
-
-void PhysicsServer::publish_sensors() {
-  const SensorReadings& r = sim_->sensors();
-  if (imu_pub_ && r.imu.valid && r.imu.seq != last_seq_[0]) {
-    last_seq_[0] = r.imu.seq;
-    sensor_msgs::msg::Imu m;
-    fill_header(m.header(), r.imu.stamp, body_frame_);
-    m.orientation().x(r.imu.q_WB.x());
-    m.orientation().y(r.imu.q_WB.y());
-    m.orientation().z(r.imu.q_WB.z());
-    m.orientation().w(r.imu.q_WB.w());
-    m.angular_velocity().x(r.imu.angular_rate_B.x());
-    m.angular_velocity().y(r.imu.angular_rate_B.y());
-    m.angular_velocity().z(r.imu.angular_rate_B.z());
-    m.linear_acceleration().x(r.imu.specific_force_B.x());
-    m.linear_acceleration().y(r.imu.specific_force_B.y());
-    m.linear_acceleration().z(r.imu.specific_force_B.z());
-    imu_pub_->publish(m);
-  }
-  if (pressure_pub_ && r.pressure.valid && r.pressure.seq != last_seq_[1]) {
-    last_seq_[1] = r.pressure.seq;
-    sensor_msgs::msg::FluidPressure p;
-    fill_header(p.header(), r.pressure.stamp, body_frame_);
-    p.fluid_pressure(r.pressure.pressure_pa);
-    pressure_pub_->publish(p);
-    geometry_msgs::msg::PointStamped d;
-    fill_header(d.header(), r.pressure.stamp, world_frame_);
-    d.point().z(r.pressure.depth_m);
-    depth_pub_->publish(d);
-  }
-  if (dvl_pub_ && r.dvl.seq != last_seq_[2] && r.dvl.seq > 0) {
-    last_seq_[2] = r.dvl.seq;
-    unav_msgs::msg::Dvl d;
-    fill_header(d.header(), r.dvl.stamp, body_frame_);
-    d.velocity().x(r.dvl.velocity_B.x());
-    d.velocity().y(r.dvl.velocity_B.y());
-    d.velocity().z(r.dvl.velocity_B.z());
-    d.altitude(r.dvl.altitude_m);
-    d.valid(r.dvl.valid);
-    dvl_pub_->publish(d);
-  }
-  if (range_pub_ && r.altimeter.seq != last_seq_[3] && r.altimeter.seq > 0) {
-    last_seq_[3] = r.altimeter.seq;
-    sensor_msgs::msg::Range m;
-    fill_header(m.header(), r.altimeter.stamp, body_frame_);
-    m.radiation_type(0);  // ULTRASOUND
-    m.field_of_view(0.1f);
-    m.range(r.altimeter.valid ? static_cast<float>(r.altimeter.range_m) : std::numeric_limits<float>::infinity());
-    range_pub_->publish(m);
-  }
-  if (mag_pub_ && r.magnetometer.valid && r.magnetometer.seq != last_seq_[4]) {
-    last_seq_[4] = r.magnetometer.seq;
-    sensor_msgs::msg::MagneticField m;
-    fill_header(m.header(), r.magnetometer.stamp, body_frame_);
-    m.magnetic_field().x(r.magnetometer.field_B.x());
-    m.magnetic_field().y(r.magnetometer.field_B.y());
-    m.magnetic_field().z(r.magnetometer.field_B.z());
-    mag_pub_->publish(m);
-  }
-  if (gps_pub_ && r.gps.seq != last_seq_[5] && r.gps.seq > 0) {
-    last_seq_[5] = r.gps.seq;
-    sensor_msgs::msg::NavSatFix m;
-    fill_header(m.header(), r.gps.stamp, "gps");
-    m.status().status(r.gps.valid ? 0 : -1);  // STATUS_FIX / STATUS_NO_FIX
-    m.status().service(1);                    // SERVICE_GPS
-    m.latitude(r.gps.latitude_deg);
-    m.longitude(r.gps.longitude_deg);
-    m.altitude(r.gps.altitude_m);
-    gps_pub_->publish(m);
-  }
-}
+void PhysicsServer::publish_state() { ports_->publish_state(*sim_); }
+void PhysicsServer::publish_thruster_state() { ports_->publish_thruster_state(*sim_); }
+void PhysicsServer::publish_sensors() { ports_->publish_sensors(*sim_); }
 
 void PhysicsServer::build_from_params(const PhysicsServerParams& p, const SimulatorOptions& so) {
   const VehicleParams vehicle = load_vehicle(p.vehicle_config);

@@ -63,6 +63,7 @@
 #include "unav_msgs/msg/thruster_state.hpp"
 #include "unav_physics/scenario_builder.hpp"
 #include "unav_physics/simulator.hpp"
+#include "unav_physics/vehicle_ports.hpp"
 #include "unav_runtime/lockstep.hpp"
 #include "unav_runtime/runtime.hpp"
 #include "unav_runtime/validation.hpp"
@@ -164,7 +165,6 @@ class PhysicsServer : public unav::Node {
   void publish_state();
   void publish_sensors();
   void publish_thruster_state();
-  void fill_header(std_msgs::msg::dds_::Header_& h, double t, const std::string& frame) const;
 
   std::unique_ptr<Simulator> sim_;
   std::string world_frame_, body_frame_;
@@ -187,19 +187,8 @@ class PhysicsServer : public unav::Node {
   double finish_started_ = 0.0;  ///< wall time [s] the finishing began
   void finish();
   std::uint64_t rejected_logged_ = 0;
-  std::uint64_t last_seq_[6] = {0, 0, 0, 0, 0, 0};
 
-  std::shared_ptr<unav::Publisher<rosgraph_msgs::msg::Clock>> clock_pub_;
-  std::shared_ptr<unav::Publisher<nav_msgs::msg::Odometry>> odom_pub_;
-  std::shared_ptr<unav::Publisher<tf2_msgs::msg::TFMessage>> tf_pub_;
-  std::shared_ptr<unav::Publisher<unav_msgs::msg::ThrusterState>> thruster_pub_;
-  std::shared_ptr<unav::Publisher<sensor_msgs::msg::Imu>> imu_pub_;
-  std::shared_ptr<unav::Publisher<sensor_msgs::msg::FluidPressure>> pressure_pub_;
-  std::shared_ptr<unav::Publisher<geometry_msgs::msg::PointStamped>> depth_pub_;
-  std::shared_ptr<unav::Publisher<unav_msgs::msg::Dvl>> dvl_pub_;
-  std::shared_ptr<unav::Publisher<sensor_msgs::msg::Range>> range_pub_;
-  std::shared_ptr<unav::Publisher<sensor_msgs::msg::MagneticField>> mag_pub_;
-  std::shared_ptr<unav::Publisher<sensor_msgs::msg::NavSatFix>> gps_pub_;
+  std::unique_ptr<VehiclePorts> ports_;
   std::shared_ptr<unav::Subscription<unav_msgs::msg::ThrusterCommand>> command_sub_;
   std::shared_ptr<unav::Subscription<unav_msgs::msg::LockstepAck>> ack_sub_;
   std::shared_ptr<unav::Subscription<std_msgs::msg::String>> drop_sub_;
@@ -207,12 +196,6 @@ class PhysicsServer : public unav::Node {
   unav::RejectionCounter rejections_{logger()};
   int episodes_ = 1;
   std::shared_ptr<unav::Timer> timer_;
-
-  // Reused messages (no allocation per publish after the first).
-  nav_msgs::msg::Odometry odom_;
-  tf2_msgs::msg::TFMessage tf_;
-  rosgraph_msgs::msg::Clock clock_;
-  unav_msgs::msg::ThrusterState thruster_state_;
 };
 
 }  // namespace unav::physics

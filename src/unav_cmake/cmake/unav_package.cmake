@@ -35,6 +35,11 @@ macro(unav_package)
   endif()
   include(GNUInstallDirs)
   option(BUILD_TESTING "Build the tests" ON)
+  # Benchmarks come with the tests (README command 2), not with the demo (command 1, which builds
+  # with -DBUILD_TESTING=OFF); -DUNAV_BUILD_BENCHMARKS=ON builds them without the tests.
+  if(NOT DEFINED UNAV_BUILD_BENCHMARKS)
+    set(UNAV_BUILD_BENCHMARKS ${BUILD_TESTING})
+  endif()
   if(BUILD_TESTING)
     enable_testing()
     find_package(GTest REQUIRED)

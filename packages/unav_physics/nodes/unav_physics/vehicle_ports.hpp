@@ -1,0 +1,67 @@
+// The topics a simulated vehicle publishes (DDS adapter, node code): /clock, ground_truth/odom and
+// /tf of its state, thrusters/state, and its sensors (imu, pressure + depth, dvl, range, mag, gps)
+// as their readings come. One set of ports for every node that owns a vehicle's simulator: the
+// physics server and the autopilot bridge publish alike, so every consumer runs beside either.
+#pragma once
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "geometry_msgs/msg/point_stamped.hpp"
+#include "nav_msgs/msg/odometry.hpp"
+#include "rosgraph_msgs/msg/clock.hpp"
+#include "sensor_msgs/msg/fluid_pressure.hpp"
+#include "sensor_msgs/msg/imu.hpp"
+#include "sensor_msgs/msg/magnetic_field.hpp"
+#include "sensor_msgs/msg/nav_sat_fix.hpp"
+#include "sensor_msgs/msg/range.hpp"
+#include "tf2_msgs/msg/tf_message.hpp"
+#include "unav_msgs/msg/dvl.hpp"
+#include "unav_msgs/msg/thruster_state.hpp"
+#include "unav_physics/simulator.hpp"
+#include "unav_runtime/runtime.hpp"
+
+namespace eprosima::fastdds::dds {
+class DataWriter;
+}
+
+namespace unav::physics {
+
+class VehiclePorts {
+ public:
+  /// Creates the publishers on `node` (names relative to its namespace; /clock and /tf absolute);
+  /// a sensor's topic only when the vehicle has it enabled.
+  VehiclePorts(unav::Node& node, const SensorSuiteParams& sensors, std::string world_frame, std::string body_frame);
+  /// /clock, ground_truth/odom (world_frame -> body_frame), /tf at the simulator's time.
+  void publish_state(const Simulator& sim);
+  void publish_thruster_state(const Simulator& sim);
+  /// The readings that are new since the last call.
+  void publish_sensors(const Simulator& sim);
+  /// The writers of publish_state() (to wait for their acknowledgments before exit).
+  std::vector<eprosima::fastdds::dds::DataWriter*> state_writers() const;
+
+ private:
+  void fill_header(std_msgs::msg::dds_::Header_& h, double t, const std::string& frame) const;
+
+  std::string world_frame_, body_frame_;
+  std::uint64_t last_seq_[6] = {0, 0, 0, 0, 0, 0};
+  std::shared_ptr<unav::Publisher<rosgraph_msgs::msg::Clock>> clock_pub_;
+  std::shared_ptr<unav::Publisher<nav_msgs::msg::Odometry>> odom_pub_;
+  std::shared_ptr<unav::Publisher<tf2_msgs::msg::TFMessage>> tf_pub_;
+  std::shared_ptr<unav::Publisher<unav_msgs::msg::ThrusterState>> thruster_pub_;
+  std::shared_ptr<unav::Publisher<sensor_msgs::msg::Imu>> imu_pub_;
+  std::shared_ptr<unav::Publisher<sensor_msgs::msg::FluidPressure>> pressure_pub_;
+  std::shared_ptr<unav::Publisher<geometry_msgs::msg::PointStamped>> depth_pub_;
+  std::shared_ptr<unav::Publisher<unav_msgs::msg::Dvl>> dvl_pub_;
+  std::shared_ptr<unav::Publisher<sensor_msgs::msg::Range>> range_pub_;
+  std::shared_ptr<unav::Publisher<sensor_msgs::msg::MagneticField>> mag_pub_;
+  std::shared_ptr<unav::Publisher<sensor_msgs::msg::NavSatFix>> gps_pub_;
+  // Reused messages (no allocation per publish after the first).
+  nav_msgs::msg::Odometry odom_;
+  tf2_msgs::msg::TFMessage tf_;
+  rosgraph_msgs::msg::Clock clock_;
+  unav_msgs::msg::ThrusterState thruster_state_;
+};
+
+}  // namespace unav::physics
