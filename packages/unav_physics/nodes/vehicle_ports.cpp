@@ -10,7 +10,7 @@
 
 namespace unav::physics {
 
-VehiclePorts::VehiclePorts(unav::Node& node, const SensorSuiteParams& sp, std::string world_frame,
+VehiclePorts::VehiclePorts(unav::Node& node, const SensorSuiteParams& sensors, std::string world_frame,
                            std::string body_frame)
     : world_frame_(std::move(world_frame)), body_frame_(std::move(body_frame)) {
   clock_pub_ = node.create_publisher<rosgraph_msgs::msg::Clock>("/clock", unav::QoS::reliable(1));
@@ -20,17 +20,18 @@ VehiclePorts::VehiclePorts(unav::Node& node, const SensorSuiteParams& sp, std::s
   tf_pub_ = node.create_publisher<tf2_msgs::msg::TFMessage>("/tf", unav::QoS::reliable(100));
   tf_.transforms().resize(1);
   thruster_pub_ = node.create_publisher<unav_msgs::msg::ThrusterState>("thrusters/state", unav::QoS::reliable());
-  if (sp.imu.enabled) imu_pub_ = node.create_publisher<sensor_msgs::msg::Imu>("imu", unav::QoS::sensor_data());
-  if (sp.pressure.enabled) {
+  if (sensors.imu.enabled) imu_pub_ = node.create_publisher<sensor_msgs::msg::Imu>("imu", unav::QoS::sensor_data());
+  if (sensors.pressure.enabled) {
     pressure_pub_ = node.create_publisher<sensor_msgs::msg::FluidPressure>("pressure", unav::QoS::sensor_data());
     depth_pub_ = node.create_publisher<geometry_msgs::msg::PointStamped>("depth", unav::QoS::sensor_data());
   }
-  if (sp.dvl.enabled) dvl_pub_ = node.create_publisher<unav_msgs::msg::Dvl>("dvl", unav::QoS::sensor_data());
-  if (sp.altimeter.enabled)
+  if (sensors.dvl.enabled) dvl_pub_ = node.create_publisher<unav_msgs::msg::Dvl>("dvl", unav::QoS::sensor_data());
+  if (sensors.altimeter.enabled)
     range_pub_ = node.create_publisher<sensor_msgs::msg::Range>("range", unav::QoS::sensor_data());
-  if (sp.magnetometer.enabled)
+  if (sensors.magnetometer.enabled)
     mag_pub_ = node.create_publisher<sensor_msgs::msg::MagneticField>("mag", unav::QoS::sensor_data());
-  if (sp.gps.enabled) gps_pub_ = node.create_publisher<sensor_msgs::msg::NavSatFix>("gps", unav::QoS::sensor_data());
+  if (sensors.gps.enabled)
+    gps_pub_ = node.create_publisher<sensor_msgs::msg::NavSatFix>("gps", unav::QoS::sensor_data());
   odom_.header().frame_id(world_frame_);
   odom_.child_frame_id(body_frame_);
   thruster_state_.header().frame_id(body_frame_);

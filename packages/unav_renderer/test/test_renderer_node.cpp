@@ -232,8 +232,8 @@ TEST(UnderwaterRendererNode, TakesItsPartOfAScenario) {
                           << "cameras: {config: " << small_cameras() << ", names: [down], width: 40, height: 24}\n"
                           << "render: {noise: false, marine_snow: false}\n";
   const std::string scenario_arg = "scenario:=" + scenario;
-  std::vector<const char*> argv = {"underwater_renderer", "--ros-args", "-p", scenario_arg.c_str(), "-p",
-                                   "lockstep:=true"};
+  std::vector<const char*> argv = {"underwater_renderer", "--ros-args", "-p",
+                                   scenario_arg.c_str(),  "-p",         "lockstep:=true"};
   unav::Context node_ctx{static_cast<int>(argv.size()), argv.data(), unav::testing::test_context_options()};
   unav::renderer::UnderwaterRendererNode node{{&node_ctx}};
   unav::Context test_ctx{unav::testing::test_context_options()};

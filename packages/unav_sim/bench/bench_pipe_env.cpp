@@ -89,7 +89,7 @@ void time_resets(const PipeFollowingConfig& cfg, int n) {
   std::vector<double> ms, plant_ms;
   for (int i = 0; i < n; ++i) {
     const auto t0 = Clock::now();
-    env.reset(static_cast<std::uint64_t>(1000 + i));
+    env.reset(1000U + static_cast<std::uint64_t>(i));
     env.observe();
     ms.push_back(1e3 * std::chrono::duration<double>(Clock::now() - t0).count());
     const auto t1 = Clock::now();  // the plant alone, as reset() rebuilt it for this scene
@@ -99,9 +99,10 @@ void time_resets(const PipeFollowingConfig& cfg, int n) {
   }
   std::sort(ms.begin(), ms.end());
   std::sort(plant_ms.begin(), plant_ms.end());
-  std::printf("reset (new %s scene + first observation): median %.2f ms, max %.2f ms over %d; of which the plant "
-              "(vehicle file, seabed grid, current): median %.2f ms\n",
-              cfg.env.scenes.c_str(), ms[ms.size() / 2], ms.back(), n, plant_ms[plant_ms.size() / 2]);
+  std::printf(
+      "reset (new %s scene + first observation): median %.2f ms, max %.2f ms over %d; of which the plant "
+      "(vehicle file, seabed grid, current): median %.2f ms\n",
+      cfg.env.scenes.c_str(), ms[ms.size() / 2], ms.back(), n, plant_ms[plant_ms.size() / 2]);
 }
 
 }  // namespace

@@ -316,7 +316,7 @@ bool ReadBool(const Reporter& r, const YAML::Node& n, const std::string& path) {
 
 std::string ReadString(const Reporter& r, const FieldSpec& s, const YAML::Node& n, const std::string& path) {
   if (!n.IsScalar()) r.Fail(path, Written(n), "must be a string");
-  const std::string v = n.Scalar();
+  const std::string& v = n.Scalar();
   CheckText(r, s, v, path, Written(n));
   return v;
 }
