@@ -33,7 +33,7 @@ int main(int argc, char** argv) {
   app.add_flag("--no-images", no_images, "write the ground truth only");
   CLI11_PARSE(app, argc, argv);
   if (!in_process) {
-    std::cerr << "unav run: only --in-process runs here; over DDS, give the same file to the nodes as "
+    std::cerr << "unav run: only --in-process runs here; over DDS: unav launch launch_scripts/scenario.launch.yaml "
                  "scenario:=FILE (see docs/scenarios.md)\n";
     return 2;
   }
