@@ -9,7 +9,6 @@
 #include <algorithm>
 #include <cerrno>
 #include <cstring>
-#include <optional>
 
 #include "unav_common/errors.hpp"
 #include "unav_common/resources.hpp"
@@ -31,8 +30,7 @@ ArduSubBridge::ArduSubBridge(const unav::NodeOptions& options) : Node("ardusub_b
     throw unav::ParameterError("node '" + name() +
                                "': 'scenario' and 'motor_map' are required (unav_resources is not installed, so "
                                "there is no default)");
-  const unav::scene::Scenario sc = unav::scene::load_scenario(
-      p.scenario, p.scenario_seed >= 0 ? std::optional<std::uint64_t>(p.scenario_seed) : std::nullopt);
+  const unav::scene::Scenario sc = unav::scene::load_scenario_param(p.scenario, p.scenario_seed);
   backend_ =
       std::make_unique<JsonBackend>(sc, unav::scene::load_world(sc.world), load_motor_map(p.motor_map), p.motor_map);
   publish_period_ = p.publish_period;

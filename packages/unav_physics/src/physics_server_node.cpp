@@ -40,8 +40,7 @@ PhysicsServer::PhysicsServer(const unav::NodeOptions& options) : Node("physics_s
   // takes it, through the same builder (unav_physics/scenario_builder.hpp).
   std::optional<unav::scene::Scenario> scenario;
   if (!p.scenario.empty()) {
-    scenario = unav::scene::load_scenario(
-        p.scenario, p.scenario_seed >= 0 ? std::optional<std::uint64_t>(p.scenario_seed) : std::nullopt);
+    scenario = unav::scene::load_scenario_param(p.scenario, p.scenario_seed);
     p.vehicle_config = scenario->vehicle.model;
     p.world = scenario->world;
     p.dt = scenario->physics.dt;

@@ -4,7 +4,6 @@
 #include <chrono>
 #include <cmath>
 #include <cstring>
-#include <optional>
 
 #include <spdlog/fmt/fmt.h>
 
@@ -57,8 +56,7 @@ UnderwaterRendererNode::UnderwaterRendererNode(const unav::NodeOptions& options)
   declare_params(&prm);
   std::vector<CameraModel> scenario_cams;
   if (!prm.scenario.empty()) {  // the renderer's part of the scenario, as the in-process Episode takes it
-    const scene::Scenario sc = scene::load_scenario(
-        prm.scenario, prm.scenario_seed >= 0 ? std::optional<std::uint64_t>(prm.scenario_seed) : std::nullopt);
+    const scene::Scenario sc = scene::load_scenario_param(prm.scenario, prm.scenario_seed);
     prm.world = sc.world;
     prm.water = sc.water;
     prm.cameras_config = sc.cameras.config;

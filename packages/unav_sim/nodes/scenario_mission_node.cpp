@@ -2,7 +2,6 @@
 
 #include <cmath>
 #include <filesystem>
-#include <optional>
 
 #include "unav_runtime/conversions.hpp"
 #include "unav_sim/scenario_run.hpp"
@@ -13,8 +12,7 @@ ScenarioMissionNode::ScenarioMissionNode(const unav::NodeOptions& options) : Nod
   ScenarioMissionParams p;
   declare_params(&p);
   if (p.scenario.empty()) throw unav::ParameterError("node '" + name() + "': parameter 'scenario' is required");
-  scenario_ = unav::scene::load_scenario(
-      p.scenario, p.scenario_seed >= 0 ? std::optional<std::uint64_t>(p.scenario_seed) : std::nullopt);
+  scenario_ = unav::scene::load_scenario_param(p.scenario, p.scenario_seed);
   if (!p.ground_truth_file.empty()) {
     const std::filesystem::path parent = std::filesystem::path(p.ground_truth_file).parent_path();
     if (!parent.empty()) std::filesystem::create_directories(parent);

@@ -9,7 +9,6 @@
 #include <atomic>
 #include <cstdio>
 #include <iostream>
-#include <optional>
 
 #include "unav_common/errors.hpp"
 #include "unav_scene/scenario.hpp"
@@ -38,8 +37,7 @@ int main(int argc, char** argv) {
     return 2;
   }
   try {
-    const unav::scene::Scenario s =
-        unav::scene::load_scenario(file, seed >= 0 ? std::optional<std::uint64_t>(seed) : std::nullopt);
+    const unav::scene::Scenario s = unav::scene::load_scenario_param(file, seed);
     if (out.empty()) out = "out/" + s.name;
     signal(SIGINT, on_signal);
     signal(SIGTERM, on_signal);

@@ -150,6 +150,8 @@ struct Scenario {
 /// ConfigError(file, key path, value, rule) on any problem: missing file, unknown key, a value
 /// or a distribution's support outside its field's rule, a referenced file that does not exist.
 Scenario load_scenario(const std::string& path, std::optional<std::uint64_t> seed = std::nullopt);
+/// load_scenario() as a node parameter or command-line option gives the seed: < 0 = the file's.
+Scenario load_scenario_param(const std::string& path, int64_t seed);
 /// The same for a scenario given as YAML (`file` names it in errors; relative paths resolve
 /// against `dir`).
 Scenario parse_scenario(const YAML::Node& root, const std::string& file, const std::string& dir,
