@@ -191,19 +191,21 @@ std::string format_state_json(const FdmState& s) {
 
 JsonBackend::JsonBackend(const unav::scene::Scenario& scenario, const unav::scene::World& world, MotorMap map,
                          const std::string& map_file)
-    : scenario_(scenario), world_(world), map_(std::move(map)) {
-  const physics::VehicleParams vehicle = physics::load_vehicle(scenario_.vehicle.model);
-  check_motor_map(map_, vehicle, map_file);
+    : scenario_(scenario),
+      world_(world),
+      map_(std::move(map)),
+      vehicle_(physics::load_vehicle(scenario_.vehicle.model)) {
+  check_motor_map(map_, vehicle_, map_file);
   for (const auto& m : map_.motors)
-    for (std::size_t i = 0; i < vehicle.thrusters.size(); ++i)
-      if (vehicle.thrusters[i].name == m.thruster) thruster_of_motor_.push_back(static_cast<int>(i));
-  u_.assign(vehicle.thrusters.size(), 0.0);
+    for (std::size_t i = 0; i < vehicle_.thrusters.size(); ++i)
+      if (vehicle_.thrusters[i].name == m.thruster) thruster_of_motor_.push_back(static_cast<int>(i));
+  u_.assign(vehicle_.thrusters.size(), 0.0);
   reset();
 }
 
 void JsonBackend::reset() {
   // The autopilot's clock restarts at 0 with it; its commands are the only ones (no timeout).
-  sim_ = physics::build_simulator(scenario_, world_, physics::scenario_simulator_options(scenario_, 0.0));
+  sim_ = physics::build_simulator(scenario_, world_, physics::scenario_simulator_options(scenario_, 0.0), vehicle_);
   std::fill(u_.begin(), u_.end(), 0.0);
   started_ = false;
   target_time_ = 0.0;

@@ -12,7 +12,6 @@
 
 #include "unav_common/errors.hpp"
 #include "unav_common/resources.hpp"
-#include "unav_physics/vehicle.hpp"
 
 namespace unav::autopilot {
 namespace {
@@ -57,8 +56,7 @@ ArduSubBridge::ArduSubBridge(const unav::NodeOptions& options) : Node("ardusub_b
   ::getsockname(fd_, reinterpret_cast<sockaddr*>(&sa), &len);
   bound_port_ = ntohs(sa.sin_port);
 
-  ports_ = std::make_unique<physics::VehiclePorts>(*this, physics::load_vehicle(sc.vehicle.model).sensors,
-                                                   p.world_frame, p.body_frame);
+  ports_ = std::make_unique<physics::VehiclePorts>(*this, backend_->vehicle().sensors, p.world_frame, p.body_frame);
   ports_->publish_state(backend_->simulator());
   next_publish_ = publish_period_;
   timer_ = create_wall_timer(std::chrono::milliseconds(1), [this] { drain(); });

@@ -73,15 +73,15 @@ PhysicsServer::PhysicsServer(const unav::NodeOptions& options) : Node("physics_s
   // Acks are integer-nanosecond stamps; half a physics step absorbs rounding from doubles.
   barrier_ = std::make_unique<unav::lockstep::Barrier>(participants_, std::llround(0.5 * so.dt * 1e9));
 
+  const VehicleParams vehicle = load_vehicle(p.vehicle_config);
   if (scenario) {
     const unav::scene::World world = unav::scene::load_world(scenario->world);
-    sim_ = build_simulator(*scenario, world, so);
+    sim_ = build_simulator(*scenario, world, so, vehicle);
     logger()->info("scenario {} (seed {}): world {}, vehicle {}", p.scenario, scenario->seed, scenario->world,
                    scenario->vehicle.model);
   } else {
-    build_from_params(p, so);
+    build_from_params(p, so, vehicle);
   }
-  const VehicleParams vehicle = load_vehicle(p.vehicle_config);  // its sensors, to publish
 
   // Ports.
   ports_ = std::make_unique<VehiclePorts>(*this, vehicle.sensors, world_frame_, body_frame_);
@@ -235,8 +235,8 @@ void PhysicsServer::publish_state() { ports_->publish_state(*sim_); }
 void PhysicsServer::publish_thruster_state() { ports_->publish_thruster_state(*sim_); }
 void PhysicsServer::publish_sensors() { ports_->publish_sensors(*sim_); }
 
-void PhysicsServer::build_from_params(const PhysicsServerParams& p, const SimulatorOptions& so) {
-  const VehicleParams vehicle = load_vehicle(p.vehicle_config);
+void PhysicsServer::build_from_params(const PhysicsServerParams& p, const SimulatorOptions& so,
+                                      const VehicleParams& vehicle) {
   // The world file (the renderer's scene) drives the seabed and the current unless a node
   // parameter names its own.
   unav::scene::World world;

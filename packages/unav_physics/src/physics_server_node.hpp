@@ -144,7 +144,7 @@ class PhysicsServer : public unav::Node {
  private:
   /// The simulator from the node's own parameters (no scenario): vehicle_config, world or
   /// seabed_config/seabed_depth, current_config, initial_position/initial_rpy.
-  void build_from_params(const PhysicsServerParams& p, const SimulatorOptions& so);
+  void build_from_params(const PhysicsServerParams& p, const SimulatorOptions& so, const VehicleParams& vehicle);
   void on_command(const unav_msgs::msg::ThrusterCommand& msg);
   static constexpr double kMaxCommandLead = 1.0;  ///< s a command's stamp may be ahead of simulated time
   void on_ack(const unav_msgs::msg::LockstepAck& msg);

@@ -39,9 +39,14 @@ SimulatorOptions scenario_simulator_options(const unav::scene::Scenario& scenari
 
 std::unique_ptr<Simulator> build_simulator(const unav::scene::Scenario& scenario, const unav::scene::World& world,
                                            const SimulatorOptions& options) {
+  return build_simulator(scenario, world, options, load_vehicle(scenario.vehicle.model));
+}
+
+std::unique_ptr<Simulator> build_simulator(const unav::scene::Scenario& scenario, const unav::scene::World& world,
+                                           const SimulatorOptions& options, const VehicleParams& vehicle) {
   std::unique_ptr<CurrentModel> current = world.current_file.empty() ? nullptr : load_current(world.current_file);
-  return std::make_unique<Simulator>(load_vehicle(scenario.vehicle.model), options, std::move(current),
-                                     seabed_from_world(world), scenario_initial_state(scenario));
+  return std::make_unique<Simulator>(vehicle, options, std::move(current), seabed_from_world(world),
+                                     scenario_initial_state(scenario));
 }
 
 }  // namespace unav::physics

@@ -94,14 +94,14 @@ void time_resets(const PipeFollowingConfig& cfg, int n) {
     ms.push_back(1e3 * std::chrono::duration<double>(Clock::now() - t0).count());
     const auto t1 = Clock::now();  // the plant alone, as reset() rebuilt it for this scene
     const auto sim = unav::physics::build_simulator(env.episode().setup().scenario, env.episode().world(),
-                                                    env.episode().setup().simulator);
+                                                    env.episode().setup().simulator, env.episode().setup().plant);
     plant_ms.push_back(1e3 * std::chrono::duration<double>(Clock::now() - t1).count());
   }
   std::sort(ms.begin(), ms.end());
   std::sort(plant_ms.begin(), plant_ms.end());
   std::printf(
       "reset (new %s scene + first observation): median %.2f ms, max %.2f ms over %d; of which the plant "
-      "(vehicle file, seabed grid, current): median %.2f ms\n",
+      "(seabed grid, current): median %.2f ms\n",
       cfg.env.scenes.c_str(), ms[ms.size() / 2], ms.back(), n, plant_ms[plant_ms.size() / 2]);
 }
 

@@ -25,6 +25,7 @@ EpisodeSetup load_episode_setup(const scene::Scenario& scenario) {
   scene::resolve_scenario_paths(&s.scenario, "scenario", "");
   const scene::Scenario& sc = s.scenario;
   // The episode sends a command every control period; the failsafe would only mask a bug.
+  s.plant = physics::load_vehicle(sc.vehicle.model);
   s.simulator = physics::scenario_simulator_options(sc, 0.0);
   s.mpc = control::load_mpc_config(sc.control.mpc);
   s.mpc.options.max_solve_time_ms = 0.0;  // iterations only: episodes repeat exactly
@@ -38,7 +39,7 @@ EpisodeSetup load_episode_setup(const scene::Scenario& scenario) {
 Episode::Episode(EpisodeSetup setup, World world, std::shared_ptr<unav::renderer::EglContext> context)
     : setup_(std::move(setup)) {
   // The plant as the physics server builds it: the world's seabed and current.
-  sim_ = physics::build_simulator(setup_.scenario, world, setup_.simulator);
+  sim_ = physics::build_simulator(setup_.scenario, world, setup_.simulator, setup_.plant);
   control::MpcOptions mo = setup_.mpc.options;
   mpc_ = std::make_unique<control::Mpc>(setup_.mpc.model, mo, setup_.simulator.environment);
   allocator_ = std::make_unique<control::Allocator>(control::make_allocator(setup_.allocator));
@@ -55,7 +56,7 @@ const World& Episode::world() const { return renderer_->world(); }
 void Episode::reset(std::uint64_t seed, const RigidBodyState& initial, const World* world) {
   if (world != nullptr) {
     renderer_->set_world(*world);
-    sim_ = physics::build_simulator(setup_.scenario, *world, setup_.simulator);  // its seabed and current
+    sim_ = physics::build_simulator(setup_.scenario, *world, setup_.simulator, setup_.plant);  // its seabed and current
   }
   seed_ = seed;
   sim_->reset(initial);

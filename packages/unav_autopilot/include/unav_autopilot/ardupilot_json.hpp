@@ -32,6 +32,7 @@
 
 #include "unav_common/config.hpp"
 #include "unav_physics/simulator.hpp"
+#include "unav_physics/vehicle.hpp"
 #include "unav_scene/scenario.hpp"
 #include "unav_scene/world.hpp"
 
@@ -130,6 +131,8 @@ class JsonBackend {
   /// Status of the last handle() call.
   PacketStatus last_status() const { return last_status_; }
   const physics::Simulator& simulator() const { return *sim_; }
+  /// The scenario's vehicle (loaded once; its sensors are what a node publishes).
+  const physics::VehicleParams& vehicle() const { return vehicle_; }
   const BackendStats& stats() const { return stats_; }
   /// Thruster command of the last frame (our thruster order).
   const std::vector<double>& command() const { return u_; }
@@ -139,6 +142,7 @@ class JsonBackend {
   unav::scene::Scenario scenario_;
   unav::scene::World world_;
   MotorMap map_;
+  physics::VehicleParams vehicle_;
   std::vector<int> thruster_of_motor_;
   std::unique_ptr<physics::Simulator> sim_;
   std::vector<double> u_;

@@ -8,6 +8,7 @@
 
 #include "unav_physics/seabed.hpp"
 #include "unav_physics/simulator.hpp"
+#include "unav_physics/vehicle.hpp"
 #include "unav_scene/scenario.hpp"
 #include "unav_scene/world.hpp"
 
@@ -28,5 +29,9 @@ SimulatorOptions scenario_simulator_options(const unav::scene::Scenario& scenari
 /// initial state. Throws ConfigError naming the file and key on a bad vehicle or current file.
 std::unique_ptr<Simulator> build_simulator(const unav::scene::Scenario& scenario, const unav::scene::World& world,
                                            const SimulatorOptions& options);
+/// The same with the vehicle already loaded from scenario.vehicle.model (callers that keep it:
+/// no file read per episode).
+std::unique_ptr<Simulator> build_simulator(const unav::scene::Scenario& scenario, const unav::scene::World& world,
+                                           const SimulatorOptions& options, const VehicleParams& vehicle);
 
 }  // namespace unav::physics

@@ -24,6 +24,7 @@
 #include "unav_control/config.hpp"
 #include "unav_control/mpc.hpp"
 #include "unav_physics/simulator.hpp"
+#include "unav_physics/vehicle.hpp"
 #include "unav_renderer/renderer.hpp"
 #include "unav_scene/scenario.hpp"
 #include "unav_scene/world.hpp"
@@ -37,7 +38,8 @@ using unav::scene::World;
 /// A scenario resolved and loaded for an episode (vehicle, controllers, cameras, renderer): the
 /// in-process half of the one builder (the plant: physics::build_simulator, as the physics server).
 struct EpisodeSetup {
-  scene::Scenario scenario;  ///< with its file paths resolved
+  scene::Scenario scenario;      ///< with its file paths resolved
+  physics::VehicleParams plant;  ///< scenario.vehicle.model, loaded once (reset() rebuilds from it)
   physics::SimulatorOptions simulator;
   control::MpcConfig mpc;
   control::AllocatorConfig allocator;
