@@ -3,13 +3,8 @@
 # zstd chunks, stopped by Ctrl-C; sqlite3, stopped by --duration) record every topic; the bags
 # are read back and decoded by rosbags and mcap-ros2-support (check_bag.py), `unav bag info`
 # agrees with them, and `unav bag play` republishes the odometry and /clock with the bag's time.
-set -euo pipefail
-trap 'echo "FAIL: unexpected exit at line $LINENO: $BASH_COMMAND"' ERR
-ws="$1"
-set +u; source "$ws/install/setup.bash"; set -u
-source "$(dirname "$0")/test_domain.sh"
+source "$(dirname "$0")/common.sh"
 export UNAV_SPIN_TIME=3
-py="${UNAV_VENV:-$ws/.venv}/bin/python"
 out=$(mktemp -d)
 log="$out/launch.log"
 fail() { echo "FAIL: $*"; echo "--- launch log:"; tail -20 "$log"; exit 1; }

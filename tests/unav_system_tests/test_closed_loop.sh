@@ -3,11 +3,7 @@
 # north is reached within 10 s of simulated time (position within 5 cm at t = 10 s; the
 # in-process tests show < 1 mm steady-state error, 5 cm leaves room for the bounded solver
 # iterations over DDS), and the launch ends cleanly when the physics stops.
-set -euo pipefail
-trap 'echo "FAIL: unexpected exit at line $LINENO: $BASH_COMMAND"; [ -n "${log:-}" ] && [ -f "$log" ] && grep -v "Publishing\|I heard" "$log" | tail -30' ERR
-ws="$1"
-set +u; source "$ws/install/setup.bash"; set -u
-source "$(dirname "$0")/test_domain.sh"  # a domain of our own (flock)
+source "$(dirname "$0")/common.sh"
 log=$(mktemp)
 rc=0
 timeout -s INT 120 unav launch "$ws/launch_scripts/closed_loop.launch.yaml" waypoints:="[2.0, 0.0, 5.0]" \

@@ -3,10 +3,7 @@
 # (munged + slurmctld + slurmd from Debian, private config, key, sockets and ports; as root, as
 # the README's test command runs): a sweep of 3 samples as a job array of 2 tasks, waited for;
 # every sample finished with its manifest, identical to the same samples rendered locally.
-set -euo pipefail
-trap 'echo "FAIL: unexpected exit at line $LINENO: $BASH_COMMAND"' ERR
-ws="$1"
-set +u; source "$ws/install/setup.bash"; set -u
+source "$(dirname "$0")/common.sh"
 fail() { echo "FAIL: $*"; for f in "$d"/*.log "$d"/out/slurm/*.log; do [ -f "$f" ] && { echo "--- $f"; tail -15 "$f"; }; done; exit 1; }
 [ "$(id -u)" -eq 0 ] || { echo "FAIL: the Slurm round trip starts slurmd, which needs root (run the test command as root)"; exit 1; }
 for b in munged slurmctld slurmd sbatch; do

@@ -4,10 +4,7 @@
 # (its sonar pings too) is byte-identical (same manifest = same SHA-256 of every file); a rerun after deleting a sample
 # regenerates only that one, identically; Ctrl-C leaves finished samples valid and the
 # interrupted one as .partial, which the next run replaces.
-set -euo pipefail
-trap 'echo "FAIL: unexpected exit at line $LINENO: $BASH_COMMAND"' ERR
-ws="$1"
-set +u; source "$ws/install/setup.bash"; set -u
+source "$(dirname "$0")/common.sh"
 out=$(mktemp -d)
 trap 'kill -INT ${pid:-} 2>/dev/null || true; rm -rf "$out"' EXIT
 fail() { echo "FAIL: $*"; exit 1; }

@@ -2,11 +2,7 @@
 # Physics (lockstep) + renderer + dataset recorder in the EuRoC/ASL and KITTI odometry layouts, 3 s
 # of simulated time each: one image per 0.1 s, one ground-truth row per image, every 200 Hz IMU
 # sample (EuRoC), KITTI poses starting at the identity, and the down camera's calibration.
-set -euo pipefail
-trap 'echo "FAIL: unexpected exit at line $LINENO: $BASH_COMMAND"; [ -n "${log:-}" ] && [ -f "$log" ] && tail -30 "$log"' ERR
-ws="$1"
-set +u; source "$ws/install/setup.bash"; set -u
-source "$(dirname "$0")/test_domain.sh"  # a domain of our own (flock)
+source "$(dirname "$0")/common.sh"
 out=$(mktemp -d)
 fail() { echo "FAIL: $*"; echo "--- launch log:"; tail -30 "$log"; exit 1; }
 

@@ -6,11 +6,7 @@
 # and KLT VO as lockstep participants, evaluator) twice: ground truth and both estimators'
 # trajectories byte-identical. Nothing in the loop may read the wall clock (the MPC is bounded by
 # iterations only in lockstep), and a run ends on a barrier every participant answered.
-set -euo pipefail
-trap 'echo "FAIL: unexpected exit at line $LINENO: $BASH_COMMAND"' ERR
-ws="$1"
-set +u; source "$ws/install/setup.bash"; set -u
-source "$(dirname "$0")/test_domain.sh"  # a domain of our own (flock)
+source "$(dirname "$0")/common.sh"
 out=$(mktemp -d)
 trap 'rm -rf "$out"' EXIT
 fail() { echo "FAIL: $*"; for r in a b va vb; do [ -f "$out/$r.log" ] && { echo "--- run $r:"; tail -15 "$out/$r.log"; }; done; exit 1; }

@@ -14,11 +14,7 @@
 #     physics server says so and simulated time runs on without it;
 #  6. Ctrl-C at the end: exit 130, frame stamps contiguous and each frame with its pose up to the
 #     drop.
-set -euo pipefail
-trap 'echo "FAIL: unexpected exit at line $LINENO: $BASH_COMMAND"' ERR
-ws="$1"
-set +u; source "$ws/install/setup.bash"; set -u
-source "$(dirname "$0")/test_domain.sh"
+source "$(dirname "$0")/common.sh"
 out=$(mktemp -d)
 log="$out/launch.log"
 fail() { echo "FAIL: $*"; echo "--- launch log:"; grep -v "Publishing" "$log" | tail -30; exit 1; }

@@ -2,11 +2,7 @@
 # `unav launch` starts talker + listener as two processes; a third process (`unav topic echo`)
 # sees their messages; `unav node list` and `topic list -t` show them with ROS 2 names; the
 # required listener exits after 150 messages, which ends the launch with exit code 0; and a SIGINT to a second launch stops everything with no orphan left.
-set -euo pipefail
-trap 'echo "FAIL: unexpected exit at line $LINENO: $BASH_COMMAND"; [ -n "${log:-}" ] && [ -f "$log" ] && grep -v "Publishing\|I heard" "$log" | tail -30' ERR
-ws="$1"
-set +u; source "$ws/install/setup.bash"; set -u
-source "$(dirname "$0")/test_domain.sh"  # a domain of our own (flock)
+source "$(dirname "$0")/common.sh"
 export UNAV_SPIN_TIME=3
 log=$(mktemp)
 fail() { echo "FAIL: $*"; echo "--- launch log:"; cat "$log"; exit 1; }

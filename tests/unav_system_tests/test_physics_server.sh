@@ -1,11 +1,7 @@
 #!/usr/bin/env bash
 # physics_server launched as a process: odometry and /clock come out with ROS 2 types, a thruster
 # command published by `unav topic pub` moves the vehicle north, the failsafe logs the timeout.
-set -euo pipefail
-trap 'echo "FAIL: unexpected exit at line $LINENO: $BASH_COMMAND"; [ -n "${log:-}" ] && [ -f "$log" ] && grep -v "Publishing\|I heard" "$log" | tail -30' ERR
-ws="$1"
-set +u; source "$ws/install/setup.bash"; set -u
-source "$(dirname "$0")/test_domain.sh"  # a domain of our own (flock)
+source "$(dirname "$0")/common.sh"
 export UNAV_SPIN_TIME=3
 log=$(mktemp)
 fail() { echo "FAIL: $*"; echo "--- launch log:"; cat "$log"; kill -INT "$launch_pid" 2>/dev/null || true; exit 1; }

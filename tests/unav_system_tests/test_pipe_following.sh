@@ -4,11 +4,7 @@
 # lockstep). The evaluator's cross-track figures must meet the issue's target: the whole pipe
 # (both turns) followed, mean e_p <= 0.5 m. The classical baseline runs the same launch; its
 # figures are printed (a number to beat), and the run must write them.
-set -euo pipefail
-trap 'echo "FAIL: unexpected exit at line $LINENO: $BASH_COMMAND"' ERR
-ws="$1"
-set +u; source "$ws/install/setup.bash"; set -u
-source "$(dirname "$0")/test_domain.sh"  # a domain of our own (flock)
+source "$(dirname "$0")/common.sh"
 out=$(mktemp -d)
 trap 'rm -rf "$out"' EXIT
 fail() { echo "FAIL: $*"; for r in drl classical; do [ -f "$out/$r.log" ] && { echo "--- $r:"; tail -15 "$out/$r.log"; }; done; exit 1; }

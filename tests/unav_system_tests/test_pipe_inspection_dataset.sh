@@ -2,11 +2,7 @@
 # The pipe-inspection launch (physics in lockstep, renderer, recorder, VO, SLAM, evaluator): the dataset has one
 # ground-truth pose per frame, every rendered frame (10 Hz of simulated time, none skipped),
 # every IMU sample (200 Hz), depth in TUM units, and nothing is lost on Ctrl-C.
-set -euo pipefail
-trap 'echo "FAIL: unexpected exit at line $LINENO: $BASH_COMMAND"; [ -n "${log:-}" ] && [ -f "$log" ] && grep -v "Publishing\|I heard" "$log" | tail -30' ERR
-ws="$1"
-set +u; source "$ws/install/setup.bash"; set -u
-source "$(dirname "$0")/test_domain.sh"  # a domain of our own (flock)
+source "$(dirname "$0")/common.sh"
 out=$(mktemp -d)
 log="$out/launch.log"
 # On failure: every warning and error of the run, ours ("[WARN]") and Fast DDS' ("... Warning]",

@@ -6,11 +6,7 @@
 # control instant; the trajectories must agree at all 201 instants within 1e-6 m. Measured on the
 # 2-core VM: 2.4e-9 m at most (not bit for bit: the nodes' MPC and allocator are built apart from
 # the Episode's; a different plant, a missing seabed or a skipped control period shows as mm to m).
-set -euo pipefail
-trap 'echo "FAIL: unexpected exit at line $LINENO: $BASH_COMMAND"; [ -n "${log:-}" ] && [ -f "$log" ] && tail -30 "$log"' ERR
-ws="$1"
-set +u; source "$ws/install/setup.bash"; set -u
-source "$(dirname "$0")/test_domain.sh"  # a domain of our own (flock)
+source "$(dirname "$0")/common.sh"
 out=$(mktemp -d)
 log="$out/launch.log"
 fail() { echo "FAIL: $*"; exit 1; }

@@ -4,12 +4,7 @@
 # side-scan's RawSonarImage; a bag of them decodes with marine_acoustic_msgs' own definitions
 # (check_sonar_bag.py: geometry, 10 Hz of simulated time, the FLS sees the pipe ahead, the
 # side-scan sees water column then seabed).
-set -euo pipefail
-trap 'echo "FAIL: unexpected exit at line $LINENO: $BASH_COMMAND"' ERR
-ws="$1"
-set +u; source "$ws/install/setup.bash"; set -u
-source "$(dirname "$0")/test_domain.sh"
-py="${UNAV_VENV:-$ws/.venv}/bin/python"
+source "$(dirname "$0")/common.sh"
 out=$(mktemp -d)
 log="$out/launch.log"
 fail() { echo "FAIL: $*"; echo "--- launch log:"; tail -30 "$log"; exit 1; }

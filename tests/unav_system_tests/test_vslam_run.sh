@@ -4,11 +4,7 @@
 # camera 640 x 480) + orb_slam + klt_vo (monocular) + evaluator, 15 s of simulated time along the
 # linear pipeline. The run must end by itself and leave the Table II files, with the SLAM's
 # Sim(3)-aligned APE under 5 cm (seen: ~5 mm) and the KLT VO's under 15 cm.
-set -euo pipefail
-trap 'echo "FAIL: unexpected exit at line $LINENO: $BASH_COMMAND"; [ -n "${log:-}" ] && [ -f "$log" ] && tail -30 "$log"' ERR
-ws="$1"
-set +u; source "$ws/install/setup.bash"; set -u
-source "$(dirname "$0")/test_domain.sh"  # a domain of our own (flock)
+source "$(dirname "$0")/common.sh"
 out=$(mktemp -d)
 log="$out/launch.log"
 fail() { echo "FAIL: $*"; echo "--- launch log:"; tail -40 "$log"; exit 1; }

@@ -34,6 +34,14 @@ macro(unav_package)
     add_compile_options(-Werror)
   endif()
   include(GNUInstallDirs)
+  # The repository root (worlds/, config/, test data; every package is two folders below it) and
+  # the project's Python venv (scripts/install_deps.sh makes it; UNAV_VENV overrides).
+  get_filename_component(UNAV_REPO_ROOT "${CMAKE_CURRENT_SOURCE_DIR}/../.." ABSOLUTE)
+  if(DEFINED ENV{UNAV_VENV})
+    set(UNAV_VENV "$ENV{UNAV_VENV}")
+  else()
+    set(UNAV_VENV "${UNAV_REPO_ROOT}/.venv")
+  endif()
   option(BUILD_TESTING "Build the tests" ON)
   # Benchmarks come with the tests (README command 2), not with the demo (command 1, which builds
   # with -DBUILD_TESTING=OFF); -DUNAV_BUILD_BENCHMARKS=ON builds them without the tests.
@@ -47,18 +55,36 @@ macro(unav_package)
   endif()
 endmacro()
 
-# unav_add_gtest(NAME SOURCES... LIBS ...): a GoogleTest executable registered with CTest.
-# Each test case becomes its own CTest test (gtest_discover_tests), with a timeout.
+# unav_add_gtest(NAME SOURCES... LIBS ... [TIMEOUT s] [ENV ...] [REPO]): a GoogleTest executable
+# registered with CTest. Each test case becomes its own CTest test (gtest_discover_tests), with a
+# timeout. REPO: the test reads the repository's data: UNAV_REPO_ROOT is defined (a string) and
+# the repository is a resource root (UNAV_RESOURCE_PATH), so a scenario's files resolve.
 function(unav_add_gtest name)
-  cmake_parse_arguments(ARG "" "TIMEOUT" "SOURCES;LIBS;ENV" ${ARGN})
+  cmake_parse_arguments(ARG "REPO" "TIMEOUT" "SOURCES;LIBS;ENV" ${ARGN})
   if(NOT ARG_TIMEOUT)
     set(ARG_TIMEOUT 120)
   endif()
   add_executable(${name} ${ARG_SOURCES})
   target_link_libraries(${name} PRIVATE ${ARG_LIBS} GTest::gtest GTest::gtest_main)
+  if(ARG_REPO)
+    target_compile_definitions(${name} PRIVATE UNAV_REPO_ROOT="${UNAV_REPO_ROOT}")
+    list(APPEND ARG_ENV "UNAV_RESOURCE_PATH=${UNAV_REPO_ROOT}")
+  endif()
   gtest_discover_tests(${name}
     DISCOVERY_TIMEOUT 60
     PROPERTIES TIMEOUT ${ARG_TIMEOUT} ENVIRONMENT "${ARG_ENV}")
+endfunction()
+
+# unav_add_pytest(NAME FILE [TIMEOUT s] [ENV ...]): a pytest file run by the project's venv, with
+# the repository as a resource root.
+function(unav_add_pytest name)
+  cmake_parse_arguments(ARG "" "FILE;TIMEOUT" "ENV" ${ARGN})
+  if(NOT ARG_TIMEOUT)
+    set(ARG_TIMEOUT 300)
+  endif()
+  add_test(NAME ${name} COMMAND ${UNAV_VENV}/bin/python -m pytest -q -p no:cacheprovider ${ARG_FILE})
+  set_tests_properties(${name} PROPERTIES TIMEOUT ${ARG_TIMEOUT}
+    ENVIRONMENT "UNAV_RESOURCE_PATH=${UNAV_REPO_ROOT};${ARG_ENV}")
 endfunction()
 
 # unav_forbid_links(target REASON text PATTERN regex): fail the configure step if `target` links
