@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include <Eigen/Geometry>
 #include <Eigen/SVD>
 
 namespace unav::common {
@@ -44,21 +45,22 @@ UmeyamaResult Umeyama(const Eigen::Matrix3Xd& from, const Eigen::Matrix3Xd& to, 
     out.status = UmeyamaStatus::kTooFewPoints;
     return out;
   }
-  // Same expressions, types and order as both former implementations (bit-identical).
+  // The estimate is Eigen's (Eigen::umeyama: the same closed form, one SVD of the 3x3
+  // cross-covariance with the reflection fix): the rotation of its rigid fit, then the scale and
+  // translation of Umeyama's eq. (41)-(42) from that rotation. The diagnostics below (source
+  // variance, singular values) are ours: Eigen has no rejection rules.
   const double n = static_cast<double>(from.cols());
   const Eigen::Vector3d mean_from = from.rowwise().mean();
   const Eigen::Vector3d mean_to = to.rowwise().mean();
   const Eigen::Matrix3Xd from_c = from.colwise() - mean_from;
-  const Eigen::Matrix3Xd to_c = to.colwise() - mean_to;
   const double var_from = from_c.squaredNorm() / n;
-  const Eigen::Matrix3d cov = to_c * from_c.transpose() / n;
-  Eigen::JacobiSVD<Eigen::Matrix3d> svd(cov, Eigen::ComputeFullU | Eigen::ComputeFullV);
-  const Eigen::Vector3d sv = svd.singularValues();
-  Eigen::Matrix3d D = Eigen::Matrix3d::Identity();
-  if (svd.matrixU().determinant() * svd.matrixV().determinant() < 0.0) D(2, 2) = -1.0;
+  const Eigen::Matrix3d cov = (to.colwise() - mean_to) * from_c.transpose() / n;
+  const Eigen::Vector3d sv = Eigen::JacobiSVD<Eigen::Matrix3d>(cov).singularValues();
   Sim3& S = out.S;
-  S.R = svd.matrixU() * D * svd.matrixV().transpose();
-  S.s = options.with_scale ? (sv.asDiagonal() * D).trace() / var_from : 1.0;
+  S.R = Eigen::umeyama(from, to, /*with_scaling=*/false).topLeftCorner<3, 3>();
+  // trace(diag(sv) D), D = diag(1, 1, sign(det U det V)) = diag(1, 1, sign(det cov)).
+  const double trace_sv_d = sv(0) + sv(1) + (cov.determinant() < 0.0 ? -sv(2) : sv(2));
+  S.s = options.with_scale ? trace_sv_d / var_from : 1.0;
   S.t = mean_to - S.s * S.R * mean_from;
   out.source_variance = var_from;
   out.singular_values = sv;

@@ -78,13 +78,12 @@ struct UmeyamaResult {
 
 /// Least-squares similarity (Umeyama 1991) mapping the columns of `from` onto those of `to`.
 /// With n points, centroids m_f, m_t, centred A = from - m_f, B = to - m_t:
-///   var = |A|^2 / n, C = B A^T / n = U diag(sv) V^T (JacobiSVD, full U and V),
-///   D = diag(1, 1, det(U) det(V) < 0 ? -1 : 1), R = U D V^T,
-///   s = with_scale ? trace(diag(sv) D) / var : 1, t = m_t - s R m_f.
-/// The status checks, in order: sizes, min_points, spread, collinearity, scale. These are
-/// exactly the operations of the former unav::localization::EstimateSim3 and
-/// unav::evaluation::umeyama (bit-identical results, tested); their different rejection rules
-/// are reproduced from the status and the diagnostics (see test/test_sim3.cpp).
+///   var = |A|^2 / n, C = B A^T / n = U diag(sv) V^T,
+///   R = U diag(1, 1, sign(det U det V)) V^T (Eigen::umeyama's rigid fit),
+///   s = with_scale ? (sv0 + sv1 + sign(det C) sv2) / var : 1, t = m_t - s R m_f.
+/// The status checks, in order: sizes, min_points, spread, collinearity, scale. The SLAM
+/// (>= 3 points, spread, not collinear) and the evaluator (evo's rules: >= 2 points, collinear
+/// accepted) each keep their own rules on top of the status and the diagnostics.
 UmeyamaResult Umeyama(const Eigen::Matrix3Xd& from, const Eigen::Matrix3Xd& to, const UmeyamaOptions& options = {});
 
 }  // namespace unav::common
