@@ -4,7 +4,9 @@
 #include <epoxy/gl.h>
 
 #include <Eigen/Core>
+#include <initializer_list>
 #include <string>
+#include <vector>
 #include <unordered_map>
 
 #include "unav_renderer/errors.hpp"
@@ -128,6 +130,39 @@ inline void check_fbo(const char* what) {
   const GLenum st = glCheckFramebufferStatus(GL_FRAMEBUFFER);
   if (st != GL_FRAMEBUFFER_COMPLETE)
     throw GlError(std::string(what) + " framebuffer incomplete (status 0x" + std::to_string(st) + ")");
+}
+
+/// A framebuffer drawing into `colors` (colour attachments 0, 1, ... in that order) with `depth`
+/// (a depth texture; 0: none), left bound. Throws GlError naming `what` when it is incomplete.
+inline GLuint make_fbo(std::initializer_list<GLuint> colors, GLuint depth, const char* what) {
+  GLuint fbo = 0;
+  glGenFramebuffers(1, &fbo);
+  glBindFramebuffer(GL_FRAMEBUFFER, fbo);
+  std::vector<GLenum> bufs;
+  for (const GLuint tex : colors) {
+    const auto attachment = static_cast<GLenum>(GL_COLOR_ATTACHMENT0 + bufs.size());
+    glFramebufferTexture2D(GL_FRAMEBUFFER, attachment, GL_TEXTURE_2D, tex, 0);
+    bufs.push_back(attachment);
+  }
+  if (depth != 0) glFramebufferTexture2D(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_TEXTURE_2D, depth, 0);
+  glDrawBuffers(static_cast<GLsizei>(bufs.size()), bufs.data());
+  check_fbo(what);
+  return fbo;
+}
+
+/// The state of an opaque, depth-tested pass into the bound framebuffer (the camera's scene pass,
+/// the sonar's): colour attachment 0 cleared to `clear0`, depth to 1 (far), depth test LESS, both
+/// faces drawn (passes that cull enable it per mesh), no blending.
+inline void begin_opaque_pass(const float clear0[4]) {
+  const float far = 1.0f;
+  glColorMaski(0, GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
+  glDepthMask(GL_TRUE);
+  glClearBufferfv(GL_COLOR, 0, clear0);
+  glClearBufferfv(GL_DEPTH, 0, &far);
+  glEnable(GL_DEPTH_TEST);
+  glDepthFunc(GL_LESS);
+  glDisable(GL_CULL_FACE);
+  glDisable(GL_BLEND);
 }
 
 }  // namespace unav::renderer::gl

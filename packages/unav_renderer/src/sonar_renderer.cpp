@@ -11,6 +11,7 @@
 #include <stdexcept>
 
 #include "gl_util.hpp"
+#include "shaders.hpp"
 #include "unav_common/frames.hpp"
 #include "unav_common/sampling.hpp"
 #include "unav_renderer/errors.hpp"
@@ -27,35 +28,6 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 double ms_since(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
-
-constexpr const char* kSonarVS = R"(#version 330 core
-layout(location = 0) in vec3 a_pos;
-layout(location = 1) in vec3 a_nrm;
-uniform mat4 u_view;
-uniform mat4 u_proj;
-out vec3 v_pos_W;
-out vec3 v_nrm_W;
-void main() {
-  v_pos_W = a_pos;
-  v_nrm_W = a_nrm;
-  gl_Position = u_proj * u_view * vec4(a_pos, 1.0);
-}
-)";
-
-// Range from the sonar, incidence cosine, Lambert mu; alpha 1 marks a hit (clear colour: 0).
-constexpr const char* kSonarFS = R"(#version 330 core
-in vec3 v_pos_W;
-in vec3 v_nrm_W;
-uniform vec3 u_origin_W;
-uniform float u_mu;
-layout(location = 0) out vec4 o_echo;
-void main() {
-  vec3 d = v_pos_W - u_origin_W;
-  float r = length(d);
-  float c = abs(dot(normalize(v_nrm_W), d / max(r, 1e-6)));
-  o_echo = vec4(r, c, u_mu, 1.0);
-}
-)";
 
 constexpr double kMaxSliceRad = 32.0 * M_PI / 180.0;
 constexpr int kSideScanColumns = 4;  // along-track samples of a side-scan strip
@@ -253,15 +225,7 @@ void SonarRenderer::Impl::raster(SonarState& st, const Pose& X_WB) {
   glBindFramebuffer(GL_FRAMEBUFFER, st.fbo);
   glViewport(0, 0, st.width, st.rows);
   const float zero[4] = {0, 0, 0, 0};
-  const float one = 1.0f;
-  glColorMaski(0, GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
-  glDepthMask(GL_TRUE);
-  glClearBufferfv(GL_COLOR, 0, zero);
-  glClearBufferfv(GL_DEPTH, 0, &one);
-  glEnable(GL_DEPTH_TEST);
-  glDepthFunc(GL_LESS);
-  glDisable(GL_CULL_FACE);
-  glDisable(GL_BLEND);
+  gl::begin_opaque_pass(zero);
   glEnable(GL_SCISSOR_TEST);
   program.use();
   for (const Head& head : st.heads) {
@@ -386,7 +350,7 @@ SonarRenderer::SonarRenderer(World world, std::vector<SonarModel> sonars, SonarO
   impl_->options = options;
   impl_->ctx = context ? std::move(context) : std::shared_ptr<EglContext>(EglContext::create(options.egl));
   impl_->ctx->make_current();
-  impl_->program = gl::Program(kSonarVS, kSonarFS, "sonar");
+  impl_->program = gl::Program(detail::kSonarVS, detail::kSonarFS, "sonar");
   impl_->upload(impl_->world);
   for (auto& m : sonars) {
     SonarState st;
