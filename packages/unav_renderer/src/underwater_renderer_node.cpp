@@ -8,6 +8,7 @@
 #include <spdlog/fmt/fmt.h>
 
 #include "unav_common/resources.hpp"
+#include "unav_common/sampling.hpp"
 #include "unav_runtime/conversions.hpp"
 #include "unav_scene/camera.hpp"
 #include "unav_scene/scenario.hpp"
@@ -55,6 +56,7 @@ UnderwaterRendererNode::UnderwaterRendererNode(const unav::NodeOptions& options)
   prm.cameras_config = resource("config/sensors/bluerov2_cameras.yaml");
   declare_params(&prm);
   std::vector<CameraModel> scenario_cams;
+  auto noise_seed = static_cast<std::uint64_t>(prm.seed);
   if (!prm.scenario.empty()) {  // the renderer's part of the scenario, as the in-process Episode takes it
     const scene::Scenario sc = scene::load_scenario_param(prm.scenario, prm.scenario_seed);
     prm.world = sc.world;
@@ -62,7 +64,8 @@ UnderwaterRendererNode::UnderwaterRendererNode(const unav::NodeOptions& options)
     prm.cameras_config = sc.cameras.config;
     prm.cameras = sc.cameras.names;
     prm.render = sc.render;
-    prm.seed = sc.seed;
+    prm.rate = sc.cameras.rate_hz;
+    noise_seed = unav::common::MixSeed(static_cast<std::uint64_t>(sc.seed));  // as Episode::reset(sc.seed)
     scenario_cams = scene::scenario_cameras(sc);
   }
   const std::string& world_path = prm.world;
@@ -76,7 +79,7 @@ UnderwaterRendererNode::UnderwaterRendererNode(const unav::NodeOptions& options)
   publish_seg_ = prm.publish_segmentation;
   RenderOptions ro;
   static_cast<scene::RenderSettings&>(ro) = prm.render;
-  ro.seed = static_cast<std::uint64_t>(prm.seed);
+  ro.seed = noise_seed;
   period_ = 1.0 / rate;
   if (world_path.empty() || cameras_path.empty())
     throw unav::ParameterError("node '" + name() +

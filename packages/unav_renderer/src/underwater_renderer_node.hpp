@@ -67,8 +67,9 @@ struct UnderwaterRendererParams {
   void Serialize(Archive* a) {
     using unav::common::Field;
     a->Visit(Field("scenario", &scenario)
-                 .Doc("scenario YAML: its world, water, cameras (config, names, size), render switches and seed "
-                      "replace world, water, cameras_config, cameras, render and seed"));
+                 .Doc("scenario YAML: its world, water, cameras (config, names, size, rate), render switches "
+                      "and seed replace world, water, cameras_config, cameras, rate, render and seed (the noise "
+                      "seed is then MixSeed(scenario seed), as the in-process Episode's)"));
     a->Visit(
         Field("scenario_seed", &scenario_seed).Min(-1.0).Doc("draw of the scenario's distributions; -1 = its seed"));
     a->Visit(Field("world", &world).Doc("world.yaml path"));

@@ -11,6 +11,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "unav_common/time.hpp"
 #include "unav_physics/scenario_builder.hpp"
 #include "unav_scene/water.hpp"
 #include "unav_sim/episode.hpp"
@@ -18,6 +19,35 @@
 namespace fs = std::filesystem;
 
 namespace unav::sim {
+
+void write_concrete_scenario(const scene::Scenario& scenario, const std::string& out_dir) {
+  fs::create_directories(out_dir);
+  YAML::Emitter e;
+  e.SetDoublePrecision(17);
+  e << scene::scenario_yaml(scenario);
+  const fs::path file = fs::path(out_dir) / "scenario.yaml";
+  std::ofstream(file) << e.c_str() << "\n";
+  if (!fs::exists(file)) throw std::runtime_error(file.string() + ": cannot be written");
+}
+
+void write_tum_pose(std::ostream& out, double t, const Eigen::Vector3d& p, const Eigen::Quaterniond& q) {
+  char line[256];
+  std::snprintf(line, sizeof(line), "%.9f %.17g %.17g %.17g %.17g %.17g %.17g %.17g\n", t, p.x(), p.y(), p.z(), q.x(),
+                q.y(), q.z(), q.w());
+  out << line;
+}
+
+std::string frame_png_path(const std::string& out_dir, const std::string& camera, std::int64_t t_ns) {
+  char name[64];
+  std::snprintf(name, sizeof(name), "%019lld.png", static_cast<long long>(t_ns));
+  return (fs::path(out_dir) / camera / name).string();
+}
+
+void write_frame_png(const std::string& path, const std::uint8_t* rgb, int width, int height) {
+  cv::Mat bgr;
+  cv::cvtColor(cv::Mat(height, width, CV_8UC3, const_cast<std::uint8_t*>(rgb)), bgr, cv::COLOR_RGB2BGR);
+  if (!cv::imwrite(path, bgr)) throw std::runtime_error(path + ": cannot be written");
+}
 
 control::PoseSetpoint mission_setpoint(const scene::Scenario& scenario, double t) {
   constexpr double kDeg = M_PI / 180.0;
@@ -47,24 +77,15 @@ ScenarioRunResult run_scenario_in_process(const scene::Scenario& scenario, const
   const scene::Scenario& sc = setup.scenario;
   scene::World world = scene::load_world(sc.world);
   if (!sc.water.empty()) world.water = scene::load_water_spec(sc.water);
-  fs::create_directories(out_dir);
-  {
-    YAML::Emitter e;
-    e.SetDoublePrecision(17);
-    e << scene::scenario_yaml(sc);
-    std::ofstream(fs::path(out_dir) / "scenario.yaml") << e.c_str() << "\n";
-  }
+  write_concrete_scenario(sc, out_dir);
   Episode ep(setup, world);
   ep.reset(static_cast<std::uint64_t>(sc.seed), physics::scenario_initial_state(sc));
 
   std::ofstream gt(fs::path(out_dir) / "ground_truth.tum");
   if (!gt) throw std::runtime_error(out_dir + "/ground_truth.tum: cannot be written");
-  gt.precision(9);
   ScenarioRunResult r;
   auto write_pose = [&] {
-    const auto& x = ep.state();
-    gt << std::fixed << ep.time() << " " << x.p_WB_W.x() << " " << x.p_WB_W.y() << " " << x.p_WB_W.z() << " "
-       << x.q_WB.x() << " " << x.q_WB.y() << " " << x.q_WB.z() << " " << x.q_WB.w() << "\n";
+    write_tum_pose(gt, ep.time(), ep.state().p_WB_W, ep.state().q_WB);
     ++r.poses;
   };
   const double frame_period = 1.0 / sc.cameras.rate_hz, period = sc.control.period;
@@ -76,12 +97,8 @@ ScenarioRunResult run_scenario_in_process(const scene::Scenario& scenario, const
     while (static_cast<double>(next_frame) * frame_period <= ep.time() + 1e-9) {
       for (const auto& c : sc.cameras.names) {
         const Frame f = ep.render(c);
-        cv::Mat rgb(f.height, f.width, CV_8UC3, const_cast<std::uint8_t*>(f.rgb.data())), bgr;
-        cv::cvtColor(rgb, bgr, cv::COLOR_RGB2BGR);
-        char name[64];
-        std::snprintf(name, sizeof(name), "%019lld.png", static_cast<long long>(std::llround(ep.time() * 1e9)));
-        const fs::path file = fs::path(out_dir) / c / name;
-        if (!cv::imwrite(file.string(), bgr)) throw std::runtime_error(file.string() + ": cannot be written");
+        write_frame_png(frame_png_path(out_dir, c, unav::Time::from_seconds(ep.time()).ns), f.rgb.data(), f.width,
+                        f.height);
         ++r.frames;
       }
       ++next_frame;

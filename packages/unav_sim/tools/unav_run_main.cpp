@@ -1,26 +1,64 @@
-// unav run SCENARIO.yaml --in-process [--seed N] [--out DIR] [--no-images]: one scenario flown in
-// process by the one builder (unav_sim/scenario_run.hpp). Ctrl-C stops after the current control
-// period with every file written so far complete. Over DDS the same file runs as the nodes'
-// `scenario:=` parameter (physics_server, underwater_renderer).
+// unav run SCENARIO.yaml [--in-process] [--seed N] [--out DIR] [--no-images]: one scenario, its
+// ground truth (OUT/ground_truth.tum) and every camera's frames (OUT/<camera>/<t_ns>.png).
+//  - over DDS (default): the scenario is checked here, before any process starts, then this
+//    process becomes `unav launch launch_scripts/scenario.launch.yaml scenario:=FILE ...`
+//    (physics, MPC, allocator, renderer, mission: one process each, in lockstep);
+//  - --in-process: the Episode built by the one builder (unav_sim/scenario_run.hpp).
+// Both write the same files, byte for byte (system test scenario_equivalence). Ctrl-C stops with
+// every file written so far complete.
 #include <CLI/CLI.hpp>
 
 #include <signal.h>
+#include <unistd.h>
 
 #include <atomic>
+#include <cerrno>
 #include <cstdio>
+#include <cstring>
+#include <filesystem>
 #include <iostream>
+#include <string>
+#include <vector>
 
 #include "unav_common/errors.hpp"
+#include "unav_common/resources.hpp"
 #include "unav_scene/scenario.hpp"
 #include "unav_sim/scenario_run.hpp"
 
 namespace {
 std::atomic<bool> g_stop{false};
 void on_signal(int) { g_stop = true; }
+// Becomes `unav launch scenario.launch.yaml ...` (exec: Ctrl-C reaches the launch directly).
+int run_over_dds(const unav::scene::Scenario& s, const std::string& file, std::int64_t seed, const std::string& out,
+                 bool no_images) {
+  if (no_images) {
+    std::cerr << "unav run: --no-images is for --in-process (over DDS the renderer is a lockstep participant)\n";
+    return 2;
+  }
+  const std::string launch = unav::common::find_resource("launch_scripts/scenario.launch.yaml");
+  unav::sim::write_concrete_scenario(s, out);
+  std::vector<std::string> args = {"unav",
+                                   "launch",
+                                   launch,
+                                   "scenario:=" + std::filesystem::absolute(file).string(),
+                                   "seed:=" + std::to_string(seed),
+                                   "duration:=" + std::to_string(s.mission.duration_s),
+                                   "output_dir:=" + std::filesystem::absolute(out).string()};
+  std::printf("unav run: %s (seed %lld) over DDS: %s\n  outputs: %s/ground_truth.tum, %s/<camera>/*.png\n",
+              s.name.c_str(), static_cast<long long>(s.seed), launch.c_str(), out.c_str(), out.c_str());
+  std::fflush(stdout);
+  std::vector<char*> argv;
+  for (auto& a : args) argv.push_back(a.data());
+  argv.push_back(nullptr);
+  execvp(argv[0], argv.data());
+  std::cerr << "unav run: cannot start 'unav launch' (" << std::strerror(errno) << "); is the workspace sourced?\n";
+  return 1;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App app{"unav run: one scenario, in process (the Episode of the gym and datagen)"};
+  CLI::App app{"unav run: one scenario, over DDS (one process per node, lockstep) or --in-process"};
   std::string file, out;
   std::int64_t seed = -1;
   bool in_process = false, no_images = false;
@@ -31,14 +69,10 @@ int main(int argc, char** argv) {
   app.add_option("--out", out, "output folder (default: out/<scenario name>)");
   app.add_flag("--no-images", no_images, "write the ground truth only");
   CLI11_PARSE(app, argc, argv);
-  if (!in_process) {
-    std::cerr << "unav run: only --in-process runs here; over DDS: unav launch launch_scripts/scenario.launch.yaml "
-                 "scenario:=FILE (see docs/scenarios.md)\n";
-    return 2;
-  }
   try {
     const unav::scene::Scenario s = unav::scene::load_scenario_param(file, seed);
     if (out.empty()) out = "out/" + s.name;
+    if (!in_process) return run_over_dds(s, file, seed, out, no_images);
     signal(SIGINT, on_signal);
     signal(SIGTERM, on_signal);
     unav::sim::ScenarioRunOptions o;

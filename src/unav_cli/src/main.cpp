@@ -341,7 +341,7 @@ int main(int argc, char** argv) {
 
   app.add_subcommand("datagen", "randomized synthetic datasets, locally or on Slurm (unav datagen --help)");
 
-  app.add_subcommand("run", "one scenario file flown in process: ground truth and images (unav run --help)");
+  app.add_subcommand("run", "one scenario file over DDS or --in-process: ground truth and images (unav run --help)");
 
   const auto run_bag = add_bag_command(app);
   const auto run_security = add_security_command(app);

@@ -20,6 +20,7 @@
 #include <vector>
 
 #include "unav_common/config.hpp"
+#include "unav_common/time.hpp"
 #include "unav_control/allocator.hpp"
 #include "unav_control/config.hpp"
 #include "unav_control/mpc.hpp"
@@ -88,7 +89,10 @@ class Episode {
   Frame collect();
 
   const RigidBodyState& state() const { return sim_->state(); }
-  double time() const { return time_offset_ + sim_->time(); }  ///< s since reset()
+  /// s since reset(), as a stamp on the wire carries it (whole nanoseconds, then seconds: what the
+  /// nodes of the same scenario compute from their messages' stamps), so that the MPC, the mission
+  /// and the renderer see the very same double in process and over DDS.
+  double time() const { return unav::Time::from_seconds(time_offset_ + sim_->time()).seconds(); }
   const World& world() const;
   const EpisodeSetup& setup() const { return setup_; }
   const EpisodeTimings& timings() const { return timings_; }
