@@ -51,7 +51,8 @@ struct ScenarioMissionParams {
         Field("scenario_seed", &scenario_seed).Min(-1.0).Doc("draw of the scenario's distributions; -1 = its seed"));
     a->Visit(
         Field("ground_truth_file", &ground_truth_file).Doc("TUM file of the state every control period; empty = none"));
-    a->Visit(Field("images_dir", &images_dir).Doc("folder of every camera's rgb frames (<cam>/<t_ns>.png); empty = none"));
+    a->Visit(
+        Field("images_dir", &images_dir).Doc("folder of every camera's rgb frames (<cam>/<t_ns>.png); empty = none"));
     a->Visit(Field("lockstep", &lockstep).Doc("ack every state on /lockstep/ack (after its setpoint and frames)"));
     a->Visit(Field("lockstep_name", &lockstep_name).Doc("participant name in acks"));
   }
