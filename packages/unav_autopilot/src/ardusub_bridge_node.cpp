@@ -22,14 +22,14 @@ std::string resource(const std::string& rel) { return unav::common::try_find_res
 
 ArduSubBridge::ArduSubBridge(const unav::NodeOptions& options) : Node("ardusub_bridge", options, "rov") {
   ArduSubBridgeParams p;
-  p.scenario = resource("config/scenarios/ardusub_pipe.yaml");
+  p.scenario.file = resource("config/scenarios/ardusub_pipe.yaml");
   p.motor_map = resource("config/autopilot/ardusub_bluerov2_heavy.yaml");
   declare_params(&p);
-  if (p.scenario.empty() || p.motor_map.empty())
+  if (!p.scenario.given() || p.motor_map.empty())
     throw unav::ParameterError("node '" + name() +
                                "': 'scenario' and 'motor_map' are required (unav_resources is not installed, so "
                                "there is no default)");
-  const unav::scene::Scenario sc = unav::scene::load_scenario_param(p.scenario, p.scenario_seed);
+  const unav::scene::Scenario sc = p.scenario.load();
   backend_ =
       std::make_unique<JsonBackend>(sc, unav::scene::load_world(sc.world), load_motor_map(p.motor_map), p.motor_map);
   publish_period_ = p.publish_period;
@@ -61,7 +61,7 @@ ArduSubBridge::ArduSubBridge(const unav::NodeOptions& options) : Node("ardusub_b
   next_publish_ = publish_period_;
   timer_ = create_wall_timer(std::chrono::milliseconds(1), [this] { drain(); });
   logger()->info("ArduPilot JSON backend on udp {}:{} (scenario {}, motor map {}); waiting for SITL", p.address,
-                 bound_port_, p.scenario, p.motor_map);
+                 bound_port_, p.scenario.file, p.motor_map);
 }
 
 ArduSubBridge::~ArduSubBridge() {

@@ -21,12 +21,14 @@
 #include "unav_common/config.hpp"
 #include "unav_physics/vehicle_ports.hpp"
 #include "unav_runtime/runtime.hpp"
+#include "unav_scene/scenario.hpp"
 
 namespace unav::autopilot {
 
 struct ArduSubBridgeParams {
-  std::string scenario;  ///< default: the installed config/scenarios/ardusub_pipe.yaml
-  int64_t scenario_seed = -1;
+  /// its world (seabed, current), vehicle, initial state and dt; default: the installed
+  /// config/scenarios/ardusub_pipe.yaml
+  unav::scene::ScenarioParam scenario;
   std::string motor_map;  ///< default: the installed config/autopilot/ardusub_bluerov2_heavy.yaml
   std::string address = "127.0.0.1";
   int64_t port = 9002;
@@ -37,9 +39,7 @@ struct ArduSubBridgeParams {
   template <class Archive>
   void Serialize(Archive* a) {
     using unav::common::Field;
-    a->Visit(Field("scenario", &scenario).Doc("scenario YAML: world (seabed, current), vehicle, initial state, dt"));
-    a->Visit(
-        Field("scenario_seed", &scenario_seed).Min(-1.0).Doc("draw of the scenario's distributions; -1 = its seed"));
+    scenario.Serialize(a);
     a->Visit(Field("motor_map", &motor_map).Doc("ArduSub motor -> thruster map (config/autopilot/*.yaml)"));
     a->Visit(Field("address", &address).Doc("UDP address to bind (loopback by default; others warn)"));
     a->Visit(Field("port", &port).Range(0, 65535).Doc("UDP port ArduPilot's JSON backend sends to (0: any free one)"));

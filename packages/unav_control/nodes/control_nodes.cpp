@@ -6,7 +6,9 @@
 
 #include "unav_common/resources.hpp"
 #include "unav_control/config.hpp"
+#include "unav_physics/scenario_builder.hpp"
 #include "unav_runtime/conversions.hpp"
+#include "unav_scene/scenario.hpp"
 #include "unav_scene/world.hpp"
 
 namespace unav::control {
@@ -49,6 +51,9 @@ ControlAllocatorNode::ControlAllocatorNode(const unav::NodeOptions& options)
   ControllerFileParam fp;
   fp.config_file = resource("config/controllers/allocator.yaml");
   declare_params(&fp);
+  unav::scene::ScenarioParam scenario;
+  declare_params(&scenario);
+  if (scenario.given()) fp.config_file = scenario.load().control.allocator;  // as the in-process Episode
   const std::string& file = fp.config_file;
   AllocatorParams params = load_allocator_params(file);
   declare_params(&params);  // params files and -p name:=value, checked by the schema
@@ -60,6 +65,7 @@ ControlAllocatorNode::ControlAllocatorNode(const unav::NodeOptions& options)
       create_subscription<std_msgs::msg::String>("thrusters/set_failed", unav::QoS::reliable(),
                                                  [this](const std_msgs::msg::String& m) { on_set_failed(m.data()); });
   pub_ = create_publisher<unav_msgs::msg::ThrusterCommand>("thrusters/command", unav::QoS::reliable());
+  achieved_pub_ = create_publisher<geometry_msgs::msg::WrenchStamped>("control/wrench_achieved", unav::QoS::reliable());
   sub_ = create_subscription<geometry_msgs::msg::WrenchStamped>(
       "control/wrench_command", unav::QoS::reliable(), [this](const geometry_msgs::msg::WrenchStamped& w) {
         Vector6d tau;
@@ -74,6 +80,10 @@ ControlAllocatorNode::ControlAllocatorNode(const unav::NodeOptions& options)
           logger()->warn("wrench saturates the thrusters (scale {:.2f}); {} saturated commands so far", s.scale,
                          saturated_);
         }
+        geometry_msgs::msg::WrenchStamped achieved;
+        achieved.header() = w.header();
+        achieved.wrench() = unav::to_wrench_msg(s.achieved);
+        achieved_pub_->publish(achieved);  // before the command: the MPC has it when the next state comes
         unav_msgs::msg::ThrusterCommand cmd;
         cmd.header() = w.header();
         cmd.u().assign(u.data(), u.data() + u.size());
@@ -105,6 +115,14 @@ MpcControllerNode::MpcControllerNode(const unav::NodeOptions& options) : Node("m
   ControllerFileParam fp;
   fp.config_file = resource("config/controllers/mpc.yaml");
   declare_params(&fp);
+  unav::scene::ScenarioParam scenario;
+  declare_params(&scenario);
+  physics::EnvironmentParams environment;
+  if (scenario.given()) {  // the MPC the in-process Episode builds from the same scenario
+    const unav::scene::Scenario sc = scenario.load();
+    fp.config_file = sc.control.mpc;
+    environment = physics::scenario_simulator_options(sc, 0.0).environment;
+  }
   const std::string& file = fp.config_file;
   // One parameter system: the schema's defaults, then the config file, then this node's params
   // files and `-p name:=value` (e.g. -p horizon_steps:=30), each checked by the schema.
@@ -115,13 +133,14 @@ MpcControllerNode::MpcControllerNode(const unav::NodeOptions& options) : Node("m
   MpcNodeParams np;
   declare_params(&np);
   setpoint_sync_ = np.setpoint_sync;
+  achieved_sync_ = np.achieved_sync;
   if (setpoint_sync_ && cfg.options.max_solve_time_ms > 0.0) {
     // Lockstep promises identical runs: a wall-clock budget would make the plan depend on load.
     logger()->info("lockstep (setpoint_sync): max_solve_time_ms {} ignored, solves bounded by {} iterations",
                    cfg.options.max_solve_time_ms, cfg.options.max_iterations);
     cfg.options.max_solve_time_ms = 0.0;
   }
-  mpc_ = wrap_config([&] { return std::make_unique<Mpc>(cfg.model, cfg.options); });
+  mpc_ = wrap_config([&] { return std::make_unique<Mpc>(cfg.model, cfg.options, environment); });
   pub_ = create_publisher<geometry_msgs::msg::WrenchStamped>("control/wrench_command", unav::QoS::reliable());
   sp_sub_ = create_subscription<geometry_msgs::msg::PoseStamped>(
       "control/pose_setpoint", unav::QoS::reliable(), [this](const geometry_msgs::msg::PoseStamped& m) {
@@ -130,12 +149,11 @@ MpcControllerNode::MpcControllerNode(const unav::NodeOptions& options) : Node("m
         setpoint_.q_WB = unav::from_msg(m.pose().orientation());
         have_setpoint_ = true;
         setpoint_t_ = std::max(setpoint_t_, stamp_of(m.header()));
-        if (pending_ && setpoint_t_ >= stamp_of(pending_->header()) - 1e-9) {
-          const nav_msgs::msg::Odometry odom = *pending_;
-          pending_.reset();
-          solve(odom);
-        }
+        solve_pending();
       });
+  achieved_sub_ = create_subscription<geometry_msgs::msg::WrenchStamped>(
+      "control/wrench_achieved", unav::QoS::reliable(),
+      [this](const geometry_msgs::msg::WrenchStamped& m) { on_achieved(m); });
   odom_sub_ = create_subscription<nav_msgs::msg::Odometry>("ground_truth/odom", unav::QoS::reliable(),
                                                            [this](const nav_msgs::msg::Odometry& m) { on_odom(m); });
   logger()->info("MPC: horizon {} x {:.3f} s, model {}", cfg.options.horizon_steps, dt_, cfg.model_vehicle_path);
@@ -154,11 +172,36 @@ void MpcControllerNode::on_odom(const nav_msgs::msg::Odometry& m) {
     return;
   }
   if (next_t_ >= 0.0 && t + 1e-6 < next_t_) return;
-  if (setpoint_sync_ && setpoint_t_ < t - 1e-9) {
-    pending_ = m;  // solved when the setpoint for this instant arrives
+  if (!ready(t)) {
+    pending_ = m;  // solved when the setpoint for this instant (and the last achieved wrench) arrive
     return;
   }
   solve(m);
+}
+
+bool MpcControllerNode::ready(double t) const {
+  if (setpoint_sync_ && setpoint_t_ < t - 1e-9) return false;
+  return !(achieved_sync_ && have_output_ && achieved_t_ < last_output_t_ - 1e-9);
+}
+
+void MpcControllerNode::solve_pending() {
+  if (!pending_ || !ready(stamp_of(pending_->header()))) return;
+  const nav_msgs::msg::Odometry odom = *pending_;
+  pending_.reset();
+  solve(odom);
+}
+
+// The wrench the thrusters gave for our last command: the estimator's input until the next solve
+// (the in-process Episode passes the allocator's achieved wrench the same way).
+void MpcControllerNode::on_achieved(const geometry_msgs::msg::WrenchStamped& m) {
+  const double t = stamp_of(m.header());
+  if (!have_output_ || std::abs(t - last_output_t_) > 1e-9 || t <= achieved_t_) return;  // not for our last command
+  Vector6d w;
+  w << m.wrench().force().x(), m.wrench().force().y(), m.wrench().force().z(), m.wrench().torque().x(),
+      m.wrench().torque().y(), m.wrench().torque().z();
+  mpc_->SetAppliedWrench(w);
+  achieved_t_ = t;
+  solve_pending();
 }
 
 void MpcControllerNode::solve(const nav_msgs::msg::Odometry& m) {

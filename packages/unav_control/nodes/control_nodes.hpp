@@ -3,21 +3,29 @@
 // control_allocator
 //   sub  control/wrench_command   geometry_msgs/WrenchStamped  body FRD [N, N m]
 //   pub  thrusters/command        unav_msgs/ThrusterCommand    u_i in [-1, 1], stamped as the wrench
+//   pub  control/wrench_achieved  geometry_msgs/WrenchStamped  B T(u) of that command (what the
+//                                 thrusters really give, e.g. scaled when saturated), stamped alike
 //   sub  thrusters/set_failed     std_msgs/String  "T3" marks thruster T3 failed, "T3:false" repairs
 //                                 it; the allocation is recomputed at once
-//   params: config_file (allocator YAML; default <unav_resources>/config/controllers/allocator.yaml)
+//   params: config_file (allocator YAML; default <unav_resources>/config/controllers/allocator.yaml),
+//           scenario (its control.allocator replaces config_file)
 //
 // mpc_controller
 //   sub  ground_truth/odom (remap to any odometry)  nav_msgs/Odometry  world_ned / base_link_frd;
 //        NaN/Inf or a non-unit quaternion is rejected and counted (no solve, no answer)
 //   sub  control/pose_setpoint    geometry_msgs/PoseStamped (world_ned)
+//   sub  control/wrench_achieved  geometry_msgs/WrenchStamped: the allocator's achieved wrench for
+//        the last command, given to the MPC's estimator (Mpc::SetAppliedWrench) before the next
+//        solve, as the in-process Episode does
 //   pub  control/wrench_command   geometry_msgs/WrenchStamped, stamped with the state's time
 //   Solves once per odometry whose stamp reached the next multiple of the MPC dt (lockstep: the
 //   physics barrier period should equal it). No setpoint yet: holds the first received pose.
 //   A failed solve publishes the MPC's safe wrench and a warning; never NaN. With setpoint_sync,
 //   a state is solved only once a setpoint stamped at or after it arrived (the waypoint follower
-//   answers every odometry), which makes lockstep runs repeatable.
-//   params: config_file (mpc YAML; default <unav_resources>/config/controllers/mpc.yaml)
+//   answers every odometry), which makes lockstep runs repeatable; with achieved_sync, also only
+//   once the achieved wrench of its previous command arrived (the same in process and over DDS).
+//   params: config_file (mpc YAML; default <unav_resources>/config/controllers/mpc.yaml),
+//           scenario (its control.mpc replaces config_file; its environment is the model's)
 //
 // waypoint_follower
 //   sub  ground_truth/odom        nav_msgs/Odometry
@@ -61,11 +69,15 @@ struct ControllerFileParam {
 /// mpc_controller's node-level parameter (the MPC's own are MpcParams).
 struct MpcNodeParams {
   bool setpoint_sync = false;
+  bool achieved_sync = false;
   template <class Archive>
   void Serialize(Archive* a) {
     a->Visit(
         unav::common::Field("setpoint_sync", &setpoint_sync)
             .Doc("solve for a state only once a setpoint stamped at or after it arrived (deterministic lockstep)"));
+    a->Visit(unav::common::Field("achieved_sync", &achieved_sync)
+                 .Doc("solve only once the allocator's achieved wrench for the previous command arrived "
+                      "(control/wrench_achieved; deterministic lockstep with an allocator)"));
   }
 };
 
@@ -99,6 +111,7 @@ class ControlAllocatorNode : public unav::Node {
   std::shared_ptr<unav::Subscription<std_msgs::msg::String>> failed_sub_;
   std::shared_ptr<unav::Subscription<geometry_msgs::msg::WrenchStamped>> sub_;
   std::shared_ptr<unav::Publisher<unav_msgs::msg::ThrusterCommand>> pub_;
+  std::shared_ptr<unav::Publisher<geometry_msgs::msg::WrenchStamped>> achieved_pub_;
 };
 
 class MpcControllerNode : public unav::Node {
@@ -111,8 +124,14 @@ class MpcControllerNode : public unav::Node {
  private:
   void on_odom(const nav_msgs::msg::Odometry& m);
   void solve(const nav_msgs::msg::Odometry& m);
+  void on_achieved(const geometry_msgs::msg::WrenchStamped& m);
+  /// Whether the state at t may be solved now (setpoint_sync, achieved_sync).
+  bool ready(double t) const;
+  void solve_pending();
   std::unique_ptr<Mpc> mpc_;
   bool setpoint_sync_ = false;
+  bool achieved_sync_ = false;
+  double achieved_t_ = -1.0;  ///< stamp of the last achieved wrench given to the MPC
   double setpoint_t_ = -1.0;
   std::optional<nav_msgs::msg::Odometry> pending_;
   double dt_ = 0.05;
@@ -127,6 +146,7 @@ class MpcControllerNode : public unav::Node {
   unav::RejectionCounter rejections_{logger()};
   std::shared_ptr<unav::Subscription<nav_msgs::msg::Odometry>> odom_sub_;
   std::shared_ptr<unav::Subscription<geometry_msgs::msg::PoseStamped>> sp_sub_;
+  std::shared_ptr<unav::Subscription<geometry_msgs::msg::WrenchStamped>> achieved_sub_;
   std::shared_ptr<unav::Publisher<geometry_msgs::msg::WrenchStamped>> pub_;
 };
 

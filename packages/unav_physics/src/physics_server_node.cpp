@@ -39,8 +39,8 @@ PhysicsServer::PhysicsServer(const unav::NodeOptions& options) : Node("physics_s
   // A scenario gives the plant (world, vehicle, step, initial state) as the in-process Episode
   // takes it, through the same builder (unav_physics/scenario_builder.hpp).
   std::optional<unav::scene::Scenario> scenario;
-  if (!p.scenario.empty()) {
-    scenario = unav::scene::load_scenario_param(p.scenario, p.scenario_seed);
+  if (p.scenario.given()) {
+    scenario = p.scenario.load();
     p.vehicle_config = scenario->vehicle.model;
     p.world = scenario->world;
     p.dt = scenario->physics.dt;
@@ -77,7 +77,7 @@ PhysicsServer::PhysicsServer(const unav::NodeOptions& options) : Node("physics_s
   if (scenario) {
     const unav::scene::World world = unav::scene::load_world(scenario->world);
     sim_ = build_simulator(*scenario, world, so, vehicle);
-    logger()->info("scenario {} (seed {}): world {}, vehicle {}", p.scenario, scenario->seed, scenario->world,
+    logger()->info("scenario {} (seed {}): world {}, vehicle {}", p.scenario.file, scenario->seed, scenario->world,
                    scenario->vehicle.model);
   } else {
     build_from_params(p, so, vehicle);

@@ -67,14 +67,16 @@
 #include "unav_runtime/lockstep.hpp"
 #include "unav_runtime/runtime.hpp"
 #include "unav_runtime/validation.hpp"
+#include "unav_scene/scenario.hpp"
 #include "unav_scene/world.hpp"
 
 namespace unav::physics {
 
 /// The physics_server's parameters (params file or `-p name:=value`; `physics_server --help`).
 struct PhysicsServerParams {
-  std::string scenario;
-  int64_t scenario_seed = -1;
+  /// its world, vehicle, physics and initial state replace vehicle_config, world, dt, integrator,
+  /// initial_position and initial_rpy (the in-process Episode builds the same)
+  unav::scene::ScenarioParam scenario;
   std::string vehicle_config;  ///< default: the installed bluerov2_heavy.yaml
   std::string world;
   std::string current_config;
@@ -99,11 +101,7 @@ struct PhysicsServerParams {
   template <class Archive>
   void Serialize(Archive* a) {
     using unav::common::Field;
-    a->Visit(Field("scenario", &scenario)
-                 .Doc("scenario YAML: its world, vehicle, physics and initial state replace vehicle_config, world, "
-                      "dt, integrator, initial_position and initial_rpy (the in-process Episode builds the same)"));
-    a->Visit(
-        Field("scenario_seed", &scenario_seed).Min(-1.0).Doc("draw of the scenario's distributions; -1 = its seed"));
+    scenario.Serialize(a);
     a->Visit(Field("vehicle_config", &vehicle_config).Doc("vehicle YAML (config/vehicles/*.yaml)"));
     a->Visit(Field("world", &world)
                  .Doc("world.yaml: its seabed (relief, heightmap) and current drive the physics; "

@@ -57,8 +57,8 @@ UnderwaterRendererNode::UnderwaterRendererNode(const unav::NodeOptions& options)
   declare_params(&prm);
   std::vector<CameraModel> scenario_cams;
   auto noise_seed = static_cast<std::uint64_t>(prm.seed);
-  if (!prm.scenario.empty()) {  // the renderer's part of the scenario, as the in-process Episode takes it
-    const scene::Scenario sc = scene::load_scenario_param(prm.scenario, prm.scenario_seed);
+  if (prm.scenario.given()) {  // the renderer's part of the scenario, as the in-process Episode takes it
+    const scene::Scenario sc = prm.scenario.load();
     prm.world = sc.world;
     prm.water = sc.water;
     prm.cameras_config = sc.cameras.config;

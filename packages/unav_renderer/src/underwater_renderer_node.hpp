@@ -42,13 +42,16 @@
 #include "unav_runtime/lockstep_ack.hpp"
 #include "unav_runtime/runtime.hpp"
 #include "unav_runtime/validation.hpp"
+#include "unav_scene/scenario.hpp"
 
 namespace unav::renderer {
 
 /// The underwater_renderer's parameters (params file or `-p name:=value`; `--help` lists them).
 struct UnderwaterRendererParams {
-  std::string scenario;
-  int64_t scenario_seed = -1;
+  /// its world, water, cameras (config, names, size, rate), render switches and seed replace world,
+  /// water, cameras_config, cameras, rate, render and seed (the noise seed is then MixSeed(scenario
+  /// seed), as the in-process Episode's)
+  unav::scene::ScenarioParam scenario;
   std::string world;           ///< default: the installed worlds/pipe_inspection/world.yaml
   std::string cameras_config;  ///< default: the installed config/sensors/bluerov2_cameras.yaml
   std::string water;
@@ -66,12 +69,7 @@ struct UnderwaterRendererParams {
   template <class Archive>
   void Serialize(Archive* a) {
     using unav::common::Field;
-    a->Visit(Field("scenario", &scenario)
-                 .Doc("scenario YAML: its world, water, cameras (config, names, size, rate), render switches "
-                      "and seed replace world, water, cameras_config, cameras, rate, render and seed (the noise "
-                      "seed is then MixSeed(scenario seed), as the in-process Episode's)"));
-    a->Visit(
-        Field("scenario_seed", &scenario_seed).Min(-1.0).Doc("draw of the scenario's distributions; -1 = its seed"));
+    scenario.Serialize(a);
     a->Visit(Field("world", &world).Doc("world.yaml path"));
     a->Visit(Field("cameras_config", &cameras_config).Doc("camera YAML path"));
     a->Visit(Field("water", &water).Doc("Jerlov preset (I, II, 3C, ...) or water YAML path; empty = the world's"));

@@ -75,6 +75,8 @@ Scenario load_scenario(const std::string& path, std::optional<std::uint64_t> see
   return parse_scenario(root, path, fs::path(path).parent_path().string(), seed);
 }
 
+Scenario ScenarioParam::load() const { return load_scenario_param(file, seed); }
+
 Scenario load_scenario_param(const std::string& path, int64_t seed) {
   return load_scenario(path, seed >= 0 ? std::optional<std::uint64_t>(seed) : std::nullopt);
 }

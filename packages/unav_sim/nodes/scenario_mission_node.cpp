@@ -12,8 +12,8 @@ namespace unav::sim {
 ScenarioMissionNode::ScenarioMissionNode(const unav::NodeOptions& options) : Node("scenario_mission", options, "rov") {
   ScenarioMissionParams p;
   declare_params(&p);
-  if (p.scenario.empty()) throw unav::ParameterError("node '" + name() + "': parameter 'scenario' is required");
-  scenario_ = unav::scene::load_scenario_param(p.scenario, p.scenario_seed);
+  if (!p.scenario.given()) throw unav::ParameterError("node '" + name() + "': parameter 'scenario' is required");
+  scenario_ = p.scenario.load();
   if (!p.ground_truth_file.empty()) {
     const std::filesystem::path parent = std::filesystem::path(p.ground_truth_file).parent_path();
     if (!parent.empty()) std::filesystem::create_directories(parent);
@@ -38,7 +38,7 @@ ScenarioMissionNode::ScenarioMissionNode(const unav::NodeOptions& options) : Nod
   }
   sub_ = create_subscription<nav_msgs::msg::Odometry>("ground_truth/odom", unav::QoS::reliable(100),
                                                       [this](const nav_msgs::msg::Odometry& m) { on_odom(m); });
-  logger()->info("mission of {} ({} waypoints, {:.1f} s){}", p.scenario, scenario_.mission.waypoints.size(),
+  logger()->info("mission of {} ({} waypoints, {:.1f} s){}", p.scenario.file, scenario_.mission.waypoints.size(),
                  scenario_.mission.duration_s, images_dir_.empty() ? "" : ", frames to " + images_dir_);
 }
 

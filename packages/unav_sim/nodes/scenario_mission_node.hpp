@@ -36,8 +36,8 @@
 namespace unav::sim {
 
 struct ScenarioMissionParams {
-  std::string scenario;
-  int64_t scenario_seed = -1;
+  /// the scenario whose mission is flown (required)
+  unav::scene::ScenarioParam scenario;
   std::string ground_truth_file;
   std::string images_dir;
   bool lockstep = false;
@@ -46,9 +46,7 @@ struct ScenarioMissionParams {
   template <class Archive>
   void Serialize(Archive* a) {
     using unav::common::Field;
-    a->Visit(Field("scenario", &scenario).Doc("scenario YAML whose mission is flown"));
-    a->Visit(
-        Field("scenario_seed", &scenario_seed).Min(-1.0).Doc("draw of the scenario's distributions; -1 = its seed"));
+    scenario.Serialize(a);
     a->Visit(
         Field("ground_truth_file", &ground_truth_file).Doc("TUM file of the state every control period; empty = none"));
     a->Visit(

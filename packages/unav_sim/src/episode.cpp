@@ -83,8 +83,9 @@ void Episode::advance(double duration) {
     const control::MpcSummary ms = mpc_->Solve(sim_->state(), setpoint_, t, &w);
     if (!ms.ok()) ++solver_failures_;
     const control::AllocationSummary as = allocator_->Allocate(w, &u);
-    if (as.status == control::AllocationStatus::kScaled || as.status == control::AllocationStatus::kInfeasible)
-      mpc_->SetAppliedWrench(as.achieved);
+    // The estimator's input: what the thrusters give (scaled when saturated), as the MPC node gets
+    // it from the allocator node (control/wrench_achieved).
+    mpc_->SetAppliedWrench(as.achieved);
     sim_->set_command(sim_->time(), u.data(), static_cast<std::size_t>(allocator_->num_thrusters()));
     timings_.control_s += seconds_since(t0);
     ++timings_.control_steps;

@@ -55,6 +55,49 @@ macro(unav_package)
   endif()
 endmacro()
 
+# unav_add_library(NAME [SHARED|STATIC] SOURCES ... [PUBLIC libs...] [PRIVATE libs...]): a library
+# of the package with include/ as its public headers (build and install trees) and the alias
+# <PROJECT_NAME>::<NAME>, the name its users see after find_package(); install it with
+# unav_install_library().
+function(unav_add_library name)
+  cmake_parse_arguments(ARG "SHARED;STATIC" "" "SOURCES;PUBLIC;PRIVATE" ${ARGN})
+  set(_type "")
+  if(ARG_SHARED)
+    set(_type SHARED)
+  elseif(ARG_STATIC)
+    set(_type STATIC)
+  endif()
+  add_library(${name} ${_type} ${ARG_SOURCES})
+  add_library(${PROJECT_NAME}::${name} ALIAS ${name})
+  target_include_directories(${name} PUBLIC
+    $<BUILD_INTERFACE:${CMAKE_CURRENT_SOURCE_DIR}/include> $<INSTALL_INTERFACE:include>)
+  if(ARG_PUBLIC)
+    target_link_libraries(${name} PUBLIC ${ARG_PUBLIC})
+  endif()
+  if(ARG_PRIVATE)
+    target_link_libraries(${name} PRIVATE ${ARG_PRIVATE})
+  endif()
+endfunction()
+
+# unav_add_node(LIB DIR dir SOURCES ... LINKS ... EXECUTABLES name=main.cpp ...): a package's thin
+# DDS adapter: a static library LIB (the in-process node tests link it; its headers in DIR) and
+# its executables, each built from DIR/<main>, linked to LIB and installed in lib/<PROJECT_NAME>
+# (where `unav launch` and `unav run` find them).
+function(unav_add_node lib)
+  cmake_parse_arguments(ARG "" "DIR" "SOURCES;LINKS;EXECUTABLES" ${ARGN})
+  add_library(${lib} STATIC ${ARG_SOURCES})
+  target_include_directories(${lib} PUBLIC ${CMAKE_CURRENT_SOURCE_DIR}/${ARG_DIR})
+  target_link_libraries(${lib} PUBLIC ${ARG_LINKS})
+  foreach(_exe IN LISTS ARG_EXECUTABLES)
+    string(REPLACE "=" ";" _kv "${_exe}")
+    list(GET _kv 0 _name)
+    list(GET _kv 1 _main)
+    add_executable(${_name} ${ARG_DIR}/${_main})
+    target_link_libraries(${_name} PRIVATE ${lib})
+    install(TARGETS ${_name} DESTINATION lib/${PROJECT_NAME})
+  endforeach()
+endfunction()
+
 # unav_add_gtest(NAME SOURCES... LIBS ... [TIMEOUT s] [ENV ...] [REPO]): a GoogleTest executable
 # registered with CTest. Each test case becomes its own CTest test (gtest_discover_tests), with a
 # timeout. REPO: the test reads the repository's data: UNAV_REPO_ROOT is defined (a string) and

@@ -152,6 +152,27 @@ struct Scenario {
 Scenario load_scenario(const std::string& path, std::optional<std::uint64_t> seed = std::nullopt);
 /// load_scenario() as a node parameter or command-line option gives the seed: < 0 = the file's.
 Scenario load_scenario_param(const std::string& path, int64_t seed);
+
+/// The `scenario` and `scenario_seed` parameters of a node that takes its part of a scenario
+/// (physics_server, underwater_renderer, mpc_controller, control_allocator, ardusub_bridge,
+/// scenario_mission): Serialize() visits both at the caller's level, so a node's params struct
+/// embeds it as `ScenarioParam scenario;` and calls `scenario.Serialize(a)`.
+struct ScenarioParam {
+  std::string file;
+  int64_t seed = -1;
+  template <class Archive>
+  void Serialize(Archive* a) {
+    using unav::common::Field;
+    a->Visit(Field("scenario", &file)
+                 .Doc("scenario YAML (config/scenarios/*.yaml) whose part this node takes; "
+                      "empty = none (the node's own parameters)"));
+    a->Visit(Field("scenario_seed", &seed).Min(-1.0).Doc("draw of the scenario's distributions; -1 = its seed"));
+  }
+  bool given() const { return !file.empty(); }
+  /// load_scenario_param(file, seed).
+  Scenario load() const;
+};
+
 /// The same for a scenario given as YAML (`file` names it in errors; relative paths resolve
 /// against `dir`).
 Scenario parse_scenario(const YAML::Node& root, const std::string& file, const std::string& dir,
