@@ -65,3 +65,20 @@ fi
 "$VENV/bin/python" -c "import gymnasium, stable_baselines3, torch, pandas, tqdm, rich, rosbags.rosbag2, mcap_ros2" \
   || { echo "install_deps: the venv $VENV cannot import the learning stack"; exit 1; }
 echo "install_deps: Python venv $VENV ready (gymnasium, stable-baselines3 over Debian's torch)"
+
+# The TypeScript readers Foxglove uses (test_foxglove_readers): Node.js from Debian when none is
+# installed, then the pinned packages of src/unav_bag/test/foxglove/package-lock.json.
+if ! command -v node >/dev/null || ! command -v npm >/dev/null; then
+  SUDO=""
+  [ "$(id -u)" -eq 0 ] || SUDO="sudo"
+  echo "install_deps: installing nodejs and npm (Debian)"
+  $SUDO apt-get update -q
+  DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -q -o DPkg::Lock::Timeout=900 nodejs npm
+fi
+FOXGLOVE_DIR="$(cd "$(dirname "$0")/.." && pwd)/src/unav_bag/test/foxglove"
+if [ ! -f "$FOXGLOVE_DIR/node_modules/.package-lock.json" ] ||
+   ! cmp -s "$FOXGLOVE_DIR/package-lock.json" "$FOXGLOVE_DIR/node_modules/.lock-installed"; then
+  echo "install_deps: npm ci (Foxglove's readers, pinned) in $FOXGLOVE_DIR"
+  (cd "$FOXGLOVE_DIR" && npm ci --no-audit --no-fund --loglevel=error && cp package-lock.json node_modules/.lock-installed)
+fi
+echo "install_deps: Foxglove's TypeScript readers ready ($(node --version))"

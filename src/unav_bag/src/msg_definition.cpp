@@ -101,7 +101,9 @@ std::string ros2msg_definition(intro::TypeRegistry& registry, const std::string&
   std::set<const intro::StructType*> seen{&root};
   collect(root, deps, seen);
   for (const auto* d : deps) {
-    text += std::string(80, '=') + "\nMSG: " + intro::dds_to_ros_name(d->name) + "\n" + body(registry, *d);
+    // rosbag2 names a dependency as its fields do ("MSG: std_msgs/Header", not std_msgs/msg/Header):
+    // Foxglove's parser (@foxglove/rosmsg) resolves a field's type by exactly that name.
+    text += std::string(80, '=') + "\nMSG: " + msg_type_ref(*d) + "\n" + body(registry, *d);
   }
   return text;
 }

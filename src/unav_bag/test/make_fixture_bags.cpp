@@ -1,10 +1,13 @@
-// Writes bags of known content for test_external_readers.py: OUT/mcap, OUT/mcap_zstd and
-// OUT/sqlite3, each with /tf, /rov/odom, /rov/dvl (a unav_msgs type), /rov/range (constants in
-// its schema) and /rov/camera/image (640x480 rgb8). Message i of every topic is stamped
-// kStart + i * 100 ms and carries i in a field the test checks.
+// Writes bags of known content for test_external_readers.py and test_foxglove_readers: OUT/mcap,
+// OUT/mcap_zstd and OUT/sqlite3, each with /tf, /rov/odom, /rov/dvl (a unav_msgs type), /rov/range
+// (constants in its schema) and /rov/camera/image (640x480 rgb8). Message i of every topic is
+// stamped kStart + i * 100 ms and carries i in a field the test checks. OUT/all_types (MCAP, zstd):
+// two messages (every field at its default) of every message type of interfaces/, one topic each
+// (/all/<pkg>/<Type>): every schema we can write, for every reader.
 #include <cstdio>
 #include <cstring>
 #include <string>
+#include <vector>
 
 #include <yaml-cpp/yaml.h>
 
@@ -131,5 +134,26 @@ int main(int argc, char** argv) {
     }
     w.close();
   }
+  // Every message type of interfaces/ (services' request/response types are not published alone).
+  unav::bag::BagWriter::Options opt;
+  opt.storage_id = "mcap";
+  opt.compression = "zstd";
+  unav::bag::BagWriter all(out + "/all_types", opt);
+  std::vector<std::vector<uint8_t>> samples;
+  for (const std::string& type : reg.list()) {
+    if (type.find("/msg/") == std::string::npos) continue;
+    unav::bag::TopicMetadata m;
+    m.name = "/all/" + type.substr(0, type.find('/')) + type.substr(type.rfind('/'));
+    m.type = type;
+    m.offered_qos_profiles = unav::bag::offered_qos_yaml({{true, false, 10}});
+    m.message_definition = unav::bag::ros2msg_definition(reg, type);
+    all.add_topic(m);
+    samples.push_back(intro::encode(reg.load(type), YAML::Node(YAML::NodeType::Map)));
+  }
+  for (int i = 0; i < 2; ++i)
+    for (size_t k = 0; k < samples.size(); ++k)
+      all.write(k, kStart + i * 100000000LL + static_cast<int64_t>(k), samples[k].data(), samples[k].size());
+  all.close();
+  std::printf("make_fixture_bags: %s/{mcap,mcap_zstd,sqlite3,all_types} (%zu types)\n", out.c_str(), samples.size());
   return 0;
 }

@@ -53,9 +53,11 @@ std::vector<uint8_t> payload(size_t n, int seed) {
 
 TEST(MsgDefinition, HeaderWithItsDependency) {
   auto reg = registry();
+  // As rosbag2 writes it: the dependency named as the field names it (pkg/Type, no "msg/"), which
+  // is the name Foxglove's @foxglove/rosmsg looks up.
   EXPECT_EQ(ros2msg_definition(reg, "std_msgs/msg/Header"),
             "builtin_interfaces/Time stamp\nstring frame_id\n" + std::string(80, '=') +
-                "\nMSG: builtin_interfaces/msg/Time\nint32 sec\nuint32 nanosec\n");
+                "\nMSG: builtin_interfaces/Time\nint32 sec\nuint32 nanosec\n");
 }
 
 TEST(MsgDefinition, ArraysSequencesConstantsAndEachDependencyOnce) {
@@ -65,8 +67,8 @@ TEST(MsgDefinition, ArraysSequencesConstantsAndEachDependencyOnce) {
   EXPECT_NE(imu.find("geometry_msgs/Quaternion orientation\n"), std::string::npos) << imu;
   // Vector3 is used twice (angular velocity, linear acceleration) but defined once.
   size_t n = 0;
-  for (size_t p = imu.find("MSG: geometry_msgs/msg/Vector3\n"); p != std::string::npos;
-       p = imu.find("MSG: geometry_msgs/msg/Vector3\n", p + 1))
+  for (size_t p = imu.find("MSG: geometry_msgs/Vector3\n"); p != std::string::npos;
+       p = imu.find("MSG: geometry_msgs/Vector3\n", p + 1))
     ++n;
   EXPECT_EQ(n, 1u);
   const std::string image = ros2msg_definition(reg, "sensor_msgs/msg/Image");
