@@ -58,8 +58,7 @@ struct DatasetRecorderParams {
   std::string camera = "front";
   std::string cameras_config;
   std::string body_frame = "base_link_frd";
-  bool lockstep = false;
-  std::string lockstep_name = "recorder";
+  unav::lockstep::ParticipantParams lockstep{"recorder"};
   double image_period = 0.1;
   std::string world;
 
@@ -72,8 +71,7 @@ struct DatasetRecorderParams {
     a->Visit(Field("cameras_config", &cameras_config)
                  .Doc("camera YAML for the mount; empty: body_frame -> <camera>_optical from /tf_static"));
     a->Visit(Field("body_frame", &body_frame).Doc("vehicle body frame (tf parent of the camera)"));
-    a->Visit(Field("lockstep", &lockstep).Doc("ack odometry and frames on /lockstep/ack"));
-    a->Visit(Field("lockstep_name", &lockstep_name).Doc("participant name in acks"));
+    lockstep.Serialize(a);
     a->Visit(Field("image_period", &image_period)
                  .Range(1e-3, 10.0)
                  .Unit("s")
@@ -123,8 +121,8 @@ class DatasetRecorder : public unav::Node {
         }
       });
     }
-    ack_name_ = prm.lockstep_name;
-    if (prm.lockstep) {
+    ack_name_ = prm.lockstep.name;
+    if (prm.lockstep.enabled) {
       acker_ = std::make_unique<unav::lockstep::Acker>(*this, ack_name_);
       frame_lead_ns_ = std::llround(prm.image_period * 1e9) - 1000000;  // just under the next frame
       stall_timer_ = create_wall_timer(std::chrono::seconds(1), [this] { check_frame_stall(); });

@@ -43,8 +43,7 @@ struct KltVoNodeParams {
   std::string camera = "down";
   std::string cameras_config;
   std::string mode = "rgbd";
-  bool lockstep = false;
-  std::string lockstep_name = "klt_vo";
+  unav::lockstep::ParticipantParams lockstep{"klt_vo"};
   double image_period = 0.1;
   std::string body_frame = "base_link_frd";
   int64_t path_max_poses = 3000;
@@ -56,8 +55,7 @@ struct KltVoNodeParams {
     a->Visit(Field("cameras_config", &cameras_config)
                  .Doc("camera YAML for the mount (rgbd); empty: body_frame -> <camera>_optical from /tf_static"));
     a->Visit(Field("mode", &mode).OneOf({"rgbd", "monocular"}).Doc("estimator"));
-    a->Visit(Field("lockstep", &lockstep).Doc("ack every processed image on /lockstep/ack"));
-    a->Visit(Field("lockstep_name", &lockstep_name).Doc("participant name in acks"));
+    lockstep.Serialize(a);
     a->Visit(
         Field("image_period", &image_period).Range(1e-3, 10.0).Unit("s").Doc("camera frame period (lockstep acks)"));
     a->Visit(Field("body_frame", &body_frame).Doc("vehicle body frame (tf parent of the camera)"));
@@ -76,8 +74,8 @@ class KltVoNode : public unav::Node {
     const std::string& cam = prm.camera;
     camera_ = cam;
     if (prm.mode == "monocular") options_.mode = KltVoOptions::Mode::kMonocular;
-    lockstep_ = prm.lockstep;
-    ack_name_ = prm.lockstep_name;
+    lockstep_ = prm.lockstep.enabled;
+    ack_name_ = prm.lockstep.name;
     image_period_ = prm.image_period;
     path_max_poses_ = static_cast<size_t>(prm.path_max_poses);
     if (!prm.cameras_config.empty()) {

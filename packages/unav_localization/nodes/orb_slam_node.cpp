@@ -40,8 +40,7 @@ struct OrbSlamNodeParams {
   int features = 1000;
   bool loop_closing = true;
   double clahe_clip = 3.0;
-  bool lockstep = false;
-  std::string lockstep_name = "orb_slam";
+  unav::lockstep::ParticipantParams lockstep{"orb_slam"};
   double image_period = 0.1;
   std::string frame_id = "orb_slam_map";
 
@@ -56,8 +55,7 @@ struct OrbSlamNodeParams {
     a->Visit(Field("clahe_clip", &clahe_clip)
                  .Range(0.0, 40.0)
                  .Doc("CLAHE clip limit before feature extraction (low-contrast frames only), 0 = off"));
-    a->Visit(Field("lockstep", &lockstep).Doc("ack every processed image on /lockstep/ack"));
-    a->Visit(Field("lockstep_name", &lockstep_name).Doc("participant name in acks"));
+    lockstep.Serialize(a);
     a->Visit(
         Field("image_period", &image_period).Range(1e-3, 10.0).Unit("s").Doc("camera frame period (lockstep acks)"));
     a->Visit(Field("frame_id", &frame_id).Doc("odometry frame"));
@@ -76,8 +74,8 @@ class OrbSlamNode : public unav::Node {
     options_.orb.features = prm.features;
     options_.loop_closing = prm.loop_closing;
     options_.clahe_clip = prm.clahe_clip;
-    lockstep_ = prm.lockstep;
-    ack_name_ = prm.lockstep_name;
+    lockstep_ = prm.lockstep.enabled;
+    ack_name_ = prm.lockstep.name;
     image_period_ = prm.image_period;
     frame_id_ = prm.frame_id;
     std::string msg;

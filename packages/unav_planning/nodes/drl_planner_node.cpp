@@ -37,8 +37,8 @@ DrlPlannerNode::DrlPlannerNode(const unav::NodeOptions& options) : Node("drl_pla
     ClassicalFollowerParams c;
     c.hfov_deg = p_.camera_hfov_deg;
     c.height_m = p_.height_above_pipe;
-    c.max_step_angle_deg = p_.max_step_angle_deg;
-    c.max_turn_deg = p_.max_turn_deg;
+    c.max_step_angle_deg = p_.action.max_step_angle_deg;
+    c.max_turn_deg = p_.action.max_turn_deg;
     policy_ = std::make_unique<ClassicalPipeFollower>(c);
   }
   hold_depth_ = p_.hold_depth;
@@ -108,8 +108,7 @@ void DrlPlannerNode::decide(const nav_msgs::msg::Odometry& m) {
   inference_ms_ += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   const Eigen::Vector3d p = unav::from_msg(m.pose().pose().position());
   const double yaw = yaw_of(unav::from_msg(m.pose().pose().orientation()));
-  setpoint_ = unav::control::waypoint_from_action(p, yaw, a, {p_.step_length_m, p_.max_step_angle_deg, p_.max_turn_deg},
-                                                  hold_depth_);
+  setpoint_ = unav::control::waypoint_from_action(p, yaw, a, p_.action, hold_depth_);
   have_setpoint_ = true;
   ++decisions_;
   const auto period_ns = static_cast<std::int64_t>(std::llround(p_.step_period * 1e9));

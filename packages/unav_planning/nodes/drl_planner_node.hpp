@@ -32,9 +32,7 @@ struct DrlPlannerParams {
   std::string model = "models/pipe_follower/policy.onnx";
   std::string camera = "down";
   double step_period = 1.5;
-  double step_length_m = 1.0;
-  double max_step_angle_deg = 60.0;
-  double max_turn_deg = 30.0;
+  unav::control::PipeActionParams action;  ///< as the training environment's (the same keys)
   double hold_depth = -1.0;
   bool sync_images = true;
   double camera_hfov_deg = 90.0;
@@ -52,9 +50,7 @@ struct DrlPlannerParams {
                  .Max(60.0)
                  .Unit("s")
                  .Doc("a new waypoint this often (training: step_duration_s)"));
-    a->Visit(Field("step_length_m", &step_length_m).Above(0.0).Max(5.0).Unit("m"));
-    a->Visit(Field("max_step_angle_deg", &max_step_angle_deg).Range(0.0, 180.0).Unit("deg"));
-    a->Visit(Field("max_turn_deg", &max_turn_deg).Range(0.0, 180.0).Unit("deg"));
+    action.Serialize(a);
     a->Visit(
         Field("hold_depth", &hold_depth).Unit("m").Doc("waypoint depth (NED z); < 0: the depth at the first odometry"));
     a->Visit(

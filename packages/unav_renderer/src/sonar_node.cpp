@@ -94,7 +94,7 @@ SonarNode::SonarNode(const unav::NodeOptions& options) : Node("sonar", options, 
   }
   odom_sub_ = create_subscription<nav_msgs::msg::Odometry>("ground_truth/odom", unav::QoS::reliable(),
                                                            [this](const nav_msgs::msg::Odometry& m) { on_odom(m); });
-  if (prm.lockstep) acker_ = std::make_unique<unav::lockstep::Acker>(*this, prm.lockstep_name);
+  if (prm.lockstep.enabled) acker_ = std::make_unique<unav::lockstep::Acker>(*this, prm.lockstep.name);
   // Sonar mounts, latched, in marine_acoustic_msgs' frame (z forward, x up).
   tf_static_pub_ = create_publisher<tf2_msgs::msg::TFMessage>("/tf_static", unav::QoS::static_latched());
   tf2_msgs::msg::TFMessage mounts;
@@ -109,7 +109,7 @@ SonarNode::SonarNode(const unav::NodeOptions& options) : Node("sonar", options, 
             std::to_string(m.ping_rate_hz).substr(0, 4) + " Hz)";
   logger()->info("world '{}', sonars {} on {}{}", prm.world, list,
                  sonar_->context().gl_renderer() + " (EGL " + sonar_->context().platform() + ")",
-                 prm.lockstep ? ", lockstep" : "");
+                 prm.lockstep.enabled ? ", lockstep" : "");
 }
 
 SonarNode::~SonarNode() = default;

@@ -43,8 +43,7 @@ struct SonarNodeParams {
   std::string sonars_config;  ///< default: the installed config/sensors/bluerov2_sonars.yaml
   std::string water;
   std::vector<std::string> sonars;
-  bool lockstep = false;
-  std::string lockstep_name = "sonar";
+  unav::lockstep::ParticipantParams lockstep{"sonar"};
   bool noise = true;
   int64_t seed = 1;
   int fan_width = 512;
@@ -59,8 +58,7 @@ struct SonarNodeParams {
     a->Visit(
         Field("water", &water).Doc("Jerlov preset or water YAML path (temperature, salinity); empty = the world's"));
     a->Visit(Field("sonars", &sonars).Doc("sonars of sonars_config to ping; [] = all"));
-    a->Visit(Field("lockstep", &lockstep).Doc("ack every odometry on /lockstep/ack"));
-    a->Visit(Field("lockstep_name", &lockstep_name).Doc("participant name in acks"));
+    lockstep.Serialize(a);
     a->Visit(Field("noise", &noise).Doc("speckle and background noise"));
     a->Visit(Field("seed", &seed).Min(0.0).Doc("noise seed"));
     a->Visit(Field("fan_width", &fan_width).Range(0, 4096).Unit("px").Doc("FLS fan image width; 0 = no fan image"));

@@ -73,8 +73,8 @@ UnderwaterRendererNode::UnderwaterRendererNode(const unav::NodeOptions& options)
   const std::string& water = prm.water;
   const std::vector<std::string>& only = prm.cameras;
   const double rate = prm.rate;
-  lockstep_ = prm.lockstep;
-  ack_name_ = prm.lockstep_name;
+  lockstep_ = prm.lockstep.enabled;
+  ack_name_ = prm.lockstep.name;
   publish_depth_ = prm.publish_depth;
   publish_seg_ = prm.publish_segmentation;
   RenderOptions ro;

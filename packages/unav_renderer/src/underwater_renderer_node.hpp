@@ -57,8 +57,7 @@ struct UnderwaterRendererParams {
   std::string water;
   std::vector<std::string> cameras;
   double rate = 10.0;
-  bool lockstep = false;
-  std::string lockstep_name = "renderer";
+  unav::lockstep::ParticipantParams lockstep{"renderer"};
   bool publish_depth = true;
   bool publish_segmentation = true;
   scene::RenderSettings render;
@@ -75,8 +74,7 @@ struct UnderwaterRendererParams {
     a->Visit(Field("water", &water).Doc("Jerlov preset (I, II, 3C, ...) or water YAML path; empty = the world's"));
     a->Visit(Field("cameras", &cameras).Doc("cameras of cameras_config to render; [] = all"));
     a->Visit(Field("rate", &rate).Range(0.01, 1000.0).Unit("Hz").Doc("frame rate per camera"));
-    a->Visit(Field("lockstep", &lockstep).Doc("ack every odometry on /lockstep/ack"));
-    a->Visit(Field("lockstep_name", &lockstep_name).Doc("participant name in acks"));
+    lockstep.Serialize(a);
     a->Visit(Field("publish_depth", &publish_depth).Doc("publish depth images"));
     a->Visit(Field("publish_segmentation", &publish_segmentation).Doc("publish segmentation images"));
     a->Visit(Field("render", &render).Doc("realism switches (render.noise, render.shadows, ...)"));

@@ -21,7 +21,7 @@ ScenarioMissionNode::ScenarioMissionNode(const unav::NodeOptions& options) : Nod
     if (!ground_truth_)
       throw unav::ParameterError("node '" + name() + "': cannot write ground_truth_file '" + p.ground_truth_file + "'");
   }
-  if (p.lockstep) acker_ = std::make_unique<unav::lockstep::Acker>(*this, p.lockstep_name);
+  if (p.lockstep.enabled) acker_ = std::make_unique<unav::lockstep::Acker>(*this, p.lockstep.name);
   pub_ = create_publisher<geometry_msgs::msg::PoseStamped>("control/pose_setpoint", unav::QoS::reliable());
   images_dir_ = p.images_dir;
   if (!images_dir_.empty()) {

@@ -40,8 +40,7 @@ struct ScenarioMissionParams {
   unav::scene::ScenarioParam scenario;
   std::string ground_truth_file;
   std::string images_dir;
-  bool lockstep = false;
-  std::string lockstep_name = "scenario_mission";
+  unav::lockstep::ParticipantParams lockstep{"scenario_mission"};
 
   template <class Archive>
   void Serialize(Archive* a) {
@@ -51,8 +50,7 @@ struct ScenarioMissionParams {
         Field("ground_truth_file", &ground_truth_file).Doc("TUM file of the state every control period; empty = none"));
     a->Visit(
         Field("images_dir", &images_dir).Doc("folder of every camera's rgb frames (<cam>/<t_ns>.png); empty = none"));
-    a->Visit(Field("lockstep", &lockstep).Doc("ack every state on /lockstep/ack (after its setpoint and frames)"));
-    a->Visit(Field("lockstep_name", &lockstep_name).Doc("participant name in acks"));
+    lockstep.Serialize(a);
   }
 };
 

@@ -153,8 +153,7 @@ PipeFollowingInfo PipeFollowingEnv::reset(std::uint64_t seed) {
 std::pair<Eigen::Vector3d, double> PipeFollowingEnv::waypoint_for(const std::array<double, 2>& a) const {
   const PipeFollowingParams& p = config_.env;
   const auto& x = episode_->state();
-  const control::PoseSetpoint sp = control::waypoint_from_action(
-      x.p_WB_W, yaw_of(x.q_WB), a, {p.step_length_m, p.max_step_angle_deg, p.max_turn_deg}, hold_depth_);
+  const control::PoseSetpoint sp = control::waypoint_from_action(x.p_WB_W, yaw_of(x.q_WB), a, p.action, hold_depth_);
   return {sp.p_W, yaw_of(sp.q_WB)};
 }
 
@@ -209,7 +208,7 @@ std::array<double, 2> PipeFollowingEnv::expert_action() const {
   auto ratio = [](double angle, double max_deg) {
     return max_deg > 0 ? std::clamp(angle / (max_deg * kDeg), -1.0, 1.0) : 0.0;
   };
-  return {ratio(wrap(dir - yaw), p.max_step_angle_deg), ratio(wrap(heading - yaw), p.max_turn_deg)};
+  return {ratio(wrap(dir - yaw), p.action.max_step_angle_deg), ratio(wrap(heading - yaw), p.action.max_turn_deg)};
 }
 
 PipeFollowingInfo PipeFollowingEnv::measure() const {

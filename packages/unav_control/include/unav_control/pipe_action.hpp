@@ -8,14 +8,28 @@
 #include <Eigen/Core>
 #include <array>
 
+#include "unav_common/config.hpp"
 #include "unav_control/mpc.hpp"
 
 namespace unav::control {
 
+/// The action's scale: the environment's and the drl_planner node's parameters embed it
+/// (`PipeActionParams action;`, `action.Serialize(a)`: the keys stay at the caller's level), so
+/// training and deployment declare it once.
 struct PipeActionParams {
   double step_length_m = 1.0;
   double max_step_angle_deg = 60.0;
   double max_turn_deg = 30.0;
+  template <class Archive>
+  void Serialize(Archive* a) {
+    using unav::common::Field;
+    a->Visit(Field("step_length_m", &step_length_m).Above(0.0).Max(5.0).Unit("m").Doc("waypoint distance per action"));
+    a->Visit(Field("max_step_angle_deg", &max_step_angle_deg)
+                 .Range(0.0, 180.0)
+                 .Unit("deg")
+                 .Doc("a1 = +-1: step direction this far right/left of the heading"));
+    a->Visit(Field("max_turn_deg", &max_turn_deg).Range(0.0, 180.0).Unit("deg").Doc("a2 = +-1: heading change"));
+  }
 };
 
 /// The waypoint of action `a` (components clamped to [-1, 1]; non-finite ones read as 0) from a

@@ -24,6 +24,7 @@
 #include <vector>
 
 #include "unav_common/config.hpp"
+#include "unav_control/pipe_action.hpp"
 #include "unav_renderer/gl_thread.hpp"
 #include "unav_sim/episode.hpp"
 #include "unav_sim/pipe_scene.hpp"
@@ -36,9 +37,7 @@ struct PipeFollowingParams {
   std::string world = "worlds/pipe_inspection/world.yaml";
   std::string split = "train";
   std::string camera = "down";
-  double step_length_m = 1.0;
-  double max_step_angle_deg = 60.0;
-  double max_turn_deg = 30.0;
+  control::PipeActionParams action;  ///< step_length_m, max_step_angle_deg, max_turn_deg
   double step_duration_s = 1.5;
   double height_above_pipe_m = 1.5;
   double termination_distance_m = 2.5;
@@ -61,12 +60,7 @@ struct PipeFollowingParams {
     a->Visit(Field("world", &world).Doc("world.yaml of scenes=fixed (relative to the resource roots)"));
     a->Visit(Field("split", &split).OneOf({"train", "eval"}).Doc("seed space of random scenes (disjoint)"));
     a->Visit(Field("camera", &camera).Doc("observation camera (of the episode's cameras)"));
-    a->Visit(Field("step_length_m", &step_length_m).Above(0.0).Max(5.0).Unit("m").Doc("waypoint distance per action"));
-    a->Visit(Field("max_step_angle_deg", &max_step_angle_deg)
-                 .Range(0.0, 180.0)
-                 .Unit("deg")
-                 .Doc("a1 = +-1: step direction this far right/left of the heading"));
-    a->Visit(Field("max_turn_deg", &max_turn_deg).Range(0.0, 180.0).Unit("deg").Doc("a2 = +-1: heading change"));
+    action.Serialize(a);
     a->Visit(
         Field("step_duration_s", &step_duration_s).Above(0.0).Max(30.0).Unit("s").Doc("simulated time per action"));
     a->Visit(Field("height_above_pipe_m", &height_above_pipe_m).Above(0.0).Unit("m").Doc("flight height (held)"));

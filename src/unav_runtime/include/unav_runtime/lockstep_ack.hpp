@@ -10,7 +10,9 @@
 #include <cmath>
 #include <memory>
 #include <string>
+#include <utility>
 
+#include "unav_common/config.hpp"
 #include "unav_msgs/msg/lockstep_ack.hpp"
 #include "unav_runtime/conversions.hpp"
 #include "unav_runtime/lockstep.hpp"
@@ -23,6 +25,20 @@ namespace unav::lockstep {
 /// processes starting at once on 2 cores) was lost with a volatile writer, and the lockstep held
 /// at t = 0 for ever. Transient local hands it to the late reader.
 inline QoS ack_qos() { return {QoS::Reliability::kReliable, QoS::Durability::kTransientLocal, 100}; }
+
+/// A participant's `lockstep` and `lockstep_name` parameters. A node's params struct embeds it,
+/// `unav::lockstep::ParticipantParams lockstep{"renderer"};`, and calls `lockstep.Serialize(a)`:
+/// the keys stay at the node's level. What the node acks and when is said in its header.
+struct ParticipantParams {
+  bool enabled = false;
+  std::string name;
+  explicit ParticipantParams(std::string default_name) : name(std::move(default_name)) {}
+  template <class Archive>
+  void Serialize(Archive* a) {
+    a->Visit(unav::common::Field("lockstep", &enabled).Doc("a lockstep participant: ack on /lockstep/ack"));
+    a->Visit(unav::common::Field("lockstep_name", &name).Doc("participant name in acks"));
+  }
+};
 
 class Acker {
  public:
