@@ -6,8 +6,8 @@
 #include <Eigen/Core>
 #include <initializer_list>
 #include <string>
-#include <vector>
 #include <unordered_map>
+#include <vector>
 
 #include "unav_renderer/errors.hpp"
 #include "unav_scene/camera.hpp"
