@@ -21,6 +21,7 @@
 #include "unav_launch/launch_description.hpp"
 #include "unav_launch/package_index.hpp"
 #include "unav_launch/supervisor.hpp"
+#include "unav_runtime/shm_cleanup.hpp"
 
 using namespace std::chrono_literals;
 namespace intro = unav::introspection;
@@ -277,6 +278,29 @@ int run_package_tool(const char* package, const char* executable, int argc, char
   return 1;
 }
 
+// `unav doctor [--clean]`: Fast DDS data-sharing pools in /dev/shm, live and dead (their writer
+// died without closing: unav_runtime/shm_cleanup.hpp). Exit 1 when dead ones remain.
+int shm_doctor(bool clean) {
+  const unav::shm::CleanReport r = unav::shm::clean_data_sharing("/dev/shm", !clean);
+  std::uint64_t live_bytes = 0, dead_bytes = 0;
+  int dead = 0;
+  for (const auto& s : r.segments) {
+    if (s.dead) {
+      ++dead;
+      dead_bytes += s.bytes;
+    } else {
+      live_bytes += s.bytes;
+    }
+  }
+  const std::string tail = clean ? ", removed " + std::to_string(r.removed)
+                                 : (dead > 0 ? std::string("; unav doctor --clean removes them") : std::string());
+  std::printf("/dev/shm: %zu data-sharing segments: %zu of live processes (%.1f MB), %d of dead ones (%.1f MB)%s\n",
+              r.segments.size(), r.segments.size() - static_cast<std::size_t>(dead),
+              static_cast<double>(live_bytes) / 1e6, dead, static_cast<double>(dead_bytes) / 1e6, tail.c_str());
+  for (const auto& e : r.errors) std::printf("  not removed: %s\n", e.c_str());
+  return (clean ? dead - r.removed : dead) > 0 ? 1 : 0;
+}
+
 int main(int argc, char** argv) {
   using namespace unav::cli;
   if (argc >= 2 && std::string(argv[1]) == "localize")
@@ -343,6 +367,11 @@ int main(int argc, char** argv) {
 
   app.add_subcommand("run", "one scenario file over DDS or --in-process: ground truth and images (unav run --help)");
 
+  bool doctor_clean = false;
+  auto* doctor = app.add_subcommand(
+      "doctor", "report (and with --clean remove) data-sharing segments left in /dev/shm by processes that died");
+  doctor->add_flag("--clean", doctor_clean, "remove the dead ones (every participant also does at start)");
+
   const auto run_bag = add_bag_command(app);
   const auto run_security = add_security_command(app);
 
@@ -358,6 +387,7 @@ int main(int argc, char** argv) {
     if (launch_cmd->parsed()) return launch(launch_file, launch_args);
     if (app.got_subcommand("bag")) return run_bag();
     if (app.got_subcommand("security")) return run_security();
+    if (doctor->parsed()) return shm_doctor(doctor_clean);
   } catch (const UsageError& e) {
     std::cerr << "unav: error: " << e.what() << std::endl;
     return 2;

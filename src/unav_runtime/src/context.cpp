@@ -28,6 +28,7 @@
 #include "unav_runtime/logging.hpp"
 #include "unav_runtime/node.hpp"
 #include "unav_runtime/publisher.hpp"
+#include "unav_runtime/shm_cleanup.hpp"
 
 namespace fdds = eprosima::fastdds::dds;
 
@@ -214,6 +215,7 @@ void Context::create_participant(
                                : " with security enclave '" + secured_enclave_ + "' (keystore " + keystore +
                                      "): its certificate, key or signed documents were refused"));
   }
+  if (data_sharing_) clean_dead_data_sharing();
   publisher_ = participant_->create_publisher(fdds::PUBLISHER_QOS_DEFAULT);
   subscriber_ = participant_->create_subscriber(fdds::SUBSCRIBER_QOS_DEFAULT);
   if (!publisher_ || !subscriber_) throw MiddlewareError("Fast DDS could not create a publisher/subscriber");
@@ -221,6 +223,21 @@ void Context::create_participant(
   // ros_discovery_info is not prefixed with rt/: it is the rmw's own topic.
   auto* graph_topic = topic("ros_discovery_info", new rmw_dds_common::msg::dds_::ParticipantEntitiesInfo_PubSubType());
   graph_writer_ = create_writer(graph_topic, QoS::static_latched());
+}
+
+// Data-sharing pools left in /dev/shm by writers of this host that died without closing (SIGKILL,
+// a crash): removed before this participant makes its own (unav_runtime/shm_cleanup.hpp).
+// UNAV_SHM_CLEAN=off keeps them.
+void Context::clean_dead_data_sharing() {
+  if (const char* v = std::getenv("UNAV_SHM_CLEAN"); v && (std::string(v) == "off" || std::string(v) == "0")) return;
+  const auto& prefix = participant_->guid().guidPrefix.value;
+  const shm::CleanReport r =
+      shm::clean_data_sharing("/dev/shm", false, std::array<std::uint8_t, 2>{prefix[2], prefix[3]});
+  if (r.removed > 0)
+    make_logger("unav_runtime")
+        ->info("removed {} data-sharing segments ({:.1f} MB) left in /dev/shm by processes that died", r.removed,
+               static_cast<double>(r.removed_bytes) / 1e6);
+  for (const auto& e : r.errors) make_logger("unav_runtime")->warn("/dev/shm/{} not removed", e);
 }
 
 void Context::stop_signal_thread() {

@@ -9,20 +9,25 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <array>
 #include <atomic>
+#include <csignal>
 #include <cstdint>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <string>
 #include <thread>
 
+#include <fastdds/dds/domain/DomainParticipant.hpp>
 #include <fastdds/dds/publisher/DataWriter.hpp>
 #include <fastdds/dds/subscriber/DataReader.hpp>
 #include <fastdds/dds/topic/Topic.hpp>
 
 #include "sensor_msgs/msg/image.hpp"
 #include "unav_runtime/runtime.hpp"
+#include "unav_runtime/shm_cleanup.hpp"
 #include "unav_runtime/testing.hpp"
 
 extern char** environ;  // NOLINT(readability-redundant-declaration): posix_spawn's environment
@@ -80,6 +85,26 @@ int run_reader(bool shared, int domain, int count, const std::string& out) {
   const bool segment = has_data_sharing_segment(sub->reader()->guid());
   ctx.spin_until([&] { return received >= count; }, 60s);
   std::ofstream(out) << received << " " << intact << " " << (segment ? 1 : 0) << "\n";
+  return 0;
+}
+
+std::string segment_name(const eprosima::fastrtps::rtps::GUID_t& guid) {
+  std::ostringstream name;
+  name << "fast_datasharing_" << guid.guidPrefix << "_" << guid.entityId;
+  return name.str();
+}
+
+// Helper mode: a data-sharing image writer that writes its pool's segment name into `out` and
+// then waits to be killed.
+int run_writer(int domain, const std::string& out) {
+  unav::Context ctx(options_on(domain));
+  unav::Node cam("doomed_camera", {&ctx});
+  auto pub = cam.create_publisher<sensor_msgs::msg::Image>(
+      "/camera/image_raw", unav::QoS::reliable(4).with_data_sharing(unav::serialized_bytes(make_image(0))));
+  pub->publish(make_image(0));
+  { std::ofstream(out + ".tmp") << segment_name(pub->writer()->guid()) << "\n"; }
+  std::filesystem::rename(out + ".tmp", out);
+  std::this_thread::sleep_for(300s);
   return 0;
 }
 
@@ -179,7 +204,85 @@ TEST(DataSharing, SerializedBytesIsTheCdrSize) {
   EXPECT_EQ(unav::serialized_bytes(make_image(0)), 8u + 4 + 21 + 3 + 8 + 4 + 5 + 1 + 2 + 4 + 4 + 921600);
 }
 
+// A writer SIGKILLed leaves its pool in /dev/shm (Fast DDS 2.9 never removes it); the next
+// participant on the host removes it (Context: shm::clean_data_sharing), and only it: a live
+// writer's pool stays.
+TEST(DataSharing, DeadWritersPoolIsRemovedAndLiveOnesKept) {
+  unav::Context ctx(unav::testing::test_context_options());
+  unav::Node cam("camera", {&ctx});
+  auto pub = cam.create_publisher<sensor_msgs::msg::Image>(
+      "/camera/image_raw", unav::QoS::reliable(4).with_data_sharing(unav::serialized_bytes(make_image(0))));
+  const std::string live = segment_name(pub->writer()->guid());
+  const std::string ready = ::testing::TempDir() + "/ds_writer_" + std::to_string(getpid());
+  const std::string d = std::to_string(ctx.domain_id());
+  const char* argv[] = {"/proc/self/exe", "--writer", d.c_str(), ready.c_str(), nullptr};
+  pid_t pid = -1;
+  ASSERT_EQ(posix_spawn(&pid, "/proc/self/exe", nullptr, nullptr, const_cast<char* const*>(argv), environ), 0);
+  const auto until = std::chrono::steady_clock::now() + 60s;
+  while (!std::filesystem::exists(ready) && std::chrono::steady_clock::now() < until) std::this_thread::sleep_for(20ms);
+  ASSERT_TRUE(std::filesystem::exists(ready)) << "the writer did not start";
+  std::string doomed;
+  std::ifstream(ready) >> doomed;
+  std::filesystem::remove(ready);
+  ASSERT_TRUE(std::filesystem::exists("/dev/shm/" + doomed)) << doomed;
+  const auto parsed = unav::shm::parse_data_sharing_name(doomed);
+  ASSERT_TRUE(parsed.has_value()) << doomed;
+  EXPECT_EQ(parsed->pid16, static_cast<std::uint16_t>(pid & 0xFFFF));
+  kill(pid, SIGKILL);
+  int status = 0;
+  ASSERT_EQ(waitpid(pid, &status, 0), pid);
+  EXPECT_TRUE(std::filesystem::exists("/dev/shm/" + doomed)) << "Fast DDS removed it itself: nothing to clean";
+  const auto& prefix = ctx.participant()->guid().guidPrefix.value;
+  const unav::shm::CleanReport r =
+      unav::shm::clean_data_sharing("/dev/shm", false, std::array<std::uint8_t, 2>{prefix[2], prefix[3]});
+  EXPECT_FALSE(std::filesystem::exists("/dev/shm/" + doomed)) << "the dead writer's pool is still there";
+  EXPECT_TRUE(std::filesystem::exists("/dev/shm/" + live)) << "a live writer's pool was removed";
+  EXPECT_GE(r.removed, 1);
+  EXPECT_GT(r.removed_bytes, 900000u) << "an image pool is ~1 MB a sample";
+  EXPECT_TRUE(r.errors.empty());
+  EXPECT_TRUE(pub->publish(make_image(1)));  // the live writer goes on
+}
+
+TEST(DataSharing, SegmentNamesAndDeadOwnersInAFolder) {
+  EXPECT_FALSE(unav::shm::parse_data_sharing_name("fastrtps_port7411").has_value());
+  EXPECT_FALSE(unav::shm::parse_data_sharing_name("fast_datasharing_zz.0f.78.fd.6c.6e.1c.75.00.00.00.00_0.0.4.3"));
+  const auto s = unav::shm::parse_data_sharing_name("fast_datasharing_01.0f.78.fd.6c.6e.1c.75.01.00.00.00_0.0.4.3");
+  ASSERT_TRUE(s.has_value());
+  EXPECT_EQ(s->pid16, 0x6e6c);
+  EXPECT_EQ(s->host[0], 0x78);
+  EXPECT_EQ(s->host[1], 0xfd);
+  // A folder with the segment of this (live) process and one of a process that has exited.
+  const std::string dir = ::testing::TempDir() + "/shm_" + std::to_string(getpid());
+  std::filesystem::create_directories(dir);
+  auto name_for = [](pid_t p, int host) {
+    char n[96];
+    std::snprintf(n, sizeof(n), "fast_datasharing_01.0f.%02x.fd.%02x.%02x.1c.75.00.00.00.00_0.0.4.3", host,
+                  static_cast<unsigned>(p & 0xFF), static_cast<unsigned>((p >> 8) & 0xFF));
+    return std::string(n);
+  };
+  pid_t gone = -1;
+  const char* argv[] = {"/bin/true", nullptr};
+  ASSERT_EQ(posix_spawn(&gone, "/bin/true", nullptr, nullptr, const_cast<char* const*>(argv), environ), 0);
+  int status = 0;
+  ASSERT_EQ(waitpid(gone, &status, 0), gone);
+  // Its pid's low 16 bits may belong to another live process (then it is kept: conservative).
+  const bool gone_is_free = !unav::shm::live_pid16()[static_cast<std::size_t>(gone & 0xFFFF)];
+  for (const auto& n : {name_for(getpid(), 0x78), name_for(gone, 0x78), name_for(gone, 0x11)})
+    std::ofstream(dir + "/" + n) << std::string(1000, 'x');
+  const auto dry = unav::shm::clean_data_sharing(dir, true, std::array<std::uint8_t, 2>{0x78, 0xfd});
+  EXPECT_EQ(dry.segments.size(), 3u);
+  EXPECT_EQ(dry.removed, 0);
+  EXPECT_TRUE(std::filesystem::exists(dir + "/" + name_for(gone, 0x78)));
+  const auto r = unav::shm::clean_data_sharing(dir, false, std::array<std::uint8_t, 2>{0x78, 0xfd});
+  EXPECT_TRUE(std::filesystem::exists(dir + "/" + name_for(getpid(), 0x78))) << "a live owner's segment";
+  EXPECT_TRUE(std::filesystem::exists(dir + "/" + name_for(gone, 0x11))) << "another host id's segment";
+  EXPECT_EQ(std::filesystem::exists(dir + "/" + name_for(gone, 0x78)), !gone_is_free);
+  EXPECT_EQ(r.removed, gone_is_free ? 1 : 0);
+  std::filesystem::remove_all(dir);
+}
+
 int main(int argc, char** argv) {
+  if (argc == 4 && std::string(argv[1]) == "--writer") return run_writer(std::stoi(argv[2]), argv[3]);
   if (argc == 6 && std::string(argv[1]) == "--reader")
     return run_reader(std::string(argv[2]) == "shared", std::stoi(argv[3]), std::stoi(argv[4]), argv[5]);
   ::testing::InitGoogleTest(&argc, argv);

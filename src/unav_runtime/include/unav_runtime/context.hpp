@@ -114,6 +114,7 @@ class Context {
  private:
   void signal_loop();
   void stop_signal_thread();
+  void clean_dead_data_sharing();
   void create_participant(int argc, const char* const* argv, const ContextOptions& options, const std::string& enclave,
                           const std::optional<std::vector<std::pair<std::string, std::string>>>& security_properties,
                           const std::string& security_warning, const std::string& keystore);
