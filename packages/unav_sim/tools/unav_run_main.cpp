@@ -48,6 +48,7 @@ int run_over_dds(const unav::scene::Scenario& s, const std::string& file, std::i
               s.name.c_str(), static_cast<long long>(s.seed), launch.c_str(), out.c_str(), out.c_str());
   std::fflush(stdout);
   std::vector<char*> argv;
+  argv.reserve(args.size() + 1);
   for (auto& a : args) argv.push_back(a.data());
   argv.push_back(nullptr);
   execvp(argv[0], argv.data());
