@@ -6,9 +6,9 @@
 #include <set>
 #include <sstream>
 
+#include <yaml-cpp/yaml.h>
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
-#include <yaml-cpp/yaml.h>
 
 #include "unav_physics/current.hpp"
 #include "unav_physics/seabed.hpp"
@@ -129,7 +129,8 @@ class Reader {
     if (!s.IsSequence() || static_cast<int>(s.size()) != n)
       fail(source_, key(k), "must be a list of " + std::to_string(n) + " numbers", flow(s));
     Eigen::VectorXd v(n);
-    for (int i = 0; i < n; ++i) v(i) = as_number(s[static_cast<std::size_t>(i)], source_, key(k) + "[" + std::to_string(i) + "]");
+    for (int i = 0; i < n; ++i)
+      v(i) = as_number(s[static_cast<std::size_t>(i)], source_, key(k) + "[" + std::to_string(i) + "]");
     return v;
   }
   Eigen::Vector3d vec3(const char* k) const { return vector(k, 3); }
@@ -211,12 +212,19 @@ SensorSuiteParams parse_sensors(const Reader& r) {
   }
   if (r.has("dvl")) {
     const Reader s = r.child("dvl");
-    s.only_keys({"enabled", "rate", "noise_stddev", "bias_random_walk", "initial_bias", "min_altitude", "max_altitude"});
+    s.only_keys({"enabled", "rate", "noise_stddev", "bias_random_walk", "initial_bias", "min_altitude", "max_altitude",
+                 "beams", "beam_angle_deg", "max_incidence_deg"});
     p.dvl.enabled = s.boolean("enabled", true);
     p.dvl.rate_hz = s.number("rate", p.dvl.rate_hz);
     read_noise(s, &p.dvl.velocity);
     p.dvl.min_altitude = s.number("min_altitude", p.dvl.min_altitude);
     p.dvl.max_altitude = s.number("max_altitude", p.dvl.max_altitude);
+    const double beams = s.number("beams", p.dvl.beams);
+    if (beams != std::floor(beams))
+      s.fail_key("beams", "must be 4 (a Janus array) or 0 (the ideal sensor)", text(beams));
+    p.dvl.beams = static_cast<int>(beams);
+    p.dvl.beam_angle_deg = s.number("beam_angle_deg", p.dvl.beam_angle_deg);
+    p.dvl.max_incidence_deg = s.number("max_incidence_deg", p.dvl.max_incidence_deg);
   }
   if (r.has("altimeter")) {
     const Reader s = r.child("altimeter");
@@ -263,9 +271,7 @@ void read_thruster_keys(const Reader& r, ThrusterParams* t) {
 
 // --- VehicleParams ------------------------------------------------------------------------------
 
-double ThrusterParams::max_forward_thrust() const {
-  return C_T * rho * w_max * w_max * std::pow(diameter, 4);
-}
+double ThrusterParams::max_forward_thrust() const { return C_T * rho * w_max * w_max * std::pow(diameter, 4); }
 double ThrusterParams::max_reverse_thrust() const {
   return (C_T_reverse > 0.0 ? C_T_reverse : C_T) * rho * w_max * w_max * std::pow(diameter, 4);
 }
@@ -307,7 +313,8 @@ void validate_vehicle(const VehicleParams& p, const std::string& src) {
   if (!(std::isfinite(p.height) && p.height > 0.0)) fail(src, "height", "must be > 0 m", text(p.height));
 
   if (!p.added_mass.allFinite()) fail(src, "added_mass", "must be finite", text(p.added_mass));
-  if ((p.added_mass - p.added_mass.transpose()).cwiseAbs().maxCoeff() > 1e-9 * (1.0 + p.added_mass.cwiseAbs().maxCoeff()))
+  if ((p.added_mass - p.added_mass.transpose()).cwiseAbs().maxCoeff() >
+      1e-9 * (1.0 + p.added_mass.cwiseAbs().maxCoeff()))
     fail(src, "added_mass", "must be symmetric", text(p.added_mass));
   if (p.rigid_body_mass().allFinite() && (p.rigid_body_mass() + p.added_mass).llt().info() != Eigen::Success)
     fail(src, "added_mass", "must make M_RB + M_A positive definite", text(p.added_mass));
@@ -318,9 +325,12 @@ void validate_vehicle(const VehicleParams& p, const std::string& src) {
       fail(src, name, "must have a non-negative diagonal (negative damping adds energy)", text(*D));
   }
   const auto& c = p.contact;
-  if (!(std::isfinite(c.stiffness) && c.stiffness > 0.0)) fail(src, "contact.stiffness", "must be > 0 N/m", text(c.stiffness));
-  if (!(std::isfinite(c.damping) && c.damping >= 0.0)) fail(src, "contact.damping", "must be >= 0 N s/m", text(c.damping));
-  if (!(std::isfinite(c.friction) && c.friction >= 0.0)) fail(src, "contact.friction", "must be >= 0 N s/m", text(c.friction));
+  if (!(std::isfinite(c.stiffness) && c.stiffness > 0.0))
+    fail(src, "contact.stiffness", "must be > 0 N/m", text(c.stiffness));
+  if (!(std::isfinite(c.damping) && c.damping >= 0.0))
+    fail(src, "contact.damping", "must be >= 0 N s/m", text(c.damping));
+  if (!(std::isfinite(c.friction) && c.friction >= 0.0))
+    fail(src, "contact.friction", "must be >= 0 N s/m", text(c.friction));
 
   if (p.thrusters.size() > static_cast<std::size_t>(kMaxThrusters))
     fail(src, "thrusters", "must have at most " + std::to_string(kMaxThrusters) + " entries",
@@ -395,7 +405,8 @@ VehicleParams parse_vehicle(const YAML::Node& node, const std::string& source) {
     tp.position_B = t.vec3("position");
     tp.direction_B = t.vec3("direction");
     if (!(tp.direction_B.norm() > 1e-9))
-      throw ConfigError(source + ": " + t.key("direction") + " has zero length (got " + flow(t.node()["direction"]) + ")");
+      throw ConfigError(source + ": " + t.key("direction") + " has zero length (got " + flow(t.node()["direction"]) +
+                        ")");
     tp.direction_B.normalize();
     read_thruster_keys(t, &tp);
     p.thrusters.push_back(tp);
@@ -426,11 +437,12 @@ VehicleParams bluerov2_heavy_params() {
   p.added_mass.diagonal() << 6.3567, 7.1206, 18.6863, 0.1858, 0.1348, 0.2215;
   p.linear_damping.diagonal() << 13.7, 0.0, 33.0, 0.0, 0.8, 0.0;
   p.quadratic_damping.diagonal() << 141.0, 217.0, 190.0, 1.192, 0.470, 1.500;
-  const double pos[8][3] = {{0.156, 0.111, 0.085}, {0.156, -0.111, 0.085}, {-0.156, 0.111, 0.085},
-                            {-0.156, -0.111, 0.085}, {0.120, 0.218, 0.0}, {0.120, -0.218, 0.0},
-                            {-0.120, 0.218, 0.0}, {-0.120, -0.218, 0.0}};
-  const double dir[8][3] = {{0.7071, -0.7071, 0}, {0.7071, 0.7071, 0}, {-0.7071, -0.7071, 0}, {-0.7071, 0.7071, 0},
-                            {0, 0, -1}, {0, 0, -1}, {0, 0, -1}, {0, 0, -1}};
+  const double pos[8][3] = {{0.156, 0.111, 0.085},   {0.156, -0.111, 0.085}, {-0.156, 0.111, 0.085},
+                            {-0.156, -0.111, 0.085}, {0.120, 0.218, 0.0},    {0.120, -0.218, 0.0},
+                            {-0.120, 0.218, 0.0},    {-0.120, -0.218, 0.0}};
+  const double dir[8][3] = {{0.7071, -0.7071, 0}, {0.7071, 0.7071, 0}, {-0.7071, -0.7071, 0},
+                            {-0.7071, 0.7071, 0}, {0, 0, -1},          {0, 0, -1},
+                            {0, 0, -1},           {0, 0, -1}};
   for (int i = 0; i < 8; ++i) {
     ThrusterParams t;
     t.name = "T" + std::to_string(i + 1);
@@ -485,7 +497,8 @@ std::unique_ptr<CurrentModel> make_current(const YAML::Node& node, const std::st
     if (!(tc > 0.0)) r.fail_key("time_constant", "must be > 0 s", text(tc));
     const double seed = r.number("seed", 0.0);
     if (seed < 0 || seed != std::floor(seed)) r.fail_key("seed", "must be a non-negative integer", text(seed));
-    return std::make_unique<GaussMarkovCurrent>(mean, sd, tc, static_cast<std::uint64_t>(seed), r.vec3("initial", mean));
+    return std::make_unique<GaussMarkovCurrent>(mean, sd, tc, static_cast<std::uint64_t>(seed),
+                                                r.vec3("initial", mean));
   }
   r.fail_key("type", "must be one of constant, sinusoidal, sum_of_sines, gauss_markov", flow(node["type"]));
 }

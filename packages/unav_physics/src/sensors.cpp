@@ -37,12 +37,42 @@ SensorSuite::SensorSuite(const SensorSuiteParams& params, const EnvironmentParam
   for (int i = 0; i < 3; ++i) {
     init(accel_[i], params.imu.accel);
     init(gyro_[i], params.imu.gyro);
-    init(dvl_[i], params.dvl.velocity);
     init(mag_[i], params.magnetometer.field);
     init(gps_[i], i < 2 ? params.gps.horizontal : params.gps.vertical);
   }
+  for (auto& c : dvl_) init(c, params.dvl.velocity);
   init(pressure_, params.pressure.pressure);
   init(range_, params.altimeter.range);
+}
+
+Eigen::Vector3d dvl_beam_B(int i, double beam_angle_deg) {
+  const double a = beam_angle_deg / kDegPerRad, az = (45.0 + 90.0 * i) / kDegPerRad;
+  return {std::sin(a) * std::cos(az), std::sin(a) * std::sin(az), std::cos(a)};
+}
+
+double seabed_ray_range(const Seabed& seabed, const Eigen::Vector3d& origin, const Eigen::Vector3d& dir,
+                        double max_range) {
+  // Below the seabed (depth > seabed depth) along the ray: g(s) = z(s) - depth(x(s), y(s)) > 0.
+  auto g = [&](double s) {
+    const Eigen::Vector3d p = origin + s * dir;
+    return p.z() - seabed.depth_at(p.x(), p.y());
+  };
+  if (g(0.0) >= 0.0) return -1.0;  // the sensor is in (or under) the seabed
+  constexpr double kStep = 0.05;   // m: the seabed's relief varies over metres (grids of 1 m cells)
+  double lo = 0.0;
+  for (double hi = kStep; lo < max_range; lo = hi, hi += kStep) {
+    hi = std::min(hi, max_range);
+    if (g(hi) >= 0.0) {
+      for (int k = 0; k < 60 && hi - lo > 1e-12; ++k) {
+        const double mid = 0.5 * (lo + hi);
+        (g(mid) >= 0.0 ? hi : lo) = mid;
+      }
+      // A last secant step: exact (to rounding) where the bottom is locally a plane.
+      const double g_lo = g(lo), g_hi = g(hi);
+      return g_hi > g_lo ? lo - g_lo * (hi - lo) / (g_hi - g_lo) : hi;
+    }
+  }
+  return -1.0;
 }
 
 double SensorSuite::noisy(Channel& c, Gaussian& g, double truth, double dt) {
@@ -74,8 +104,8 @@ void SensorSuite::update(double t, const RigidBodyState& x, const Vector6d& nu_d
   if (s_pressure_.due(t)) {
     auto& r = readings_.pressure;
     const double rho_g = env_.water_density * env_.gravity;
-    r.pressure_pa = noisy(pressure_, g_pressure_, env_.atmospheric_pressure + rho_g * std::max(z, 0.0),
-                          s_pressure_.period);
+    r.pressure_pa =
+        noisy(pressure_, g_pressure_, env_.atmospheric_pressure + rho_g * std::max(z, 0.0), s_pressure_.period);
     r.depth_m = (r.pressure_pa - env_.atmospheric_pressure) / rho_g;
     r.valid = true;
     r.stamp = t;
@@ -86,10 +116,14 @@ void SensorSuite::update(double t, const RigidBodyState& x, const Vector6d& nu_d
   if (s_dvl_.due(t)) {
     auto& r = readings_.dvl;
     const auto& p = params_.dvl;
-    r.valid = seabed != nullptr && underwater && altitude >= p.min_altitude && altitude <= p.max_altitude;
-    if (r.valid) {
-      for (int i = 0; i < 3; ++i) r.velocity_B(i) = noisy(dvl_[i], g_dvl_, x.v_WB_B(i), s_dvl_.period);
-      r.altitude_m = altitude;
+    if (p.beams == 0) {
+      r.valid = seabed != nullptr && underwater && altitude >= p.min_altitude && altitude <= p.max_altitude;
+      if (r.valid) {
+        for (int i = 0; i < 3; ++i) r.velocity_B(i) = noisy(dvl_[i], g_dvl_, x.v_WB_B(i), s_dvl_.period);
+        r.altitude_m = altitude;
+      }
+    } else {
+      update_dvl_beams(x, R, seabed, underwater);
     }
     r.stamp = t;
     ++r.seq;
@@ -135,7 +169,8 @@ void SensorSuite::update(double t, const RigidBodyState& x, const Vector6d& nu_d
 }
 
 namespace {
-[[noreturn]] void sensor_fail(const std::string& source, const std::string& key, double value, const std::string& rule) {
+[[noreturn]] void sensor_fail(const std::string& source, const std::string& key, double value,
+                              const std::string& rule) {
   std::ostringstream os;
   os << source << ": sensors." << key << " " << rule << " (got " << value << ")";
   throw ConfigError(os.str());
@@ -156,6 +191,48 @@ void check_range(const std::string& src, const std::string& lo_key, const std::s
 }
 }  // namespace
 
+// Four beams: ray casts, lock, per-beam velocity, least-squares solution (see DvlParams).
+void SensorSuite::update_dvl_beams(const RigidBodyState& x, const Eigen::Matrix3d& R, const Seabed* seabed,
+                                   bool underwater) {
+  auto& r = readings_.dvl;
+  const auto& p = params_.dvl;
+  const double max_range = p.max_altitude / std::cos(p.beam_angle_deg / kDegPerRad) + 1.0;
+  const double cos_max_incidence = std::cos(p.max_incidence_deg / kDegPerRad);
+  Eigen::Matrix<double, 4, 3> B;
+  Eigen::Vector4d m;
+  int n = 0;
+  double vertical_sum = 0.0;
+  for (int i = 0; i < 4; ++i) {
+    r.beam_valid[static_cast<std::size_t>(i)] = false;
+    const Eigen::Vector3d b_B = dvl_beam_B(i, p.beam_angle_deg), d_W = R * b_B;
+    const double s = seabed != nullptr && underwater ? seabed_ray_range(*seabed, x.p_WB_W, d_W, max_range) : -1.0;
+    if (s < 0.0) continue;
+    const Eigen::Vector3d hit = x.p_WB_W + s * d_W;
+    const double vertical = s * d_W.z();
+    // The bottom's normal (up, NED: -z) from the height field's slope at the hit.
+    constexpr double h = 0.05;
+    const double dzdx = (seabed->depth_at(hit.x() + h, hit.y()) - seabed->depth_at(hit.x() - h, hit.y())) / (2 * h);
+    const double dzdy = (seabed->depth_at(hit.x(), hit.y() + h) - seabed->depth_at(hit.x(), hit.y() - h)) / (2 * h);
+    const Eigen::Vector3d up = Eigen::Vector3d(dzdx, dzdy, -1.0).normalized();
+    if (vertical < p.min_altitude || vertical > p.max_altitude || -d_W.dot(up) < cos_max_incidence) continue;
+    // The sensor's velocity over the (still) bottom, along the beam, with the beam's noise.
+    const double v_beam = noisy(dvl_[i], g_dvl_, b_B.dot(x.v_WB_B), s_dvl_.period);
+    r.beam_valid[static_cast<std::size_t>(i)] = true;
+    r.beam_range_m[static_cast<std::size_t>(i)] = s;
+    r.beam_velocity[static_cast<std::size_t>(i)] = v_beam;
+    B.row(n) = b_B.transpose();
+    m(n) = v_beam;
+    vertical_sum += vertical;
+    ++n;
+  }
+  r.locked_beams = n;
+  r.valid = n >= 3;
+  if (r.valid) {
+    r.velocity_B = B.topRows(n).colPivHouseholderQr().solve(m.head(n));
+    r.altitude_m = vertical_sum / n;
+  }
+}
+
 void validate_sensors(const SensorSuiteParams& p, const std::string& src) {
   check_rate(src, "imu", p.imu.enabled, p.imu.rate_hz);
   check_noise(src, "imu.accel", p.imu.accel);
@@ -165,6 +242,12 @@ void validate_sensors(const SensorSuiteParams& p, const std::string& src) {
   check_rate(src, "dvl", p.dvl.enabled, p.dvl.rate_hz);
   check_noise(src, "dvl", p.dvl.velocity);
   check_range(src, "dvl.min_altitude", "dvl.max_altitude", p.dvl.min_altitude, p.dvl.max_altitude);
+  if (p.dvl.beams != 0 && p.dvl.beams != 4)
+    sensor_fail(src, "dvl.beams", p.dvl.beams, "must be 4 (a Janus array) or 0 (the ideal sensor)");
+  if (!(p.dvl.beam_angle_deg > 0.0 && p.dvl.beam_angle_deg < 60.0))
+    sensor_fail(src, "dvl.beam_angle_deg", p.dvl.beam_angle_deg, "must be in (0, 60) deg off the down axis");
+  if (!(p.dvl.max_incidence_deg > 0.0 && p.dvl.max_incidence_deg < 90.0))
+    sensor_fail(src, "dvl.max_incidence_deg", p.dvl.max_incidence_deg, "must be in (0, 90) deg");
   check_rate(src, "altimeter", p.altimeter.enabled, p.altimeter.rate_hz);
   check_noise(src, "altimeter", p.altimeter.range);
   check_range(src, "altimeter.min_range", "altimeter.max_range", p.altimeter.min_range, p.altimeter.max_range);

@@ -4,6 +4,7 @@
 // All sensors sit at the body origin (no lever arms yet).
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <random>
 #include <string>
@@ -33,12 +34,24 @@ struct PressureParams {
   double rate_hz = 50.0;
   NoiseParams pressure;  ///< Pa
 };
+/// A bottom-tracking DVL at the body origin. beams = 4: a Janus array (Water Linked A50 /
+/// Nortek DVL1000 layout: four beams beam_angle_deg off the body's down axis, at azimuths 45, 135,
+/// 225, 315 deg), each a ray cast against the seabed; a beam locks when the bottom it hits is
+/// min_altitude..max_altitude below the sensor (vertically) and seen within max_incidence_deg of
+/// its normal; each locked beam measures the sensor's bottom-relative velocity along itself (+
+/// noise per beam), and the velocity is the least-squares solution of 3 or 4 locked beams (a
+/// 3-beam solution when one is lost, as real units give); fewer: invalid. Altitude: the mean
+/// vertical distance of the locked beams' bottom points. beams = 0: the ideal sensor (body
+/// velocity + noise per axis, altitude straight down).
 struct DvlParams {
   bool enabled = false;
   double rate_hz = 10.0;
-  NoiseParams velocity;        ///< m/s
-  double min_altitude = 0.3;   ///< m; below it (or above max) the reading is invalid
-  double max_altitude = 50.0;  ///< m
+  NoiseParams velocity;             ///< m/s: per beam (beams = 4) or per axis (beams = 0)
+  double min_altitude = 0.3;        ///< m; below it (or above max) a beam (or the reading) is invalid
+  double max_altitude = 50.0;       ///< m
+  int beams = 4;                    ///< 4 (Janus) or 0 (ideal)
+  double beam_angle_deg = 22.5;     ///< off the down axis (A50: 22.5, DVL1000: 25, Pathfinder: 30)
+  double max_incidence_deg = 70.0;  ///< a beam hitting the bottom more obliquely loses lock
 };
 struct AltimeterParams {
   bool enabled = false;
@@ -55,9 +68,9 @@ struct MagnetometerParams {
 struct GpsParams {
   bool enabled = false;
   double rate_hz = 5.0;
-  NoiseParams horizontal;    ///< m, north and east
-  NoiseParams vertical;      ///< m, down
-  double max_depth = 0.1;    ///< m; a fix only while the antenna is within this of the surface
+  NoiseParams horizontal;  ///< m, north and east
+  NoiseParams vertical;    ///< m, down
+  double max_depth = 0.1;  ///< m; a fix only while the antenna is within this of the surface
 };
 struct SensorSuiteParams {
   std::uint64_t seed = 0;  ///< each sensor draws from its own generator seeded from this
@@ -85,12 +98,23 @@ struct PressureReading {
   double depth_m = 0.0;      ///< (pressure - p_atm) / (rho g), m
 };
 struct DvlReading {
-  bool valid = false;  ///< altitude within [min_altitude, max_altitude] and a seabed exists
+  bool valid = false;  ///< >= 3 beams locked (beams = 4) / altitude in range (beams = 0)
   double stamp = 0.0;
   std::uint64_t seq = 0;
   Eigen::Vector3d velocity_B = Eigen::Vector3d::Zero();  ///< seabed-relative velocity, FRD, m/s
   double altitude_m = 0.0;                               ///< vertical distance to the seabed, m
+  int locked_beams = 0;                                  ///< beams = 4: how many have bottom lock
+  std::array<bool, 4> beam_valid{};
+  std::array<double, 4> beam_range_m{};   ///< slant range along each beam, m (valid beams)
+  std::array<double, 4> beam_velocity{};  ///< measured velocity along each beam, m/s (valid beams)
 };
+
+/// Unit vector of DVL beam i (0..3) in body FRD axes: beam_angle_deg off +z, azimuth 45 + 90 i deg.
+Eigen::Vector3d dvl_beam_B(int i, double beam_angle_deg);
+/// Slant range along the unit ray from `origin` (NED) to the seabed, or a negative number when
+/// it does not reach it within max_range (ray marched in 5 cm steps, then bisected to 1e-12 m).
+double seabed_ray_range(const Seabed& seabed, const Eigen::Vector3d& origin, const Eigen::Vector3d& dir,
+                        double max_range);
 struct RangeReading {
   bool valid = false;
   double stamp = 0.0;
@@ -150,13 +174,14 @@ class SensorSuite {
     double operator()() { return dist(gen); }
   };
   static double noisy(Channel& c, Gaussian& g, double truth, double dt);
+  void update_dvl_beams(const RigidBodyState& x, const Eigen::Matrix3d& R, const Seabed* seabed, bool underwater);
 
   SensorSuiteParams params_;
   EnvironmentParams env_;
   SensorReadings readings_;
   Gaussian g_imu_, g_pressure_, g_dvl_, g_alt_, g_mag_, g_gps_;
   Schedule s_imu_, s_pressure_, s_dvl_, s_alt_, s_mag_, s_gps_;
-  Channel accel_[3], gyro_[3], pressure_, dvl_[3], range_, mag_[3], gps_[3];
+  Channel accel_[3], gyro_[3], pressure_, dvl_[4], range_, mag_[3], gps_[3];
 };
 
 /// Throws ConfigError ("<source>: sensors.imu.rate must be > 0 (got -1)") on a bad value.
