@@ -1,6 +1,7 @@
 // Per-packet cost of ArduPilot's JSON backend (ardupilot_json.hpp), in process: decode a servo
 // packet, map the PWM, one 1 ms physics step, format the JSON reply. Prints percentiles as
-// machine-readable lines "bench <name> <value> <unit>".
+// machine-readable lines: BENCH autopilot/ardupilot_json_handle_{p50,p99}_us and
+// autopilot/ardupilot_json_max_sim_rate_x_real_time (1 ms of physics a packet, at the p50).
 //   bench_ardupilot_json [packets=20000] [scenario=config/scenarios/ardusub_pipe.yaml]
 #include <algorithm>
 #include <chrono>
@@ -9,6 +10,7 @@
 #include <vector>
 
 #include "unav_autopilot/ardupilot_json.hpp"
+#include "unav_common/bench.hpp"
 #include "unav_common/resources.hpp"
 
 int main(int argc, char** argv) {
@@ -30,8 +32,9 @@ int main(int argc, char** argv) {
   }
   std::sort(us.begin(), us.end());
   auto q = [&](double x) { return us[static_cast<std::size_t>(x * static_cast<double>(us.size() - 1))]; };
-  std::printf("bench ardupilot_json.handle_p50 %.2f us\nbench ardupilot_json.handle_p99 %.2f us\n", q(0.5), q(0.99));
-  std::printf("bench ardupilot_json.max_sim_rate %.1f x_real_time\n", 1000.0 / q(0.5));  // 1 ms a packet
+  unav::common::print_bench("autopilot/ardupilot_json_handle_p50_us", q(0.5), "us");
+  unav::common::print_bench("autopilot/ardupilot_json_handle_p99_us", q(0.99), "us");
+  unav::common::print_bench("autopilot/ardupilot_json_max_sim_rate_x_real_time", 1000.0 / q(0.5), "x_real_time");
   std::printf("# %d packets, %.1f bytes a reply, simulated %.3f s\n", n, static_cast<double>(bytes) / n,
               b.simulator().time());
   return 0;

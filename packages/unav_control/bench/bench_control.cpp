@@ -1,17 +1,21 @@
 // Timing of the control core, printed: MPC solve time p50/p99 and iterations at the default
 // horizon (from config/controllers/mpc.yaml) inside a closed loop (surge + yaw steps, then a
 // current), and allocation time per call. Single-threaded (Ceres num_threads = 1).
+// Machine-readable: BENCH control/mpc_solve_{p50,p99}_ms, control/mpc_iterations_mean,
+// control/mpc_replay_cpu_{p50,p99}_ms, control/allocate_{pseudo_inverse,redistributed}_ns.
 #include <algorithm>
 #include <chrono>
-#include <ctime>
+#include <cmath>
 #include <cstdio>
+#include <ctime>
 #include <numeric>
 #include <random>
 #include <vector>
 
 #include "../test/closed_loop.hpp"
-#include "unav_control/config.hpp"
+#include "unav_common/bench.hpp"
 #include "unav_common/resources.hpp"
+#include "unav_control/config.hpp"
 
 using namespace unav;
 using namespace unav::control;
@@ -19,7 +23,7 @@ using namespace unav::control;
 namespace {
 double pct(std::vector<double> v, double p) {
   std::sort(v.begin(), v.end());
-  return v[std::min(v.size() - 1, static_cast<std::size_t>(p * (v.size() - 1) + 0.5))];
+  return v[std::min(v.size() - 1, static_cast<std::size_t>(std::lround(p * static_cast<double>(v.size() - 1))))];
 }
 }  // namespace
 
@@ -43,7 +47,12 @@ int main() {
   auto r1 = testing::run_closed_loop(s, steps, 25.0);
   // Scenario 2: station keeping in a 0.2 m/s current.
   s.current_W = Eigen::Vector3d(0.2 * std::cos(0.5), 0.2 * std::sin(0.5), 0);
-  auto r2 = testing::run_closed_loop(s, [](double) { return PoseSetpoint::FromPositionYaw({0, 0, 5}, 0); }, 15.0);
+  auto r2 = testing::run_closed_loop(
+      s,
+      [](double) {
+        return PoseSetpoint::FromPositionYaw({0, 0, 5}, 0);
+      },
+      15.0);
   for (auto* r : {&r1, &r2}) {
     ms.insert(ms.end(), r->solve_ms.begin(), r->solve_ms.end());
     for (int i : r->iterations) its.push_back(i);
@@ -56,6 +65,10 @@ int main() {
   std::printf("  iterations  p50 %.0f  p99 %.0f  max %.0f  mean %.2f\n", pct(its, 0.5), pct(its, 0.99), pct(its, 1.0),
               std::accumulate(its.begin(), its.end(), 0.0) / its.size());
   std::printf("  solver failures: %d\n", r1.solver_failures + r2.solver_failures);
+  common::print_bench("control/mpc_solve_p50_ms", pct(ms, 0.5), "ms");
+  common::print_bench("control/mpc_solve_p99_ms", pct(ms, 0.99), "ms");
+  common::print_bench("control/mpc_iterations_mean", std::accumulate(its.begin(), its.end(), 0.0) / its.size(),
+                      "iterations");
   // The machine is shared (2 cores): wall time includes preemption. Replay the same states and
   // setpoints into a fresh MPC and time each solve in thread CPU time as well.
   {
@@ -74,6 +87,8 @@ int main() {
     }
     std::printf("  replay of %zu solves: wall p50 %.3f / p99 %.3f ms, thread CPU p50 %.3f / p99 %.3f / max %.3f ms\n",
                 cpu.size(), pct(wall, 0.5), pct(wall, 0.99), pct(cpu, 0.5), pct(cpu, 0.99), pct(cpu, 1.0));
+    common::print_bench("control/mpc_replay_cpu_p50_ms", pct(cpu, 0.5), "ms");
+    common::print_bench("control/mpc_replay_cpu_p99_ms", pct(cpu, 0.99), "ms");
   }
 
   // Allocation: random wrenches over twice the achievable box (about half saturate).
@@ -84,7 +99,7 @@ int main() {
     Allocator a(acfg.vehicle.thrusters, ao);
     std::mt19937_64 rng(7);
     std::uniform_real_distribution<double> uni(-1.0, 1.0);
-    const WrenchBox box = a.achievable_wrench_box();
+    const WrenchBox& box = a.achievable_wrench_box();
     std::vector<Vector6d> ws(4096);
     for (auto& w : ws) {
       for (int j = 0; j < 6; ++j) w(j) = uni(rng) * 2.0 * box.upper(j) / 6.0 * 3.0;
@@ -98,8 +113,9 @@ int main() {
     }
     const double ns = std::chrono::duration<double, std::nano>(std::chrono::steady_clock::now() - t0).count() /
                       (reps * static_cast<double>(ws.size()));
-    std::printf("Allocation (%s, %d thrusters): %.0f ns per call (checksum %.3f)\n", to_string(mode),
-                a.num_thrusters(), ns, sink);
+    std::printf("Allocation (%s, %d thrusters): %.0f ns per call (checksum %.3f)\n", to_string(mode), a.num_thrusters(),
+                ns, sink);
+    common::print_bench(std::string("control/allocate_") + to_string(mode) + "_ns", ns, "ns");
   }
   return 0;
 }

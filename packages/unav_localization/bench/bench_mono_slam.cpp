@@ -4,6 +4,8 @@
 //                                    of the down camera flying 1.4 m over the pipe-inspection seabed)
 // Prints per-frame tracking time (features + tracking) and the time with mapping (keyframe
 // insertion, local BA, loop closing) as percentiles and frames per second.
+// Machine-readable: BENCH slam/<part>_mean_ms and slam/<part>_p50_ms, part: orb_tracking,
+// orb_tracking_mapping, orb_mapping_per_keyframe, klt_vo_mono.
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -14,6 +16,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "unav_common/bench.hpp"
 #include "unav_common/resources.hpp"
 #include "unav_localization/image_sequence.hpp"
 #include "unav_localization/klt_vo.hpp"
@@ -26,7 +29,7 @@ namespace ul = unav::localization;
 
 namespace {
 
-void Report(const char* what, std::vector<double> ms, const char* unit = "frames/s") {
+void Report(const char* what, const std::string& id, std::vector<double> ms, const char* unit = "frames/s") {
   std::sort(ms.begin(), ms.end());
   const double mean = std::accumulate(ms.begin(), ms.end(), 0.0) / static_cast<double>(ms.size());
   auto pct = [&](double q) {
@@ -34,6 +37,8 @@ void Report(const char* what, std::vector<double> ms, const char* unit = "frames
   };
   std::printf("  %-30s mean %7.2f ms  p50 %7.2f  p90 %7.2f  p99 %7.2f  max %7.2f  -> %6.1f %s\n", what, mean, pct(0.5),
               pct(0.9), pct(0.99), ms.back(), 1000.0 / mean, unit);
+  unav::common::print_bench("slam/" + id + "_mean_ms", mean, "ms");
+  unav::common::print_bench("slam/" + id + "_p50_ms", pct(0.5), "ms");
 }
 
 }  // namespace
@@ -88,9 +93,9 @@ int main(int argc, char** argv) {
   const auto st = slam.stats();
   std::printf("orb_slam: %d tracked, %d lost, %d keyframes, %d points, %d loops\n", st.tracked_frames, st.lost_frames,
               st.keyframes, st.points, st.loops);
-  Report("tracking (ORB + pose)", track);
-  Report("tracking + mapping", total);
-  if (!kf_mapping.empty()) Report("mapping per keyframe", kf_mapping, "keyframes/s");
+  Report("tracking (ORB + pose)", "orb_tracking", track);
+  Report("tracking + mapping", "orb_tracking_mapping", total);
+  if (!kf_mapping.empty()) Report("mapping per keyframe", "orb_mapping_per_keyframe", kf_mapping, "keyframes/s");
 
   ul::KltVoOptions ko;
   ko.mode = ul::KltVoOptions::Mode::kMonocular;
@@ -102,6 +107,6 @@ int main(int argc, char** argv) {
     klt.ProcessFrame(f, &T);
     klt_ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
   }
-  Report("klt_vo monocular", klt_ms);
+  Report("klt_vo monocular", "klt_vo_mono", klt_ms);
   return 0;
 }

@@ -1,5 +1,7 @@
 // Model steps per second on one core (target >= 2,000,000 steps/s for the dynamics step).
 // Run: bench_physics [--benchmark_filter=...]; items_per_second = steps per second.
+// Machine-readable: Google Benchmark's own `--benchmark_format=json`; scripts/bench_compare.sh
+// reads each run's CPU time per step as BENCH physics/{dynamics,simulator}_step_{verlet,rk4}_ns.
 #include <benchmark/benchmark.h>
 
 #include "unav_physics/simulator.hpp"
@@ -11,7 +13,7 @@ namespace {
 up::DynamicsInputs busy_inputs() {
   up::DynamicsInputs in;
   in.tau_B << 20.0, 5.0, -3.0, 0.5, -0.4, 1.0;  // a thrusting, turning vehicle
-  in.v_c_W = Eigen::Vector3d(0.2, 0.1, 0.0);   // and a current, so every term is exercised
+  in.v_c_W = Eigen::Vector3d(0.2, 0.1, 0.0);    // and a current, so every term is exercised
   return in;
 }
 
@@ -44,8 +46,9 @@ void BM_SimulatorStep(benchmark::State& state, up::Integrator integrator) {
   up::SimulatorOptions o;
   o.integrator = integrator;
   o.command_timeout = 0.0;
-  up::Simulator sim(v, o, std::make_unique<up::SinusoidalCurrent>(Eigen::Vector3d(0.1, 0, 0), Eigen::Vector3d(0.1, 0.05, 0), 0.05),
-                    std::make_unique<up::FlatSeabed>(30.0), moving_state());
+  up::Simulator sim(
+      v, o, std::make_unique<up::SinusoidalCurrent>(Eigen::Vector3d(0.1, 0, 0), Eigen::Vector3d(0.1, 0.05, 0), 0.05),
+      std::make_unique<up::FlatSeabed>(30.0), moving_state());
   sim.set_command(0.0, std::vector<double>{0.3, 0.3, -0.3, -0.3, 0.1, 0.1, 0.1, 0.1});
   for (auto _ : state) {
     sim.step();

@@ -1,12 +1,14 @@
 // physics_server in lockstep with no participants (no camera, no controller), all sensors of
-// the Heavy config publishing: simulated seconds per wall second. Prints one table.
+// the Heavy config publishing: simulated seconds per wall second. Prints one table, then
+// BENCH physics/server_lockstep_x_real_time and physics/server_lockstep_odom_subscriber_x_real_time.
 // Usage: bench_physics_server VEHICLE_YAML [wall_seconds]
+#include <unistd.h>
 #include <cstdio>
 #include <cstdlib>
 #include <thread>
-#include <unistd.h>
 
 #include "physics_server_node.hpp"
+#include "unav_common/bench.hpp"
 
 namespace {
 
@@ -31,8 +33,8 @@ double run(const std::string& vehicle, double wall_s, bool with_subscriber) {
   }
   const double t0 = server.simulator().time();
   const auto start = std::chrono::steady_clock::now();
-  server_ctx.spin_until([] { return false; }, std::chrono::duration_cast<std::chrono::nanoseconds>(
-                                                  std::chrono::duration<double>(wall_s)));
+  server_ctx.spin_until([] { return false; },
+                        std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::duration<double>(wall_s)));
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   const double ratio = (server.simulator().time() - t0) / wall;
   if (with_subscriber) {
@@ -55,5 +57,7 @@ int main(int argc, char** argv) {
   const double with_sub = run(argv[1], wall_s, true);
   std::printf("| physics_server lockstep, 1 kHz, all sensors | simulated s per wall s |\n|---|---|\n");
   std::printf("| no subscribers | %.1f |\n| odometry subscriber in another participant | %.1f |\n", alone, with_sub);
+  unav::common::print_bench("physics/server_lockstep_x_real_time", alone, "x_real_time");
+  unav::common::print_bench("physics/server_lockstep_odom_subscriber_x_real_time", with_sub, "x_real_time");
   return 0;
 }

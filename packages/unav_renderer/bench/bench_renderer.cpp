@@ -16,6 +16,9 @@
 // VM's timing noise (texture and memory stalls are not counted: check the direction with fps).
 // --config N: the N-th configuration of the table (0 default, 1 no materials, ...) for the
 // callgrind count, the --quick row and the per-pass breakdown.
+// Machine-readable, for the default options' rows: BENCH renderer/<camera>_median_ms,
+// renderer/<camera>_sync_fps, renderer/<camera>_pipelined_fps (camera: w320x180, w640x480,
+// w640x480_distorted, demo_front), and renderer/node_pattern_{1,2}_workers_ticks_per_s.
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -30,6 +33,7 @@
 #define UNAV_HAVE_CALLGRIND 1
 #endif
 
+#include "unav_common/bench.hpp"
 #include "unav_common/resources.hpp"
 #include "unav_renderer/renderer.hpp"
 #include "unav_renderer/renderer_pool.hpp"
@@ -186,7 +190,8 @@ int main(int argc, char** argv) {
     RenderOptions o;
   };
   std::vector<Config> configs;
-  configs.push_back({"full (default options)", opt});
+  const char* const kDefaultOptions = "full (default options)";  // its rows give the BENCH lines
+  configs.push_back({kDefaultOptions, opt});
   RenderOptions o = opt;
   o.materials = false;
   configs.push_back({"no materials (flat Lambertian)", o});
@@ -253,6 +258,11 @@ int main(int argc, char** argv) {
       const Result res = measure(r, cam, frames);
       std::printf("%-34s %-20s %10.1f %10.1f %12.2f %10.2f\n", c.name, cam, res.fps_sync, res.fps_pipelined,
                   res.median_ms, res.cpu_ms_pipelined);
+      if (c.name != kDefaultOptions) continue;
+      const std::string id = std::string("renderer/") + cam;
+      unav::common::print_bench(id + "_median_ms", res.median_ms, "ms");
+      unav::common::print_bench(id + "_sync_fps", res.fps_sync, "fps");
+      unav::common::print_bench(id + "_pipelined_fps", res.fps_pipelined, "fps");
     }
   }
   // Throughput with several contexts at once (RendererPool), alternated with one context so that
@@ -277,6 +287,10 @@ int main(int argc, char** argv) {
       const double g1 = pool_ticks_per_s(one, frames), g2 = pool_ticks_per_s(two, frames);
       std::printf("%-20s %10.1f %10.1f %9.0f %%   (ticks/s: demo_front + 320x180 at each pose)\n", "node pattern",
                   0.5 * (f1 + g1), 0.5 * (f2 + g2), 100.0 * ((f2 + g2) / (f1 + g1) - 1.0));
+      if (c.name == kDefaultOptions) {
+        unav::common::print_bench("renderer/node_pattern_1_workers_ticks_per_s", 0.5 * (f1 + g1), "ticks_per_s");
+        unav::common::print_bench("renderer/node_pattern_2_workers_ticks_per_s", 0.5 * (f2 + g2), "ticks_per_s");
+      }
     }
   }
   // The GPU's time for each pass (timestamp queries, nothing serialised) and the calling thread's

@@ -4,6 +4,8 @@
 // also writes the README's sonar gallery: FLS fans over the pipe in clear and turbid water (the
 // sonar does not care), the front camera's view in both, and a side-scan waterfall along the pipe.
 //   bench_unav_sonar [pings=30] [--gallery DIR] [world.yaml]
+// Machine-readable: BENCH sonar/<sonar>_pings_per_s, sonar/<sonar>_raster_ms,
+// sonar/<sonar>_accumulate_ms (sonar: fls_256x512, fls_512x1024, sidescan_1024).
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -12,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "unav_common/bench.hpp"
 #include "unav_common/resources.hpp"
 #include "unav_renderer/renderer.hpp"
 #include "unav_renderer/sonar_renderer.hpp"
@@ -89,6 +92,9 @@ int main(int argc, char** argv) {
     const double s = std::chrono::duration<double>(Clock::now() - t0).count();
     std::printf("%-18s %10.1f %12.2f %14.2f %10.2f\n", m.name.c_str(), pings / s, median(raster), median(acc),
                 median(total));
+    unav::common::print_bench("sonar/" + m.name + "_pings_per_s", pings / s, "pings_per_s");
+    unav::common::print_bench("sonar/" + m.name + "_raster_ms", median(raster), "ms");
+    unav::common::print_bench("sonar/" + m.name + "_accumulate_ms", median(acc), "ms");
   }
   if (gallery.empty()) return 0;
 

@@ -5,6 +5,10 @@
 // The vector env runs twice on one EGL context and twice as it chooses (two displays on llvmpipe),
 // alternated: this VM's speed drifts over minutes.
 // key=value: any config key (scenario.cameras.width=80, scenario.render.marine_snow=false, ...).
+// Machine-readable (D: kinematic or mpc, HxW: the observation, e.g. 180x320; N: --envs):
+// BENCH sim/pipe_env_reset_ms; sim/pipe_env_D_HxW_steps_per_s and, per step of that one env,
+// sim/pipe_env_D_HxW_{physics,control,render,readback}_ms; sim/pipe_env_D_HxW_Nenvs_{1ctx,auto_ctx}_steps_per_s
+// (the vector env on one EGL context / as many as it chooses, mean of its two runs).
 #include <algorithm>
 #include <array>
 #include <chrono>
@@ -15,6 +19,7 @@
 #include <utility>
 #include <vector>
 
+#include "unav_common/bench.hpp"
 #include "unav_common/resources.hpp"
 #include "unav_physics/scenario_builder.hpp"
 #include "unav_sim/pipe_following_env.hpp"
@@ -45,7 +50,13 @@ EpisodeTimings diff(const EpisodeTimings& a, const EpisodeTimings& b) {
   return d;
 }
 
-void run(const PipeFollowingConfig& cfg, int num_envs, int steps, int contexts) {
+struct Throughput {
+  double steps_per_s;
+  std::string id;  // sim/pipe_env_<dynamics>_<H>x<W>
+};
+
+// Steps per second (all envs); one env's also gives its BENCH lines per part.
+Throughput run(const PipeFollowingConfig& cfg, int num_envs, int steps, int contexts) {
   VectorPipeFollowingEnv vec(cfg, num_envs, 0, contexts);
   std::vector<std::uint8_t> obs;
   std::vector<std::array<double, 2>> actions(static_cast<std::size_t>(num_envs));
@@ -80,6 +91,16 @@ void run(const PipeFollowingConfig& cfg, int num_envs, int steps, int contexts) 
       cfg.env.dynamics.c_str(), vec.env(0).obs_height(), vec.env(0).obs_width(), num_envs, vec.contexts(), n / wall,
       1e3 * wall / n, 1e3 * d.physics_s / n, 1e3 * d.control_s / n, 1e3 * d.render_s / n, 1e3 * d.readback_s / n,
       1e3 * (wall - d.physics_s - d.control_s - d.render_s - d.readback_s) / n, resets);
+  const std::string id = "sim/pipe_env_" + cfg.env.dynamics + "_" + std::to_string(vec.env(0).obs_height()) + "x" +
+                         std::to_string(vec.env(0).obs_width());
+  if (num_envs == 1) {
+    unav::common::print_bench(id + "_steps_per_s", n / wall, "steps_per_s");
+    unav::common::print_bench(id + "_physics_ms", 1e3 * d.physics_s / n, "ms");
+    unav::common::print_bench(id + "_control_ms", 1e3 * d.control_s / n, "ms");
+    unav::common::print_bench(id + "_render_ms", 1e3 * d.render_s / n, "ms");
+    unav::common::print_bench(id + "_readback_ms", 1e3 * d.readback_s / n, "ms");
+  }
+  return {n / wall, id};
 }
 
 // reset() of one env: a new random scene (geometry upload, the plant rebuilt on its seabed and
@@ -103,6 +124,7 @@ void time_resets(const PipeFollowingConfig& cfg, int n) {
       "reset (new %s scene + first observation): median %.2f ms, max %.2f ms over %d; of which the plant "
       "(seabed grid, current): median %.2f ms\n",
       cfg.env.scenes.c_str(), ms[ms.size() / 2], ms.back(), n, plant_ms[plant_ms.size() / 2]);
+  unav::common::print_bench("sim/pipe_env_reset_ms", ms[ms.size() / 2], "ms");
 }
 
 }  // namespace
@@ -140,9 +162,18 @@ int main(int argc, char** argv) {
     cfg.env.dynamics = dyn;
     run(cfg, 1, steps, 1);
     // The vector env on one EGL context, then on two displays where llvmpipe allows (alternated).
-    if (num_envs > 1)
+    if (num_envs > 1) {
+      double sps[2] = {0.0, 0.0};
+      std::string id;
       for (int rep = 0; rep < 2; ++rep)
-        for (int contexts : {1, 0}) run(cfg, num_envs, steps, contexts);
+        for (int contexts : {1, 0}) {
+          const Throughput t = run(cfg, num_envs, steps, contexts);
+          sps[contexts == 1 ? 0 : 1] += 0.5 * t.steps_per_s;
+          id = t.id + "_" + std::to_string(num_envs) + "envs";
+        }
+      unav::common::print_bench(id + "_1ctx_steps_per_s", sps[0], "steps_per_s");
+      unav::common::print_bench(id + "_auto_ctx_steps_per_s", sps[1], "steps_per_s");
+    }
   }
   return 0;
 }

@@ -1,5 +1,6 @@
 // Bag write throughput with camera-sized messages: MB/s for MCAP (none, zstd) and sqlite3, and
 // the file size each gives for the same content. Usage: bench_unav_bag [OUT_DIR] [SECONDS_OF_VIDEO]
+// Machine-readable: BENCH bag/write_{mcap_none,mcap_zstd,sqlite3_none}_mb_per_s.
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
@@ -7,6 +8,7 @@
 #include <string>
 
 #include "unav_bag/bag.hpp"
+#include "unav_common/bench.hpp"
 
 namespace fs = std::filesystem;
 
@@ -54,6 +56,8 @@ int main(int argc, char** argv) {
     std::printf("%-14s %10llu %10.1f %12.3f %10.1f   (file %.1f MB)\n",
                 (std::string(storage) + "/" + compression).c_str(), static_cast<unsigned long long>(n), payload_mb, dt,
                 payload_mb / dt, static_cast<double>(bytes) / 1e6);
+    unav::common::print_bench(std::string("bag/write_") + storage + "_" + compression + "_mb_per_s", payload_mb / dt,
+                              "MB_per_s");
   }
   fs::remove_all(out);
   return 0;

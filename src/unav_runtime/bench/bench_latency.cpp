@@ -2,7 +2,9 @@
 // a minimal raw Fast DDS program with the same QoS and transports, in the same run: both with and
 // without data-sharing delivery (the Image type bounded to the image's size, registered under its
 // ROS 2 name), and through the runtime with DDS Security on (SROS2 default governance: RTPS
-// signed, data encrypted with AES-GCM); plus image throughput. Prints a Markdown table.
+// signed, data encrypted with AES-GCM); plus image throughput. Prints a Markdown table, then
+// BENCH runtime/latency_{small,image}_<path>_{p50,p99}_ms and runtime/throughput_image_<path>_mb_per_s,
+// path: raw, raw_data_sharing, runtime, runtime_data_sharing, runtime_secured.
 // Usage: bench_latency [samples_small] [samples_image]
 #include <sys/wait.h>
 #include <unistd.h>
@@ -28,6 +30,7 @@
 #include <fastdds/dds/topic/TypeSupport.hpp>
 
 #include "sensor_msgs/msg/image.hpp"
+#include "unav_common/bench.hpp"
 #include "unav_runtime/runtime.hpp"
 #include "unav_runtime/security.hpp"
 
@@ -37,6 +40,8 @@ using namespace std::chrono_literals;
 namespace {
 
 enum class Path { kRaw, kRawDataSharing, kRuntime, kRuntimeDataSharing, kRuntimeSecured };
+// In BENCH ids, by Path.
+const char* const kPathIds[] = {"raw", "raw_data_sharing", "runtime", "runtime_data_sharing", "runtime_secured"};
 const char* path_name(Path p) {
   switch (p) {
     case Path::kRaw:
@@ -297,13 +302,20 @@ int main(int argc, char** argv) {
   std::printf("|---|---|---|---|---|---|---|\n");
   struct Case {
     const char* name;
+    const char* id;  // BENCH id: p50 and p99 latency, or received MB/s for the throughput case
     bool big;
     size_t n;
     double period;
   };
-  const Case cases[] = {{"100 B Image", false, n_small, 0.002},
-                        {"640x480 rgb8 (921,600 B)", true, n_image, 1.0 / 30.0},
-                        {"640x480 rgb8, throughput", true, n_image, 1.0 / 500.0}};
+  const Case cases[] = {{"100 B Image", "latency_small", false, n_small, 0.002},
+                        {"640x480 rgb8 (921,600 B)", "latency_image", true, n_image, 1.0 / 30.0},
+                        {"640x480 rgb8, throughput", "throughput_image", true, n_image, 1.0 / 500.0}};
+  struct Figure {
+    std::string id;
+    double value;
+    const char* unit;
+  };
+  std::vector<Figure> figures;  // BENCH lines, printed after the table
   g_keystore = "/tmp/unav_bench_keystore_" + std::to_string(getpid());
   std::filesystem::remove_all(g_keystore);
   unav::security::create_keystore(g_keystore);
@@ -316,8 +328,18 @@ int main(int argc, char** argv) {
       std::printf("| %s | %s | %zu | %.0f Hz | %.3f | %.3f | %.1f |\n", c.name, path_name(path), s.n, 1.0 / c.period,
                   s.p50_ms, s.p99_ms, s.mbps);
       std::fflush(stdout);
+      if (s.n == 0) continue;  // nothing received: no figure
+      const std::string id = std::string("runtime/") + c.id + "_" + kPathIds[static_cast<int>(path)];
+      if (std::string(c.id).rfind("throughput", 0) == 0) {
+        figures.push_back({id + "_mb_per_s", s.mbps, "MB_per_s"});
+      } else {
+        figures.push_back({id + "_p50_ms", s.p50_ms, "ms"});
+        figures.push_back({id + "_p99_ms", s.p99_ms, "ms"});
+      }
     }
   }
+  std::printf("\n");
+  for (const auto& f : figures) unav::common::print_bench(f.id, f.value, f.unit);
   std::filesystem::remove_all(g_keystore);
   return 0;
 }
