@@ -33,6 +33,7 @@ RobotDescriptionNode::RobotDescriptionNode(const unav::NodeOptions& options)
   if (p.vehicle_config.empty())
     throw unav::ParameterError("node '" + name() + "': 'vehicle_config' is required (unav_resources is not installed)");
   std::vector<MountedFrame> mounts;
+  mounts.reserve(cameras.size() + 4);
   for (const auto& c : cameras) mounts.push_back({c.name + "_optical", c.X_BC});
   if (!p.sonars_config.empty())
     for (const auto& s : unav::scene::load_sonars(p.sonars_config))

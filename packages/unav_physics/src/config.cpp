@@ -58,8 +58,8 @@ std::string text(double v) {
 /// A YAML node plus where it came from, with typed, checked accessors.
 class Reader {
  public:
-  Reader(YAML::Node node, std::string source, std::string path)
-      : node_(std::move(node)), source_(std::move(source)), path_(std::move(path)) {}
+  Reader(const YAML::Node& node, std::string source, std::string path)
+      : node_(node), source_(std::move(source)), path_(std::move(path)) {}
 
   const YAML::Node& node() const { return node_; }
   const std::string& source() const { return source_; }
@@ -300,7 +300,7 @@ void validate_vehicle(const VehicleParams& p, const std::string& src) {
     fail(src, "inertia", "must be symmetric", text(p.inertia));
   {
     const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(p.inertia);
-    const Eigen::Vector3d e = es.eigenvalues();  // ascending
+    const Eigen::Vector3d& e = es.eigenvalues();  // ascending
     if (!(e(0) > 0.0)) fail(src, "inertia", "must be positive definite (eigenvalues " + text(e) + ")", text(p.inertia));
     if (e(0) + e(1) < e(2) * (1.0 - 1e-9))
       fail(src, "inertia", "principal moments must satisfy the triangle inequality (eigenvalues " + text(e) + ")",

@@ -34,7 +34,7 @@ std::optional<Segment> parse_data_sharing_name(const std::string& name) {
   if (name.compare(0, prefix.size(), prefix) != 0) return std::nullopt;
   // 12 bytes "xx." (the last without the dot), then '_' and the entity id.
   const std::size_t at = prefix.size();
-  if (name.size() < at + 12 * 3) return std::nullopt;
+  if (name.size() < at + std::size_t{36}) return std::nullopt;
   std::array<int, 12> b{};
   for (std::size_t i = 0; i < 12; ++i) {
     b[i] = hex_byte(name, at + 3 * i);

@@ -184,7 +184,7 @@ class SensorSuite {
   Channel accel_[3], gyro_[3], pressure_, dvl_[4], range_, mag_[3], gps_[3];
 };
 
-/// Throws ConfigError ("<source>: sensors.imu.rate must be > 0 (got -1)") on a bad value.
-void validate_sensors(const SensorSuiteParams& params, const std::string& source);
+/// Throws ConfigError ("<src>: sensors.imu.rate must be > 0 (got -1)") on a bad value.
+void validate_sensors(const SensorSuiteParams& p, const std::string& src);
 
 }  // namespace unav::physics

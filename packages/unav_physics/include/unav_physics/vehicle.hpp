@@ -17,9 +17,9 @@ namespace unav::physics {
 /// reverse coefficient C_T_reverse is used (asymmetric T200 curve), C_T when it is <= 0.
 struct ThrusterParams {
   std::string name;
-  Eigen::Vector3d position_B = Eigen::Vector3d::Zero();   ///< r_i, m, body FRD
+  Eigen::Vector3d position_B = Eigen::Vector3d::Zero();    ///< r_i, m, body FRD
   Eigen::Vector3d direction_B = Eigen::Vector3d::UnitX();  ///< n_i, positive thrust direction (normalised on load)
-  double C_T = 0.344;          ///< thrust coefficient, -
+  double C_T = 0.344;                                      ///< thrust coefficient, -
   double C_T_reverse = 0.0;    ///< thrust coefficient for negative commands, - (<= 0: same as C_T)
   double rho = 1025.0;         ///< water density used by eq. 3, kg/m^3
   double w_max = 58.33;        ///< maximum propeller speed, rev/s
@@ -39,7 +39,7 @@ struct ContactParams {
 
 struct VehicleParams {
   std::string name = "vehicle";
-  double mass = 1.0;                                       ///< m, kg
+  double mass = 1.0;                                      ///< m, kg
   Eigen::Matrix3d inertia = Eigen::Matrix3d::Identity();  ///< about the CG, body axes, kg m^2
   Eigen::Vector3d r_g_B = Eigen::Vector3d::Zero();        ///< centre of gravity, m
   Eigen::Vector3d r_b_B = Eigen::Vector3d::Zero();        ///< centre of buoyancy, m
@@ -67,7 +67,7 @@ struct VehicleParams {
 /// triangle inequality; M_A symmetric with M_RB + M_A positive definite; damping diagonals >= 0;
 /// thruster directions non-zero; time constants, coefficients, w_max, D > 0; finite values;
 /// 1 <= thrusters <= kMaxThrusters; sensors). Throws ConfigError naming source + key + value + rule.
-void validate_vehicle(const VehicleParams& params, const std::string& source = "<in-memory>");
+void validate_vehicle(const VehicleParams& p, const std::string& src = "<in-memory>");
 
 /// Parses a vehicle map (layout: config/vehicles/bluerov2_heavy.yaml), rejecting unknown keys,
 /// wrong types and NaN/Inf, normalising thruster directions, then validate_vehicle().
