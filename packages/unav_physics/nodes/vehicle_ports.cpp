@@ -122,6 +122,12 @@ void VehiclePorts::publish_sensors(const Simulator& sim) {
     d.velocity().z(r.dvl.velocity_B.z());
     d.altitude(r.dvl.altitude_m);
     d.valid(r.dvl.valid);
+    d.locked_beams(r.dvl.locked_beams);
+    for (std::size_t i = 0; i < 4; ++i) {
+      d.beam_valid()[i] = r.dvl.beam_valid[i];
+      d.beam_range()[i] = r.dvl.beam_valid[i] ? r.dvl.beam_range_m[i] : 0.0;
+      d.beam_velocity()[i] = r.dvl.beam_valid[i] ? r.dvl.beam_velocity[i] : 0.0;
+    }
     dvl_pub_->publish(d);
   }
   if (range_pub_ && r.altimeter.seq != last_seq_[3] && r.altimeter.seq > 0) {

@@ -3,8 +3,10 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <optional>
 
 #include "physics_server_node.hpp"
 #include "unav_runtime/lockstep_ack.hpp"
@@ -294,6 +296,32 @@ TEST(PhysicsServer, NodeParametersOverrideTheWorld) {
 // /lockstep/ack is transient local. With a volatile writer, a participant that acked its first
 // input during a slow start (16 processes on 2 cores) was never heard and the lockstep held at
 // t = 0 for ever (seen once in three vslam_benchmark runs).
+// The four-beam DVL on the wire: over the default flat seabed (10 m) with the vehicle starting at
+// 5 m, every beam locks at a slant range of altitude / cos(22.5 deg) (the vehicle stays near level;
+// 2 % covers its small tilt and drift while the failsafe holds the thrusters at zero).
+TEST(PhysicsServer, DvlPublishesItsFourBeams) {
+  std::unique_ptr<unav::Context> server_ctx = make_context({});
+  PhysicsServer server(unav::NodeOptions{server_ctx.get()});
+  std::unique_ptr<unav::Context> test_ctx = make_context({});
+  unav::Node probe("probe", unav::NodeOptions{test_ctx.get()});
+  std::optional<unav_msgs::msg::Dvl> last;
+  auto sub = probe.create_subscription<unav_msgs::msg::Dvl>("/rov/dvl", unav::QoS::sensor_data(),
+                                                            [&](const unav_msgs::msg::Dvl& m) { last = m; });
+  const std::vector<unav::testing::Link> links = {make_link(server, *sub)};
+  ASSERT_TRUE(unav::testing::wait_for_match({server_ctx.get(), test_ctx.get()}, links))
+      << unav::testing::describe(links);
+  ASSERT_TRUE(unav::testing::spin_until(
+      {server_ctx.get(), test_ctx.get()}, [&] { return last && last->valid(); }, 20s))
+      << "no valid DVL reading";
+  EXPECT_EQ(last->locked_beams(), 4);
+  const double cos_a = std::cos(22.5 * M_PI / 180.0);
+  for (std::size_t i = 0; i < 4; ++i) {
+    EXPECT_TRUE(last->beam_valid()[i]) << i;
+    EXPECT_NEAR(last->beam_range()[i] * cos_a / last->altitude(), 1.0, 0.02) << i;
+  }
+  EXPECT_NEAR(last->altitude(), 5.0, 0.5);
+}
+
 TEST(LockstepAck, AnAckWrittenBeforeTheServerMatchedStillArrives) {
   unav::Context participant_ctx(unav::testing::test_context_options());
   unav::Node participant("late_ack_participant", {&participant_ctx});
