@@ -76,14 +76,9 @@ TEST(RobotDescriptionNode, LatchedUrdfMatchesTheVehicleAndTheMounts) {
   const unav::ContextOptions o = unav::testing::test_context_options();
   unav::Context node_ctx(8, argv, o);
   unav::physics::RobotDescriptionNode node({&node_ctx});  // publishes at once, before anyone listens
-  unav::Context test_ctx(o);
-  unav::Node probe("probe", {&test_ctx});
-  std::string received;
-  auto sub = probe.create_subscription<std_msgs::msg::String>(
-      "/robot_description", unav::QoS::static_latched(), [&](const std_msgs::msg::String& m) { received = m.data(); });
-  ASSERT_TRUE(unav::testing::spin_until(
-      {&node_ctx, &test_ctx}, [&] { return !received.empty(); }, 30s))
-      << "no /robot_description for a late subscriber";
+  const auto latched = unav::testing::late_latched<std_msgs::msg::String>(node_ctx, "/robot_description");
+  ASSERT_TRUE(latched.has_value()) << "no /robot_description for a late subscriber";
+  const std::string received = latched->data();
   EXPECT_EQ(received, node.urdf());
 
   tinyxml2::XMLDocument doc;

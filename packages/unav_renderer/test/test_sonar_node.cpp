@@ -129,14 +129,10 @@ TEST(SonarNode, PublishesMountsOnTfStaticAndRejectsBadConfig) {
   const char* argv[] = {"sonar", "--ros-args", "-p", world.c_str(), "-p", cfg.c_str()};
   unav::Context node_ctx(6, argv, unav::testing::test_context_options());
   unav::renderer::SonarNode node({&node_ctx});
-  unav::Context test_ctx(unav::testing::test_context_options());
-  unav::Node probe("probe", {&test_ctx});
-  std::vector<tf2_msgs::msg::TFMessage> got;
-  auto sub = probe.create_subscription<tf2_msgs::msg::TFMessage>(
-      "/tf_static", unav::QoS::static_latched(), [&](const tf2_msgs::msg::TFMessage& m) { got.push_back(m); });
-  ASSERT_TRUE(unav::testing::spin_until({&node_ctx, &test_ctx}, [&] { return !got.empty(); }));
-  ASSERT_EQ(got[0].transforms().size(), 2u);
-  const auto& t = got[0].transforms()[0];
+  const auto got = unav::testing::late_latched<tf2_msgs::msg::TFMessage>(node_ctx, "/tf_static");
+  ASSERT_TRUE(got.has_value()) << "no /tf_static for a late subscriber";
+  ASSERT_EQ(got->transforms().size(), 2u);
+  const auto& t = got->transforms()[0];
   EXPECT_EQ(t.header().frame_id(), "base_link_frd");
   EXPECT_EQ(t.child_frame_id(), "fls_link");
   const Eigen::Isometry3d X = unav::from_msg(t.transform());

@@ -33,6 +33,7 @@
 #include <cstdlib>
 #include <functional>
 #include <initializer_list>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -190,6 +191,25 @@ inline std::string describe(const std::vector<Link>& links) {
     s += l.pub->topic_name() + ": writer sees " + std::to_string(l.pub->subscription_count()) +
          " reader(s), reader sees " + std::to_string(l.sub->publisher_count()) + " writer(s)\n";
   return s;
+}
+
+/// What a subscriber that joins after the node under test started receives on a latched topic
+/// (transient local: /tf_static, /robot_description): the first message, from a probe in a
+/// context of its own, spinning both; nullopt after `timeout`.
+template <typename Msg>
+std::optional<Msg> late_latched(Context& node_ctx, const std::string& topic,
+                                std::chrono::milliseconds timeout = std::chrono::seconds(30)) {
+  ContextOptions o = test_context_options();
+  o.domain_id = node_ctx.domain_id();  // the node's domain, whatever it was given
+  Context test_ctx(o);
+  Node probe("late_probe", {&test_ctx});
+  std::optional<Msg> got;
+  auto sub = probe.create_subscription<Msg>(topic, QoS::static_latched(), [&](const Msg& m) {
+    if (!got) got = m;
+  });
+  spin_until(
+      {&node_ctx, &test_ctx}, [&] { return got.has_value(); }, timeout);
+  return got;
 }
 
 }  // namespace unav::testing
