@@ -14,16 +14,11 @@
 #include "unav_common/resources.hpp"
 
 namespace unav::autopilot {
-namespace {
-
-std::string resource(const std::string& rel) { return unav::common::try_find_resource(rel).value_or(""); }
-
-}  // namespace
 
 ArduSubBridge::ArduSubBridge(const unav::NodeOptions& options) : Node("ardusub_bridge", options, "rov") {
   ArduSubBridgeParams p;
-  p.scenario.file = resource("config/scenarios/ardusub_pipe.yaml");
-  p.motor_map = resource("config/autopilot/ardusub_bluerov2_heavy.yaml");
+  p.scenario.file = unav::common::resource_or_empty("config/scenarios/ardusub_pipe.yaml");
+  p.motor_map = unav::common::resource_or_empty("config/autopilot/ardusub_bluerov2_heavy.yaml");
   declare_params(&p);
   if (!p.scenario.given() || p.motor_map.empty())
     throw unav::ParameterError("node '" + name() +

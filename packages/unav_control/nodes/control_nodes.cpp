@@ -14,9 +14,7 @@
 namespace unav::control {
 namespace {
 
-// Installed data file (config/, worlds/), or "" when unav_resources is not installed.
-std::string resource(const std::string& rel) { return unav::common::try_find_resource(rel).value_or(""); }
-std::string config_root() { return resource("config"); }
+std::string config_root() { return unav::common::resource_or_empty("config"); }
 // Relative vehicle paths: against the installed config/, or without it the file's config root.
 std::string config_root_for(const std::string& file) {
   const std::string installed = config_root();
@@ -49,7 +47,7 @@ auto wrap_config(F&& f) -> decltype(f()) {
 ControlAllocatorNode::ControlAllocatorNode(const unav::NodeOptions& options)
     : Node("control_allocator", options, "rov") {
   ControllerFileParam fp;
-  fp.config_file = resource("config/controllers/allocator.yaml");
+  fp.config_file = unav::common::resource_or_empty("config/controllers/allocator.yaml");
   declare_params(&fp);
   unav::scene::ScenarioParam scenario;
   declare_params(&scenario);
@@ -113,7 +111,7 @@ void ControlAllocatorNode::on_set_failed(const std::string& request) {
 
 MpcControllerNode::MpcControllerNode(const unav::NodeOptions& options) : Node("mpc_controller", options, "rov") {
   ControllerFileParam fp;
-  fp.config_file = resource("config/controllers/mpc.yaml");
+  fp.config_file = unav::common::resource_or_empty("config/controllers/mpc.yaml");
   declare_params(&fp);
   unav::scene::ScenarioParam scenario;
   declare_params(&scenario);

@@ -66,7 +66,7 @@ class OrbSlamNode : public unav::Node {
  public:
   explicit OrbSlamNode(const unav::NodeOptions& options) : Node("orb_slam", options, "rov") {
     OrbSlamNodeParams prm;
-    prm.vocabulary = unav::common::try_find_resource("config/vocabulary/orb_vocabulary.bin").value_or("");
+    prm.vocabulary = unav::common::resource_or_empty("config/vocabulary/orb_vocabulary.bin");
     declare_params(&prm);
     const std::string& cam = prm.camera;
     camera_ = cam;

@@ -97,7 +97,7 @@ int main(int argc, char** argv) {
     double depth_scale = 1.0;
     if (method == "orb_slam") {
       if (vocabulary.empty()) {
-        vocabulary = unav::common::try_find_resource("config/vocabulary/orb_vocabulary.bin").value_or("");
+        vocabulary = unav::common::resource_or_empty("config/vocabulary/orb_vocabulary.bin");
       }
       std::shared_ptr<const ul::BowVocabulary> voc;
       if (!vocabulary.empty()) {

@@ -9,18 +9,12 @@
 
 namespace unav::physics {
 
-namespace {
-
-std::string resource(const std::string& rel) { return unav::common::try_find_resource(rel).value_or(""); }
-
-}  // namespace
-
 RobotDescriptionNode::RobotDescriptionNode(const unav::NodeOptions& options)
     : Node("robot_description", options, "rov") {
   RobotDescriptionParams p;
-  p.vehicle_config = resource("config/vehicles/bluerov2_heavy.yaml");
-  p.cameras_config = resource("config/sensors/bluerov2_cameras.yaml");
-  p.sonars_config = resource("config/sensors/bluerov2_sonars.yaml");
+  p.vehicle_config = unav::common::resource_or_empty("config/vehicles/bluerov2_heavy.yaml");
+  p.cameras_config = unav::common::resource_or_empty("config/sensors/bluerov2_cameras.yaml");
+  p.sonars_config = unav::common::resource_or_empty("config/sensors/bluerov2_sonars.yaml");
   declare_params(&p);
   std::vector<unav::scene::CameraModel> cameras;
   if (p.scenario.given()) {  // the scenario's vehicle and cameras, as the physics server and renderer take them

@@ -34,7 +34,7 @@ int64_t steps_in(double period, double dt, const std::string& name) {
 
 PhysicsServer::PhysicsServer(const unav::NodeOptions& options) : Node("physics_server", options, "rov") {
   PhysicsServerParams p;
-  p.vehicle_config = unav::common::try_find_resource("config/vehicles/bluerov2_heavy.yaml").value_or("");
+  p.vehicle_config = unav::common::resource_or_empty("config/vehicles/bluerov2_heavy.yaml");
   declare_params(&p);
   // A scenario gives the plant (world, vehicle, step, initial state) as the in-process Episode
   // takes it, through the same builder (unav_physics/scenario_builder.hpp).

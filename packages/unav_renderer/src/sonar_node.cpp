@@ -18,8 +18,6 @@ using unav::scene::SonarModel;
 using unav::scene::World;
 namespace dtype = marine_acoustic_msgs::msg::SonarImageData_Constants;
 
-std::string resource(const std::string& rel) { return unav::common::try_find_resource(rel).value_or(""); }
-
 // Samples of a ping into SonarImageData (row-major by range, `channels` values per row).
 void fill_image_data(SonarImageData_& d, const SonarPing& ping, bool float32) {
   d.is_bigendian(false);
@@ -47,8 +45,8 @@ void fill_mono8(sensor_msgs::msg::Image& m, int w, int h, const std::vector<std:
 
 SonarNode::SonarNode(const unav::NodeOptions& options) : Node("sonar", options, "rov") {
   SonarNodeParams prm;
-  prm.world = resource("worlds/pipe_inspection/world.yaml");
-  prm.sonars_config = resource("config/sensors/bluerov2_sonars.yaml");
+  prm.world = unav::common::resource_or_empty("worlds/pipe_inspection/world.yaml");
+  prm.sonars_config = unav::common::resource_or_empty("config/sensors/bluerov2_sonars.yaml");
   declare_params(&prm);
   if (prm.world.empty() || prm.sonars_config.empty())
     throw unav::ParameterError("node '" + name() +

@@ -24,9 +24,6 @@ std::string join(const std::vector<std::string>& parts) {
   return out;
 }
 
-// Installed data file (config/, worlds/), or "" when unav_resources is not installed.
-std::string resource(const std::string& rel) { return unav::common::try_find_resource(rel).value_or(""); }
-
 void fill_image(sensor_msgs::msg::Image& m, int w, int h, const char* encoding, int bytes_per_px) {
   m.width(static_cast<uint32_t>(w));
   m.height(static_cast<uint32_t>(h));
@@ -52,8 +49,8 @@ unav::QoS image_qos(sensor_msgs::msg::Image proto, const std::string& frame_id) 
 UnderwaterRendererNode::UnderwaterRendererNode(const unav::NodeOptions& options)
     : Node("underwater_renderer", options, "rov") {
   UnderwaterRendererParams prm;
-  prm.world = resource("worlds/pipe_inspection/world.yaml");
-  prm.cameras_config = resource("config/sensors/bluerov2_cameras.yaml");
+  prm.world = unav::common::resource_or_empty("worlds/pipe_inspection/world.yaml");
+  prm.cameras_config = unav::common::resource_or_empty("config/sensors/bluerov2_cameras.yaml");
   declare_params(&prm);
   std::vector<CameraModel> scenario_cams;
   auto noise_seed = static_cast<std::uint64_t>(prm.seed);

@@ -90,8 +90,7 @@ std::optional<std::string> find_package_share(const std::string& package) {
   return *prefix + "/share/" + package;
 }
 
-std::optional<std::string> find_executable(const std::string& package,
-                                           const std::string& executable,
+std::optional<std::string> find_executable(const std::string& package, const std::string& executable,
                                            std::vector<std::string>* searched_dirs) {
   if (package.empty() || package.find('/') != std::string::npos || executable.empty() ||
       executable.find('/') != std::string::npos) {
@@ -135,6 +134,8 @@ std::optional<std::string> try_find_resource(const std::string& path) {
   }
   return std::nullopt;
 }
+
+std::string resource_or_empty(const std::string& path) { return try_find_resource(path).value_or(""); }
 
 std::string find_resource(const std::string& path) {
   if (auto found = try_find_resource(path)) return *found;

@@ -43,6 +43,10 @@ std::vector<std::string> resource_roots();
 /// Empty when not found (for callers with a fallback, e.g. a parameter default of "").
 std::optional<std::string> try_find_resource(const std::string& path);
 
+/// try_find_resource(path) or "": a node parameter's default (empty when unav_resources is not
+/// installed; the node then asks for the parameter).
+std::string resource_or_empty(const std::string& path);
+
 /// try_find_resource(path), or throws unav::ConfigError naming `path` and every place looked
 /// at (including "unav_resources is not installed" when it is not).
 std::string find_resource(const std::string& path);
