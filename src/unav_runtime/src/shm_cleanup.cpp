@@ -65,10 +65,11 @@ CleanReport clean_data_sharing(const std::string& dir, bool dry_run,
   CleanReport r;
   std::error_code ec;
   if (!fs::is_directory(dir, ec)) return r;
-  const std::vector<bool> live = live_pid16();
+  std::vector<bool> live;  // read from /proc at the first segment: a participant's start with none costs no scan
   for (const auto& e : fs::directory_iterator(dir, ec)) {
     std::optional<Segment> s = parse_data_sharing_name(e.path().filename().string());
     if (!s) continue;
+    if (live.empty()) live = live_pid16();
     s->bytes = e.is_regular_file(ec) ? static_cast<std::uint64_t>(e.file_size(ec)) : 0;
     s->dead = !live[s->pid16] && (!host_id || *host_id == s->host);
     if (s->dead && !dry_run) {
