@@ -10,7 +10,7 @@ set -u
 TMP="$(mktemp -d)"
 trap 'rm -rf "$TMP"' EXIT
 export ROS_DOMAIN_ID="${ROS_DOMAIN_ID:-43}"
-unav launch launch_scripts/pipe_inspection.launch.yaml output_dir:="$TMP/train" height:=2.5 water:=II duration:=30 \
-  cameras:="$PWD/config/sensors/bluerov2_down_vslam.yaml" > "$TMP/launch.log" 2>&1 || { tail -20 "$TMP/launch.log"; exit 1; }
+unav launch launch_scripts/pipe_inspection.launch.yaml output_dir:="$TMP/train" height:=2.5 duration:=30 \
+  scenario:="$PWD/config/scenarios/vslam.yaml" set:="[water=II]" > "$TMP/launch.log" 2>&1 || { tail -20 "$TMP/launch.log"; exit 1; }
 install/unav_localization/lib/unav_localization/unav_train_vocabulary --images "$TMP/train/rgb" \
   --out config/vocabulary/orb_vocabulary.bin --features 1000 --branching 10 --levels 4

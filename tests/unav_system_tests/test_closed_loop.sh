@@ -7,7 +7,7 @@ source "$(dirname "$0")/common.sh"
 log=$(mktemp)
 rc=0
 timeout -s INT 120 unav launch "$ws/launch_scripts/closed_loop.launch.yaml" waypoints:="[2.0, 0.0, 5.0]" \
-  pipeline_world:="" initial_position:="[0.0, 0.0, 5.0]" duration:=10.0 >"$log" 2>&1 || rc=$?
+  initial_position:="[0.0, 0.0, 5.0]" duration:=10.0 >"$log" 2>&1 || rc=$?
 fail() { echo "FAIL: $*"; grep -v "Publishing" "$log" | tail -30; exit 1; }
 [ "$rc" -eq 0 ] || fail "launch exit code $rc"
 line=$(grep "max_sim_time reached" "$log") || fail "physics did not reach t = 10 s"

@@ -228,6 +228,7 @@ WaypointFollowerNode::WaypointFollowerNode(const unav::NodeOptions& options)
     : Node("waypoint_follower", options, "rov") {
   WaypointFollowerParams prm;
   declare_params(&prm);
+  if (prm.scenario.given()) prm.pipeline_world = prm.scenario.load().world;
   WaypointFollowerOptions wo;
   wo.acceptance_radius = prm.acceptance_radius;
   const std::vector<double>& flat = prm.waypoints;
@@ -235,7 +236,7 @@ WaypointFollowerNode::WaypointFollowerNode(const unav::NodeOptions& options)
   const double height = prm.height_above_pipe;
   follower_ = WaypointFollower(wo);
   std::vector<PoseSetpoint> path;
-  if (!world.empty()) {
+  if (!world.empty() && flat.empty()) {
     unav::scene::World w;
     try {
       w = unav::scene::load_world(world);

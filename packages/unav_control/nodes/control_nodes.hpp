@@ -33,8 +33,9 @@
 //   sub  sim/reset                geometry_msgs/Pose: a new episode (physics_server): the path
 //                                 starts again from its first waypoint
 //   pub  control/pose_setpoint    geometry_msgs/PoseStamped, on every odometry
-//   params: waypoints (flat [x, y, z, ...] NED, m), pipeline_world (world.yaml: follow its first
-//           pipeline), height_above_pipe (m), acceptance_radius (m)
+//   params: waypoints (flat [x, y, z, ...] NED, m; given, they win), pipeline_world (world.yaml:
+//           follow its first pipeline), scenario (its world is the pipeline_world),
+//           height_above_pipe (m), acceptance_radius (m)
 #pragma once
 
 #include <memory>
@@ -53,6 +54,7 @@
 #include "unav_msgs/msg/thruster_command.hpp"
 #include "unav_runtime/runtime.hpp"
 #include "unav_runtime/validation.hpp"
+#include "unav_scene/scenario.hpp"
 
 namespace unav::control {
 
@@ -83,6 +85,7 @@ struct MpcNodeParams {
 
 /// waypoint_follower's parameters.
 struct WaypointFollowerParams {
+  unav::scene::ScenarioParam scenario;  ///< its world replaces pipeline_world
   double acceptance_radius = 0.3;
   std::vector<double> waypoints;
   std::string pipeline_world;
@@ -90,9 +93,10 @@ struct WaypointFollowerParams {
   template <class Archive>
   void Serialize(Archive* a) {
     using unav::common::Field;
+    scenario.Serialize(a);
     a->Visit(
         Field("acceptance_radius", &acceptance_radius).Range(1e-3, 100.0).Unit("m").Doc("waypoint reached within"));
-    a->Visit(Field("waypoints", &waypoints).Unit("m").Doc("[x, y, z, ...] NED"));
+    a->Visit(Field("waypoints", &waypoints).Unit("m").Doc("[x, y, z, ...] NED; given, they replace the pipeline"));
     a->Visit(Field("pipeline_world", &pipeline_world).Doc("world.yaml whose first pipeline to follow"));
     a->Visit(
         Field("height_above_pipe", &height_above_pipe).Range(0.0, 50.0).Unit("m").Doc("above the pipe's centre line"));

@@ -41,6 +41,7 @@
 #include "unav_runtime/tf_static.hpp"
 #include "unav_runtime/validation.hpp"
 #include "unav_scene/camera.hpp"
+#include "unav_scene/scenario.hpp"
 #include "unav_scene/world.hpp"
 
 namespace unav::datagen {
@@ -61,10 +62,13 @@ struct DatasetRecorderParams {
   unav::lockstep::ParticipantParams lockstep{"recorder"};
   double image_period = 0.1;
   std::string world;
+  /// recorded in manifest.json; its world and cameras.rate_hz replace world and image_period
+  unav::scene::ScenarioParam scenario;
 
   template <class Archive>
   void Serialize(Archive* a) {
     using unav::common::Field;
+    scenario.Serialize(a);
     a->Visit(Field("output_dir", &output_dir).Doc("dataset folder"));
     a->Visit(Field("format", &format).OneOf(sequence_formats()).Doc("dataset layout: tum, euroc or kitti"));
     a->Visit(Field("camera", &camera).Doc("camera name to record"));
@@ -91,6 +95,15 @@ class DatasetRecorder : public unav::Node {
     manifest_.format = prm.format;
     manifest_.camera = camera_;
     manifest_.parent_frame = prm.body_frame;
+    if (prm.scenario.given()) {
+      const unav::scene::Scenario sc = prm.scenario.load();
+      prm.world = sc.world;
+      prm.image_period = 1.0 / sc.cameras.rate_hz;  // the renderer's rate is the scenario's
+      manifest_.source["scenario"] = prm.scenario.file;
+      manifest_.source["scenario_seed"] = std::to_string(sc.seed);
+      for (std::size_t i = 0; i < prm.scenario.overrides.size(); ++i)
+        manifest_.source["scenario_set_" + std::to_string(i)] = prm.scenario.overrides[i];
+    }
     if (!prm.world.empty()) manifest_.source["world"] = prm.world;
     manifest_.labels = {{static_cast<int>(SegClass::kWater), "water"},
                         {static_cast<int>(SegClass::kSeabed), "seabed"},

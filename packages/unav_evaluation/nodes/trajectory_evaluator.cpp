@@ -77,6 +77,7 @@ TrajectoryEvaluator::TrajectoryEvaluator(const unav::NodeOptions& options)
     : Node("trajectory_evaluator", options, "rov") {
   TrajectoryEvaluatorParams prm;
   declare_params(&prm);
+  if (prm.scenario.given()) prm.pipeline_world = prm.scenario.load().world;
   const std::vector<std::string>& names = prm.estimates;
   output_dir_ = prm.output_dir;
   trajectory_name_ = prm.trajectory_name;

@@ -30,7 +30,8 @@
 //         results.md/csv/json hold the rows of every run, kept in rows/<trajectory_name>.tsv),
 //         pipeline_world (world.yaml: also writes pipe_tracking.json, the cross-track error e_p
 //         of the ground truth along its first pipeline and the length followed before e_p first
-//         exceeded pipe_loss_distance, default 2.5 m: the pipe-following figures).
+//         exceeded pipe_loss_distance, default 2.5 m: the pipe-following figures); scenario
+//         (its world is the pipeline_world).
 #pragma once
 
 #include <map>
@@ -48,6 +49,7 @@
 #include "unav_runtime/runtime.hpp"
 #include "unav_runtime/tf_static.hpp"
 #include "unav_runtime/validation.hpp"
+#include "unav_scene/scenario.hpp"
 #include "unav_scene/world.hpp"
 
 namespace unav::evaluation {
@@ -68,10 +70,12 @@ struct TrajectoryEvaluatorParams {
   std::string body_frame = "base_link_frd";
   std::string pipeline_world;
   double pipe_loss_distance = 2.5;
+  unav::scene::ScenarioParam scenario;  ///< its world replaces pipeline_world
 
   template <class Archive>
   void Serialize(Archive* a) {
     using unav::common::Field;
+    scenario.Serialize(a);
     a->Visit(Field("estimates", &estimates).Doc("estimator names (localization/<name>/odom)"));
     a->Visit(
         Field("inputs", &inputs)

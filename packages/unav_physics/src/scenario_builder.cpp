@@ -44,7 +44,8 @@ std::unique_ptr<Simulator> build_simulator(const unav::scene::Scenario& scenario
 
 std::unique_ptr<Simulator> build_simulator(const unav::scene::Scenario& scenario, const unav::scene::World& world,
                                            const SimulatorOptions& options, const VehicleParams& vehicle) {
-  std::unique_ptr<CurrentModel> current = world.current_file.empty() ? nullptr : load_current(world.current_file);
+  const std::string& current_file = scenario.current.empty() ? world.current_file : scenario.current;
+  std::unique_ptr<CurrentModel> current = current_file.empty() ? nullptr : load_current(current_file);
   return std::make_unique<Simulator>(vehicle, options, std::move(current), seabed_from_world(world),
                                      scenario_initial_state(scenario));
 }

@@ -48,6 +48,16 @@ SonarNode::SonarNode(const unav::NodeOptions& options) : Node("sonar", options, 
   prm.world = unav::common::resource_or_empty("worlds/pipe_inspection/world.yaml");
   prm.sonars_config = unav::common::resource_or_empty("config/sensors/bluerov2_sonars.yaml");
   declare_params(&prm);
+  if (prm.scenario.given()) {  // the sonar's part of the scenario
+    const unav::scene::Scenario sc = prm.scenario.load();
+    if (sc.sonars.names.empty())
+      throw unav::ConfigError(prm.scenario.file, "sonars.names", "[]",
+                              "the sonar node needs at least one sonar of the scenario's sonars.config");
+    prm.world = sc.world;
+    prm.water = sc.water;
+    prm.sonars_config = sc.sonars.config;
+    prm.sonars = sc.sonars.names;
+  }
   if (prm.world.empty() || prm.sonars_config.empty())
     throw unav::ParameterError("node '" + name() +
                                "': 'world' and 'sonars_config' are required (unav_resources is not installed, so "

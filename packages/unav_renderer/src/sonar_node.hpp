@@ -34,11 +34,14 @@
 #include "unav_runtime/lockstep_ack.hpp"
 #include "unav_runtime/runtime.hpp"
 #include "unav_runtime/validation.hpp"
+#include "unav_scene/scenario.hpp"
 
 namespace unav::renderer {
 
 /// The sonar node's parameters (params file or `-p name:=value`; `--help` lists them).
 struct SonarNodeParams {
+  /// its world, water and sonars (config, names) replace world, water, sonars_config and sonars
+  unav::scene::ScenarioParam scenario;
   std::string world;          ///< default: the installed worlds/pipe_inspection/world.yaml
   std::string sonars_config;  ///< default: the installed config/sensors/bluerov2_sonars.yaml
   std::string water;
@@ -53,6 +56,7 @@ struct SonarNodeParams {
   template <class Archive>
   void Serialize(Archive* a) {
     using unav::common::Field;
+    scenario.Serialize(a);
     a->Visit(Field("world", &world).Doc("world.yaml path"));
     a->Visit(Field("sonars_config", &sonars_config).Doc("sonar YAML path"));
     a->Visit(

@@ -33,16 +33,23 @@ std::string resolve(const std::string& value, const std::string& dir, const std:
 
 }  // namespace
 
+std::string find_scenario_file(const std::string& value, const std::string& dir, const std::string& file,
+                               const std::string& key) {
+  return resolve(value, dir, {"config/", ""}, file, key);
+}
+
 void resolve_scenario_paths(Scenario* s, const std::string& file, const std::string& dir) {
   const std::vector<std::string> config{"config/", ""}, top{"", "config/"};
   s->world = resolve(s->world, dir, top, file, "world");
   // A water preset is a name ("3C", "jerlov_II"); a file has a '/' or ends in .yaml.
   if (s->water.find('/') != std::string::npos || s->water.find(".yaml") != std::string::npos)
     s->water = resolve(s->water, dir, config, file, "water");
+  if (!s->current.empty()) s->current = resolve(s->current, dir, config, file, "current");
   s->vehicle.model = resolve(s->vehicle.model, dir, config, file, "vehicle.model");
   s->control.mpc = resolve(s->control.mpc, dir, config, file, "control.mpc");
   s->control.allocator = resolve(s->control.allocator, dir, config, file, "control.allocator");
   s->cameras.config = resolve(s->cameras.config, dir, config, file, "cameras.config");
+  if (!s->sonars.names.empty()) s->sonars.config = resolve(s->sonars.config, dir, config, file, "sonars.config");
   if ((s->cameras.width > 0) != (s->cameras.height > 0))
     throw unav::ConfigError(file, "cameras.width/cameras.height",
                             std::to_string(s->cameras.width) + "x" + std::to_string(s->cameras.height),
@@ -70,15 +77,55 @@ Scenario parse_scenario(const YAML::Node& root, const std::string& file, const s
   return out;
 }
 
-Scenario load_scenario(const std::string& path, std::optional<std::uint64_t> seed) {
-  const YAML::Node root = unav::common::detail::ReadYamlFile(path);
-  return parse_scenario(root, path, fs::path(path).parent_path().string(), seed);
+YAML::Node apply_scenario_overrides(const YAML::Node& root, const std::vector<std::string>& overrides,
+                                    const std::string& file) {
+  YAML::Node out = YAML::Clone(root);
+  if (!out.IsDefined() || out.IsNull()) out = YAML::Node(YAML::NodeType::Map);
+  for (const auto& o : overrides) {
+    const auto eq = o.find('=');
+    const std::string path = o.substr(0, eq);
+    if (eq == std::string::npos || path.empty() || path.front() == '.' || path.back() == '.' ||
+        path.find("..") != std::string::npos)
+      throw unav::ConfigError(file, "scenario_set", o, "each override is key.path=value (e.g. water=3C)");
+    YAML::Node value(std::string{});  // "key=" is the empty string (e.g. water= : the world's)
+    try {
+      if (eq + 1 < o.size()) value = YAML::Load(o.substr(eq + 1));
+    } catch (const YAML::Exception& e) {
+      throw unav::ConfigError(file, path, o.substr(eq + 1), std::string("the value must be YAML: ") + e.msg);
+    }
+    if (!out.IsMap()) throw unav::ConfigError(file, path, o, "the scenario must be a map to override its keys");
+    YAML::Node cur = out;  // yaml-cpp: reset() rebinds, operator= would overwrite the node
+    std::size_t begin = 0;
+    for (std::size_t dot = path.find('.'); dot != std::string::npos; dot = path.find('.', begin)) {
+      const std::string key = path.substr(begin, dot - begin);
+      if (!cur[key].IsDefined() || cur[key].IsNull()) cur[key] = YAML::Node(YAML::NodeType::Map);
+      if (!cur[key].IsMap())
+        throw unav::ConfigError(file, path.substr(0, dot), o, "is not a section: only keys of sections can be set");
+      YAML::Node next = cur[key];
+      cur.reset(next);
+      begin = dot + 1;
+    }
+    cur[path.substr(begin)] = value;
+  }
+  return out;
 }
 
-Scenario ScenarioParam::load() const { return load_scenario_param(file, seed); }
+Scenario load_scenario(const std::string& path, std::optional<std::uint64_t> seed,
+                       const std::vector<std::string>& overrides) {
+  const YAML::Node root = unav::common::detail::ReadYamlFile(path);
+  if (overrides.empty()) return parse_scenario(root, path, fs::path(path).parent_path().string(), seed);
+  // Errors of an overridden file name it with its overrides: the value at fault may be either's.
+  std::string label = path + " (scenario_set:";
+  for (const auto& o : overrides) label += " " + o;
+  label += ")";
+  return parse_scenario(apply_scenario_overrides(root, overrides, label), label,
+                        fs::path(path).parent_path().string(), seed);
+}
 
-Scenario load_scenario_param(const std::string& path, int64_t seed) {
-  return load_scenario(path, seed >= 0 ? std::optional<std::uint64_t>(seed) : std::nullopt);
+Scenario ScenarioParam::load() const { return load_scenario_param(file, seed, overrides); }
+
+Scenario load_scenario_param(const std::string& path, int64_t seed, const std::vector<std::string>& overrides) {
+  return load_scenario(path, seed >= 0 ? std::optional<std::uint64_t>(seed) : std::nullopt, overrides);
 }
 
 std::vector<CameraModel> scenario_cameras(const Scenario& s) {

@@ -107,3 +107,49 @@ TEST(Scenario, PathsResolveAgainstTheScenarioFolderFirst) {
   const Scenario s = load_scenario(write("local.yaml", "world: world.yaml\n"));
   EXPECT_EQ(s.world, world);
 }
+
+// scenario_set / `unav run --set`: key.path=value overrides replace keys (sections kept), add new
+// ones inside sections, may be distributions, and obey the same rules as the file.
+TEST(Scenario, OverridesReplaceKeysBeforeTheDrawUnderTheSameRules) {
+  const std::string f = kScenarios + "pipe_inspection.yaml";
+  const Scenario s = load_scenario(f, std::nullopt,
+                                   {"water=3C", "vehicle.initial_position=[0, 0, 5]", "render.shadows=false",
+                                    "sonars.names=[fls]", "mission.duration_s={uniform: [20, 40]}"});
+  EXPECT_EQ(s.water, "3C");
+  EXPECT_EQ(s.vehicle.initial_position, Eigen::Vector3d(0.0, 0.0, 5.0));
+  EXPECT_EQ(s.vehicle.model, load_scenario(f).vehicle.model);  // the rest of the section stays
+  EXPECT_FALSE(s.render.shadows);
+  EXPECT_TRUE(s.render.caustics);
+  EXPECT_EQ(s.sonars.names, std::vector<std::string>{"fls"});
+  EXPECT_TRUE(fs::path(s.sonars.config).is_absolute()) << s.sonars.config;
+  EXPECT_GE(s.mission.duration_s, 20.0);
+  EXPECT_LE(s.mission.duration_s, 40.0);
+  EXPECT_EQ(s.mission.waypoints.size(), 4u);
+  // Another draw of the overridden distribution, the same draw for the same seed.
+  const auto d = [&](std::uint64_t seed) {
+    return load_scenario(f, seed, {"mission.duration_s={uniform: [20, 40]}"}).mission.duration_s;
+  };
+  EXPECT_EQ(load_scenario(f, std::nullopt, {"water=3C", "water="}).water, "");  // later wins; empty = ""
+  EXPECT_EQ(d(3), d(3));
+  EXPECT_NE(d(3), d(4));
+
+  const auto error = [&](const std::vector<std::string>& o) {
+    try {
+      load_scenario(f, std::nullopt, o);
+    } catch (const ConfigError& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  const std::string unknown = error({"vehicle.modle=x.yaml"});
+  EXPECT_NE(unknown.find("pipe_inspection.yaml (scenario_set: vehicle.modle=x.yaml)"), std::string::npos) << unknown;
+  EXPECT_NE(unknown.find("vehicle.modle"), std::string::npos) << unknown;
+  EXPECT_NE(unknown.find("unknown key"), std::string::npos) << unknown;
+  const std::string range = error({"physics.dt=0.5"});
+  EXPECT_NE(range.find("physics.dt"), std::string::npos) << range;
+  EXPECT_NE(range.find("0.5"), std::string::npos) << range;
+  EXPECT_NE(error({"water"}).find("key.path=value"), std::string::npos);
+  EXPECT_NE(error({"=3C"}).find("key.path=value"), std::string::npos);
+  EXPECT_NE(error({"water.preset=3C"}).find("is not a section"), std::string::npos) << error({"water.preset=3C"});
+  EXPECT_NE(error({"sonars.names=[fls]", "sonars.config=nowhere.yaml"}).find("no such file"), std::string::npos);
+}

@@ -66,9 +66,13 @@ PipeFollowingConfig load_pipe_following_config(const std::string& path) {
       throw ConfigError(path, key, "", "unknown section (allowed: env, scenario, pipe_scenes)");
   }
   if (root["env"]) unav::common::LoadYaml(root, path, &c.env, "env");
-  if (root["scenario"]) {
+  const std::string dir = std::filesystem::path(path).parent_path().string();
+  if (root["scenario"] && root["scenario"].IsScalar()) {  // a scenario file, as the deploy launch takes it
+    c.scenario = scene::load_scenario(
+        scene::find_scenario_file(root["scenario"].as<std::string>(), dir, path, "scenario"));
+  } else if (root["scenario"]) {
     unav::common::LoadYaml(root, path, &c.scenario, "scenario");
-    scene::resolve_scenario_paths(&c.scenario, path, std::filesystem::path(path).parent_path().string());
+    scene::resolve_scenario_paths(&c.scenario, path, dir);
   }
   if (root["pipe_scenes"]) unav::common::LoadYaml(root, path, &c.scenes, "pipe_scenes");
   c.scenes.validate(path);

@@ -1,4 +1,4 @@
-// unav run SCENARIO.yaml [--in-process] [--seed N] [--out DIR] [--no-images]: one scenario, its
+// unav run SCENARIO.yaml [--in-process] [--seed N] [--set KEY=VALUE]... [--out DIR] [--no-images]: one scenario, its
 // ground truth (OUT/ground_truth.tum) and every camera's frames (OUT/<camera>/<t_ns>.png).
 //  - over DDS (default): the scenario is checked here, before any process starts, then this
 //    process becomes `unav launch launch_scripts/scenario.launch.yaml scenario:=FILE ...`
@@ -20,6 +20,8 @@
 #include <string>
 #include <vector>
 
+#include <yaml-cpp/yaml.h>
+
 #include "unav_common/errors.hpp"
 #include "unav_common/resources.hpp"
 #include "unav_scene/scenario.hpp"
@@ -29,19 +31,22 @@ namespace {
 std::atomic<bool> g_stop{false};
 void on_signal(int) { g_stop = true; }
 // Becomes `unav launch scenario.launch.yaml ...` (exec: Ctrl-C reaches the launch directly).
-int run_over_dds(const unav::scene::Scenario& s, const std::string& file, std::int64_t seed, const std::string& out,
-                 bool no_images) {
+int run_over_dds(const unav::scene::Scenario& s, const std::string& file, std::int64_t seed,
+                 const std::vector<std::string>& sets, const std::string& out, bool no_images) {
   if (no_images) {
     std::cerr << "unav run: --no-images is for --in-process (over DDS the renderer is a lockstep participant)\n";
     return 2;
   }
   const std::string launch = unav::common::find_resource("launch_scripts/scenario.launch.yaml");
   unav::sim::write_concrete_scenario(s, out);
+  YAML::Emitter set_list;  // a flow list of quoted strings: values may hold ',', '[' or ':'
+  set_list << YAML::Flow << YAML::DoubleQuoted << sets;
   std::vector<std::string> args = {"unav",
                                    "launch",
                                    launch,
                                    "scenario:=" + std::filesystem::absolute(file).string(),
                                    "seed:=" + std::to_string(seed),
+                                   std::string("set:=") + set_list.c_str(),
                                    "duration:=" + std::to_string(s.mission.duration_s),
                                    "output_dir:=" + std::filesystem::absolute(out).string()};
   std::printf("unav run: %s (seed %lld) over DDS: %s\n  outputs: %s/ground_truth.tum, %s/<camera>/*.png\n",
@@ -63,17 +68,22 @@ int main(int argc, char** argv) {
   std::string file, out;
   std::int64_t seed = -1;
   bool in_process = false, no_images = false;
+  std::vector<std::string> sets;
   app.add_option("scenario", file, "scenario YAML (config/scenarios/*.yaml)")->required();
   app.add_flag("--in-process", in_process, "run the cores in this process (no DDS)");
   app.add_option("--seed", seed, "draw of the scenario's distributions (default: its seed)")
       ->check(CLI::NonNegativeNumber);
+  app.add_option("--set", sets,
+                 "replace a key of the scenario before the draw, key.path=value (repeatable): "
+                 "--set water=3C --set 'vehicle.initial_position=[0, 0, 5]'")
+      ->allow_extra_args(false);
   app.add_option("--out", out, "output folder (default: out/<scenario name>)");
   app.add_flag("--no-images", no_images, "write the ground truth only");
   CLI11_PARSE(app, argc, argv);
   try {
-    const unav::scene::Scenario s = unav::scene::load_scenario_param(file, seed);
+    const unav::scene::Scenario s = unav::scene::load_scenario_param(file, seed, sets);
     if (out.empty()) out = "out/" + s.name;
-    if (!in_process) return run_over_dds(s, file, seed, out, no_images);
+    if (!in_process) return run_over_dds(s, file, seed, sets, out, no_images);
     signal(SIGINT, on_signal);
     signal(SIGTERM, on_signal);
     unav::sim::ScenarioRunOptions o;

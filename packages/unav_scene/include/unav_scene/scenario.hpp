@@ -85,6 +85,19 @@ struct ScenarioCameras {
   }
 };
 
+/// The imaging sonars pinged along the run (the sonar node's part): `names` of `config`.
+struct ScenarioSonars {
+  std::string config = "sensors/bluerov2_sonars.yaml";  ///< sonar set (mounts, beams, bins)
+  std::vector<std::string> names;                       ///< sonars of `config` to ping; [] = none
+
+  template <class Archive>
+  void Serialize(Archive* a) {
+    using unav::common::Field;
+    a->Visit(Field("config", &config).Doc("sonar set YAML (mounts, beams, bins)"));
+    a->Visit(Field("names", &names).Doc("sonars of config to ping; [] = none"));
+  }
+};
+
 /// A waypoint: the setpoint travels to it from the previous one (or the start) at the mission's
 /// speed, then stays on it until `hold_s` seconds after the leg began (world NED, heading).
 struct ScenarioWaypoint {
@@ -122,10 +135,12 @@ struct Scenario {
   int64_t seed = 0;  ///< draws of the file's distributions and every noise source
   std::string world = "worlds/pipe_inspection/world.yaml";
   std::string water;  ///< Jerlov preset or water YAML replacing the world's; "" = the world's
+  std::string current;  ///< water current YAML replacing the world's; "" = the world's
   ScenarioVehicle vehicle;
   ScenarioPhysics physics;
   ScenarioControl control;
   ScenarioCameras cameras;
+  ScenarioSonars sonars;
   RenderSettings render;
   ScenarioMission mission;
 
@@ -136,22 +151,33 @@ struct Scenario {
     a->Visit(Field("seed", &seed).Min(0.0).Doc("seed of the distributions and the noise sources"));
     a->Visit(Field("world", &world).Doc("world.yaml: relative to the scenario, the resource roots or absolute"));
     a->Visit(Field("water", &water).Doc("Jerlov preset (I, II, 3C, ...) or water YAML; empty = the world's"));
+    a->Visit(Field("current", &current).Doc("water current YAML (config/water/currents/); empty = the world's"));
     a->Visit(Field("vehicle", &vehicle));
     a->Visit(Field("physics", &physics));
     a->Visit(Field("control", &control));
     a->Visit(Field("cameras", &cameras));
+    a->Visit(Field("sonars", &sonars));
     a->Visit(Field("render", &render));
     a->Visit(Field("mission", &mission));
   }
 };
 
 /// Reads, checks and samples the scenario file `path` with `seed` (default: the file's `seed`,
-/// which must then be a fixed value), and resolves its file paths (see above). Throws
+/// which must then be a fixed value), and resolves its file paths (see above). `overrides`
+/// ("key.path=value", the value as YAML: "water=3C", "vehicle.initial_position=[0, 0, 5]",
+/// "render.shadows=false", "mission.duration_s={uniform: [20, 40]}") replace or add keys of the
+/// file before it is checked and drawn, so they obey the same rules. Throws
 /// ConfigError(file, key path, value, rule) on any problem: missing file, unknown key, a value
-/// or a distribution's support outside its field's rule, a referenced file that does not exist.
-Scenario load_scenario(const std::string& path, std::optional<std::uint64_t> seed = std::nullopt);
+/// or a distribution's support outside its field's rule, a referenced file that does not exist,
+/// an override that is not key.path=value (the file is then named with its overrides).
+Scenario load_scenario(const std::string& path, std::optional<std::uint64_t> seed = std::nullopt,
+                       const std::vector<std::string>& overrides = {});
 /// load_scenario() as a node parameter or command-line option gives the seed: < 0 = the file's.
-Scenario load_scenario_param(const std::string& path, int64_t seed);
+Scenario load_scenario_param(const std::string& path, int64_t seed, const std::vector<std::string>& overrides = {});
+
+/// `root` (a scenario's YAML, not changed) with `overrides` applied (see load_scenario()).
+YAML::Node apply_scenario_overrides(const YAML::Node& root, const std::vector<std::string>& overrides,
+                                    const std::string& file);
 
 /// The `scenario` and `scenario_seed` parameters of a node that takes its part of a scenario
 /// (physics_server, underwater_renderer, mpc_controller, control_allocator, ardusub_bridge,
@@ -160,6 +186,7 @@ Scenario load_scenario_param(const std::string& path, int64_t seed);
 struct ScenarioParam {
   std::string file;
   int64_t seed = -1;
+  std::vector<std::string> overrides;
   template <class Archive>
   void Serialize(Archive* a) {
     using unav::common::Field;
@@ -167,9 +194,12 @@ struct ScenarioParam {
                  .Doc("scenario YAML (config/scenarios/*.yaml) whose part this node takes; "
                       "empty = none (the node's own parameters)"));
     a->Visit(Field("scenario_seed", &seed).Min(-1.0).Doc("draw of the scenario's distributions; -1 = its seed"));
+    a->Visit(Field("scenario_set", &overrides)
+                 .Doc("scenario keys replaced before the draw: [key.path=value, ...], e.g. "
+                      "['water=3C', 'vehicle.initial_position=[0, 0, 5]']"));
   }
   bool given() const { return !file.empty(); }
-  /// load_scenario_param(file, seed).
+  /// load_scenario_param(file, seed, overrides).
   Scenario load() const;
 };
 
@@ -177,6 +207,10 @@ struct ScenarioParam {
 /// against `dir`).
 Scenario parse_scenario(const YAML::Node& root, const std::string& file, const std::string& dir,
                         std::optional<std::uint64_t> seed = std::nullopt);
+/// A scenario file named in another config (`file`, key `key`): `value` as an absolute path,
+/// relative to `dir`, then under the resource roots' config/ and top. Throws ConfigError.
+std::string find_scenario_file(const std::string& value, const std::string& dir, const std::string& file,
+                               const std::string& key);
 /// Resolves the scenario's file paths as load_scenario() does (for scenarios built in code).
 void resolve_scenario_paths(Scenario* s, const std::string& file, const std::string& dir);
 

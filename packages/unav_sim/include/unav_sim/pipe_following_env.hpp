@@ -82,7 +82,8 @@ struct PipeFollowingParams {
 
 /// A learning config file (config/learning/pipe_following.yaml): the sections `env`, `scenario`
 /// (scene::Scenario: vehicle, physics, control, cameras, render; its world and mission are the
-/// env's) and `pipe_scenes`; each absent section keeps its defaults.
+/// env's; a scenario file's path, e.g. scenarios/pipe_following.yaml, which the deploy launch
+/// takes too, or the section itself) and `pipe_scenes`; each absent section keeps its defaults.
 struct PipeFollowingConfig {
   PipeFollowingParams env;
   scene::Scenario scenario;
