@@ -47,6 +47,20 @@ assert len(pngs) == 6 and "sonar/fls/pings.txt" in [f["path"] for f in m["files"
 PY
 done
 [ -f "$out/a/contact_sheet.png" ] || fail "no contact sheet"
+# Each sample is a scenario (world/scenario.yaml, its world beside it): re-flown in process, it
+# starts where the sample's path starts, in the sample's own world.
+sc="$out/a/sample_000000/world/scenario.yaml"
+[ -f "$sc" ] || fail "sample 0: no world/scenario.yaml"
+unav run "$sc" --in-process --no-images --out "$out/rerun" >"$out/rerun.log" 2>&1 || { cat "$out/rerun.log"; fail "sample scenario does not run"; }
+grep -q "0 MPC failures" "$out/rerun.log" || { cat "$out/rerun.log"; fail "sample scenario: MPC failures"; }
+"$ws/.venv/bin/python" - "$out/rerun/scenario.yaml" "$out/rerun/ground_truth.tum" "$out/a/sample_000000/world" <<'PY' || fail "sample scenario content"
+import os, sys, yaml
+s = yaml.safe_load(open(sys.argv[1]))
+assert os.path.samefile(s["world"], os.path.join(sys.argv[3], "world.yaml")), s["world"]
+first = [float(v) for v in open(sys.argv[2]).readline().split()[1:4]]
+assert all(abs(a - b) < 1e-9 for a, b in zip(first, s["vehicle"]["initial_position"])), (first, s["vehicle"])
+assert len(s["mission"]["waypoints"]) >= 1 and abs(s["mission"]["duration_s"] - 0.6) < 1e-9, s["mission"]
+PY
 grep -q "3 samples, 18 frames" "$out/a.log" || { cat "$out/a.log"; fail "summary line"; }
 
 # Reproducible: sample 1 alone, in another folder, is byte-identical.

@@ -16,6 +16,7 @@
 #include "unav_renderer/sonar_renderer.hpp"
 #include "unav_scene/sonar.hpp"
 #include "unav_sim/episode.hpp"
+#include "unav_sim/scenario_run.hpp"
 
 namespace fs = std::filesystem;
 
@@ -101,6 +102,34 @@ class SonarOutput {
   std::vector<float> azimuths_;
 };
 
+// The sample as a scenario file, world/scenario.yaml beside its world.yaml (relative, so the
+// sample folder can move): the world, camera and render switches the sample was rendered with,
+// the start of its path and the path as a mission (waypoints ~1 m apart, each leg as long as
+// the setpoint takes at `speed`), so `unav run` and every launch file (`scenario:=`) re-fly it.
+// The camera's noise/exposure/gain draws are the spec's and not in it.
+void write_sample_scenario(unav::scene::Scenario sc, const std::vector<unav::datagen::PathPoint>& path, double speed,
+                           double duration, const std::string& dir) {
+  constexpr double kRadToDeg = 180.0 / M_PI;
+  sc.world = "world.yaml";
+  sc.vehicle.initial_position = path.front().p_W;
+  sc.vehicle.initial_rpy_deg = Eigen::Vector3d(0.0, 0.0, path.front().yaw * kRadToDeg);
+  sc.mission.duration_s = duration;
+  sc.mission.speed_mps = speed;
+  sc.mission.waypoints.clear();
+  Eigen::Vector3d last = path.front().p_W;
+  for (std::size_t i = 1; i < path.size(); ++i) {
+    const double d = (path[i].p_W - last).norm();
+    if (d < 1.0 && i + 1 < path.size()) continue;
+    unav::scene::ScenarioWaypoint w;
+    w.position = path[i].p_W;
+    w.yaw_deg = path[i].yaw * kRadToDeg;
+    w.hold_s = std::max(d / speed, 1e-3);
+    sc.mission.waypoints.push_back(w);
+    last = path[i].p_W;
+  }
+  write_concrete_scenario(sc, dir);
+}
+
 }  // namespace
 
 std::string sample_name(std::uint64_t index) {
@@ -159,6 +188,7 @@ SampleResult generate_sample(const unav::datagen::RandomizationSpec& spec, std::
   x0.p_WB_W = path.front().p_W;
   x0.q_WB = Eigen::AngleAxisd(path.front().yaw, Eigen::Vector3d::UnitZ());
   ep.reset(seed, x0);
+  write_sample_scenario(sc, path, speed, s["output"]["frames"].as<double>() / rate, (partial / "world").string());
 
   const std::string format = s["output"]["format"].as<std::string>();
   auto writer = unav::datagen::make_sequence_writer(format, partial.string());
