@@ -52,7 +52,7 @@ std::string text(double v) {
 
 [[noreturn]] void fail(const std::string& source, const std::string& key, const std::string& rule,
                        const std::string& value) {
-  throw ConfigError(source + ": " + key + " " + rule + " (got " + value + ")");
+  throw ConfigError(source, key, value, rule);
 }
 
 /// A YAML node plus where it came from, with typed, checked accessors.
@@ -135,27 +135,6 @@ class Reader {
   }
   Eigen::Vector3d vec3(const char* k) const { return vector(k, 3); }
   Eigen::Vector3d vec3(const char* k, const Eigen::Vector3d& def) const { return has(k) ? vec3(k) : def; }
-  /// n numbers (the diagonal) or an n x n nested list (the full matrix).
-  Eigen::MatrixXd matrix(const char* k, int n) const {
-    if (!has(k)) fail(source_, key(k), "is required", "nothing");
-    const YAML::Node& s = node_[k];
-    const std::string rule = "must be a list of " + std::to_string(n) + " numbers (diagonal) or an " +
-                             std::to_string(n) + "x" + std::to_string(n) + " nested list";
-    if (!s.IsSequence() || static_cast<int>(s.size()) != n) fail(source_, key(k), rule, flow(s));
-    Eigen::MatrixXd m = Eigen::MatrixXd::Zero(n, n);
-    if (s[0].IsSequence()) {
-      for (int i = 0; i < n; ++i) {
-        const YAML::Node& row = s[static_cast<std::size_t>(i)];
-        if (!row.IsSequence() || static_cast<int>(row.size()) != n) fail(source_, key(k), rule, flow(s));
-        for (int j = 0; j < n; ++j)
-          m(i, j) = as_number(row[static_cast<std::size_t>(j)], source_,
-                              key(k) + "[" + std::to_string(i) + "][" + std::to_string(j) + "]");
-      }
-    } else {
-      m.diagonal() = vector(k, n);
-    }
-    return m;
-  }
 
  private:
   YAML::Node node_;
@@ -173,98 +152,22 @@ YAML::Node load_file(const std::string& path) {
   }
 }
 
-void read_noise(const Reader& r, NoiseParams* n) {
-  n->noise_stddev = r.number("noise_stddev", n->noise_stddev);
-  n->bias_random_walk = r.number("bias_random_walk", n->bias_random_walk);
-  n->initial_bias = r.number("initial_bias", n->initial_bias);
-}
+// A vehicle file's thruster_defaults: the propeller keys of a thruster.
+struct ThrusterCoefficients {
+  ThrusterParams* t;
+  template <class Archive>
+  void Serialize(Archive* a) {
+    t->SerializeCoefficients(a);
+  }
+};
 
-SensorSuiteParams parse_sensors(const Reader& r) {
-  SensorSuiteParams p;
-  r.only_keys({"seed", "imu", "pressure", "dvl", "altimeter", "magnetometer", "gps"});
-  if (r.has("seed")) {
-    const double s = r.number("seed");
-    if (s < 0 || s != std::floor(s)) r.fail_key("seed", "must be a non-negative integer", text(s));
-    p.seed = static_cast<std::uint64_t>(s);
+// The keys a vehicle file must give (the rest have defaults).
+void require_keys(const YAML::Node& node, const std::string& source, const std::string& path,
+                  std::initializer_list<const char*> keys) {
+  for (const char* k : keys) {
+    const YAML::Node v = node[k];
+    if (!v.IsDefined() || v.IsNull()) throw ConfigError(source, path.empty() ? k : path + "." + k, "", "is required");
   }
-  if (r.has("imu")) {
-    const Reader s = r.child("imu");
-    s.only_keys({"enabled", "rate", "accel", "gyro"});
-    p.imu.enabled = s.boolean("enabled", true);
-    p.imu.rate_hz = s.number("rate", p.imu.rate_hz);
-    if (s.has("accel")) {
-      const Reader a = s.child("accel");
-      a.only_keys({"noise_stddev", "bias_random_walk", "initial_bias"});
-      read_noise(a, &p.imu.accel);
-    }
-    if (s.has("gyro")) {
-      const Reader g = s.child("gyro");
-      g.only_keys({"noise_stddev", "bias_random_walk", "initial_bias"});
-      read_noise(g, &p.imu.gyro);
-    }
-  }
-  if (r.has("pressure")) {
-    const Reader s = r.child("pressure");
-    s.only_keys({"enabled", "rate", "noise_stddev", "bias_random_walk", "initial_bias"});
-    p.pressure.enabled = s.boolean("enabled", true);
-    p.pressure.rate_hz = s.number("rate", p.pressure.rate_hz);
-    read_noise(s, &p.pressure.pressure);
-  }
-  if (r.has("dvl")) {
-    const Reader s = r.child("dvl");
-    s.only_keys({"enabled", "rate", "noise_stddev", "bias_random_walk", "initial_bias", "min_altitude", "max_altitude",
-                 "beams", "beam_angle_deg", "max_incidence_deg"});
-    p.dvl.enabled = s.boolean("enabled", true);
-    p.dvl.rate_hz = s.number("rate", p.dvl.rate_hz);
-    read_noise(s, &p.dvl.velocity);
-    p.dvl.min_altitude = s.number("min_altitude", p.dvl.min_altitude);
-    p.dvl.max_altitude = s.number("max_altitude", p.dvl.max_altitude);
-    const double beams = s.number("beams", p.dvl.beams);
-    if (beams != std::floor(beams))
-      s.fail_key("beams", "must be 4 (a Janus array) or 0 (the ideal sensor)", text(beams));
-    p.dvl.beams = static_cast<int>(beams);
-    p.dvl.beam_angle_deg = s.number("beam_angle_deg", p.dvl.beam_angle_deg);
-    p.dvl.max_incidence_deg = s.number("max_incidence_deg", p.dvl.max_incidence_deg);
-  }
-  if (r.has("altimeter")) {
-    const Reader s = r.child("altimeter");
-    s.only_keys({"enabled", "rate", "noise_stddev", "bias_random_walk", "initial_bias", "min_range", "max_range"});
-    p.altimeter.enabled = s.boolean("enabled", true);
-    p.altimeter.rate_hz = s.number("rate", p.altimeter.rate_hz);
-    read_noise(s, &p.altimeter.range);
-    p.altimeter.min_range = s.number("min_range", p.altimeter.min_range);
-    p.altimeter.max_range = s.number("max_range", p.altimeter.max_range);
-  }
-  if (r.has("magnetometer")) {
-    const Reader s = r.child("magnetometer");
-    s.only_keys({"enabled", "rate", "noise_stddev", "bias_random_walk", "initial_bias"});
-    p.magnetometer.enabled = s.boolean("enabled", true);
-    p.magnetometer.rate_hz = s.number("rate", p.magnetometer.rate_hz);
-    read_noise(s, &p.magnetometer.field);
-  }
-  if (r.has("gps")) {
-    const Reader s = r.child("gps");
-    s.only_keys({"enabled", "rate", "horizontal", "vertical", "max_depth"});
-    p.gps.enabled = s.boolean("enabled", true);
-    p.gps.rate_hz = s.number("rate", p.gps.rate_hz);
-    p.gps.max_depth = s.number("max_depth", p.gps.max_depth);
-    for (const char* k : {"horizontal", "vertical"}) {
-      if (!s.has(k)) continue;
-      const Reader n = s.child(k);
-      n.only_keys({"noise_stddev", "bias_random_walk", "initial_bias"});
-      read_noise(n, std::string(k) == "horizontal" ? &p.gps.horizontal : &p.gps.vertical);
-    }
-  }
-  return p;
-}
-
-void read_thruster_keys(const Reader& r, ThrusterParams* t) {
-  t->C_T = r.number("C_T", t->C_T);
-  t->C_T_reverse = r.number("C_T_reverse", t->C_T_reverse);
-  t->rho = r.number("rho", t->rho);
-  t->w_max = r.number("w_max", t->w_max);
-  t->diameter = r.number("diameter", t->diameter);
-  t->time_constant = r.number("time_constant", t->time_constant);
 }
 
 }  // namespace
@@ -341,7 +244,7 @@ void validate_vehicle(const VehicleParams& p, const std::string& src) {
     if (!t.position_B.allFinite()) fail(src, k + ".position", "must be finite", text(t.position_B));
     if (!t.direction_B.allFinite()) fail(src, k + ".direction", "must be finite", text(t.direction_B));
     if (!(t.direction_B.norm() > 1e-9)) {
-      throw ConfigError(src + ": " + k + ".direction has zero length (got " + text(t.direction_B) + ")");
+      throw ConfigError(src, k + ".direction", text(t.direction_B), "has zero length");
     }
     auto positive = [&](const char* key, double v, const char* unit) {
       if (!(std::isfinite(v) && v > 0.0)) fail(src, k + "." + key, std::string("must be > 0 ") + unit, text(v));
@@ -358,67 +261,59 @@ void validate_vehicle(const VehicleParams& p, const std::string& src) {
 }
 
 VehicleParams parse_vehicle(const YAML::Node& node, const std::string& source) {
-  const Reader r(node, source, "");
-  r.only_keys({"name", "description", "mass", "inertia", "center_of_gravity", "center_of_buoyancy", "buoyancy",
-               "volume", "height", "added_mass", "linear_damping", "quadratic_damping", "thruster_defaults",
-               "thrusters", "contact", "sensors"});
-  VehicleParams p;
-  p.name = r.string("name", p.name);
-  p.mass = r.number("mass");
-  p.inertia = r.matrix("inertia", 3);
-  p.r_g_B = r.vec3("center_of_gravity", Eigen::Vector3d::Zero());
-  p.r_b_B = r.vec3("center_of_buoyancy", Eigen::Vector3d::Zero());
-  if (r.has("buoyancy") && r.has("volume"))
-    r.fail_key("buoyancy", "and volume are exclusive: set one of them", flow(node["buoyancy"]));
-  if (r.has("buoyancy")) {
-    const YAML::Node& b = node["buoyancy"];
-    if (b.IsScalar() && b.Scalar() == "neutral") {
-      p.buoyancy = -1.0;
-    } else {
-      p.buoyancy = r.number("buoyancy");
-      if (p.buoyancy < 0.0) r.fail_key("buoyancy", "must be >= 0 N or 'neutral'", flow(b));
+  // The schema is VehicleParams::Serialize (unav_common/config.hpp reads, checks and names every
+  // key); what depends on which keys are given is settled on the YAML first: required keys,
+  // buoyancy 'neutral' (the default) or a number exclusive with volume, thruster_defaults under
+  // every thruster entry that does not set the key itself, default thruster names, and a sensor
+  // whose section is given is enabled unless it says otherwise.
+  if (!node.IsMap()) throw ConfigError(source, "", flow(node), "must be a mapping (a vehicle)");
+  require_keys(node, source, "", {"mass", "inertia", "added_mass", "linear_damping", "quadratic_damping", "thrusters"});
+  YAML::Node y = YAML::Clone(node);
+  // buoyancy: 'neutral', a force >= 0, or (as VehicleParams writes an unset one) negative; a
+  // neutral or given force excludes a volume > 0.
+  const YAML::Node buoyancy = y["buoyancy"], volume = y["volume"];
+  const bool neutral = buoyancy.IsScalar() && buoyancy.Scalar() == "neutral";
+  double b = -1.0, v = 0.0;
+  const bool b_set = neutral || (buoyancy.IsScalar() && YAML::convert<double>::decode(buoyancy, b) && b >= 0.0);
+  const bool v_set = volume.IsScalar() && YAML::convert<double>::decode(volume, v) && v > 0.0;
+  if (b_set && v_set) throw ConfigError(source, "buoyancy", flow(buoyancy), "and volume are exclusive: set one of them");
+  if (neutral) y.remove("buoyancy");
+  ThrusterParams defaults;
+  ThrusterCoefficients coefficients{&defaults};
+  YAML::Node given_defaults(YAML::NodeType::Map);
+  if (y["thruster_defaults"].IsDefined()) {
+    unav::common::LoadYaml(y, source, &coefficients, "thruster_defaults");
+    if (y["thruster_defaults"].IsMap()) given_defaults = y["thruster_defaults"];
+    y.remove("thruster_defaults");
+  }
+  YAML::Node thrusters = y["thrusters"];
+  if (!thrusters.IsSequence() || thrusters.size() == 0)
+    throw ConfigError(source, "thrusters", flow(thrusters), "must be a non-empty list");
+  for (std::size_t i = 0; i < thrusters.size(); ++i) {
+    YAML::Node t = thrusters[i];
+    const std::string path = "thrusters[" + std::to_string(i) + "]";
+    if (!t.IsMap()) throw ConfigError(source, path, flow(t), "must be a mapping (a thruster)");
+    require_keys(t, source, path, {"position", "direction"});
+    if (!t["name"].IsDefined()) t["name"] = "T" + std::to_string(i + 1);
+    for (const auto& kv : given_defaults)
+      if (!t[kv.first.Scalar()].IsDefined()) t[kv.first.Scalar()] = YAML::Clone(kv.second);
+  }
+  YAML::Node sensors = y["sensors"];
+  if (sensors.IsMap()) {
+    for (auto kv : sensors) {
+      YAML::Node section = kv.second;
+      if (section.IsMap() && !section["enabled"].IsDefined()) section["enabled"] = true;
     }
   }
-  if (r.has("volume")) {
-    p.volume = r.number("volume");
-    if (!(p.volume > 0.0)) r.fail_key("volume", "must be > 0 m^3", flow(node["volume"]));
+  VehicleParams p;
+  unav::common::LoadYaml(y, source, &p);
+  for (std::size_t i = 0; i < p.thrusters.size(); ++i) {
+    ThrusterParams& t = p.thrusters[i];
+    if (!(t.direction_B.norm() > 1e-9))
+      throw ConfigError(source, "thrusters[" + std::to_string(i) + "].direction", text(t.direction_B),
+                        "has zero length");
+    t.direction_B.normalize();
   }
-  p.height = r.number("height", p.height);
-  p.added_mass = r.matrix("added_mass", 6);
-  p.linear_damping = r.matrix("linear_damping", 6);
-  p.quadratic_damping = r.matrix("quadratic_damping", 6);
-
-  ThrusterParams defaults;
-  if (r.has("thruster_defaults")) {
-    const Reader d = r.child("thruster_defaults");
-    d.only_keys({"C_T", "C_T_reverse", "rho", "w_max", "diameter", "time_constant"});
-    read_thruster_keys(d, &defaults);
-  }
-  const Reader ts = r.child("thrusters");
-  if (!ts.node().IsSequence() || ts.node().size() == 0)
-    fail(source, "thrusters", "must be a non-empty list", flow(ts.node()));
-  for (std::size_t i = 0; i < ts.node().size(); ++i) {
-    const Reader t = ts.item(i);
-    t.only_keys({"name", "position", "direction", "C_T", "C_T_reverse", "rho", "w_max", "diameter", "time_constant"});
-    ThrusterParams tp = defaults;
-    tp.name = t.string("name", "T" + std::to_string(i + 1));
-    tp.position_B = t.vec3("position");
-    tp.direction_B = t.vec3("direction");
-    if (!(tp.direction_B.norm() > 1e-9))
-      throw ConfigError(source + ": " + t.key("direction") + " has zero length (got " + flow(t.node()["direction"]) +
-                        ")");
-    tp.direction_B.normalize();
-    read_thruster_keys(t, &tp);
-    p.thrusters.push_back(tp);
-  }
-  if (r.has("contact")) {
-    const Reader c = r.child("contact");
-    c.only_keys({"stiffness", "damping", "friction"});
-    p.contact.stiffness = c.number("stiffness", p.contact.stiffness);
-    p.contact.damping = c.number("damping", p.contact.damping);
-    p.contact.friction = c.number("friction", p.contact.friction);
-  }
-  if (r.has("sensors")) p.sensors = parse_sensors(r.child("sensors"));
   validate_vehicle(p, source);
   return p;
 }

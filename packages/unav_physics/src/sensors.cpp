@@ -17,7 +17,7 @@ double period_of(bool enabled, double rate_hz) { return enabled && rate_hz > 0.0
 
 SensorSuite::SensorSuite(const SensorSuiteParams& params, const EnvironmentParams& env) : params_(params), env_(env) {
   // Independent streams: enabling one sensor does not change another's noise.
-  const std::uint64_t s = params.seed * 0x9E3779B97F4A7C15ULL;
+  const std::uint64_t s = static_cast<std::uint64_t>(params.seed) * 0x9E3779B97F4A7C15ULL;
   g_imu_.gen.seed(s + 1);
   g_pressure_.gen.seed(s + 2);
   g_dvl_.gen.seed(s + 3);
@@ -172,8 +172,8 @@ namespace {
 [[noreturn]] void sensor_fail(const std::string& source, const std::string& key, double value,
                               const std::string& rule) {
   std::ostringstream os;
-  os << source << ": sensors." << key << " " << rule << " (got " << value << ")";
-  throw ConfigError(os.str());
+  os << value;
+  throw ConfigError(source, "sensors." + key, os.str(), rule);
 }
 void check_rate(const std::string& src, const std::string& key, bool enabled, double rate) {
   if (enabled && !(std::isfinite(rate) && rate > 0.0)) sensor_fail(src, key + ".rate", rate, "must be > 0 Hz");

@@ -87,36 +87,36 @@ TEST(Config, BundledSixThrusterBlueRov2Loads) {
 }
 
 TEST(Config, BadVehicleValuesNameFileKeyValueAndRule) {
-  expect_error(variant("neg_mass", "mass: 13.5", "mass: -1"), {"mass must be > 0 kg", "(got -1)"});
-  expect_error(variant("nan_mass", "mass: 13.5", "mass: .nan"), {"mass must be finite", ".nan"});
-  expect_error(variant("text_mass", "mass: 13.5", "mass: heavy"), {"mass must be a number", "heavy"});
+  expect_error(variant("neg_mass", "mass: 13.5", "mass: -1"), {"mass = -1: must be > 0 kg"});
+  expect_error(variant("nan_mass", "mass: 13.5", "mass: .nan"), {"mass = .nan: must be finite"});
+  expect_error(variant("text_mass", "mass: 13.5", "mass: heavy"), {"mass = heavy: must be a number"});
   expect_error(variant("inf_added", "added_mass: [6.3567, 7.1206, 18.6863", "added_mass: [6.3567, 7.1206, .inf"),
-               {"added_mass[2] must be finite", ".inf"});
+               {"added_mass[2] = .inf: must be finite"});
   expect_error(variant("asym_inertia", "inertia: [0.26, 0.23, 0.37]", "inertia: [[0.26, 0.1, 0], [0, 0.23, 0], [0, 0, 0.37]]"),
-               {"inertia must be symmetric", "[[0.26, 0.1, 0]"});
+               {"inertia = [[0.26, 0.1, 0]", "must be symmetric"});
   expect_error(variant("npd_inertia", "inertia: [0.26, 0.23, 0.37]", "inertia: [[0.26, 0.5, 0], [0.5, 0.23, 0], [0, 0, 0.37]]"),
-               {"inertia must be positive definite", "[[0.26, 0.5, 0]"});
+               {"inertia = [[0.26, 0.5, 0]", "must be positive definite"});
   expect_error(variant("triangle", "inertia: [0.26, 0.23, 0.37]", "inertia: [0.1, 0.1, 0.37]"),
-               {"inertia principal moments must satisfy the triangle inequality"});
+               {"inertia = ", "principal moments must satisfy the triangle inequality"});
   expect_error(variant("zero_dir", "{name: T4, position: [-0.156, -0.111, 0.085], direction: [-0.7071,  0.7071,  0.0]}",
                        "{name: T4, position: [-0.156, -0.111, 0.085], direction: [0, 0, 0]}"),
-               {"thrusters[3].direction has zero length", "[0, 0, 0]"});
+               {"thrusters[3].direction = [0, 0, 0]: has zero length"});
   expect_error(variant("zero_tc", "{name: T3, position: [-0.156,  0.111, 0.085], direction: [-0.7071, -0.7071,  0.0]}",
                        "{name: T3, position: [-0.156,  0.111, 0.085], direction: [-0.7071, -0.7071,  0.0], time_constant: 0}"),
-               {"thrusters[2].time_constant must be > 0 s", "(got 0)"});
+               {"thrusters[2].time_constant = 0: must be > 0 s"});
   expect_error(variant("neg_tc_default", "time_constant: 0.1     # s", "time_constant: -0.1     # s"),
-               {"thrusters[0].time_constant must be > 0 s", "(got -0.1)"});
-  expect_error(variant("unknown_top", "mass: 13.5", "mass: 13.5\nmasss: 13.5"), {"masss is not a known key"});
+               {"thrusters[0].time_constant = -0.1: must be > 0 s"});
+  expect_error(variant("unknown_top", "mass: 13.5", "mass: 13.5\nmasss: 13.5"), {"masss = 13.5: unknown key"});
   expect_error(variant("unknown_nested", "{name: T2, position:", "{name: T2, positon: [0, 0, 0], position:"),
-               {"thrusters[1].positon is not a known key"});
+               {"thrusters[1].positon = [0, 0, 0]: unknown key"});
   expect_error(variant("short_damping", "linear_damping: [13.7, 0.0, 33.0, 0.0, 0.8, 0.0]", "linear_damping: [13.7, 0.0, 33.0]"),
-               {"linear_damping must be a list of 6 numbers", "(got [13.7, 0.0, 33.0])"});
+               {"linear_damping = [13.7, 0.0, 33.0]: must be a list of 6 numbers"});
   expect_error(variant("neg_damping", "quadratic_damping: [141.0", "quadratic_damping: [-141.0"),
-               {"quadratic_damping must have a non-negative diagonal"});
-  expect_error(variant("imu_rate", "rate: 200.0          # Hz", "rate: -5          # Hz"), {"sensors.imu.rate must be > 0 Hz", "(got -5)"});
-  expect_error(variant("imu_key", "rate: 200.0          # Hz", "rat: 200.0"), {"sensors.imu.rat is not a known key"});
-  expect_error(variant("both_buoyancy", "buoyancy: neutral", "buoyancy: neutral\nvolume: 0.0134"), {"buoyancy and volume are exclusive"});
-  expect_error(variant("no_mass", "mass: 13.5", ""), {"mass is required"});
+               {"quadratic_damping = ", "must have a non-negative diagonal"});
+  expect_error(variant("imu_rate", "rate: 200.0          # Hz", "rate: -5          # Hz"), {"sensors.imu.rate = -5: must be > 0 Hz"});
+  expect_error(variant("imu_key", "rate: 200.0          # Hz", "rat: 200.0"), {"sensors.imu.rat = 200.0: unknown key"});
+  expect_error(variant("both_buoyancy", "buoyancy: neutral", "buoyancy: neutral\nvolume: 0.0134"), {"buoyancy = neutral: and volume are exclusive"});
+  expect_error(variant("no_mass", "mass: 13.5", ""), {"mass: is required"});
   std::filesystem::remove_all(temp_dir());
 }
 
@@ -138,7 +138,7 @@ TEST(Config, InMemoryValidationUsesTheSameKeys) {
     up::validate_vehicle(v, "<test>");
     ADD_FAILURE();
   } catch (const up::ConfigError& e) {
-    EXPECT_NE(std::string(e.what()).find("<test>: thrusters[5].direction has zero length"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("<test>: thrusters[5].direction = [0, 0, 0]: has zero length"), std::string::npos) << e.what();
   }
   v = up::bluerov2_heavy_params();
   v.mass = 0.0;
@@ -168,17 +168,17 @@ TEST(Config, CurrentAndSeabedErrors) {
     }
   };
   const std::string bad_type = write("c1.yaml", "current: {type: tidal, velocity: [0, 0, 0]}\n");
-  expect([&] { up::load_current(bad_type); }, bad_type + ": current.type must be one of constant");
+  expect([&] { up::load_current(bad_type); }, bad_type + ": current.type = tidal: must be one of constant");
   const std::string bad_tc = write("c2.yaml", "current: {type: gauss_markov, stddev: [0.1, 0.1, 0], time_constant: 0}\n");
-  expect([&] { up::load_current(bad_tc); }, bad_tc + ": current.time_constant must be > 0 s (got 0)");
+  expect([&] { up::load_current(bad_tc); }, bad_tc + ": current.time_constant = 0: must be > 0 s");
   const std::string bad_vel = write("c3.yaml", "current: {type: constant, velocity: [0.1, .nan, 0]}\n");
-  expect([&] { up::load_current(bad_vel); }, bad_vel + ": current.velocity[1] must be finite");
+  expect([&] { up::load_current(bad_vel); }, bad_vel + ": current.velocity[1] = .nan: must be finite");
   const std::string bad_key = write("c4.yaml", "current: {type: constant, velocty: [0, 0, 0]}\n");
-  expect([&] { up::load_current(bad_key); }, bad_key + ": current.velocty is not a known key");
+  expect([&] { up::load_current(bad_key); }, bad_key + ": current.velocty");
   const std::string ragged = write("s1.yaml", "seabed: {type: grid, resolution: 1, depths: [[1, 2], [3]]}\n");
-  expect([&] { up::load_seabed(ragged); }, ragged + ": seabed.depths[1] must be a list with as many values");
+  expect([&] { up::load_seabed(ragged); }, ragged + ": seabed.depths[1] = [3]: must be a list with as many values");
   const std::string bad_res = write("s2.yaml", "seabed: {type: grid, resolution: 0, depths: [[1]]}\n");
-  expect([&] { up::load_seabed(bad_res); }, bad_res + ": seabed.resolution must be > 0 m (got 0)");
+  expect([&] { up::load_seabed(bad_res); }, bad_res + ": seabed.resolution = 0: must be > 0 m");
   std::filesystem::remove_all(dir);
 }
 
@@ -203,3 +203,51 @@ TEST(Config, EnvironmentFromYaml) {
 }
 
 }  // namespace
+
+// What depends on which keys a vehicle file gives: thruster_defaults fill the keys a thruster
+// entry leaves out (an entry's own key wins), unnamed thrusters are T<i+1>, a sensor section that
+// is given is enabled unless it says `enabled: false`, an absent one stays off; buoyancy
+// 'neutral' is the default (B = m g). The schema (VehicleParams::Serialize) round-trips.
+TEST(Config, ThrusterDefaultsAndSensorSectionsFollowWhatIsGiven) {
+  const YAML::Node v = YAML::Load(R"(
+mass: 10
+inertia: [0.2, 0.2, 0.3]
+added_mass: [1, 1, 1, 0.1, 0.1, 0.1]
+linear_damping: [1, 1, 1, 0.1, 0.1, 0.1]
+quadratic_damping: [[10, 0, 0, 0, 0, 0], [0, 10, 0, 0, 0, 0], [0, 0, 10, 0, 0, 0],
+                    [0, 0, 0, 1, 0, 0], [0, 0, 0, 0, 1, 0], [0, 0, 0, 0, 0, 1]]
+buoyancy: neutral
+thruster_defaults: {w_max: 50, time_constant: 0.2}
+thrusters:
+  - {position: [0.1, 0, 0], direction: [2, 0, 0]}
+  - {name: aft, position: [-0.1, 0, 0], direction: [-1, 0, 0], time_constant: 0.05}
+sensors:
+  imu: {rate: 100}
+  dvl: {enabled: false, beams: 0}
+)");
+  const up::VehicleParams p = up::parse_vehicle(v, "given.yaml");
+  ASSERT_EQ(p.thrusters.size(), 2u);
+  EXPECT_EQ(p.thrusters[0].name, "T1");
+  EXPECT_EQ(p.thrusters[1].name, "aft");
+  EXPECT_EQ(p.thrusters[0].w_max, 50.0);
+  EXPECT_EQ(p.thrusters[1].w_max, 50.0);
+  EXPECT_EQ(p.thrusters[0].time_constant, 0.2);
+  EXPECT_EQ(p.thrusters[1].time_constant, 0.05);                 // its own key wins
+  EXPECT_EQ(p.thrusters[0].C_T, up::ThrusterParams{}.C_T);       // neither: the default
+  EXPECT_EQ(p.thrusters[0].direction_B, Eigen::Vector3d::UnitX());  // normalised
+  EXPECT_TRUE(p.sensors.imu.enabled);
+  EXPECT_EQ(p.sensors.imu.rate_hz, 100.0);
+  EXPECT_FALSE(p.sensors.dvl.enabled);
+  EXPECT_EQ(p.sensors.dvl.beams, 0);
+  EXPECT_FALSE(p.sensors.gps.enabled);
+  EXPECT_NEAR(p.buoyancy_force(up::EnvironmentParams{}), 10 * 9.81, 1e-12);
+  EXPECT_EQ(p.quadratic_damping(3, 3), 1.0);
+  // Written back through the same schema and read again: the same vehicle.
+  YAML::Node again = unav::common::ToYaml(p);
+  const up::VehicleParams q = up::parse_vehicle(again, "again.yaml");
+  EXPECT_EQ(q.inertia, p.inertia);
+  EXPECT_EQ(q.quadratic_damping, p.quadratic_damping);
+  EXPECT_EQ(q.thrusters[1].time_constant, 0.05);
+  EXPECT_EQ(q.sensors.imu.rate_hz, 100.0);
+  EXPECT_FALSE(q.sensors.dvl.enabled);
+}

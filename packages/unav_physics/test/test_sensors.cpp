@@ -209,7 +209,7 @@ TEST(Sensors, DvlBeamSettingsAreChecked) {
     up::validate_sensors(p, "v.yaml");
     FAIL() << "3 beams accepted";
   } catch (const up::ConfigError& e) {
-    EXPECT_NE(std::string(e.what()).find("v.yaml: sensors.dvl.beams must be 4"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("v.yaml: sensors.dvl.beams = 3: must be 4"), std::string::npos) << e.what();
   }
   p.dvl.beams = 4;
   p.dvl.beam_angle_deg = 90.0;

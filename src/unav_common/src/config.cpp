@@ -82,8 +82,26 @@ std::string ListText(const V& values, long n, F&& text) {
   return "[" + JoinTexts(items) + "]";
 }
 
+/// Order n of a square-matrix value type, else 0. The matrices are Eigen's fixed-size types,
+/// column-major doubles, so one Map reads and writes both.
+int MatrixOrder(ValueType t) { return t == ValueType::kMatrix3 ? 3 : t == ValueType::kMatrix6 ? 6 : 0; }
+Eigen::Map<Eigen::MatrixXd> MatrixOf(ValueRef v) {
+  const int n = MatrixOrder(v.type);
+  return {static_cast<double*>(v.ptr), n, n};
+}
+bool IsDiagonal(const Eigen::Ref<const Eigen::MatrixXd>& m) {
+  return (m - Eigen::MatrixXd(m.diagonal().asDiagonal())).cwiseAbs().maxCoeff() == 0.0;
+}
+
 /// The current value as flow YAML text.
 std::string ValueText(ValueRef v) {
+  if (const int n = MatrixOrder(v.type)) {
+    const auto m = MatrixOf(v);
+    if (IsDiagonal(m)) return ListText(m.diagonal(), n, DoubleText);
+    std::vector<std::string> rows;
+    for (int i = 0; i < n; ++i) rows.push_back(ListText(m.row(i), n, DoubleText));
+    return "[" + JoinTexts(rows) + "]";
+  }
   switch (v.type) {
     case ValueType::kBool:
       return *static_cast<const bool*>(v.ptr) ? "true" : "false";
@@ -113,6 +131,9 @@ std::string ValueText(ValueRef v) {
       return ListText(*static_cast<const Eigen::Vector2d*>(v.ptr), 2, DoubleText);
     case ValueType::kVector3:
       return ListText(*static_cast<const Eigen::Vector3d*>(v.ptr), 3, DoubleText);
+    case ValueType::kMatrix3:
+    case ValueType::kMatrix6:
+      break;  // above
   }
   return "";
 }
@@ -141,6 +162,10 @@ const char* TypeName(ValueType t) {
       return "double[2]";
     case ValueType::kVector3:
       return "double[3]";
+    case ValueType::kMatrix3:
+      return "double[3x3]";
+    case ValueType::kMatrix6:
+      return "double[6x6]";
   }
   return "";
 }
@@ -484,6 +509,29 @@ void ReadValue(const Reporter& r, const FieldSpec& s, const YAML::Node& n, Value
   const bool index_map = allow_index_map && n.IsMap() && n.Tag() == kIndexTag;
   if (index_map && !IsListType(v.type))
     r.Fail(path, "", "is a " + std::string(TypeName(v.type)) + ", not a list: it has no elements to index");
+  if (const int order = MatrixOrder(v.type)) {  // n numbers (the diagonal) or n rows of n
+    const auto size = static_cast<std::size_t>(order);
+    const std::string count = std::to_string(size);
+    const std::string rule =
+        "must be a list of " + count + " numbers (the diagonal) or " + count + " lists of " + count + " numbers (the rows)";
+    if (!n.IsSequence() || n.size() != size) r.Fail(path, Written(n), rule);
+    Eigen::MatrixXd m = Eigen::MatrixXd::Zero(order, order);
+    const bool rows = n[0].IsSequence();
+    for (std::size_t i = 0; i < size; ++i) {
+      const YAML::Node row = n[i];
+      const auto ii = static_cast<Eigen::Index>(i);
+      if (!rows) {
+        if (!row.IsScalar()) r.Fail(path, Written(n), rule);
+        m(ii, ii) = ReadDouble(r, s, row, IndexPath(path, i));
+        continue;
+      }
+      if (!row.IsSequence() || row.size() != size) r.Fail(path, Written(n), rule);
+      for (std::size_t j = 0; j < size; ++j)
+        m(ii, static_cast<Eigen::Index>(j)) = ReadDouble(r, s, row[j], IndexPath(IndexPath(path, i), j));
+    }
+    MatrixOf(v) = m;
+    return;
+  }
   if (IsListType(v.type)) {
     ListCopy copy(v);
     if (index_map) {  // override of single elements: name[i]
@@ -590,11 +638,32 @@ void CheckValue(const Reporter& r, const FieldSpec& s, ValueRef v, const std::st
       for (Eigen::Index i = 0; i < 3; ++i) number(x[i], true, IndexPath(path, static_cast<std::size_t>(i)));
       break;
     }
+    case ValueType::kMatrix3:
+    case ValueType::kMatrix6: {
+      const auto m = MatrixOf(v);
+      for (Eigen::Index i = 0; i < m.rows(); ++i)
+        for (Eigen::Index j = 0; j < m.cols(); ++j)
+          number(m(i, j), true, IndexPath(IndexPath(path, static_cast<std::size_t>(i)), static_cast<std::size_t>(j)));
+      break;
+    }
   }
 }
 
 /// A leaf as a YAML node (numbers and strings as plain scalars, lists in flow style).
 YAML::Node ValueNode(ValueRef v) {
+  if (const int n = MatrixOrder(v.type)) {  // the diagonal when the matrix is, else its rows
+    const auto m = MatrixOf(v);
+    const auto flow = [](const auto& values, int count) {
+      YAML::Node seq(YAML::NodeType::Sequence);
+      seq.SetStyle(YAML::EmitterStyle::Flow);
+      for (int i = 0; i < count; ++i) seq.push_back(DoubleText(values[i]));
+      return seq;
+    };
+    if (IsDiagonal(m)) return flow(Eigen::VectorXd(m.diagonal()), n);
+    YAML::Node rows(YAML::NodeType::Sequence);
+    for (int i = 0; i < n; ++i) rows.push_back(flow(Eigen::VectorXd(m.row(i).transpose()), n));
+    return rows;
+  }
   if (IsListType(v.type)) {
     YAML::Node seq(YAML::NodeType::Sequence);
     seq.SetStyle(YAML::EmitterStyle::Flow);

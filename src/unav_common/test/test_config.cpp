@@ -593,3 +593,55 @@ TEST(Config, ValidateChecksCodeBuiltValues) {
 }
 
 }  // namespace
+
+// Square matrices (a vehicle's inertia, added mass, damping): n numbers are the diagonal, n lists
+// of n the rows; written back as the diagonal when the matrix is one, else as rows, and read again
+// to the same values. Wrong shapes and NaN are named with the element's key path.
+struct Plant {
+  Eigen::Matrix3d inertia = Eigen::Matrix3d::Identity();
+  Eigen::Matrix<double, 6, 6> damping = Eigen::Matrix<double, 6, 6>::Zero();
+  template <class Archive>
+  void Serialize(Archive* a) {
+    a->Visit(uc::Field("inertia", &inertia).Doc("about the CG"));
+    a->Visit(uc::Field("damping", &damping));
+  }
+};
+
+TEST(Config, SquareMatricesReadAsDiagonalOrRowsAndRoundTrip) {
+  Plant p;
+  uc::LoadYaml(YAML::Load("inertia: [0.26, 0.23, 0.37]\n"
+                          "damping: [[1, 2, 0, 0, 0, 0], [2, 3, 0, 0, 0, 0], [0, 0, 4, 0, 0, 0],\n"
+                          "          [0, 0, 0, 5, 0, 0], [0, 0, 0, 0, 6, 0], [0, 0, 0, 0, 0, 7.5]]"),
+               "v.yaml", &p);
+  EXPECT_EQ(p.inertia, Eigen::Vector3d(0.26, 0.23, 0.37).asDiagonal().toDenseMatrix());
+  EXPECT_EQ(p.damping(0, 1), 2.0);
+  EXPECT_EQ(p.damping(1, 0), 2.0);
+  EXPECT_EQ(p.damping(5, 5), 7.5);
+  EXPECT_EQ(p.damping(2, 3), 0.0);
+  const YAML::Node y = uc::ToYaml(p);
+  EXPECT_TRUE(y["inertia"].IsSequence() && y["inertia"][0].IsScalar()) << y;  // the diagonal
+  EXPECT_TRUE(y["damping"][0].IsSequence() && y["damping"][0].size() == 6u) << y;  // rows
+  Plant q;
+  uc::LoadYaml(y, "again.yaml", &q);
+  EXPECT_EQ(q.inertia, p.inertia);
+  EXPECT_EQ(q.damping, p.damping);
+
+  const auto error = [](const std::string& yaml) {
+    Plant t;
+    try {
+      uc::LoadYaml(YAML::Load(yaml), "v.yaml", &t);
+    } catch (const ConfigError& e) {
+      EXPECT_EQ(t.inertia, Eigen::Matrix3d::Identity());  // a failed read changes nothing
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  EXPECT_EQ(error("inertia: [1, 2]"),
+            "v.yaml: inertia = [1, 2]: must be a list of 3 numbers (the diagonal) or 3 lists of 3 numbers (the rows)");
+  EXPECT_NE(error("inertia: [[1, 0, 0], [0, 1], [0, 0, 1]]").find("3 lists of 3 numbers"), std::string::npos);
+  EXPECT_NE(error("inertia: [1, .nan, 1]").find("inertia[1]"), std::string::npos);
+  EXPECT_NE(error("inertia: [[1, 0, 0], [0, 1, x], [0, 0, 1]]").find("inertia[1][2] = x"), std::string::npos)
+      << error("inertia: [[1, 0, 0], [0, 1, x], [0, 0, 1]]");
+  const auto rows = uc::Describe(Plant{});
+  EXPECT_EQ(rows.at(0).type, "double[3x3]");
+}

@@ -9,6 +9,7 @@
 #include <random>
 #include <string>
 
+#include "unav_common/config.hpp"
 #include "unav_physics/types.hpp"
 
 namespace unav::physics {
@@ -21,18 +22,46 @@ struct NoiseParams {
   double noise_stddev = 0.0;      ///< unit of the reading
   double bias_random_walk = 0.0;  ///< unit of the reading per sqrt(s)
   double initial_bias = 0.0;      ///< unit of the reading
+
+  /// The three keys at the caller's level (a sensor with one channel writes them flat).
+  template <class Archive>
+  void Serialize(Archive* a) {
+    using unav::common::Field;
+    a->Visit(Field("noise_stddev", &noise_stddev).Doc("white noise, unit of the reading"));
+    a->Visit(Field("bias_random_walk", &bias_random_walk).Doc("bias random walk, unit per sqrt(s)"));
+    a->Visit(Field("initial_bias", &initial_bias).Doc("bias at t = 0"));
+  }
 };
+
+/// The `enabled` and `rate` keys of every sensor (a vehicle file enables a sensor whose section it
+/// gives unless it says `enabled: false`).
+template <class Archive>
+void VisitSensorSwitch(Archive* a, bool* enabled, double* rate_hz) {
+  a->Visit(unav::common::Field("enabled", enabled).Doc("sample it"));
+  a->Visit(unav::common::Field("rate", rate_hz).Unit("Hz").Doc("samples per second"));
+}
 
 struct ImuParams {
   bool enabled = false;
   double rate_hz = 200.0;
   NoiseParams accel;  ///< specific force, m/s^2
   NoiseParams gyro;   ///< angular rate, rad/s
+  template <class Archive>
+  void Serialize(Archive* a) {
+    VisitSensorSwitch(a, &enabled, &rate_hz);
+    a->Visit(unav::common::Field("accel", &accel).Doc("specific force, m/s^2"));
+    a->Visit(unav::common::Field("gyro", &gyro).Doc("angular rate, rad/s"));
+  }
 };
 struct PressureParams {
   bool enabled = false;
   double rate_hz = 50.0;
   NoiseParams pressure;  ///< Pa
+  template <class Archive>
+  void Serialize(Archive* a) {
+    VisitSensorSwitch(a, &enabled, &rate_hz);
+    pressure.Serialize(a);
+  }
 };
 /// A bottom-tracking DVL at the body origin. beams = 4: a Janus array (Water Linked A50 /
 /// Nortek DVL1000 layout: four beams beam_angle_deg off the body's down axis, at azimuths 45, 135,
@@ -52,6 +81,17 @@ struct DvlParams {
   int beams = 4;                    ///< 4 (Janus) or 0 (ideal)
   double beam_angle_deg = 22.5;     ///< off the down axis (A50: 22.5, DVL1000: 25, Pathfinder: 30)
   double max_incidence_deg = 70.0;  ///< a beam hitting the bottom more obliquely loses lock
+  template <class Archive>
+  void Serialize(Archive* a) {
+    using unav::common::Field;
+    VisitSensorSwitch(a, &enabled, &rate_hz);
+    velocity.Serialize(a);
+    a->Visit(Field("min_altitude", &min_altitude).Unit("m").Doc("bottom lock from"));
+    a->Visit(Field("max_altitude", &max_altitude).Unit("m").Doc("bottom lock up to"));
+    a->Visit(Field("beams", &beams).Doc("4 (Janus array) or 0 (ideal sensor)"));
+    a->Visit(Field("beam_angle_deg", &beam_angle_deg).Unit("deg").Doc("off the down axis"));
+    a->Visit(Field("max_incidence_deg", &max_incidence_deg).Unit("deg").Doc("steeper bottom: no lock"));
+  }
 };
 struct AltimeterParams {
   bool enabled = false;
@@ -59,11 +99,23 @@ struct AltimeterParams {
   NoiseParams range;         ///< m
   double min_range = 0.3;    ///< m
   double max_range = 100.0;  ///< m
+  template <class Archive>
+  void Serialize(Archive* a) {
+    VisitSensorSwitch(a, &enabled, &rate_hz);
+    range.Serialize(a);
+    a->Visit(unav::common::Field("min_range", &min_range).Unit("m"));
+    a->Visit(unav::common::Field("max_range", &max_range).Unit("m"));
+  }
 };
 struct MagnetometerParams {
   bool enabled = false;
   double rate_hz = 50.0;
   NoiseParams field;  ///< T
+  template <class Archive>
+  void Serialize(Archive* a) {
+    VisitSensorSwitch(a, &enabled, &rate_hz);
+    field.Serialize(a);
+  }
 };
 struct GpsParams {
   bool enabled = false;
@@ -71,15 +123,34 @@ struct GpsParams {
   NoiseParams horizontal;  ///< m, north and east
   NoiseParams vertical;    ///< m, down
   double max_depth = 0.1;  ///< m; a fix only while the antenna is within this of the surface
+  template <class Archive>
+  void Serialize(Archive* a) {
+    using unav::common::Field;
+    VisitSensorSwitch(a, &enabled, &rate_hz);
+    a->Visit(Field("horizontal", &horizontal).Doc("m, north and east"));
+    a->Visit(Field("vertical", &vertical).Doc("m, down"));
+    a->Visit(Field("max_depth", &max_depth).Unit("m").Doc("a fix only this close to the surface"));
+  }
 };
 struct SensorSuiteParams {
-  std::uint64_t seed = 0;  ///< each sensor draws from its own generator seeded from this
+  int64_t seed = 0;  ///< >= 0; each sensor draws from its own generator seeded from this
   ImuParams imu;
   PressureParams pressure;
   DvlParams dvl;
   AltimeterParams altimeter;
   MagnetometerParams magnetometer;
   GpsParams gps;
+  template <class Archive>
+  void Serialize(Archive* a) {
+    using unav::common::Field;
+    a->Visit(Field("seed", &seed).Min(0.0).Doc("noise seed of every sensor"));
+    a->Visit(Field("imu", &imu));
+    a->Visit(Field("pressure", &pressure));
+    a->Visit(Field("dvl", &dvl));
+    a->Visit(Field("altimeter", &altimeter));
+    a->Visit(Field("magnetometer", &magnetometer));
+    a->Visit(Field("gps", &gps));
+  }
 };
 
 struct ImuReading {
@@ -184,7 +255,7 @@ class SensorSuite {
   Channel accel_[3], gyro_[3], pressure_, dvl_[4], range_, mag_[3], gps_[3];
 };
 
-/// Throws ConfigError ("<src>: sensors.imu.rate must be > 0 (got -1)") on a bad value.
+/// Throws ConfigError ("<src>: sensors.imu.rate = -1: must be > 0 Hz") on a bad value.
 void validate_sensors(const SensorSuiteParams& p, const std::string& src);
 
 }  // namespace unav::physics

@@ -26,6 +26,26 @@ struct ThrusterParams {
   double diameter = 0.076;     ///< propeller diameter D, m
   double time_constant = 0.1;  ///< t_c of the command low-pass, s (> 0)
 
+  /// The propeller's keys (also the file's thruster_defaults).
+  template <class Archive>
+  void SerializeCoefficients(Archive* a) {
+    using unav::common::Field;
+    a->Visit(Field("C_T", &C_T).Doc("thrust coefficient"));
+    a->Visit(Field("C_T_reverse", &C_T_reverse).Doc("for negative commands; 0 = C_T"));
+    a->Visit(Field("rho", &rho).Unit("kg/m^3").Doc("water density of eq. 3"));
+    a->Visit(Field("w_max", &w_max).Unit("rev/s").Doc("maximum propeller speed"));
+    a->Visit(Field("diameter", &diameter).Unit("m").Doc("propeller diameter"));
+    a->Visit(Field("time_constant", &time_constant).Unit("s").Doc("command low-pass"));
+  }
+  template <class Archive>
+  void Serialize(Archive* a) {
+    using unav::common::Field;
+    a->Visit(Field("name", &name));
+    a->Visit(Field("position", &position_B).Unit("m").Doc("body FRD"));
+    a->Visit(Field("direction", &direction_B).Doc("positive thrust direction, body FRD (normalised)"));
+    SerializeCoefficients(a);
+  }
+
   double max_forward_thrust() const;  ///< N, at u = +1
   double max_reverse_thrust() const;  ///< N (positive), at u = -1
 };
@@ -35,10 +55,18 @@ struct ContactParams {
   double stiffness = 2000.0;  ///< N/m
   double damping = 500.0;     ///< N s/m (about critical for ~30 kg with added mass)
   double friction = 50.0;     ///< viscous horizontal friction while in contact, N s/m
+  template <class Archive>
+  void Serialize(Archive* a) {
+    using unav::common::Field;
+    a->Visit(Field("stiffness", &stiffness).Unit("N/m"));
+    a->Visit(Field("damping", &damping).Unit("N s/m"));
+    a->Visit(Field("friction", &friction).Unit("N s/m").Doc("horizontal, while in contact"));
+  }
 };
 
 struct VehicleParams {
   std::string name = "vehicle";
+  std::string description;
   double mass = 1.0;                                      ///< m, kg
   Eigen::Matrix3d inertia = Eigen::Matrix3d::Identity();  ///< about the CG, body axes, kg m^2
   Eigen::Vector3d r_g_B = Eigen::Vector3d::Zero();        ///< centre of gravity, m
@@ -56,6 +84,28 @@ struct VehicleParams {
   std::vector<ThrusterParams> thrusters;
   ContactParams contact;
   SensorSuiteParams sensors;
+
+  /// The file's keys (config/vehicles/*.yaml) but thruster_defaults, which parse_vehicle() applies
+  /// to each thruster entry that does not set a key itself, and buoyancy: neutral (the default).
+  template <class Archive>
+  void Serialize(Archive* a) {
+    using unav::common::Field;
+    a->Visit(Field("name", &name));
+    a->Visit(Field("description", &description));
+    a->Visit(Field("mass", &mass).Unit("kg"));
+    a->Visit(Field("inertia", &inertia).Unit("kg m^2").Doc("about the CG, body axes"));
+    a->Visit(Field("center_of_gravity", &r_g_B).Unit("m"));
+    a->Visit(Field("center_of_buoyancy", &r_b_B).Unit("m"));
+    a->Visit(Field("buoyancy", &buoyancy).Unit("N").Doc("'neutral' (B = m g) or N; exclusive with volume"));
+    a->Visit(Field("volume", &volume).Unit("m^3").Doc("displaced volume (B = rho g V)"));
+    a->Visit(Field("height", &height).Unit("m").Doc("vertical extent (contact, surface)"));
+    a->Visit(Field("added_mass", &added_mass).Doc("M_A, 6 numbers (diagonal) or 6x6"));
+    a->Visit(Field("linear_damping", &linear_damping).Doc("D_l"));
+    a->Visit(Field("quadratic_damping", &quadratic_damping).Doc("D_q"));
+    a->Visit(Field("thrusters", &thrusters));
+    a->Visit(Field("contact", &contact));
+    a->Visit(Field("sensors", &sensors));
+  }
 
   /// Fully submerged buoyancy, N, for this environment.
   double buoyancy_force(const EnvironmentParams& env) const;

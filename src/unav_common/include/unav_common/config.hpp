@@ -17,7 +17,8 @@
 //
 // Field value types: bool, int, int64_t, uint32_t, double, std::string, std::vector<double>,
 // std::vector<int>, std::vector<std::string>, Eigen::Vector2d, Eigen::Vector3d (YAML list of 2
-// or 3 numbers), a struct with its own Serialize() (YAML mapping, key path "a.b") and a
+// or 3 numbers), Eigen::Matrix3d and Eigen::Matrix<double, 6, 6> (n numbers, the diagonal, or n
+// lists of n numbers, the rows; written back diagonal when the matrix is), a struct with its own Serialize() (YAML mapping, key path "a.b") and a
 // std::vector of such structs (YAML list of mappings, key path "a[2].b").
 // Rules: Range(lo, hi), Min(lo), Max(hi) are inclusive, Above(lo), Below(hi) exclusive; on
 // lists and Eigen vectors they apply to every element. OneOf({...}) for strings. NaN and Inf
@@ -56,7 +57,9 @@ enum class ValueType {
   kIntList,
   kStringList,
   kVector2,
-  kVector3
+  kVector3,
+  kMatrix3,  ///< Eigen::Matrix3d
+  kMatrix6   ///< Eigen::Matrix<double, 6, 6>
 };
 
 /// A typed pointer to a leaf value; built only by the MakeValueRef overloads.
@@ -75,6 +78,8 @@ inline ValueRef MakeValueRef(std::vector<int>* p) { return {ValueType::kIntList,
 inline ValueRef MakeValueRef(std::vector<std::string>* p) { return {ValueType::kStringList, p}; }
 inline ValueRef MakeValueRef(Eigen::Vector2d* p) { return {ValueType::kVector2, p}; }
 inline ValueRef MakeValueRef(Eigen::Vector3d* p) { return {ValueType::kVector3, p}; }
+inline ValueRef MakeValueRef(Eigen::Matrix3d* p) { return {ValueType::kMatrix3, p}; }
+inline ValueRef MakeValueRef(Eigen::Matrix<double, 6, 6>* p) { return {ValueType::kMatrix6, p}; }
 
 /// Everything a field declares besides its value (the non-template half of Field<T>).
 struct FieldSpec {
