@@ -10,7 +10,7 @@ PKGS=(
   python3-colcon-library-path python3-colcon-bash python3-colcon-package-information
   libeigen3-dev libopencv-dev libceres-dev libassimp-dev
   libegl-dev libgles-dev libgl-dev libegl-mesa0 libgbm-dev libepoxy-dev
-  libyaml-cpp-dev libcli11-dev libspdlog-dev nlohmann-json3-dev
+  libyaml-cpp-dev libcli11-dev libspdlog-dev nlohmann-json3-dev libwebsocketpp-dev libasio-dev
   libgtest-dev libgmock-dev libbenchmark-dev libsqlite3-dev libssl-dev libzstd-dev zlib1g-dev
   clang-format clang-tidy clang-14 libclang-rt-14-dev
   munge slurmctld slurmd slurm-client

@@ -2,7 +2,7 @@
 _unav() {
   local cur=${COMP_WORDS[COMP_CWORD]} prev=${COMP_WORDS[1]} sub=${COMP_WORDS[2]}
   case $COMP_CWORD in
-    1) COMPREPLY=($(compgen -W "topic node launch bag eval datagen localize" -- "$cur")) ;;
+    1) COMPREPLY=($(compgen -W "topic node launch bag eval datagen localize run foxglove security doctor" -- "$cur")) ;;
     2) case $prev in
          topic) COMPREPLY=($(compgen -W "list echo hz bw pub" -- "$cur")) ;;
          node) COMPREPLY=($(compgen -W "list" -- "$cur")) ;;

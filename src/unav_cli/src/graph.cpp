@@ -74,13 +74,19 @@ std::map<std::string, std::set<std::string>> Graph::topics() const {
   return out;
 }
 
-std::string Graph::wait_for_type(const std::string& ros_topic, std::chrono::milliseconds timeout) {
+std::string Graph::writer_type(const std::string& ros_topic) const {
   const std::string dds_topic = unav::to_dds_topic(ros_topic);
+  std::string type;
+  for (const auto& e : endpoints())
+    if (e.is_writer && e.dds_topic == dds_topic) type = e.dds_type;
+  return type;
+}
+
+std::string Graph::wait_for_type(const std::string& ros_topic, std::chrono::milliseconds timeout) {
   std::string type;
   ctx_->spin_until(
       [&] {
-        for (const auto& e : endpoints())
-          if (e.is_writer && e.dds_topic == dds_topic) type = e.dds_type;
+        type = writer_type(ros_topic);
         return !type.empty();
       },
       timeout);

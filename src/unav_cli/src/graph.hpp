@@ -33,6 +33,8 @@ class Graph {
   std::vector<EndpointInfo> endpoints() const;
   /// topic (ROS name) -> set of DDS type names, for topics under rt/.
   std::map<std::string, std::set<std::string>> topics() const;
+  /// The DDS type name of a writer of `topic` discovered so far, or "" (none yet).
+  std::string writer_type(const std::string& ros_topic) const;
   /// Waits until `topic` has a writer; returns its DDS type name or "" on timeout.
   std::string wait_for_type(const std::string& ros_topic, std::chrono::milliseconds timeout);
   /// QoS that matches every current writer of `topic` (best effort if any is best effort;

@@ -12,6 +12,7 @@
 #include <fastdds/dds/publisher/DataWriter.hpp>
 
 #include "bag_command.hpp"
+#include "foxglove_command.hpp"
 #include "cli_common.hpp"
 #include "graph.hpp"
 #include "raw_type.hpp"
@@ -373,6 +374,7 @@ int main(int argc, char** argv) {
   doctor->add_flag("--clean", doctor_clean, "remove the dead ones (every participant also does at start)");
 
   const auto run_bag = add_bag_command(app);
+  const auto run_foxglove = add_foxglove_command(app);
   const auto run_security = add_security_command(app);
 
   CLI11_PARSE(app, argc, argv);
@@ -386,6 +388,7 @@ int main(int argc, char** argv) {
     if (node_list_cmd->parsed()) return node_list();
     if (launch_cmd->parsed()) return launch(launch_file, launch_args);
     if (app.got_subcommand("bag")) return run_bag();
+    if (app.got_subcommand("foxglove")) return run_foxglove();
     if (app.got_subcommand("security")) return run_security();
     if (doctor->parsed()) return shm_doctor(doctor_clean);
   } catch (const UsageError& e) {
