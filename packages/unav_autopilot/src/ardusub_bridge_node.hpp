@@ -33,8 +33,7 @@ struct ArduSubBridgeParams {
   std::string address = "127.0.0.1";
   int64_t port = 9002;
   double publish_period = 0.02;
-  std::string world_frame = "world_ned";
-  std::string body_frame = "base_link_frd";
+  physics::PortFrames frames;
 
   template <class Archive>
   void Serialize(Archive* a) {
@@ -48,8 +47,7 @@ struct ArduSubBridgeParams {
                  .Max(1.0)
                  .Unit("s")
                  .Doc("simulated time between published states"));
-    a->Visit(Field("world_frame", &world_frame));
-    a->Visit(Field("body_frame", &body_frame));
+    frames.Serialize(a);
   }
 };
 

@@ -18,17 +18,61 @@
 using namespace std::chrono_literals;
 using unav::testing::make_link;
 
+namespace {
+// A trajectory_evaluator with `params` (name:=value each) in its own context, and a probe node
+// in another, on the same domain.
+class EvaluatorRun {
+ public:
+  EvaluatorRun(const std::vector<std::string>& params, const unav::ContextOptions& o)
+      : args_(ros_args(params)),
+        argv_(pointers(args_)),
+        node_ctx(static_cast<int>(argv_.size()), argv_.data(), o),
+        node(std::make_unique<unav::evaluation::TrajectoryEvaluator>(unav::NodeOptions{&node_ctx})),
+        test_ctx(o),
+        probe("probe", {&test_ctx}) {}
+
+ private:
+  static std::vector<std::string> ros_args(const std::vector<std::string>& params) {
+    std::vector<std::string> a{"trajectory_evaluator", "--ros-args"};
+    for (const auto& p : params) a.insert(a.end(), {"-p", p});
+    return a;
+  }
+  static std::vector<const char*> pointers(const std::vector<std::string>& a) {
+    std::vector<const char*> out;
+    for (const auto& s : a) out.push_back(s.c_str());
+    return out;
+  }
+  std::vector<std::string> args_;
+  std::vector<const char*> argv_;
+
+ public:
+  unav::Context node_ctx;
+  std::unique_ptr<unav::evaluation::TrajectoryEvaluator> node;
+  unav::Context test_ctx;
+  unav::Node probe;
+};
+
+// Odometry stamped t [s] (whole nanoseconds) at `pose`.
+nav_msgs::msg::Odometry odom(double t, const geometry_msgs::msg::Pose& pose) {
+  nav_msgs::msg::Odometry m;
+  const unav::Time s{std::llround(t * 1e9)};
+  m.header().stamp().sec(s.sec());
+  m.header().stamp().nanosec(s.nanosec());
+  m.pose().pose(pose);
+  return m;
+}
+}  // namespace
+
 TEST(TrajectoryEvaluator, WritesTableTumAndPlotOnShutdown) {
   const unav::ContextOptions o = unav::testing::test_context_options();
   const std::string out = ::testing::TempDir() + "eval_node_out";
   std::filesystem::remove_all(out);
   const std::string p_out = "output_dir:=" + out;
-  const char* argv[] = {"trajectory_evaluator",   "--ros-args", "-p", p_out.c_str(), "-p", "estimates:=[mono]", "-p",
-                        "trajectory_name:=linear"};
-  unav::Context node_ctx(8, argv, o);
-  auto node = std::make_unique<unav::evaluation::TrajectoryEvaluator>(unav::NodeOptions{&node_ctx});
-  unav::Context test_ctx(o);
-  unav::Node probe("probe", {&test_ctx});
+  EvaluatorRun harness({p_out, "estimates:=[mono]", "trajectory_name:=linear"}, o);
+  unav::Context& node_ctx = harness.node_ctx;
+  unav::Context& test_ctx = harness.test_ctx;
+  unav::Node& probe = harness.probe;
+  auto& node = harness.node;
   auto gt_pub = probe.create_publisher<nav_msgs::msg::Odometry>("/rov/ground_truth/odom", unav::QoS::reliable(100));
   auto est_pub =
       probe.create_publisher<nav_msgs::msg::Odometry>("/rov/localization/mono/odom", unav::QoS::reliable(100));
@@ -44,20 +88,7 @@ TEST(TrajectoryEvaluator, WritesTableTumAndPlotOnShutdown) {
     const double t = 0.1 * i, a = 0.05 * i;
     const Eigen::Vector3d p(5 * std::sin(a), 2 * std::cos(a), 8.0 + 0.1 * std::sin(3 * a));
     const Eigen::Quaterniond q(Eigen::AngleAxisd(a, Eigen::Vector3d::UnitZ()));
-    auto msg = [&](const Eigen::Vector3d& pos, const Eigen::Quaterniond& qq) {
-      nav_msgs::msg::Odometry m;
-      const unav::Time s{std::llround(t * 1e9)};
-      m.header().stamp().sec(s.sec());
-      m.header().stamp().nanosec(s.nanosec());
-      m.pose().pose().position().x(pos.x());
-      m.pose().pose().position().y(pos.y());
-      m.pose().pose().position().z(pos.z());
-      m.pose().pose().orientation().x(qq.x());
-      m.pose().pose().orientation().y(qq.y());
-      m.pose().pose().orientation().z(qq.z());
-      m.pose().pose().orientation().w(qq.w());
-      return m;
-    };
+    auto msg = [&](const Eigen::Vector3d& pos, const Eigen::Quaterniond& qq) { return odom(t, unav::to_msg(pos, qq)); };
     gt_pub->publish(msg(p, q));
     est_pub->publish(msg(0.3 * (R * p) + Eigen::Vector3d(1, 2, 3), Eigen::Quaterniond(R) * q));  // Sim(3) copy
     spin(2ms, [] { return false; });
@@ -97,24 +128,13 @@ void RunCombined(const std::string& out, const std::string& run, int domain, boo
   o.domain_id = domain;
   o.handle_signals = false;
   const std::string p_out = "output_dir:=" + out, p_run = "trajectory_name:=" + run, p_cams = "cameras_config:=" + cams;
-  const char* argv[] = {"trajectory_evaluator",
-                        "--ros-args",
-                        "-p",
-                        p_out.c_str(),
-                        "-p",
-                        "estimates:=[mono]",
-                        "-p",
-                        p_run.c_str(),
-                        "-p",
-                        "combine:=true",
-                        "-p",
-                        "camera:=down",
-                        "-p",
-                        p_cams.c_str()};
-  unav::Context node_ctx(mount_on_tf ? 12 : 14, argv, o);
-  auto node = std::make_unique<unav::evaluation::TrajectoryEvaluator>(unav::NodeOptions{&node_ctx});
-  unav::Context test_ctx(o);
-  unav::Node probe("probe", {&test_ctx});
+  std::vector<std::string> params{p_out, "estimates:=[mono]", p_run, "combine:=true", "camera:=down"};
+  if (!mount_on_tf) params.push_back(p_cams);
+  EvaluatorRun harness(params, o);
+  unav::Context& node_ctx = harness.node_ctx;
+  unav::Context& test_ctx = harness.test_ctx;
+  unav::Node& probe = harness.probe;
+  auto& node = harness.node;
   auto gt_pub = probe.create_publisher<nav_msgs::msg::Odometry>("/rov/ground_truth/odom", unav::QoS::reliable(100));
   auto est_pub =
       probe.create_publisher<nav_msgs::msg::Odometry>("/rov/localization/mono/odom", unav::QoS::reliable(100));
@@ -133,21 +153,7 @@ void RunCombined(const std::string& out, const std::string& run, int domain, boo
     links.push_back(make_link(*tf_pub, *node));
   }
   ASSERT_TRUE(unav::testing::wait_for_match({&node_ctx, &test_ctx}, links)) << unav::testing::describe(links);
-  auto pose_msg = [](double t, const Eigen::Isometry3d& X) {
-    nav_msgs::msg::Odometry m;
-    const unav::Time s{std::llround(t * 1e9)};
-    m.header().stamp().sec(s.sec());
-    m.header().stamp().nanosec(s.nanosec());
-    const Eigen::Quaterniond q(X.linear());
-    m.pose().pose().position().x(X.translation().x());
-    m.pose().pose().position().y(X.translation().y());
-    m.pose().pose().position().z(X.translation().z());
-    m.pose().pose().orientation().x(q.x());
-    m.pose().pose().orientation().y(q.y());
-    m.pose().pose().orientation().z(q.z());
-    m.pose().pose().orientation().w(q.w());
-    return m;
-  };
+  auto pose_msg = [](double t, const Eigen::Isometry3d& X) { return odom(t, unav::to_msg(X)); };
   const Eigen::Isometry3d G(Eigen::AngleAxisd(0.7, Eigen::Vector3d::UnitX()));
   nav_msgs::msg::Path path;
   for (int i = 0; i < 100; ++i) {
@@ -214,18 +220,11 @@ TEST(TrajectoryEvaluator, TakesPoseStampedAndTfInputs) {
   std::filesystem::remove_all(out);
   const std::string p_out = "output_dir:=" + out;
   // One estimate aligned otherwise (estimate_alignments): SE(3) leaves its scale of 2 in the error.
-  const char* argv[] = {"trajectory_evaluator",
-                        "--ros-args",
-                        "-p",
-                        p_out.c_str(),
-                        "-p",
-                        kInputs.c_str(),
-                        "-p",
-                        "estimate_alignments:=[ext_tf=se3]"};
-  unav::Context node_ctx(8, argv, o);
-  auto node = std::make_unique<unav::evaluation::TrajectoryEvaluator>(unav::NodeOptions{&node_ctx});
-  unav::Context test_ctx(o);
-  unav::Node probe("probe", {&test_ctx});
+  EvaluatorRun harness({p_out, kInputs, "estimate_alignments:=[ext_tf=se3]"}, o);
+  unav::Context& node_ctx = harness.node_ctx;
+  unav::Context& test_ctx = harness.test_ctx;
+  unav::Node& probe = harness.probe;
+  auto& node = harness.node;
   auto gt_pub = probe.create_publisher<nav_msgs::msg::Odometry>("/rov/ground_truth/odom", unav::QoS::reliable(100));
   auto pose_pub = probe.create_publisher<geometry_msgs::msg::PoseStamped>("/ext/camera_pose", unav::QoS::reliable(100));
   auto tf_pub = probe.create_publisher<tf2_msgs::msg::TFMessage>("/tf", unav::QoS::reliable(100));
@@ -259,34 +258,18 @@ TEST(TrajectoryEvaluator, TakesPoseStampedAndTfInputs) {
     const double t = 0.1 * i, a = 0.05 * i;
     const Eigen::Vector3d p(4 * std::sin(a), 3 * std::cos(a), 9.0 + 0.2 * std::sin(2 * a));
     const Eigen::Quaterniond q(Eigen::AngleAxisd(a, Eigen::Vector3d::UnitZ()));
-    const unav::Time s{std::llround(t * 1e9)};
-    nav_msgs::msg::Odometry gt;
-    gt.header().stamp().sec(s.sec());
-    gt.header().stamp().nanosec(s.nanosec());
-    gt.pose().pose().position().x(p.x());
-    gt.pose().pose().position().y(p.y());
-    gt.pose().pose().position().z(p.z());
-    gt.pose().pose().orientation().w(q.w());
-    gt.pose().pose().orientation().z(q.z());
+    const nav_msgs::msg::Odometry gt = odom(t, unav::to_msg(p, q));
     const Eigen::Vector3d pe = 2.0 * (R * p) + Eigen::Vector3d(-1, 0.5, 2);
     const Eigen::Quaterniond qe = Eigen::Quaterniond(R) * q;
     geometry_msgs::msg::PoseStamped ps;
     ps.header() = gt.header();
     ps.header().frame_id("ext_map");
-    ps.pose().position().x(pe.x());
-    ps.pose().position().y(pe.y());
-    ps.pose().position().z(pe.z());
-    ps.pose().orientation().x(qe.x());
-    ps.pose().orientation().y(qe.y());
-    ps.pose().orientation().z(qe.z());
-    ps.pose().orientation().w(qe.w());
+    ps.pose(unav::to_msg(pe, qe));
     tf2_msgs::msg::TFMessage tf;
     geometry_msgs::msg::TransformStamped tr;
     tr.header() = ps.header();
     tr.child_frame_id("ext_camera");
-    tr.transform().translation().x(pe.x());
-    tr.transform().translation().y(pe.y());
-    tr.transform().translation().z(pe.z());
+    tr.transform().translation(unav::to_vector3_msg(pe));
     tr.transform().rotation(ps.pose().orientation());
     geometry_msgs::msg::TransformStamped other = tr;  // another frame pair: ignored
     other.child_frame_id("something_else");
@@ -303,13 +286,7 @@ TEST(TrajectoryEvaluator, TakesPoseStampedAndTfInputs) {
     const Eigen::Quaterniond qs_s = Eigen::Quaterniond(R) * Eigen::Quaterniond(X_WS.linear());
     geometry_msgs::msg::PoseStamped sp;
     sp.header() = ps.header();
-    sp.pose().position().x(ps_s.x());
-    sp.pose().position().y(ps_s.y());
-    sp.pose().position().z(ps_s.z());
-    sp.pose().orientation().x(qs_s.x());
-    sp.pose().orientation().y(qs_s.y());
-    sp.pose().orientation().z(qs_s.z());
-    sp.pose().orientation().w(qs_s.w());
+    sp.pose(unav::to_msg(ps_s, qs_s));
     sensor_pub->publish(sp);
     unav::testing::spin_until(
         {&node_ctx, &test_ctx}, [] { return false; }, 2ms);

@@ -83,25 +83,19 @@ double Chi2(const PinholeCamera& cam, const Eigen::Isometry3d& T_cw, const Eigen
   return (cam.Project(p) - uv).squaredNorm() * inv_sigma2;
 }
 
-ceres::Solver::Options SmallOptions(int iterations) {
+// Quiet, single-threaded, bounded solves: `solver` DENSE_QR for one pose, SPARSE_SCHUR for
+// bundle adjustment (cameras and points).
+ceres::Solver::Options SolverOptions(ceres::LinearSolverType solver, int iterations) {
   ceres::Solver::Options o;
-  o.linear_solver_type = ceres::DENSE_QR;
+  o.linear_solver_type = solver;
   o.max_num_iterations = iterations;
   o.num_threads = 1;
   o.logging_type = ceres::SILENT;
   o.minimizer_progress_to_stdout = false;
   return o;
 }
-
-ceres::Solver::Options BaOptions(int iterations) {
-  ceres::Solver::Options o;
-  o.linear_solver_type = ceres::SPARSE_SCHUR;
-  o.max_num_iterations = iterations;
-  o.num_threads = 1;
-  o.logging_type = ceres::SILENT;
-  o.minimizer_progress_to_stdout = false;
-  return o;
-}
+ceres::Solver::Options SmallOptions(int iterations) { return SolverOptions(ceres::DENSE_QR, iterations); }
+ceres::Solver::Options BaOptions(int iterations) { return SolverOptions(ceres::SPARSE_SCHUR, iterations); }
 
 }  // namespace
 

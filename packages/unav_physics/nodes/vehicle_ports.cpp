@@ -10,9 +10,8 @@
 
 namespace unav::physics {
 
-VehiclePorts::VehiclePorts(unav::Node& node, const SensorSuiteParams& sensors, std::string world_frame,
-                           std::string body_frame)
-    : world_frame_(std::move(world_frame)), body_frame_(std::move(body_frame)) {
+VehiclePorts::VehiclePorts(unav::Node& node, const SensorSuiteParams& sensors, const PortFrames& frames)
+    : world_frame_(frames.world_frame), body_frame_(frames.body_frame) {
   clock_pub_ = node.create_publisher<rosgraph_msgs::msg::Clock>("/clock", unav::QoS::reliable(1));
   // 100 deep (5 s of lockstep barriers, ~80 kB): a consumer stalled for a while (or dropped from
   // the lockstep) catches up on what its own reader history can hold.

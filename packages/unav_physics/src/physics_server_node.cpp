@@ -62,8 +62,8 @@ PhysicsServer::PhysicsServer(const unav::NodeOptions& options) : Node("physics_s
   participants_ = p.lockstep_participants;
   wait_for_command_ = p.lockstep_wait_for_command;
   max_sim_time_ = p.max_sim_time;
-  world_frame_ = p.world_frame;
-  body_frame_ = p.body_frame;
+  world_frame_ = p.frames.world_frame;
+  body_frame_ = p.frames.body_frame;
   const double publish_rate = p.publish_rate;
   const double thruster_rate = p.thruster_state_rate;
 
@@ -84,7 +84,7 @@ PhysicsServer::PhysicsServer(const unav::NodeOptions& options) : Node("physics_s
   }
 
   // Ports.
-  ports_ = std::make_unique<VehiclePorts>(*this, vehicle.sensors, world_frame_, body_frame_);
+  ports_ = std::make_unique<VehiclePorts>(*this, vehicle.sensors, p.frames);
   command_sub_ = create_subscription<unav_msgs::msg::ThrusterCommand>(
       "thrusters/command", unav::QoS::reliable(), [this](const unav_msgs::msg::ThrusterCommand& m) { on_command(m); });
   reset_sub_ = create_subscription<geometry_msgs::msg::Pose>(

@@ -95,8 +95,7 @@ struct PhysicsServerParams {
   std::vector<std::string> lockstep_participants;
   bool lockstep_wait_for_command = false;
   double max_sim_time = 0.0;
-  std::string world_frame = "world_ned";
-  std::string body_frame = "base_link_frd";
+  PortFrames frames;
 
   template <class Archive>
   void Serialize(Archive* a) {
@@ -126,8 +125,7 @@ struct PhysicsServerParams {
     a->Visit(Field("lockstep_wait_for_command", &lockstep_wait_for_command)
                  .Doc("hold each barrier until a command stamped at it arrives"));
     a->Visit(Field("max_sim_time", &max_sim_time).Min(0.0).Unit("s").Doc("stop (exit 0) here; 0 = run until stopped"));
-    a->Visit(Field("world_frame", &world_frame).Doc("odometry and /tf parent frame"));
-    a->Visit(Field("body_frame", &body_frame).Doc("vehicle body frame"));
+    frames.Serialize(a);
   }
 };
 

@@ -17,16 +17,8 @@ using namespace unav::sim;
 namespace {
 
 PipeFollowingConfig fixed(const std::string& dynamics, int w, int h) {
-  PipeFollowingConfig c =
-      load_pipe_following_config(std::string(UNAV_REPO_ROOT) + "/config/learning/pipe_following.yaml");
-  c.env.scenes = "fixed";
-  c.env.dynamics = dynamics;
-  c.env.start_offset_m = 0.0;
-  c.env.start_heading_deg = 0.0;
-  c.env.start_arc_fraction = 0.0;
-  c.scenario.cameras.width = w;
-  c.scenario.cameras.height = h;
-  return c;
+  return evaluation_config(
+      load_pipe_following_config(std::string(UNAV_REPO_ROOT) + "/config/learning/pipe_following.yaml"), dynamics, w, h);
 }
 
 struct Flight {

@@ -31,15 +31,21 @@ inline World empty_world() {
   return w;
 }
 
+// A primitive `shape` (box, plane, ...) of `size_m`, level at `xyz_m` (world_ned), untextured.
+inline Object shape_object(const std::string& name, const std::string& shape, const Eigen::Vector3d& size_m,
+                           const Eigen::Vector3d& xyz_m, SegClass seg_class) {
+  Object o;
+  o.name = name;
+  o.shape = shape;
+  o.size_m = size_m;
+  o.X_WO = pose_from_xyz_rpy(xyz_m, Eigen::Vector3d::Zero());
+  o.seg_class = seg_class;
+  return o;
+}
+
 // A horizontal plane `size_m` square at `depth_m` (seabed class, untextured albedo 0.5).
 inline Object floor_object(double depth_m, double size_m) {
-  Object f;
-  f.name = "floor";
-  f.shape = "plane";
-  f.size_m = {size_m, size_m, 1.0};
-  f.X_WO = pose_from_xyz_rpy({0.0, 0.0, depth_m}, {0.0, 0.0, 0.0});
-  f.seg_class = SegClass::kSeabed;
-  return f;
+  return shape_object("floor", "plane", {size_m, size_m, 1.0}, {0.0, 0.0, depth_m}, SegClass::kSeabed);
 }
 
 // A forward camera "cam" (optical axis = body x) with a centred principal point.
@@ -53,6 +59,19 @@ inline CameraModel forward_camera(int w, int h, double f) {
   c.cy = 0.5 * (h - 1);
   c.X_BC.linear() = R_camera_body_to_optical();
   return c;
+}
+
+// Centroid (u, v) of the pixels of segmentation class `id`; `count` says how many there are.
+inline Eigen::Vector2d seg_centroid(const Frame& f, int id, int* count) {
+  Eigen::Vector2d sum = Eigen::Vector2d::Zero();
+  *count = 0;
+  for (int v = 0; v < f.height; ++v)
+    for (int u = 0; u < f.width; ++u)
+      if (f.seg[static_cast<std::size_t>(v) * f.width + u] == id) {
+        sum += Eigen::Vector2d(u, v);
+        ++*count;
+      }
+  return *count > 0 ? Eigen::Vector2d(sum / *count) : sum;
 }
 
 // A level body at p_W (world_ned).

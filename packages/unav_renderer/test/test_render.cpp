@@ -108,19 +108,12 @@ TEST(Render, PointLandsOnPixelPredictedByK) {
   w.objects.push_back(plane(target_W, {0, M_PI / 2, 0}, 0.25, SegClass::kOther));
   Renderer r(w, {front_camera(160, 120, 380.0, 372.0, 83.3, 57.6)}, exact_options());
   const Frame f = r.render(Pose::Identity(), "front");
-  double su = 0, sv = 0;
   int n = 0;
-  for (int v = 0; v < f.height; ++v)
-    for (int u = 0; u < f.width; ++u)
-      if (f.seg[static_cast<std::size_t>(v) * f.width + u] == 4) {
-        su += u;
-        sv += v;
-        ++n;
-      }
+  const Eigen::Vector2d centroid = test::seg_centroid(f, 4, &n);
   ASSERT_GT(n, 100);
   const Eigen::Vector2d uv = project(f, target_W);
-  EXPECT_NEAR(su / n, uv.x(), 0.5);
-  EXPECT_NEAR(sv / n, uv.y(), 0.5);
+  EXPECT_NEAR(centroid.x(), uv.x(), 0.5);
+  EXPECT_NEAR(centroid.y(), uv.y(), 0.5);
   // Expected from K by hand: u = fx y/x + cx with body/optical axes (x fwd -> z_C).
   EXPECT_NEAR(uv.x(), 380.0 * 0.8 / 6.0 + 83.3, 1e-9);
   EXPECT_NEAR(uv.y(), 372.0 * -0.5 / 6.0 + 57.6, 1e-9);
@@ -134,15 +127,8 @@ TEST(Render, DistortedPointMatchesOpenCvProjection) {
   c.distortion << -0.2, 0.05, 0.001, -0.001, 0.0;
   Renderer r(w, {c}, exact_options());
   const Frame f = r.render(Pose::Identity(), "front");
-  double su = 0, sv = 0;
   int n = 0;
-  for (int v = 0; v < f.height; ++v)
-    for (int u = 0; u < f.width; ++u)
-      if (f.seg[static_cast<std::size_t>(v) * f.width + u] == 4) {
-        su += u;
-        sv += v;
-        ++n;
-      }
+  const Eigen::Vector2d centroid = test::seg_centroid(f, 4, &n);
   ASSERT_GT(n, 4);
   const Eigen::Vector3d p_C = f.X_WC.inverse() * target_W;
   std::vector<cv::Point3d> obj{{p_C.x(), p_C.y(), p_C.z()}};
@@ -151,10 +137,10 @@ TEST(Render, DistortedPointMatchesOpenCvProjection) {
   cv::Mat D = (cv::Mat_<double>(1, 5) << -0.2, 0.05, 0.001, -0.001, 0.0);
   cv::projectPoints(obj, cv::Vec3d(0, 0, 0), cv::Vec3d(0, 0, 0), K, D, img);
   // Small square (~5 px): the distortion is locally affine, 0.5 px holds.
-  EXPECT_NEAR(su / n, img[0].x, 0.5);
-  EXPECT_NEAR(sv / n, img[0].y, 0.5);
+  EXPECT_NEAR(centroid.x(), img[0].x, 0.5);
+  EXPECT_NEAR(centroid.y(), img[0].y, 0.5);
   // Depth stays metres along the optical axis through the distortion remap.
-  const auto i = static_cast<std::size_t>(std::lround(sv / n)) * f.width + std::lround(su / n);
+  const auto i = static_cast<std::size_t>(std::lround(centroid.y())) * f.width + std::lround(centroid.x());
   EXPECT_NEAR(f.depth[i], p_C.z(), 1e-3);
 }
 

@@ -33,15 +33,9 @@ World scene(bool floor, bool tile, double tile_size = 0.4, double tile_depth = 8
   w.file = "<test world>";
   w.seabed.enabled = false;
   if (floor) w.objects.push_back(unav::renderer::test::floor_object(10.0, 30.0));
-  if (tile) {
-    Object t;
-    t.name = "tile";
-    t.shape = "box";
-    t.size_m = {tile_size, tile_size, 0.05};
-    t.X_WO = pose_from_xyz_rpy({0.0, 1.5, tile_depth}, {0.0, 0.0, 0.0});
-    t.seg_class = SegClass::kOther;
-    w.objects.push_back(t);
-  }
+  if (tile)
+    w.objects.push_back(unav::renderer::test::shape_object("tile", "box", {tile_size, tile_size, 0.05},
+                                                           {0.0, 1.5, tile_depth}, SegClass::kOther));
   Lamp l;
   l.name = "lamp";
   l.X_BL = pose_from_xyz_rpy({0.0, 1.5, 0.0}, {0.0, -M_PI / 2, 0.0});  // beam axis (x) down

@@ -79,6 +79,18 @@ PipeFollowingConfig load_pipe_following_config(const std::string& path) {
   return c;
 }
 
+PipeFollowingConfig evaluation_config(PipeFollowingConfig config, const std::string& dynamics, int width,
+                                      int height) {
+  config.env.scenes = "fixed";
+  config.env.dynamics = dynamics;
+  config.env.start_offset_m = 0.0;
+  config.env.start_heading_deg = 0.0;
+  config.env.start_arc_fraction = 0.0;
+  config.scenario.cameras.width = width;
+  config.scenario.cameras.height = height;
+  return config;
+}
+
 void apply_override(PipeFollowingConfig* config, const std::string& key, const std::string& yaml_value,
                     const std::string& source) {
   PipeFollowingConfig c = *config;

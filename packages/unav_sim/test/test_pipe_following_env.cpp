@@ -15,16 +15,9 @@ namespace {
 
 // The paper's evaluation pipe, a fixed start on its first (northbound) run, small images.
 PipeFollowingConfig fixed_config(const std::string& dynamics) {
-  PipeFollowingConfig c =
-      load_pipe_following_config(std::string(UNAV_REPO_ROOT) + "/config/learning/pipe_following.yaml");
-  c.env.scenes = "fixed";
-  c.env.dynamics = dynamics;
-  c.env.start_offset_m = 0.0;
-  c.env.start_heading_deg = 0.0;
-  c.env.start_arc_fraction = 0.0;
-  c.scenario.cameras.width = 80;
-  c.scenario.cameras.height = 45;
-  return c;
+  return evaluation_config(
+      load_pipe_following_config(std::string(UNAV_REPO_ROOT) + "/config/learning/pipe_following.yaml"), dynamics, 80,
+      45);
 }
 
 }  // namespace

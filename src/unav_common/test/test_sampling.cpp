@@ -129,20 +129,22 @@ TEST(Sampling, KeySeedIsSplitMixOfTheSeedAndThePathHash) {
 }
 
 TEST(Sampling, BadDistributionsAreNamedWithFileKeyValueAndRule) {
-  EXPECT_EQ(ErrorOf("depth_m: {uniform: [0.5, 20]}"),
-            "s.yaml: depth_m = {uniform: [0.5, 20]}: the distribution reaches 0.5, which must be in [1, 1000]");
-  EXPECT_EQ(ErrorOf("depth_m: {uniform: [20, 5]}"), "s.yaml: depth_m.uniform = [20, 5]: empty range: lo > hi");
-  EXPECT_EQ(ErrorOf("lamps: {uniform: [1, 3]}"),
-            "s.yaml: lamps.uniform = [1, 3]: a int field takes {int: [lo, hi]} or {choice: [...]}");
-  EXPECT_EQ(ErrorOf("water: {preset: {choice: [I, IX]}}"),
-            "s.yaml: water.preset = {choice: [I, IX]}: the distribution reaches IX, which must be one of {I, II, 3C}");
-  EXPECT_EQ(ErrorOf("depth_m: {normal: {mean: 5}}"), "s.yaml: depth_m.normal = {mean: 5}: needs mean and std");
-  EXPECT_EQ(ErrorOf("depth_m: {normal: {mean: 5, std: -1}}"), "s.yaml: depth_m.normal.std = -1: must be >= 0");
+  const std::pair<const char*, const char*> cases[] = {
+      {"depth_m: {uniform: [0.5, 20]}",
+       "s.yaml: depth_m = {uniform: [0.5, 20]}: the distribution reaches 0.5, which must be in [1, 1000]"},
+      {"depth_m: {uniform: [20, 5]}", "s.yaml: depth_m.uniform = [20, 5]: empty range: lo > hi"},
+      {"lamps: {uniform: [1, 3]}",
+       "s.yaml: lamps.uniform = [1, 3]: a int field takes {int: [lo, hi]} or {choice: [...]}"},
+      {"water: {preset: {choice: [I, IX]}}",
+       "s.yaml: water.preset = {choice: [I, IX]}: the distribution reaches IX, which must be one of {I, II, 3C}"},
+      {"depth_m: {normal: {mean: 5}}", "s.yaml: depth_m.normal = {mean: 5}: needs mean and std"},
+      {"depth_m: {normal: {mean: 5, std: -1}}", "s.yaml: depth_m.normal.std = -1: must be >= 0"},
+      {"water: {uniform: [2, 3]}",
+       "s.yaml: water = {uniform: [2, 3]}: a distribution stands for one value, not a mapping"},
+      {"legs: [{yaw_deg: {int: [0, 400]}}]",
+       "s.yaml: legs[0].yaw_deg = {int: [0, 400]}: the distribution reaches 400, which must be in [-180, 180]"},
+      {"depth_m: {uniform: [2, .nan]}", "s.yaml: depth_m.uniform[1] = .nan: must be finite"},
+      {"[1, 2]", "s.yaml: [1, 2]: must be a mapping of config keys"}};
+  for (const auto& [yaml, error] : cases) EXPECT_EQ(ErrorOf(yaml), error) << yaml;
   EXPECT_EQ(ErrorOf("depht_m: {uniform: [2, 3]}").rfind("s.yaml: depht_m = 2: unknown key", 0), 0u);
-  EXPECT_EQ(ErrorOf("water: {uniform: [2, 3]}"),
-            "s.yaml: water = {uniform: [2, 3]}: a distribution stands for one value, not a mapping");
-  EXPECT_EQ(ErrorOf("legs: [{yaw_deg: {int: [0, 400]}}]"),
-            "s.yaml: legs[0].yaw_deg = {int: [0, 400]}: the distribution reaches 400, which must be in [-180, 180]");
-  EXPECT_EQ(ErrorOf("depth_m: {uniform: [2, .nan]}"), "s.yaml: depth_m.uniform[1] = .nan: must be finite");
-  EXPECT_EQ(ErrorOf("[1, 2]"), "s.yaml: [1, 2]: must be a mapping of config keys");
 }

@@ -10,6 +10,39 @@ namespace {
 
 using RegistryTest = IdlFixture;
 
+// test_msgs/msg/Everything.idl: every kind of member, with `ints` after the plain scalars and
+// `tail` after the string sequences (line 25 is the first line of `tail` when `ints` is one line).
+std::string everything_idl(const std::string& ints, const std::string& tail) {
+  return R"IDL(
+#include "std_msgs/msg/Header.idl"
+module test_msgs { module msg {
+  module Everything_Constants {
+    const uint8 ULTRASOUND = 0;
+    const uint32 N = 4;
+    const string NAME = "ev";
+  };
+  typedef double double__9[9];
+  module dds_ {
+    struct Everything_ {
+      std_msgs::msg::dds_::Header_ header;
+      boolean b; octet o; char c; int8 i8; uint8 u8; short s; unsigned short us;
+      long l; unsigned long ul; long long ll; unsigned long long ull; float f; double d;
+)IDL" + ints + R"IDL(      @verbatim (language="comment", text="Gain (unitless), see \"docs\" (1)")
+      @default (value=1.5)
+      float gain;
+      double fixed[test_msgs::msg::Everything_Constants::N];
+      double__9 covariance;
+      sequence<int16> unbounded;
+      sequence<int16, 3> bounded;
+      string<4> short_name;
+      sequence<string<8>, 2> names;
+)IDL" + tail + R"IDL(    };
+  };
+};
+};
+)IDL";
+}
+
 TEST(NameConversion, DdsToRosAndBack) {
   EXPECT_EQ(dds_to_ros_name("sensor_msgs::msg::dds_::Image_"), "sensor_msgs/msg/Image");
   EXPECT_EQ(dds_to_ros_name("::std_msgs::msg::dds_::Header_"), "std_msgs/msg/Header");
@@ -48,36 +81,9 @@ TEST_F(RegistryTest, LoadsHeaderWithIncludeAndFindsAllNameForms) {
 
 TEST_F(RegistryTest, ParsesTypesArraysSequencesConstantsTypedefsAndDefaults) {
   const std::string root = write_std_types();
-  write("idl", "test_msgs/msg/Everything.idl", R"IDL(
-#include "std_msgs/msg/Header.idl"
-module test_msgs { module msg {
-  module Everything_Constants {
-    const uint8 ULTRASOUND = 0;
-    const uint32 N = 4;
-    const string NAME = "ev";
-  };
-  typedef double double__9[9];
-  module dds_ {
-    struct Everything_ {
-      std_msgs::msg::dds_::Header_ header;
-      boolean b; octet o; char c; int8 i8; uint8 u8; short s; unsigned short us;
-      long l; unsigned long ul; long long ll; unsigned long long ull; float f; double d;
-      int16 i16; uint16 u16; int32 i32; uint32 u32; int64 i64; uint64 u64;
-      @verbatim (language="comment", text="Gain (unitless), see \"docs\" (1)")
-      @default (value=1.5)
-      float gain;
-      double fixed[test_msgs::msg::Everything_Constants::N];
-      double__9 covariance;
-      sequence<int16> unbounded;
-      sequence<int16, 3> bounded;
-      string<4> short_name;
-      sequence<string<8>, 2> names;
-      sequence<Header_Alias> headers;
-    };
-  };
-};
-};
-)IDL");
+  write("idl", "test_msgs/msg/Everything.idl",
+        everything_idl("      int16 i16; uint16 u16; int32 i32; uint32 u32; int64 i64; uint64 u64;\n",
+                       "      sequence<Header_Alias> headers;\n"));
   // Header_Alias is not declared: the error must point to its line.
   TypeRegistry registry;
   registry.add_root(root);
@@ -90,37 +96,9 @@ module test_msgs { module msg {
         << e.what();
   }
 
-  write("idl", "test_msgs/msg/Everything.idl", R"IDL(
-#include "std_msgs/msg/Header.idl"
-module test_msgs { module msg {
-  module Everything_Constants {
-    const uint8 ULTRASOUND = 0;
-    const uint32 N = 4;
-    const string NAME = "ev";
-  };
-  typedef double double__9[9];
-  module dds_ {
-    struct Everything_ {
-      std_msgs::msg::dds_::Header_ header;
-      boolean b; octet o; char c; int8 i8; uint8 u8; short s; unsigned short us;
-      long l; unsigned long ul; long long ll; unsigned long long ull; float f; double d;
-      @verbatim (language="comment", text="Gain (unitless), see \"docs\" (1)")
-      @default (value=1.5)
-      float gain;
-      double fixed[test_msgs::msg::Everything_Constants::N];
-      double__9 covariance;
-      sequence<int16> unbounded;
-      sequence<int16, 3> bounded;
-      string<4> short_name;
-      sequence<string<8>, 2> names;
-      sequence<std_msgs::msg::dds_::Header_> headers;
-      @default (value="(1, 2)")
-      int32 pair[2];
-    };
-  };
-};
-};
-)IDL");
+  write("idl", "test_msgs/msg/Everything.idl",
+        everything_idl("", "      sequence<std_msgs::msg::dds_::Header_> headers;\n      @default (value=\"(1, 2)\")\n"
+                           "      int32 pair[2];\n"));
   const StructType& t = registry.load("test_msgs/msg/Everything");
   auto field = [&](const std::string& name) -> const Field& {
     for (const Field& f : t.fields) {

@@ -17,6 +17,7 @@
 #include "sensor_msgs/msg/nav_sat_fix.hpp"
 #include "sensor_msgs/msg/range.hpp"
 #include "tf2_msgs/msg/tf_message.hpp"
+#include "unav_common/config.hpp"
 #include "unav_msgs/msg/dvl.hpp"
 #include "unav_msgs/msg/thruster_state.hpp"
 #include "unav_physics/simulator.hpp"
@@ -28,11 +29,23 @@ class DataWriter;
 
 namespace unav::physics {
 
+/// The frames a vehicle's ports stamp: the `world_frame` and `body_frame` parameters of every node
+/// that owns a vehicle (Serialize visits both at the node's level).
+struct PortFrames {
+  std::string world_frame = "world_ned";
+  std::string body_frame = "base_link_frd";
+  template <class Archive>
+  void Serialize(Archive* a) {
+    a->Visit(unav::common::Field("world_frame", &world_frame).Doc("odometry and /tf parent frame"));
+    a->Visit(unav::common::Field("body_frame", &body_frame).Doc("vehicle body frame"));
+  }
+};
+
 class VehiclePorts {
  public:
   /// Creates the publishers on `node` (names relative to its namespace; /clock and /tf absolute);
   /// a sensor's topic only when the vehicle has it enabled.
-  VehiclePorts(unav::Node& node, const SensorSuiteParams& sensors, std::string world_frame, std::string body_frame);
+  VehiclePorts(unav::Node& node, const SensorSuiteParams& sensors, const PortFrames& frames);
   /// /clock, ground_truth/odom (world_frame -> body_frame), /tf at the simulator's time.
   void publish_state(const Simulator& sim);
   void publish_thruster_state(const Simulator& sim);

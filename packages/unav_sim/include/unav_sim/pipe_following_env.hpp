@@ -90,6 +90,11 @@ struct PipeFollowingConfig {
   PipeSceneRanges scenes;
 };
 PipeFollowingConfig load_pipe_following_config(const std::string& path);
+/// `config` for the paper's evaluation: the fixed world (env.world), the start on the pipe's
+/// beginning heading along it (no random offset, heading or arc position), `dynamics` (mpc or
+/// kinematic) and the camera at width x height (0 x 0: its own size).
+PipeFollowingConfig evaluation_config(PipeFollowingConfig config, const std::string& dynamics, int width = 0,
+                                      int height = 0);
 /// Sets "env.max_steps", "scenario.cameras.width", "pipe_scenes.turns" ... or a bare env key
 /// ("max_steps") from YAML text. Unknown keys throw ConfigError listing the valid ones.
 void apply_override(PipeFollowingConfig* config, const std::string& key, const std::string& yaml_value,

@@ -16,6 +16,18 @@
 
 namespace unav::sync {
 
+namespace detail {
+/// Appends (t, msg) to a stream's queue, dropping (and counting) the oldest beyond `queue_size`.
+template <class Q, class T>
+void push_bounded(Q* q, int64_t t, const T& msg, std::size_t queue_size, std::uint64_t* dropped) {
+  q->emplace_back(t, msg);
+  if (q->size() > queue_size) {
+    q->pop_front();
+    ++*dropped;
+  }
+}
+}  // namespace detail
+
 /// ExactTime: emits (a, b) when both streams have a message with the same stamp. Each stream
 /// keeps at most `queue_size` unmatched messages; the oldest is dropped (and counted) beyond
 /// that, and a message older than the newest match can never match any more and is dropped.
@@ -65,11 +77,7 @@ class ExactTime {
   }
   template <class Q, class T>
   void push(Q* q, int64_t t, const T& msg) {
-    q->emplace_back(t, msg);
-    if (q->size() > queue_size_) {
-      q->pop_front();
-      ++dropped_;
-    }
+    detail::push_bounded(q, t, msg, queue_size_, &dropped_);
   }
   void emit(const A& a, const B& b) {
     ++matched_;
@@ -109,11 +117,7 @@ class ApproximateTime {
  private:
   template <class Q, class T>
   void push(Q* q, int64_t t, const T& msg) {
-    q->emplace_back(t, msg);
-    if (q->size() > queue_size_) {
-      q->pop_front();
-      ++dropped_;
-    }
+    detail::push_bounded(q, t, msg, queue_size_, &dropped_);
   }
   // Index of the element of `q` nearest to t, or -1 when q has nothing at or after t yet.
   template <class Q>
