@@ -38,10 +38,17 @@ void BM_DynamicsStep(benchmark::State& state, up::Integrator integrator) {
 }
 
 // Full facade step: failsafe, 8 thruster lags, dynamics, current, seabed contact check, sensors.
-void BM_SimulatorStep(benchmark::State& state, up::Integrator integrator) {
+// One Simulator step (lagged thrusters, current, seabed) with every sensor of the vehicle (IMU,
+// pressure, the 4-beam DVL ray-casting the seabed at 10 Hz, altimeter, magnetometer, GPS), with
+// the DVL alone off, or with no sensor: the figures split the step's cost.
+enum class Sensors { kAll, kNoDvl, kNone };
+void BM_SimulatorStep(benchmark::State& state, up::Integrator integrator, Sensors sensors) {
   up::VehicleParams v = up::bluerov2_heavy_params();
-  v.sensors.imu.enabled = v.sensors.pressure.enabled = v.sensors.dvl.enabled = true;
-  v.sensors.altimeter.enabled = v.sensors.magnetometer.enabled = v.sensors.gps.enabled = true;
+  if (sensors != Sensors::kNone) {
+    v.sensors.imu.enabled = v.sensors.pressure.enabled = v.sensors.dvl.enabled = true;
+    v.sensors.altimeter.enabled = v.sensors.magnetometer.enabled = v.sensors.gps.enabled = true;
+    v.sensors.dvl.enabled = sensors == Sensors::kAll;
+  }
   v.sensors.imu.accel.noise_stddev = 0.02;
   up::SimulatorOptions o;
   o.integrator = integrator;
@@ -61,6 +68,8 @@ void BM_SimulatorStep(benchmark::State& state, up::Integrator integrator) {
 
 BENCHMARK_CAPTURE(BM_DynamicsStep, velocity_verlet, up::Integrator::kVelocityVerlet);
 BENCHMARK_CAPTURE(BM_DynamicsStep, rk4, up::Integrator::kRk4);
-BENCHMARK_CAPTURE(BM_SimulatorStep, velocity_verlet, up::Integrator::kVelocityVerlet);
-BENCHMARK_CAPTURE(BM_SimulatorStep, rk4, up::Integrator::kRk4);
+BENCHMARK_CAPTURE(BM_SimulatorStep, velocity_verlet, up::Integrator::kVelocityVerlet, Sensors::kAll);
+BENCHMARK_CAPTURE(BM_SimulatorStep, rk4, up::Integrator::kRk4, Sensors::kAll);
+BENCHMARK_CAPTURE(BM_SimulatorStep, verlet_no_dvl, up::Integrator::kVelocityVerlet, Sensors::kNoDvl);
+BENCHMARK_CAPTURE(BM_SimulatorStep, verlet_no_sensors, up::Integrator::kVelocityVerlet, Sensors::kNone);
 BENCHMARK_MAIN();

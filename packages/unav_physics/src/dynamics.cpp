@@ -243,6 +243,7 @@ ThrusterBank::ThrusterBank(const std::vector<ThrusterParams>& thrusters) {
   gain_rev_.resize(n);
   tc_.resize(n);
   alpha_.resize(n);
+  decay_half_.resize(n);
   u_f_.setZero(n);
   thrust_.setZero(n);
   mean_thrust_.setZero(n);
@@ -263,6 +264,7 @@ ThrusterBank::ThrusterBank(const std::vector<ThrusterParams>& thrusters) {
 void ThrusterBank::reset() {
   u_f_.setZero();
   thrust_.setZero();
+  wrench_.setZero();
   mean_thrust_.setZero();
   u_f0_.setZero();
   u_.setZero();
@@ -270,16 +272,20 @@ void ThrusterBank::reset() {
 
 Vector6d ThrusterBank::wrench_at_B(double h) const {
   ThrusterVector T(size());
+  const bool half = h == 0.5 * alpha_dt_;  // the integrator's midpoint: e^(-h/t_c) kept from step()
   for (int i = 0; i < size(); ++i) {
-    const double uf = u_(i) + (u_f0_(i) - u_(i)) * std::exp(-h / tc_(i));
+    const double uf = u_(i) + (u_f0_(i) - u_(i)) * (half ? decay_half_(i) : std::exp(-h / tc_(i)));
     T(i) = uf >= 0.0 ? gain_fwd_(i) * uf : gain_rev_(i) * uf;
   }
   return B_ * T;
 }
 
 void ThrusterBank::step(double dt, const ThrusterVector& u) {
-  if (dt != alpha_dt_) {
-    for (int i = 0; i < size(); ++i) alpha_(i) = 1.0 - std::exp(-dt / tc_(i));
+  if (dt != alpha_dt_) {  // the step size rarely changes: its decays are computed once
+    for (int i = 0; i < size(); ++i) {
+      alpha_(i) = 1.0 - std::exp(-dt / tc_(i));
+      decay_half_(i) = std::exp(-(0.5 * dt) / tc_(i));
+    }
     alpha_dt_ = dt;
   }
   for (int i = 0; i < size(); ++i) {
@@ -305,6 +311,7 @@ void ThrusterBank::step(double dt, const ThrusterVector& u) {
       mean_thrust_(i) = gain(u0 != 0.0 ? u0 : ui) * mean_u;
     }
   }
+  wrench_ = B_ * thrust_;
 }
 
 }  // namespace unav::physics

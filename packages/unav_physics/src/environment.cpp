@@ -115,6 +115,7 @@ GridSeabed::GridSeabed(double origin_N, double origin_E, double resolution_m, st
       depths_m_.push_back(d);
     }
   }
+  shallowest_m_ = *std::min_element(depths_m_.begin(), depths_m_.end());
 }
 
 double GridSeabed::depth_at(double x_N, double y_E) const {

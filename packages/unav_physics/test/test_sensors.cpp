@@ -1,6 +1,7 @@
 // Sensors read what physics predicts; seabed and surface behaviour.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 
 #include "unav_physics/simulator.hpp"
@@ -281,3 +282,44 @@ TEST(Sensors, SameSeedSameNoiseDifferentSeedDifferentNoise) {
 }
 
 }  // namespace
+
+namespace {
+// A seabed that does not say how shallow it gets: rays are followed from the sensor.
+class UnboundedSeabed : public up::Seabed {
+ public:
+  explicit UnboundedSeabed(const up::Seabed& s) : s_(s) {}
+  double depth_at(double x, double y) const override { return s_.depth_at(x, y); }
+
+ private:
+  const up::Seabed& s_;
+};
+}  // namespace
+
+// The DVL's ray cast skips what lies above the seabed's shallowest depth: the range is the same
+// as following the whole ray (to the 1e-9 m the bisection + secant reach), on a flat seabed the
+// analytic 25 m / cos(22.5 deg), and a level or rising ray never reaches the bottom.
+TEST(Sensors, RayRangeSkipsTheWaterAboveTheShallowestSeabed) {
+  const up::FlatSeabed flat(30.0);
+  const Eigen::Vector3d origin(1.0, -2.0, 5.0), beam = up::dvl_beam_B(1, 22.5);
+  EXPECT_NEAR(up::seabed_ray_range(flat, origin, beam, 100.0), 25.0 / std::cos(22.5 * M_PI / 180.0), 1e-9);
+  EXPECT_NEAR(up::seabed_ray_range(flat, origin, beam, 100.0),
+              up::seabed_ray_range(UnboundedSeabed(flat), origin, beam, 100.0), 1e-9);
+  EXPECT_LT(up::seabed_ray_range(flat, origin, Eigen::Vector3d(1, 0, 0), 100.0), 0.0);
+  EXPECT_LT(up::seabed_ray_range(flat, origin, Eigen::Vector3d(0.6, 0, -0.8), 100.0), 0.0);
+  EXPECT_LT(up::seabed_ray_range(flat, origin, beam, 20.0), 0.0);  // beyond max_range
+  // A ridged grid (1 m cells, 18..24 m): every beam from 3 m and from 17.5 m, both ways alike.
+  std::vector<std::vector<double>> depths(40, std::vector<double>(40));
+  for (int i = 0; i < 40; ++i)
+    for (int j = 0; j < 40; ++j) depths[i][j] = 21.0 + 3.0 * std::sin(0.7 * i) * std::cos(0.4 * j);
+  const up::GridSeabed grid(-20.0, -20.0, 1.0, depths);
+  double shallowest = depths[0][0];
+  for (const auto& row : depths) shallowest = std::min(shallowest, *std::min_element(row.begin(), row.end()));
+  EXPECT_EQ(grid.shallowest_depth(), shallowest);
+  for (const double z : {3.0, 17.5})
+    for (int b = 0; b < 4; ++b) {
+      const Eigen::Vector3d o(0.3, -1.1, z), d = up::dvl_beam_B(b, 30.0);
+      const double fast = up::seabed_ray_range(grid, o, d, 60.0);
+      ASSERT_GT(fast, 0.0) << "z " << z << " beam " << b;
+      EXPECT_NEAR(fast, up::seabed_ray_range(UnboundedSeabed(grid), o, d, 60.0), 1e-9) << "z " << z << " beam " << b;
+    }
+}

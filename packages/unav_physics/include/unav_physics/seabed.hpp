@@ -1,6 +1,7 @@
 // Seabed models: the depth of the sea floor under a horizontal position (NED).
 #pragma once
 
+#include <limits>
 #include <memory>
 #include <string>
 #include <vector>
@@ -17,12 +18,16 @@ class Seabed {
   virtual ~Seabed() = default;
   /// Depth of the seabed below the surface at north x_N, east y_E (m); called per dynamics stage.
   virtual double depth_at(double x_N, double y_E) const = 0;
+  /// A depth the seabed is nowhere shallower than (m): what a ray need not be followed above;
+  /// -infinity when unknown.
+  virtual double shallowest_depth() const { return -std::numeric_limits<double>::infinity(); }
 };
 
 class FlatSeabed final : public Seabed {
  public:
   explicit FlatSeabed(double depth_m);
   double depth_at(double, double) const override { return depth_m_; }
+  double shallowest_depth() const override { return depth_m_; }
 
  private:
   double depth_m_;
@@ -37,6 +42,7 @@ class GridSeabed final : public Seabed {
   GridSeabed(double origin_N, double origin_E, double resolution_m,
              std::vector<std::vector<double>> depths_m);
   double depth_at(double x_N, double y_E) const override;
+  double shallowest_depth() const override { return shallowest_m_; }  // bilinear: within the nodes' range
   int rows() const { return rows_; }
   int cols() const { return cols_; }
 
@@ -44,6 +50,7 @@ class GridSeabed final : public Seabed {
   double origin_N_, origin_E_, resolution_m_;
   int rows_ = 0, cols_ = 0;
   std::vector<double> depths_m_;  // row-major
+  double shallowest_m_ = 0.0;
 };
 
 /// Builds a seabed from a YAML map (example: test/data/seabed_grid.yaml):

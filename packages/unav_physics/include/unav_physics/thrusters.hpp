@@ -26,7 +26,7 @@ class ThrusterBank {
   /// Mean of T_i over the last step(), N (the value a fixed-step integrator must hold over it).
   const ThrusterVector& mean_thrust() const { return mean_thrust_; }
   /// Body wrench [sum n_i T_i; sum r_i x n_i T_i] at the end of the step, N / N m.
-  Vector6d wrench_B() const { return B_ * thrust_; }
+  const Vector6d& wrench_B() const { return wrench_; }
   /// Body wrench of mean_thrust(), N / N m.
   Vector6d mean_wrench_B() const { return B_ * mean_thrust_; }
   /// Exact body wrench at h in [0, dt] into the last step() (h = 0: its start, h = dt: wrench_B()).
@@ -38,7 +38,8 @@ class ThrusterBank {
 
  private:
   ThrusterMatrix B_;
-  ThrusterVector gain_fwd_, gain_rev_, tc_, u_f_, thrust_, mean_thrust_, alpha_, u_f0_, u_;
+  ThrusterVector gain_fwd_, gain_rev_, tc_, u_f_, thrust_, mean_thrust_, alpha_, decay_half_, u_f0_, u_;
+  Vector6d wrench_ = Vector6d::Zero();  ///< B_ * thrust_, kept by step() and reset()
   double alpha_dt_ = -1.0;
 };
 
