@@ -39,6 +39,7 @@ class EvaluatorRun {
   }
   static std::vector<const char*> pointers(const std::vector<std::string>& a) {
     std::vector<const char*> out;
+    out.reserve(a.size());
     for (const auto& s : a) out.push_back(s.c_str());
     return out;
   }

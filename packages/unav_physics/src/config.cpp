@@ -276,7 +276,8 @@ VehicleParams parse_vehicle(const YAML::Node& node, const std::string& source) {
   double b = -1.0, v = 0.0;
   const bool b_set = neutral || (buoyancy.IsScalar() && YAML::convert<double>::decode(buoyancy, b) && b >= 0.0);
   const bool v_set = volume.IsScalar() && YAML::convert<double>::decode(volume, v) && v > 0.0;
-  if (b_set && v_set) throw ConfigError(source, "buoyancy", flow(buoyancy), "and volume are exclusive: set one of them");
+  if (b_set && v_set)
+    throw ConfigError(source, "buoyancy", flow(buoyancy), "and volume are exclusive: set one of them");
   if (neutral) y.remove("buoyancy");
   ThrusterParams defaults;
   ThrusterCoefficients coefficients{&defaults};

@@ -20,9 +20,7 @@ bool parse_integrator(const std::string& name, Integrator* out) {
   return true;
 }
 
-const char* to_string(Integrator integrator) {
-  return integrator == Integrator::kRk4 ? "rk4" : "velocity_verlet";
-}
+const char* to_string(Integrator integrator) { return integrator == Integrator::kRk4 ? "rk4" : "velocity_verlet"; }
 
 Matrix6d coriolis_matrix(const Matrix6d& M, const Vector6d& nu) {
   const Eigen::Vector3d a1 = M.topLeftCorner<3, 3>() * nu.head<3>() + M.topRightCorner<3, 3>() * nu.tail<3>();
@@ -235,8 +233,8 @@ void VehicleDynamics::step(RigidBodyState& x, double dt, const DynamicsInputs& i
 ThrusterBank::ThrusterBank(const std::vector<ThrusterParams>& thrusters) {
   const int n = static_cast<int>(thrusters.size());
   if (n > kMaxThrusters) {
-    throw ConfigError("thrusters: at most " + std::to_string(kMaxThrusters) + " supported (got " +
-                      std::to_string(n) + ")");
+    throw ConfigError("thrusters: at most " + std::to_string(kMaxThrusters) + " supported (got " + std::to_string(n) +
+                      ")");
   }
   B_.resize(6, n);
   gain_fwd_.resize(n);
@@ -304,8 +302,8 @@ void ThrusterBank::step(double dt, const ThrusterVector& u) {
       // u_f is monotonic and crosses zero once, at e^(-t*/t_c) = -u / (u0 - u).
       const double e_star = -ui / (u0 - ui);
       const double t_star = -tc * std::log(e_star);
-      mean_thrust_(i) = (gain(u0) * integral(0.0, t_star, 1.0, e_star) +
-                         gain(ui) * integral(t_star, dt, e_star, e_dt)) / dt;
+      mean_thrust_(i) =
+          (gain(u0) * integral(0.0, t_star, 1.0, e_star) + gain(ui) * integral(t_star, dt, e_star, e_dt)) / dt;
     } else {
       const double mean_u = integral(0.0, dt, 1.0, e_dt) / dt;
       mean_thrust_(i) = gain(u0 != 0.0 ? u0 : ui) * mean_u;

@@ -103,7 +103,7 @@ GridSeabed::GridSeabed(double origin_N, double origin_E, double resolution_m, st
   rows_ = static_cast<int>(depths_m.size());
   cols_ = rows_ > 0 ? static_cast<int>(depths_m[0].size()) : 0;
   if (rows_ < 1 || cols_ < 1) throw ConfigError("grid seabed: depths must have at least 1 row and 1 column");
-  depths_m_.reserve(static_cast<std::size_t>(rows_ * cols_));
+  depths_m_.reserve(static_cast<std::size_t>(rows_) * static_cast<std::size_t>(cols_));
   for (int i = 0; i < rows_; ++i) {
     const auto& row = depths_m[static_cast<std::size_t>(i)];
     if (static_cast<int>(row.size()) != cols_) {
@@ -125,7 +125,9 @@ double GridSeabed::depth_at(double x_N, double y_E) const {
   const int j0 = std::min(static_cast<int>(fj), std::max(cols_ - 2, 0));
   const int i1 = std::min(i0 + 1, rows_ - 1), j1 = std::min(j0 + 1, cols_ - 1);
   const double a = fi - i0, b = fj - j0;
-  auto d = [&](int i, int j) { return depths_m_[static_cast<std::size_t>(i * cols_ + j)]; };
+  auto d = [&](int i, int j) {
+    return depths_m_[static_cast<std::size_t>(i) * static_cast<std::size_t>(cols_) + static_cast<std::size_t>(j)];
+  };
   return (1 - a) * ((1 - b) * d(i0, j0) + b * d(i0, j1)) + a * ((1 - b) * d(i1, j0) + b * d(i1, j1));
 }
 

@@ -35,7 +35,7 @@ std::string variant(const std::string& name, const std::string& from, const std:
   EXPECT_NE(pos, std::string::npos) << from;
   if (pos != std::string::npos) text.replace(pos, from.size(), to);
   std::filesystem::create_directories(temp_dir());
-  const std::string path = (temp_dir() / (name + ".yaml")).string();
+  std::string path = (temp_dir() / (name + ".yaml")).string();
   std::ofstream(path) << text;
   return path;
 }
@@ -92,30 +92,36 @@ TEST(Config, BadVehicleValuesNameFileKeyValueAndRule) {
   expect_error(variant("text_mass", "mass: 13.5", "mass: heavy"), {"mass = heavy: must be a number"});
   expect_error(variant("inf_added", "added_mass: [6.3567, 7.1206, 18.6863", "added_mass: [6.3567, 7.1206, .inf"),
                {"added_mass[2] = .inf: must be finite"});
-  expect_error(variant("asym_inertia", "inertia: [0.26, 0.23, 0.37]", "inertia: [[0.26, 0.1, 0], [0, 0.23, 0], [0, 0, 0.37]]"),
-               {"inertia = [[0.26, 0.1, 0]", "must be symmetric"});
-  expect_error(variant("npd_inertia", "inertia: [0.26, 0.23, 0.37]", "inertia: [[0.26, 0.5, 0], [0.5, 0.23, 0], [0, 0, 0.37]]"),
-               {"inertia = [[0.26, 0.5, 0]", "must be positive definite"});
+  expect_error(
+      variant("asym_inertia", "inertia: [0.26, 0.23, 0.37]", "inertia: [[0.26, 0.1, 0], [0, 0.23, 0], [0, 0, 0.37]]"),
+      {"inertia = [[0.26, 0.1, 0]", "must be symmetric"});
+  expect_error(
+      variant("npd_inertia", "inertia: [0.26, 0.23, 0.37]", "inertia: [[0.26, 0.5, 0], [0.5, 0.23, 0], [0, 0, 0.37]]"),
+      {"inertia = [[0.26, 0.5, 0]", "must be positive definite"});
   expect_error(variant("triangle", "inertia: [0.26, 0.23, 0.37]", "inertia: [0.1, 0.1, 0.37]"),
                {"inertia = ", "principal moments must satisfy the triangle inequality"});
   expect_error(variant("zero_dir", "{name: T4, position: [-0.156, -0.111, 0.085], direction: [-0.7071,  0.7071,  0.0]}",
                        "{name: T4, position: [-0.156, -0.111, 0.085], direction: [0, 0, 0]}"),
                {"thrusters[3].direction = [0, 0, 0]: has zero length"});
-  expect_error(variant("zero_tc", "{name: T3, position: [-0.156,  0.111, 0.085], direction: [-0.7071, -0.7071,  0.0]}",
-                       "{name: T3, position: [-0.156,  0.111, 0.085], direction: [-0.7071, -0.7071,  0.0], time_constant: 0}"),
-               {"thrusters[2].time_constant = 0: must be > 0 s"});
+  expect_error(
+      variant("zero_tc", "{name: T3, position: [-0.156,  0.111, 0.085], direction: [-0.7071, -0.7071,  0.0]}",
+              "{name: T3, position: [-0.156,  0.111, 0.085], direction: [-0.7071, -0.7071,  0.0], time_constant: 0}"),
+      {"thrusters[2].time_constant = 0: must be > 0 s"});
   expect_error(variant("neg_tc_default", "time_constant: 0.1     # s", "time_constant: -0.1     # s"),
                {"thrusters[0].time_constant = -0.1: must be > 0 s"});
   expect_error(variant("unknown_top", "mass: 13.5", "mass: 13.5\nmasss: 13.5"), {"masss = 13.5: unknown key"});
   expect_error(variant("unknown_nested", "{name: T2, position:", "{name: T2, positon: [0, 0, 0], position:"),
                {"thrusters[1].positon = [0, 0, 0]: unknown key"});
-  expect_error(variant("short_damping", "linear_damping: [13.7, 0.0, 33.0, 0.0, 0.8, 0.0]", "linear_damping: [13.7, 0.0, 33.0]"),
-               {"linear_damping = [13.7, 0.0, 33.0]: must be a list of 6 numbers"});
+  expect_error(
+      variant("short_damping", "linear_damping: [13.7, 0.0, 33.0, 0.0, 0.8, 0.0]", "linear_damping: [13.7, 0.0, 33.0]"),
+      {"linear_damping = [13.7, 0.0, 33.0]: must be a list of 6 numbers"});
   expect_error(variant("neg_damping", "quadratic_damping: [141.0", "quadratic_damping: [-141.0"),
                {"quadratic_damping = ", "must have a non-negative diagonal"});
-  expect_error(variant("imu_rate", "rate: 200.0          # Hz", "rate: -5          # Hz"), {"sensors.imu.rate = -5: must be > 0 Hz"});
+  expect_error(variant("imu_rate", "rate: 200.0          # Hz", "rate: -5          # Hz"),
+               {"sensors.imu.rate = -5: must be > 0 Hz"});
   expect_error(variant("imu_key", "rate: 200.0          # Hz", "rat: 200.0"), {"sensors.imu.rat = 200.0: unknown key"});
-  expect_error(variant("both_buoyancy", "buoyancy: neutral", "buoyancy: neutral\nvolume: 0.0134"), {"buoyancy = neutral: and volume are exclusive"});
+  expect_error(variant("both_buoyancy", "buoyancy: neutral", "buoyancy: neutral\nvolume: 0.0134"),
+               {"buoyancy = neutral: and volume are exclusive"});
   expect_error(variant("no_mass", "mass: 13.5", ""), {"mass: is required"});
   std::filesystem::remove_all(temp_dir());
 }
@@ -138,7 +144,9 @@ TEST(Config, InMemoryValidationUsesTheSameKeys) {
     up::validate_vehicle(v, "<test>");
     ADD_FAILURE();
   } catch (const up::ConfigError& e) {
-    EXPECT_NE(std::string(e.what()).find("<test>: thrusters[5].direction = [0, 0, 0]: has zero length"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("<test>: thrusters[5].direction = [0, 0, 0]: has zero length"),
+              std::string::npos)
+        << e.what();
   }
   v = up::bluerov2_heavy_params();
   v.mass = 0.0;
@@ -155,7 +163,7 @@ TEST(Config, CurrentAndSeabedErrors) {
   const auto dir = temp_dir();
   std::filesystem::create_directories(dir);
   auto write = [&](const std::string& name, const std::string& text) {
-    const std::string p = (dir / name).string();
+    std::string p = (dir / name).string();
     std::ofstream(p) << text;
     return p;
   };
@@ -169,7 +177,8 @@ TEST(Config, CurrentAndSeabedErrors) {
   };
   const std::string bad_type = write("c1.yaml", "current: {type: tidal, velocity: [0, 0, 0]}\n");
   expect([&] { up::load_current(bad_type); }, bad_type + ": current.type = tidal: must be one of constant");
-  const std::string bad_tc = write("c2.yaml", "current: {type: gauss_markov, stddev: [0.1, 0.1, 0], time_constant: 0}\n");
+  const std::string bad_tc =
+      write("c2.yaml", "current: {type: gauss_markov, stddev: [0.1, 0.1, 0], time_constant: 0}\n");
   expect([&] { up::load_current(bad_tc); }, bad_tc + ": current.time_constant = 0: must be > 0 s");
   const std::string bad_vel = write("c3.yaml", "current: {type: constant, velocity: [0.1, .nan, 0]}\n");
   expect([&] { up::load_current(bad_vel); }, bad_vel + ": current.velocity[1] = .nan: must be finite");
@@ -188,9 +197,9 @@ TEST(Config, SeabedFilesLoad) {
   EXPECT_DOUBLE_EQ(grid->depth_at(5.0, 0.0), 22.0);  // halfway between 25 and 19
   const auto pgm = up::load_seabed(std::string(UNAV_TEST_DATA_DIR) + "/seabed_pgm.yaml");
   // Image rows (top first): [0 255 0], [255 0 51]; the bottom row is x_N = 0.
-  EXPECT_DOUBLE_EQ(pgm->depth_at(0.0, 0.0), 20.0);   // 255 -> white
-  EXPECT_DOUBLE_EQ(pgm->depth_at(0.0, 1.0), 30.0);   // 0 -> black
-  EXPECT_DOUBLE_EQ(pgm->depth_at(0.0, 2.0), 28.0);   // 51 -> 30 - 0.2 * 10
+  EXPECT_DOUBLE_EQ(pgm->depth_at(0.0, 0.0), 20.0);  // 255 -> white
+  EXPECT_DOUBLE_EQ(pgm->depth_at(0.0, 1.0), 30.0);  // 0 -> black
+  EXPECT_DOUBLE_EQ(pgm->depth_at(0.0, 2.0), 28.0);  // 51 -> 30 - 0.2 * 10
   EXPECT_DOUBLE_EQ(pgm->depth_at(1.0, 1.0), 20.0);
 }
 
@@ -232,8 +241,8 @@ sensors:
   EXPECT_EQ(p.thrusters[0].w_max, 50.0);
   EXPECT_EQ(p.thrusters[1].w_max, 50.0);
   EXPECT_EQ(p.thrusters[0].time_constant, 0.2);
-  EXPECT_EQ(p.thrusters[1].time_constant, 0.05);                 // its own key wins
-  EXPECT_EQ(p.thrusters[0].C_T, up::ThrusterParams{}.C_T);       // neither: the default
+  EXPECT_EQ(p.thrusters[1].time_constant, 0.05);                    // its own key wins
+  EXPECT_EQ(p.thrusters[0].C_T, up::ThrusterParams{}.C_T);          // neither: the default
   EXPECT_EQ(p.thrusters[0].direction_B, Eigen::Vector3d::UnitX());  // normalised
   EXPECT_TRUE(p.sensors.imu.enabled);
   EXPECT_EQ(p.sensors.imu.rate_hz, 100.0);

@@ -112,7 +112,8 @@ TEST(Dynamics, TiltedStartReturnsToLevel) {
 double measured_period(const std::vector<double>& t, const std::vector<double>& s) {
   std::vector<double> crossings;
   for (std::size_t i = 1; i < s.size(); ++i) {
-    if (s[i - 1] < 0.0 && s[i] >= 0.0) crossings.push_back(t[i - 1] + (t[i] - t[i - 1]) * (-s[i - 1]) / (s[i] - s[i - 1]));
+    if (s[i - 1] < 0.0 && s[i] >= 0.0)
+      crossings.push_back(t[i - 1] + (t[i] - t[i - 1]) * (-s[i - 1]) / (s[i] - s[i - 1]));
   }
   if (crossings.size() < 2) return 0.0;
   return (crossings.back() - crossings.front()) / static_cast<double>(crossings.size() - 1);
@@ -281,8 +282,8 @@ TEST(Dynamics, UniformCurrentIsStillWaterShiftedByTheCurrent) {
   up::RigidBodyState drift = still;
   drift.v_WB_B += still.q_WB.conjugate() * v_c;
   up::Simulator a(up::bluerov2_heavy_params(), options(up::Integrator::kRk4), nullptr, nullptr, still);
-  up::Simulator b(up::bluerov2_heavy_params(), options(up::Integrator::kRk4), std::make_unique<up::ConstantCurrent>(v_c),
-                  nullptr, drift);
+  up::Simulator b(up::bluerov2_heavy_params(), options(up::Integrator::kRk4),
+                  std::make_unique<up::ConstantCurrent>(v_c), nullptr, drift);
   b.advance_to(5.0);
   a.advance_to(5.0);
   EXPECT_LT((b.state().v_WB_W() - v_c - a.state().v_WB_W()).norm(), 1e-9);
@@ -307,11 +308,12 @@ TEST(Simulator, StepAllocatesNothing) {
   v.sensors.imu.accel.noise_stddev = 0.01;
   v.sensors.imu.accel.bias_random_walk = 0.01;
   for (up::Integrator integ : {up::Integrator::kVelocityVerlet, up::Integrator::kRk4}) {
-    up::Simulator sim(v, options(integ),
-                      std::make_unique<up::GaussMarkovCurrent>(Eigen::Vector3d(0.1, 0, 0), Eigen::Vector3d(0.05, 0.05, 0),
-                                                               10.0, 3, Eigen::Vector3d::Zero()),
-                      std::make_unique<up::GridSeabed>(0.0, 0.0, 1.0, std::vector<std::vector<double>>{{20, 21}, {22, 23}}),
-                      at_depth(19.5));
+    up::Simulator sim(
+        v, options(integ),
+        std::make_unique<up::GaussMarkovCurrent>(Eigen::Vector3d(0.1, 0, 0), Eigen::Vector3d(0.05, 0.05, 0), 10.0, 3,
+                                                 Eigen::Vector3d::Zero()),
+        std::make_unique<up::GridSeabed>(0.0, 0.0, 1.0, std::vector<std::vector<double>>{{20, 21}, {22, 23}}),
+        at_depth(19.5));
     const double u[8] = {0.2, 0.2, -0.2, -0.2, 0.1, 0.1, 0.1, 0.1};
     sim.set_command(0.0, u, 8);
     sim.advance_to(0.1);

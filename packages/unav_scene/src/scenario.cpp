@@ -118,8 +118,8 @@ Scenario load_scenario(const std::string& path, std::optional<std::uint64_t> see
   std::string label = path + " (scenario_set:";
   for (const auto& o : overrides) label += " " + o;
   label += ")";
-  return parse_scenario(apply_scenario_overrides(root, overrides, label), label,
-                        fs::path(path).parent_path().string(), seed);
+  return parse_scenario(apply_scenario_overrides(root, overrides, label), label, fs::path(path).parent_path().string(),
+                        seed);
 }
 
 Scenario ScenarioParam::load() const { return load_scenario_param(file, seed, overrides); }

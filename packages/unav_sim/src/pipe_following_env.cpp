@@ -68,8 +68,8 @@ PipeFollowingConfig load_pipe_following_config(const std::string& path) {
   if (root["env"]) unav::common::LoadYaml(root, path, &c.env, "env");
   const std::string dir = std::filesystem::path(path).parent_path().string();
   if (root["scenario"] && root["scenario"].IsScalar()) {  // a scenario file, as the deploy launch takes it
-    c.scenario = scene::load_scenario(
-        scene::find_scenario_file(root["scenario"].as<std::string>(), dir, path, "scenario"));
+    c.scenario =
+        scene::load_scenario(scene::find_scenario_file(root["scenario"].as<std::string>(), dir, path, "scenario"));
   } else if (root["scenario"]) {
     unav::common::LoadYaml(root, path, &c.scenario, "scenario");
     scene::resolve_scenario_paths(&c.scenario, path, dir);
@@ -79,8 +79,7 @@ PipeFollowingConfig load_pipe_following_config(const std::string& path) {
   return c;
 }
 
-PipeFollowingConfig evaluation_config(PipeFollowingConfig config, const std::string& dynamics, int width,
-                                      int height) {
+PipeFollowingConfig evaluation_config(PipeFollowingConfig config, const std::string& dynamics, int width, int height) {
   config.env.scenes = "fixed";
   config.env.dynamics = dynamics;
   config.env.start_offset_m = 0.0;

@@ -72,8 +72,8 @@ int run(const FoxgloveOptions& o) {
       try {
         c.schema = unav::bag::ros2msg_definition(reg, dds_type);
       } catch (const std::exception& e) {
-        std::cerr << "[WARN] [unav_foxglove]: no IDL for " << c.schema_name << " (" << e.what()
-                  << "): '" << topic << "' not advertised" << std::endl;
+        std::cerr << "[WARN] [unav_foxglove]: no IDL for " << c.schema_name << " (" << e.what() << "): '" << topic
+                  << "' not advertised" << std::endl;
         channel_of_topic[topic] = 0;
         continue;
       }
@@ -91,10 +91,9 @@ int run(const FoxgloveOptions& o) {
       if (want && !t.sub) {
         const unav::QoS qos = g.matching_qos(t.name);
         const std::uint32_t channel = id;
-        t.sub = std::make_shared<RawSubscription>(g.context(), unav::to_dds_topic(t.name), t.dds_type, qos,
-                                                  [&server, channel](RawSample& s) {
-                                                    server->publish(channel, wall_ns(), s.bytes.data(), s.bytes.size());
-                                                  });
+        t.sub = std::make_shared<RawSubscription>(
+            g.context(), unav::to_dds_topic(t.name), t.dds_type, qos,
+            [&server, channel](RawSample& s) { server->publish(channel, wall_ns(), s.bytes.data(), s.bytes.size()); });
         t.sub->start(qos);
         std::cout << "[INFO] [unav_foxglove]: forwarding '" << t.name << "'" << std::endl;
       } else if (!want && t.sub) {
@@ -121,7 +120,8 @@ int run(const FoxgloveOptions& o) {
 std::function<int()> add_foxglove_command(CLI::App& app) {
   auto o = std::make_shared<FoxgloveOptions>();
   auto* cmd = app.add_subcommand(
-      "foxglove", "live view in Foxglove: a Foxglove WebSocket server forwarding the ROS 2 topics (like foxglove_bridge)");
+      "foxglove",
+      "live view in Foxglove: a Foxglove WebSocket server forwarding the ROS 2 topics (like foxglove_bridge)");
   cmd->add_option("topics", o->topics, "topics to offer (default: every topic with a publisher)");
   cmd->add_option("--address", o->address, "address to listen on (0.0.0.0: every interface)");
   cmd->add_option("-p,--port", o->port, "port (default 8765, as foxglove_bridge; 0: any free port)");

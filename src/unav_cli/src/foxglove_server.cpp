@@ -26,8 +26,8 @@ constexpr const char* kSubprotocol = "foxglove.websocket.v1";
 constexpr std::uint8_t kMessageData = 0x01;
 
 Json channel_json(std::uint32_t id, const FoxgloveServer::Channel& c) {
-  return {{"id", id},           {"topic", c.topic},   {"encoding", "cdr"},
-          {"schemaName", c.schema_name}, {"schema", c.schema}, {"schemaEncoding", "ros2msg"}};
+  return {{"id", id},           {"topic", c.topic},           {"encoding", "cdr"}, {"schemaName", c.schema_name},
+          {"schema", c.schema}, {"schemaEncoding", "ros2msg"}};
 }
 
 }  // namespace
@@ -93,7 +93,8 @@ struct FoxgloveServer::Impl {
     const auto it = clients.find(h);
     if (it == clients.end()) return;
     Client& c = it->second;
-    if (msg->get_opcode() != websocketpp::frame::opcode::text) return status(h, 1, "binary client messages are not supported");
+    if (msg->get_opcode() != websocketpp::frame::opcode::text)
+      return status(h, 1, "binary client messages are not supported");
     Json j;
     try {
       j = Json::parse(msg->get_payload());
@@ -109,8 +110,9 @@ struct FoxgloveServer::Impl {
           if (!channels.count(channel)) {
             status(h, 1, "subscribe: no channel " + std::to_string(channel));
           } else if (c.channel_of_subscription.count(sub) || c.subscription_of_channel.count(channel)) {
-            status(h, 1, "subscribe: subscription " + std::to_string(sub) + " or channel " + std::to_string(channel) +
-                             " is already in use");
+            status(h, 1,
+                   "subscribe: subscription " + std::to_string(sub) + " or channel " + std::to_string(channel) +
+                       " is already in use");
           } else {
             c.channel_of_subscription[sub] = channel;
             c.subscription_of_channel[channel] = sub;
@@ -165,7 +167,7 @@ FoxgloveServer::FoxgloveServer(const Options& options, InterestCallback on_inter
   m.server.clear_error_channels(websocketpp::log::elevel::all);
   m.server.init_asio();
   m.server.set_reuse_addr(true);
-  m.server.set_validate_handler([&m](Handle h) {
+  m.server.set_validate_handler([&m](const Handle& h) {
     websocketpp::lib::error_code ec;
     const auto con = m.server.get_con_from_hdl(h, ec);
     if (ec) return false;
@@ -178,10 +180,10 @@ FoxgloveServer::FoxgloveServer(const Options& options, InterestCallback on_inter
     con->set_body(std::string("this is a Foxglove WebSocket server: connect with subprotocol ") + kSubprotocol);
     return false;
   });
-  m.server.set_open_handler([&m](Handle h) { m.on_open(h); });
-  m.server.set_close_handler([&m](Handle h) { m.on_close(h); });
-  m.server.set_fail_handler([&m](Handle h) { m.on_close(h); });
-  m.server.set_message_handler([&m](Handle h, Server::message_ptr msg) { m.on_message(h, msg); });
+  m.server.set_open_handler([&m](const Handle& h) { m.on_open(h); });
+  m.server.set_close_handler([&m](const Handle& h) { m.on_close(h); });
+  m.server.set_fail_handler([&m](const Handle& h) { m.on_close(h); });
+  m.server.set_message_handler([&m](const Handle& h, const Server::message_ptr& msg) { m.on_message(h, msg); });
   websocketpp::lib::error_code ec;
   asio::ip::tcp::endpoint endpoint(asio::ip::make_address(options.address, ec), options.port);
   if (!ec) m.server.listen(endpoint, ec);
@@ -219,7 +221,8 @@ std::uint32_t FoxgloveServer::add_channel(const Channel& channel) {
   }
   asio::post(m.server.get_io_service(), [&m, id, channel] {
     m.channels[id] = channel;
-    for (const auto& [h, c] : m.clients) m.send_text(h, {{"op", "advertise"}, {"channels", {channel_json(id, channel)}}});
+    for (const auto& [h, c] : m.clients)
+      m.send_text(h, {{"op", "advertise"}, {"channels", {channel_json(id, channel)}}});
   });
   return id;
 }

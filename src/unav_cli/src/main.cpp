@@ -12,8 +12,8 @@
 #include <fastdds/dds/publisher/DataWriter.hpp>
 
 #include "bag_command.hpp"
-#include "foxglove_command.hpp"
 #include "cli_common.hpp"
+#include "foxglove_command.hpp"
 #include "graph.hpp"
 #include "raw_type.hpp"
 #include "security_command.hpp"

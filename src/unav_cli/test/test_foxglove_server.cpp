@@ -35,7 +35,7 @@ class TestClient {
     c_.clear_access_channels(websocketpp::log::alevel::all);
     c_.clear_error_channels(websocketpp::log::elevel::all);
     c_.init_asio();
-    c_.set_message_handler([this](websocketpp::connection_hdl, Client::message_ptr m) {
+    c_.set_message_handler([this](const websocketpp::connection_hdl&, const Client::message_ptr& m) {
       const std::lock_guard<std::mutex> lock(mutex_);
       if (m->get_opcode() == websocketpp::frame::opcode::text)
         text_.push_back(Json::parse(m->get_payload()));
@@ -43,8 +43,8 @@ class TestClient {
         binary_.push_back(m->get_payload());
       cv_.notify_all();
     });
-    c_.set_open_handler([this](websocketpp::connection_hdl) { set_state(1); });
-    c_.set_fail_handler([this](websocketpp::connection_hdl h) {
+    c_.set_open_handler([this](const websocketpp::connection_hdl&) { set_state(1); });
+    c_.set_fail_handler([this](const websocketpp::connection_hdl& h) {
       http_status_ = c_.get_con_from_hdl(h)->get_response_code();
       set_state(2);
     });

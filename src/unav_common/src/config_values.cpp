@@ -95,6 +95,7 @@ std::string ValueText(ValueRef v) {
     const auto m = MatrixOf(v);
     if (IsDiagonal(m)) return ListText(m.diagonal(), n, DoubleText);
     std::vector<std::string> rows;
+    rows.reserve(static_cast<std::size_t>(n));
     for (int i = 0; i < n; ++i) rows.push_back(ListText(m.row(i), n, DoubleText));
     return "[" + JoinTexts(rows) + "]";
   }
@@ -502,8 +503,8 @@ void ReadValue(const Reporter& r, const FieldSpec& s, const YAML::Node& n, Value
   if (const int order = MatrixOrder(v.type)) {  // n numbers (the diagonal) or n rows of n
     const auto size = static_cast<std::size_t>(order);
     const std::string count = std::to_string(size);
-    const std::string rule =
-        "must be a list of " + count + " numbers (the diagonal) or " + count + " lists of " + count + " numbers (the rows)";
+    const std::string rule = "must be a list of " + count + " numbers (the diagonal) or " + count + " lists of " +
+                             count + " numbers (the rows)";
     if (!n.IsSequence() || n.size() != size) r.Fail(path, Written(n), rule);
     Eigen::MatrixXd m = Eigen::MatrixXd::Zero(order, order);
     const bool rows = n[0].IsSequence();

@@ -339,7 +339,7 @@ class ConfigFile : public ::testing::Test {
   }
   void TearDown() override { std::filesystem::remove_all(dir_); }
   std::string Write(const std::string& name, const std::string& text) {
-    const std::string path = dir_ + "/" + name;
+    std::string path = dir_ + "/" + name;
     std::ofstream(path) << text;
     return path;
   }
@@ -440,6 +440,7 @@ TEST(Config, OverrideErrorsNameSourceKeyValueRule) {
 TEST(Config, DescribeListsEveryFieldWithTypeDefaultRuleUnitDoc) {
   const std::vector<uc::FieldInfo> rows = uc::Describe(MpcParams{});
   std::vector<std::string> names;
+  names.reserve(rows.size());
   for (const auto& r : rows) names.push_back(r.name);
   EXPECT_EQ(names, (std::vector<std::string>{"enabled",
                                              "horizon_steps",
@@ -619,7 +620,7 @@ TEST(Config, SquareMatricesReadAsDiagonalOrRowsAndRoundTrip) {
   EXPECT_EQ(p.damping(5, 5), 7.5);
   EXPECT_EQ(p.damping(2, 3), 0.0);
   const YAML::Node y = uc::ToYaml(p);
-  EXPECT_TRUE(y["inertia"].IsSequence() && y["inertia"][0].IsScalar()) << y;  // the diagonal
+  EXPECT_TRUE(y["inertia"].IsSequence() && y["inertia"][0].IsScalar()) << y;       // the diagonal
   EXPECT_TRUE(y["damping"][0].IsSequence() && y["damping"][0].size() == 6u) << y;  // rows
   Plant q;
   uc::LoadYaml(y, "again.yaml", &q);

@@ -27,7 +27,8 @@ module test_msgs { module msg {
       std_msgs::msg::dds_::Header_ header;
       boolean b; octet o; char c; int8 i8; uint8 u8; short s; unsigned short us;
       long l; unsigned long ul; long long ll; unsigned long long ull; float f; double d;
-)IDL" + ints + R"IDL(      @verbatim (language="comment", text="Gain (unitless), see \"docs\" (1)")
+)IDL" + ints +
+         R"IDL(      @verbatim (language="comment", text="Gain (unitless), see \"docs\" (1)")
       @default (value=1.5)
       float gain;
       double fixed[test_msgs::msg::Everything_Constants::N];
@@ -36,7 +37,8 @@ module test_msgs { module msg {
       sequence<int16, 3> bounded;
       string<4> short_name;
       sequence<string<8>, 2> names;
-)IDL" + tail + R"IDL(    };
+)IDL" + tail +
+         R"IDL(    };
   };
 };
 };
@@ -97,8 +99,9 @@ TEST_F(RegistryTest, ParsesTypesArraysSequencesConstantsTypedefsAndDefaults) {
   }
 
   write("idl", "test_msgs/msg/Everything.idl",
-        everything_idl("", "      sequence<std_msgs::msg::dds_::Header_> headers;\n      @default (value=\"(1, 2)\")\n"
-                           "      int32 pair[2];\n"));
+        everything_idl("",
+                       "      sequence<std_msgs::msg::dds_::Header_> headers;\n      @default (value=\"(1, 2)\")\n"
+                       "      int32 pair[2];\n"));
   const StructType& t = registry.load("test_msgs/msg/Everything");
   auto field = [&](const std::string& name) -> const Field& {
     for (const Field& f : t.fields) {

@@ -39,8 +39,7 @@ class FlatSeabed final : public Seabed {
 class GridSeabed final : public Seabed {
  public:
   /// Throws ConfigError if the grid is empty, ragged, non-finite or the resolution is <= 0.
-  GridSeabed(double origin_N, double origin_E, double resolution_m,
-             std::vector<std::vector<double>> depths_m);
+  GridSeabed(double origin_N, double origin_E, double resolution_m, std::vector<std::vector<double>> depths_m);
   double depth_at(double x_N, double y_E) const override;
   double shallowest_depth() const override { return shallowest_m_; }  // bilinear: within the nodes' range
   int rows() const { return rows_; }

@@ -134,7 +134,7 @@ struct Scenario {
   std::string name = "scenario";
   int64_t seed = 0;  ///< draws of the file's distributions and every noise source
   std::string world = "worlds/pipe_inspection/world.yaml";
-  std::string water;  ///< Jerlov preset or water YAML replacing the world's; "" = the world's
+  std::string water;    ///< Jerlov preset or water YAML replacing the world's; "" = the world's
   std::string current;  ///< water current YAML replacing the world's; "" = the world's
   ScenarioVehicle vehicle;
   ScenarioPhysics physics;

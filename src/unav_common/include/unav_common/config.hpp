@@ -18,11 +18,10 @@
 // Field value types: bool, int, int64_t, uint32_t, double, std::string, std::vector<double>,
 // std::vector<int>, std::vector<std::string>, Eigen::Vector2d, Eigen::Vector3d (YAML list of 2
 // or 3 numbers), Eigen::Matrix3d and Eigen::Matrix<double, 6, 6> (n numbers, the diagonal, or n
-// lists of n numbers, the rows; written back diagonal when the matrix is), a struct with its own Serialize() (YAML mapping, key path "a.b") and a
-// std::vector of such structs (YAML list of mappings, key path "a[2].b").
-// Rules: Range(lo, hi), Min(lo), Max(hi) are inclusive, Above(lo), Below(hi) exclusive; on
-// lists and Eigen vectors they apply to every element. OneOf({...}) for strings. NaN and Inf
-// are always rejected for doubles.
+// lists of n numbers, the rows; written back diagonal when the matrix is), a struct with its own Serialize() (YAML
+// mapping, key path "a.b") and a std::vector of such structs (YAML list of mappings, key path "a[2].b"). Rules:
+// Range(lo, hi), Min(lo), Max(hi) are inclusive, Above(lo), Below(hi) exclusive; on lists and Eigen vectors they apply
+// to every element. OneOf({...}) for strings. NaN and Inf are always rejected for doubles.
 //
 // Errors are unav::ConfigError(file, key path, value as written, rule), e.g.
 //   "config/controllers/mpc.yaml: horizon_steps = -3: must be in [1, 500]".
