@@ -114,14 +114,6 @@ class Reader {
     if (!node_[k].IsScalar()) fail(source_, key(k), "must be a string", flow(node_[k]));
     return node_[k].as<std::string>();
   }
-  bool boolean(const char* k, bool def) const {
-    if (!has(k)) return def;
-    try {
-      return node_[k].as<bool>();
-    } catch (const YAML::Exception&) {
-      fail(source_, key(k), "must be true or false", flow(node_[k]));
-    }
-  }
   /// A list of n numbers.
   Eigen::VectorXd vector(const char* k, int n) const {
     if (!has(k)) fail(source_, key(k), "is required", "nothing");

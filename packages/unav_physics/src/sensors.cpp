@@ -63,9 +63,11 @@ double seabed_ray_range(const Seabed& seabed, const Eigen::Vector3d& origin, con
   // Above the seabed's shallowest depth the ray cannot reach it: the march starts a step before
   // the ray gets there (a DVL 20 m up marches ~10 steps instead of ~400).
   double lo = 0.0;
-  if (dir.z() > 0.0 && origin.z() < seabed.shallowest_depth())
-    lo = std::max(0.0, std::floor((seabed.shallowest_depth() - origin.z()) / dir.z() / kStep) - 1.0) * kStep;
-  if (dir.z() <= 0.0 && origin.z() < seabed.shallowest_depth()) return -1.0;  // level or rising: never
+  const double top = seabed.shallowest_depth();
+  if (origin.z() < top) {
+    if (dir.z() <= 0.0) return -1.0;  // level or rising: never
+    lo = std::max(0.0, std::floor((top - origin.z()) / dir.z() / kStep) - 1.0) * kStep;
+  }
   for (double hi = lo + kStep; lo < max_range; lo = hi, hi += kStep) {
     hi = std::min(hi, max_range);
     if (g(hi) >= 0.0) {

@@ -48,11 +48,6 @@ struct PlayOptions {
   double delay = 0.0;
 };
 
-int64_t wall_ns() {
-  return std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::system_clock::now().time_since_epoch())
-      .count();
-}
-
 std::string default_bag_name() {
   const std::time_t t = std::time(nullptr);
   std::tm tm{};

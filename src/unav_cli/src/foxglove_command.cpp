@@ -27,12 +27,6 @@ struct FoxgloveOptions {
   std::vector<std::string> topics;  // empty: every topic with a publisher
 };
 
-std::uint64_t wall_ns() {
-  return static_cast<std::uint64_t>(
-      std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::system_clock::now().time_since_epoch())
-          .count());
-}
-
 int run(const FoxgloveOptions& o) {
   if (o.port < 0 || o.port > 65535) throw UsageError("--port " + std::to_string(o.port) + ": must be in [0, 65535]");
   std::set<std::string> only;
@@ -92,8 +86,9 @@ int run(const FoxgloveOptions& o) {
         const unav::QoS qos = g.matching_qos(t.name);
         const std::uint32_t channel = id;
         t.sub = std::make_shared<RawSubscription>(
-            g.context(), unav::to_dds_topic(t.name), t.dds_type, qos,
-            [&server, channel](RawSample& s) { server->publish(channel, wall_ns(), s.bytes.data(), s.bytes.size()); });
+            g.context(), unav::to_dds_topic(t.name), t.dds_type, qos, [&server, channel](RawSample& s) {
+              server->publish(channel, static_cast<std::uint64_t>(wall_ns()), s.bytes.data(), s.bytes.size());
+            });
         t.sub->start(qos);
         std::cout << "[INFO] [unav_foxglove]: forwarding '" << t.name << "'" << std::endl;
       } else if (!want && t.sub) {

@@ -136,7 +136,8 @@ struct FoxgloveServer::Impl {
     }
   }
 
-  // Frames a message once and sends it to every subscriber of `channel`.
+  // Sends a message to every subscriber of `channel`, each in a frame of its own (the header
+  // carries that client's subscription id).
   void deliver(std::uint32_t channel, std::uint64_t receive_ns, const std::shared_ptr<std::string>& payload) {
     for (auto& [h, c] : clients) {
       const auto sub = c.subscription_of_channel.find(channel);
