@@ -125,6 +125,117 @@ std::string ValueKind(const FieldInfo& row, bool element) {
   return "";
 }
 
+// {repeat: {count: C, each: E}}: a list of C elements, each a fresh draw of E.
+bool IsRepeat(const YAML::Node& n) {
+  return n.IsMap() && n.size() == 1 && n.begin()->first.IsScalar() && n.begin()->first.Scalar() == "repeat";
+}
+
+constexpr int64_t kMaxRepeat = 10000;
+
+// The counts a checked repeat's `count` may take: {min, max}.
+std::pair<int64_t, int64_t> CountRange(const YAML::Node& count) {
+  if (!IsDistribution(count)) return {count.as<int64_t>(), count.as<int64_t>()};
+  const auto support = DistributionSupport(count);
+  int64_t lo = kMaxRepeat, hi = 0;
+  for (const auto& v : support) {
+    lo = std::min(lo, static_cast<int64_t>(std::llround(v.as<double>())));
+    hi = std::max(hi, static_cast<int64_t>(std::llround(v.as<double>())));
+  }
+  return {lo, hi};
+}
+
+void CheckRepeatSyntax(const YAML::Node& n, const std::string& file, const std::string& path) {
+  const YAML::Node a = n.begin()->second;
+  const std::string at = path + ".repeat";
+  const char* form = "expected {count: n or {int: [lo, hi]} or {choice: [...]}, each: element}";
+  if (!a.IsMap() || a.size() != 2 || !a["count"] || !a["each"]) throw ConfigError(file, at, Written(a), form);
+  const YAML::Node count = a["count"];
+  std::vector<YAML::Node> values{count};
+  if (IsDistribution(count)) {
+    CheckDistributionSyntax(count, file, at + ".count");
+    const std::string kind = count.begin()->first.Scalar();
+    if (kind != "int" && kind != "choice")
+      throw ConfigError(file, at + ".count", Written(count), "a count takes n, {int: [lo, hi]} or {choice: [...]}");
+    values = DistributionSupport(count);
+  }
+  for (const auto& v : values) {
+    const double c = Number(v, file, at + ".count");
+    if (c != std::floor(c) || c < 0 || c > static_cast<double>(kMaxRepeat))
+      throw ConfigError(file, at + ".count", Written(count),
+                        "a count is a whole number in [0, " + std::to_string(kMaxRepeat) + "]");
+  }
+}
+
+// `node` with every repeat replaced by its list: of `count(path, repeat)` clones of its element
+// (themselves expanded: repeats may nest).
+YAML::Node Expand(const YAML::Node& node, std::vector<Step>* steps,
+                  const std::function<int64_t(const std::string&, const YAML::Node&)>& count) {
+  if (IsRepeat(node)) {
+    const YAML::Node a = node.begin()->second;
+    YAML::Node list(YAML::NodeType::Sequence);
+    const int64_t n = count(PathText(*steps), a["count"]);
+    for (int64_t i = 0; i < n; ++i) {
+      steps->push_back(static_cast<std::size_t>(i));
+      list.push_back(Expand(a["each"], steps, count));
+      steps->pop_back();
+    }
+    return list;
+  }
+  if (IsDistribution(node)) return YAML::Clone(node);
+  if (node.IsMap()) {
+    YAML::Node out(YAML::NodeType::Map);
+    for (const auto& kv : node) {
+      steps->push_back(kv.first.Scalar());
+      out[kv.first.Scalar()] = Expand(kv.second, steps, count);
+      steps->pop_back();
+    }
+    return out;
+  }
+  if (node.IsSequence()) {
+    YAML::Node out(YAML::NodeType::Sequence);
+    for (std::size_t i = 0; i < node.size(); ++i) {
+      steps->push_back(i);
+      out.push_back(Expand(node[i], steps, count));
+      steps->pop_back();
+    }
+    return out;
+  }
+  return YAML::Clone(node);
+}
+
+// Checks the syntax of every repeat in `node` and that it stands for a list; true if any.
+bool CheckRepeats(const YAML::Node& node, std::vector<Step>* steps, const std::map<std::string, FieldInfo>& rows,
+                  const std::string& file) {
+  if (IsDistribution(node)) return false;
+  if (IsRepeat(node)) {
+    const std::string path = PathText(*steps);
+    CheckRepeatSyntax(node, file, path);
+    bool element = false;
+    const FieldInfo* row = Row(rows, *steps, &element);
+    if (row != nullptr && (element || row->type.empty() || row->type.back() != ']'))
+      throw ConfigError(file, path, Written(node), "a repeat stands for a list, not a " + row->type);
+    steps->push_back(std::size_t{0});
+    CheckRepeats(node.begin()->second["each"], steps, rows, file);
+    steps->pop_back();
+    return true;
+  }
+  bool any = false;
+  if (node.IsMap()) {
+    for (const auto& kv : node) {
+      steps->push_back(kv.first.Scalar());
+      any = CheckRepeats(kv.second, steps, rows, file) || any;
+      steps->pop_back();
+    }
+  } else if (node.IsSequence()) {
+    for (std::size_t i = 0; i < node.size(); ++i) {
+      steps->push_back(i);
+      any = CheckRepeats(node[i], steps, rows, file) || any;
+      steps->pop_back();
+    }
+  }
+  return any;
+}
+
 }  // namespace
 
 std::uint64_t KeySeed(std::uint64_t seed, const std::string& path) {
@@ -206,12 +317,11 @@ YAML::Node DrawDistribution(const YAML::Node& node, SplitMix64* rng, double lo, 
 
 namespace detail {
 
-YAML::Node CheckStochastic(const YAML::Node& spec, const std::string& file, Target defaults,
-                           const std::function<void(const YAML::Node&)>& check) {
-  if (spec.IsDefined() && !spec.IsNull() && !spec.IsMap())
-    throw ConfigError(file, "", Written(spec), "must be a mapping of config keys");
-  const YAML::Node tree = spec.IsDefined() && !spec.IsNull() ? YAML::Clone(spec) : YAML::Node(YAML::NodeType::Map);
-  const auto rows = Rows(defaults);
+namespace {
+
+// CheckStochastic() of a tree without repeats.
+void CheckExpanded(const YAML::Node& tree, const std::string& file, const std::map<std::string, FieldInfo>& rows,
+                   const std::function<void(const YAML::Node&)>& check) {
   std::vector<Found> found;
   std::vector<Step> steps;
   Collect(tree, &steps, &found);
@@ -271,14 +381,43 @@ YAML::Node CheckStochastic(const YAML::Node& spec, const std::string& file, Targ
       }
     }
   }
+}
+
+}  // namespace
+
+YAML::Node CheckStochastic(const YAML::Node& spec, const std::string& file, Target defaults,
+                           const std::function<void(const YAML::Node&)>& check) {
+  if (spec.IsDefined() && !spec.IsNull() && !spec.IsMap())
+    throw ConfigError(file, "", Written(spec), "must be a mapping of config keys");
+  const YAML::Node tree = spec.IsDefined() && !spec.IsNull() ? YAML::Clone(spec) : YAML::Node(YAML::NodeType::Map);
+  const auto rows = Rows(defaults);
+  std::vector<Step> steps;
+  if (!CheckRepeats(tree, &steps, rows, file)) {
+    CheckExpanded(tree, file, rows, check);
+    return tree;
+  }
+  // Every element of a repeat is drawn from the same spec: the lists at their shortest and at
+  // their longest cover every rule (a list's length, each element's support).
+  for (const bool longest : {false, true}) {
+    const auto count = [longest](const std::string& /*path*/, const YAML::Node& c) {
+      const auto [lo, hi] = CountRange(c);
+      return longest ? hi : lo;
+    };
+    CheckExpanded(Expand(tree, &steps, count), file, rows, check);
+  }
   return tree;
 }
 
 YAML::Node SampleStochastic(const YAML::Node& spec, std::uint64_t seed, Target defaults) {
-  YAML::Node out = YAML::Clone(spec);
-  std::vector<Found> found;
   std::vector<Step> steps;
-  Collect(spec, &steps, &found);
+  // Repeats first: each count from the generator of "<list path>.count".
+  YAML::Node out = Expand(spec, &steps, [seed](const std::string& path, const YAML::Node& c) {
+    if (!IsDistribution(c)) return c.as<int64_t>();
+    SplitMix64 rng{KeySeed(seed, path + ".count")};
+    return static_cast<int64_t>(std::llround(DrawDistribution(c, &rng, 0.0, kMaxRepeat).as<double>()));
+  });
+  std::vector<Found> found;
+  Collect(out, &steps, &found);
   if (found.empty()) return out;
   const auto rows = Rows(defaults);
   for (const auto& f : found) {

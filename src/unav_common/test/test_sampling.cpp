@@ -41,6 +41,8 @@ struct Config {
   double depth_m = 10.0;
   Water water;
   std::vector<Leg> legs;
+  std::vector<double> sizes;
+  Eigen::Vector2d range{0.0, 1.0};
   template <class Archive>
   void Serialize(Archive* a) {
     a->Visit(uc::Field("seed", &seed).Min(0.0));
@@ -49,6 +51,8 @@ struct Config {
     a->Visit(uc::Field("depth_m", &depth_m).Range(1.0, 1000.0));
     a->Visit(uc::Field("water", &water));
     a->Visit(uc::Field("legs", &legs));
+    a->Visit(uc::Field("sizes", &sizes).Range(0.0, 5.0));
+    a->Visit(uc::Field("range", &range));
   }
 };
 
@@ -119,6 +123,52 @@ TEST(Sampling, DrawsAreUniformOverTheRange) {
   constexpr int kN = 10000;
   for (int i = 0; i < kN; ++i) sum += s.Sample(static_cast<std::uint64_t>(i)).water.turbidity - 1.0;
   EXPECT_NEAR(sum / kN, 0.5, 5 * 0.0029);
+}
+
+TEST(Sampling, RepeatDrawsAListWhoseLengthAndElementsAreDistributions) {
+  const auto s = Parse(R"(
+    legs: {repeat: {count: {int: [0, 3]}, each: {position: [{uniform: [0, 10]}, 0, 5], yaw_deg: {choice: [-90, 90]}}}}
+    sizes: {repeat: {count: 2, each: {uniform: [1, 2]}}}
+  )");
+  std::set<std::size_t> lengths;
+  for (std::uint64_t seed = 0; seed < 200; ++seed) {
+    const Config c = s.Sample(seed);
+    lengths.insert(c.legs.size());
+    for (const auto& leg : c.legs) {
+      EXPECT_GE(leg.position.x(), 0.0);
+      EXPECT_LT(leg.position.x(), 10.0);
+      EXPECT_EQ(leg.position.z(), 5.0);
+      EXPECT_EQ(std::abs(leg.yaw_deg), 90.0);
+    }
+    if (c.legs.size() >= 2) {
+      EXPECT_NE(c.legs[0].position.x(), c.legs[1].position.x());  // each element drawn anew
+    }
+    ASSERT_EQ(c.sizes.size(), 2u);
+    EXPECT_NE(c.sizes[0], c.sizes[1]);
+    for (double v : c.sizes) EXPECT_TRUE(v >= 1.0 && v < 2.0) << v;
+    // Element i of a list is keyed by its path ("sizes[1]"): the same draw whatever the count's.
+    const Config d = Parse("sizes: {repeat: {count: 3, each: {uniform: [1, 2]}}}").Sample(seed);
+    EXPECT_EQ(d.sizes[1], c.sizes[1]);
+  }
+  EXPECT_EQ(lengths, (std::set<std::size_t>{0, 1, 2, 3}));
+}
+
+TEST(Sampling, BadRepeatsAreNamed) {
+  const std::pair<const char*, const char*> cases[] = {
+      {"sizes: {repeat: {count: 2}}",
+       "s.yaml: sizes.repeat = {count: 2}: expected {count: n or {int: [lo, hi]} or {choice: [...]}, each: element}"},
+      {"sizes: {repeat: {count: -1, each: 1}}",
+       "s.yaml: sizes.repeat.count = -1: a count is a whole number in [0, 10000]"},
+      {"sizes: {repeat: {count: {uniform: [1, 2]}, each: 1}}",
+       "s.yaml: sizes.repeat.count = {uniform: [1, 2]}: a count takes n, {int: [lo, hi]} or {choice: [...]}"},
+      {"depth_m: {repeat: {count: 2, each: 1}}",
+       "s.yaml: depth_m = {repeat: {count: 2, each: 1}}: a repeat stands for a list, not a double"},
+      {"sizes: {repeat: {count: {int: [1, 3]}, each: {uniform: [4, 6]}}}",
+       "s.yaml: sizes[0] = {uniform: [4, 6]}: the distribution reaches 6, which must be in [0, 5]"},
+      // The shortest and the longest list are both checked: a fixed-size field takes one length.
+      {"range: {repeat: {count: {int: [2, 3]}, each: 1}}", "s.yaml: range"}};
+  for (const auto& [yaml, error] : cases)
+    EXPECT_EQ(ErrorOf(yaml).rfind(error, 0), 0u) << yaml << " -> " << ErrorOf(yaml);
 }
 
 TEST(Sampling, KeySeedIsSplitMixOfTheSeedAndThePathHash) {

@@ -5,16 +5,20 @@
 //   {normal: {mean: m, std: s}}  double fields; draws clipped to the field's range
 //   {int: [lo, hi]}              integer fields, both ends included
 //   {choice: [a, b, ...]}        any leaf: one of the listed values, equally likely
+// and a list field may be written as
+//   {repeat: {count: C, each: E}}  C elements (C a whole number, {int: [lo, hi]} or {choice}),
+//                                  each drawn anew from E (values, distributions, repeats)
 // Sample(seed) draws every distribution from its own generator, seeded from (seed, key path),
 // so a sample is reproduced bit for bit by its seed and adding a field shifts no other field's
-// draw. The generators are SplitMix64 and the transforms are written here (not <random>'s,
-// whose algorithms differ between standard libraries).
+// draw (a repeat's count: "<list>.count"; its elements: "<list>[i].<key>"). The generators are SplitMix64 and the
+// transforms are written here (not <random>'s, whose algorithms differ between standard libraries).
 //
 //   auto s = unav::common::LoadStochasticYamlFile<Scenario>("my.yaml");   // checks everything
 //   Scenario a = s.Sample(7);                                              // concrete, typed
 //
 // Checks before any draw: a distribution's syntax, its kind against the field's type, and its
-// whole support (both ends, every choice, the mean) against the field's rule; errors are
+// whole support (both ends, every choice, the mean) against the field's rule (a repeat's list
+// at its shortest and at its longest); errors are
 // ConfigError(file, key path, value as written, rule), like every config error.
 #pragma once
 
