@@ -31,12 +31,12 @@ seed: {seed}
 base_world: {ws}/worlds/pipe_inspection/world.yaml
 cameras_config: {ws}/config/sensors/bluerov2_down_vslam.yaml
 output: {{format: tum, camera: down, width: 640, height: 480, frames: {frames}, rate_hz: 10}}
-water: {{preset: jerlov_{preset}, turbidity: 1.0, marine_snow_per_m3: 20}}
-seabed: {{depth_m: {depth}, texture: sand, relief_m: 0.15, relief_wavelength_m: 5}}
-sun: {{elevation_deg: 70, azimuth_deg: 30, irradiance: {sun}}}
-lamps: {{count: {lamps}, intensity: 4.0, half_angle_deg: 50}}
-pipeline: {{segments: 2, segment_length_m: 6, turn_deg: 40, radius_m: 0.25, burial_fraction: 0.2, growth: 0.3}}
-rocks: {{count: 40, max_radius_m: 0.45}}
+world:
+  water: {{preset: {preset}, turbidity: 1.0, marine_snow_per_m3: 20}}
+  seabed: {{depth_m: {depth}, texture: sand, relief_m: 0.15, relief_wavelength_m: 5}}
+  light: {{sun_elevation_deg: 70, sun_azimuth_deg: 30, sun_irradiance: {sun}, lamp_count: {lamps}, lamp_intensity: 1.333, lamp_half_angle_deg: 50}}
+  pipeline: {{first_length_m: 6, legs: [{{turn_deg: 40, length_m: 6}}], radius_m: 0.25, burial_fraction: 0.2, growth: 0.3}}
+  rocks: {{per_100m2: 7.6, radius_m: [0.08, 0.45]}}
 current: {{speed_mps: 0.0}}
 camera: {{noise_stddev: 0.008, exposure: 1.0, gain: 1.0}}
 trajectory: {{kind: follow_pipe, altitude_m: 1.5, speed_mps: 0.4, lateral_offset_m: 0.0}}

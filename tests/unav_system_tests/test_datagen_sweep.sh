@@ -16,14 +16,14 @@ sed -e "s|^base_world: .*|base_world: $ws/worlds/pipe_inspection/world.yaml|" \
     "$ws/config/datagen/pipe_survey.yaml" >"$spec"
 
 # Bad input: exit 2, the message names file, key, value and rule; nothing is written.
-sed 's|  turbidity: .*|  turbidity: {uniform: [1.6, 0.7]}|' "$spec" >"$out/bad.yaml"
+sed 's|    turbidity: .*|    turbidity: {uniform: [1.6, 0.7]}|' "$spec" >"$out/bad.yaml"
 rc=0; msg=$(unav datagen "$out/bad.yaml" -n 2 --out "$out/bad" 2>&1) || rc=$?
 [ "$rc" -eq 2 ] || fail "bad spec: exit $rc ($msg)"
-grep -q "bad.yaml: water.turbidity.uniform = \[1.6, 0.7\]: empty range" <<<"$msg" || fail "bad spec message: $msg"
+grep -q "bad.yaml: world.water.turbidity.uniform = \[1.6, 0.7\]: empty range" <<<"$msg" || fail "bad spec message: $msg"
 [ ! -e "$out/bad" ] || fail "bad spec: output folder created"
-printf 'seed: 1\nwater: {preset: jerlov_X}\n' >"$out/bad2.yaml"
+printf 'seed: 1\nworld: {water: {preset: jerlov_X}}\n' >"$out/bad2.yaml"
 msg=$(unav datagen "$out/bad2.yaml" --out "$out/bad" 2>&1) && fail "unknown preset accepted"
-grep -q "water.preset = jerlov_X: must be one of:" <<<"$msg" || fail "unknown preset message: $msg"
+grep -q "world.water.preset = jerlov_X: must be one of" <<<"$msg" || fail "unknown preset message: $msg"
 
 # A sweep over two processes.
 unav datagen "$spec" -n 3 -j 2 --out "$out/a" --contact-sheet >"$out/a.log" 2>&1 || { cat "$out/a.log"; fail "sweep failed"; }
@@ -36,8 +36,8 @@ m = json.load(open(sys.argv[1]))
 assert m["counts"]["images"] == 6 and m["counts"]["depth"] == 6 and m["counts"]["segmentation"] == 6, m["counts"]
 assert m["randomization"]["seed"] == 1000 + int(sys.argv[2])
 assert m["camera"]["width"] == 160 and m["camera"]["height"] == 120
-assert any(f["path"] == "world/world.yaml" for f in m["files"])
-assert m["source"]["world"] == "world/world.yaml"
+assert any(f["path"] == "world/scenario.yaml" for f in m["files"])
+assert m["source"]["world"] == "world/scenario.yaml"
 # The spec pings the forward-looking sonar at 10 Hz: t = 0.0 .. 0.5 s for 6 frames at 10 Hz.
 s = m["sonar"]
 assert s["name"] == "fls" and s["pings"] == 6 and s["channels"] == 256 and s["bins"] == 512, s
@@ -47,16 +47,19 @@ assert len(pngs) == 6 and "sonar/fls/pings.txt" in [f["path"] for f in m["files"
 PY
 done
 [ -f "$out/a/contact_sheet.png" ] || fail "no contact sheet"
-# Each sample is a scenario (world/scenario.yaml, its world beside it): re-flown in process, it
-# starts where the sample's path starts, in the sample's own world.
+# Each sample is a scenario (world/scenario.yaml: the base world and the sample's draw of the
+# generator): re-flown in process, it starts where the sample's path starts, in the sample's world.
 sc="$out/a/sample_000000/world/scenario.yaml"
 [ -f "$sc" ] || fail "sample 0: no world/scenario.yaml"
 unav run "$sc" --in-process --no-images --out "$out/rerun" >"$out/rerun.log" 2>&1 || { cat "$out/rerun.log"; fail "sample scenario does not run"; }
 grep -q "0 MPC failures" "$out/rerun.log" || { cat "$out/rerun.log"; fail "sample scenario: MPC failures"; }
-"$ws/.venv/bin/python" - "$out/rerun/scenario.yaml" "$out/rerun/ground_truth.tum" "$out/a/sample_000000/world" <<'PY' || fail "sample scenario content"
-import os, sys, yaml
+"$ws/.venv/bin/python" - "$out/rerun/scenario.yaml" "$out/rerun/ground_truth.tum" "$out/a/sample_000000/manifest.json" "$ws" <<'PY' || fail "sample scenario content"
+import json, os, sys, yaml
 s = yaml.safe_load(open(sys.argv[1]))
-assert os.path.samefile(s["world"], os.path.join(sys.argv[3], "world.yaml")), s["world"]
+m = json.load(open(sys.argv[3]))
+assert os.path.samefile(s["world"], os.path.join(sys.argv[4], "worlds/pipe_inspection/world.yaml")), s["world"]
+assert s["generate"]["enabled"] is True
+assert s["generate"]["pipeline"] == m["randomization"]["world"]["pipeline"], (s["generate"], m["randomization"]["world"])
 first = [float(v) for v in open(sys.argv[2]).readline().split()[1:4]]
 assert all(abs(a - b) < 1e-9 for a, b in zip(first, s["vehicle"]["initial_position"])), (first, s["vehicle"])
 assert len(s["mission"]["waypoints"]) >= 1 and abs(s["mission"]["duration_s"] - 0.6) < 1e-9, s["mission"]
@@ -74,17 +77,16 @@ unav datagen "$out/flat.yaml" --start 1 -n 1 --out "$out/f" >/dev/null 2>&1 || f
 "$ws/.venv/bin/python" - "$out/b/sample_000001/manifest.json" "$out/f/sample_000001/manifest.json" <<'PY' || fail "render switches"
 import json, sys
 a, b = (json.load(open(p)) for p in sys.argv[1:])
-assert a["randomization"]["render"] == {"shadows": True, "caustics": True, "materials": True}, a["randomization"]["render"]
-assert b["randomization"]["render"] == {"shadows": False, "caustics": False, "materials": False}, b["randomization"]["render"]
+switches = ("shadows", "caustics", "materials")
+assert all(a["randomization"]["render"][k] is True for k in switches), a["randomization"]["render"]
+assert all(b["randomization"]["render"][k] is False for k in switches), b["randomization"]["render"]
 fa = {f["path"]: f["sha256"] for f in a["files"]}
 fb = {f["path"]: f["sha256"] for f in b["files"]}
 assert fa.keys() == fb.keys()
 same = [p for p in fa if p.startswith(("depth/", "segmentation/", "sonar/")) or p == "groundtruth.txt"]
 assert len(same) >= 12 and all(fa[p] == fb[p] for p in same), [p for p in same if fa[p] != fb[p]]
-# The world file names the spec it came from in its description; the rest is the same.
-worlds = [[l for l in open(p.replace("manifest.json", "world/world.yaml")) if not l.startswith("description:")]
-          for p in sys.argv[1:]]
-assert worlds[0] == worlds[1]
+# The same world drawn.
+assert a["randomization"]["world"] == b["randomization"]["world"]
 rgb = [p for p in fa if p.startswith("rgb/")]
 assert len(rgb) == 6 and sum(fa[p] != fb[p] for p in rgb) == 6, [p for p in rgb if fa[p] == fb[p]]
 PY

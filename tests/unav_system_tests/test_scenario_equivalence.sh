@@ -11,8 +11,10 @@
 # iterations). A different plant, a missing seabed, a skipped control period, another noise seed
 # or one ulp of time shows as a difference.
 #  1. config/scenarios/pipe_inspection.yaml, the first 10 s of its mission (both cameras, 10 Hz).
-#  2. Seabed contact with saturated thrusters: the same vehicle driven at 2 m/s towards a point 2 m
-#     below the seabed (10 m +- 0.15 m relief) stops on it in both paths: its bottom (z + 0.127 m)
+#  2. Seabed contact with saturated thrusters, in a world the scenario generates (`generate:`, built
+#     by each node and the Episode from the scenario: a different world in one of them shows in the
+#     images and the contact): the same vehicle driven at 2 m/s towards a point 2 m below the
+#     seabed (10 m +- 0.15 m relief) stops on it in both paths: its bottom (z + 0.127 m)
 #     ends within the relief plus <= 0.1 m of penalty spring (2000 N/m against at most the
 #     vertical thrusters' force), not moving vertically by more than 5 mm in the last second (it
 #     pushes and slides on the sand). The allocator saturates for most of the run, so the achieved
@@ -57,9 +59,15 @@ run_both pipe "$out/pipe.yaml"
 # The flight moved: 10 s along the mission's first legs (not a hold that would match trivially).
 awk 'END { exit !($2 > 2.0) }' "$out/pipe/inproc/ground_truth.tum" || fail "the vehicle did not fly the mission"
 
-# 2. Seabed contact: one waypoint 2 m below the seabed under the start, at 2 m/s.
+# 2. Seabed contact in a generated world: one waypoint 2 m below the seabed under the start, at 2 m/s.
 sed -n '/^mission:/q;p' "$out/pipe.yaml" | sed 's/^name: .*/name: seabed_contact/' > "$out/contact.yaml"
 cat >> "$out/contact.yaml" <<'YAML'
+generate:
+  enabled: true
+  pipeline: {heading_deg: 60, first_length_m: 6, legs: [{turn_deg: -45, length_m: 5}], radius_m: 0.3}
+  seabed: {depth_m: 10.0, relief_m: 0.15, relief_wavelength_m: 4.0}
+  rocks: {per_100m2: 5}
+  water: {preset: 3C}
 mission:
   duration_s: 10.0
   speed_mps: 2.0

@@ -18,7 +18,7 @@ int main(int argc, char** argv) {
   const std::string scenario = argc > 2 ? argv[2] : unav::common::find_resource("config/scenarios/ardusub_pipe.yaml");
   const std::string map = unav::common::find_resource("config/autopilot/ardusub_bluerov2_heavy.yaml");
   const auto sc = unav::scene::load_scenario(scenario);
-  unav::autopilot::JsonBackend b(sc, unav::scene::load_world(sc.world), unav::autopilot::load_motor_map(map), map);
+  unav::autopilot::JsonBackend b(sc, unav::scene::scenario_world(sc), unav::autopilot::load_motor_map(map), map);
   std::vector<double> us;
   us.reserve(static_cast<std::size_t>(n));
   std::size_t bytes = 0;

@@ -26,7 +26,7 @@ ArduSubBridge::ArduSubBridge(const unav::NodeOptions& options) : Node("ardusub_b
                                "there is no default)");
   const unav::scene::Scenario sc = p.scenario.load();
   backend_ =
-      std::make_unique<JsonBackend>(sc, unav::scene::load_world(sc.world), load_motor_map(p.motor_map), p.motor_map);
+      std::make_unique<JsonBackend>(sc, unav::scene::scenario_world(sc), load_motor_map(p.motor_map), p.motor_map);
   publish_period_ = p.publish_period;
 
   in_addr addr{};

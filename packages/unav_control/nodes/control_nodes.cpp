@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <optional>
 
 #include "unav_common/resources.hpp"
 #include "unav_control/config.hpp"
@@ -228,7 +229,12 @@ WaypointFollowerNode::WaypointFollowerNode(const unav::NodeOptions& options)
     : Node("waypoint_follower", options, "rov") {
   WaypointFollowerParams prm;
   declare_params(&prm);
-  if (prm.scenario.given()) prm.pipeline_world = prm.scenario.load().world;
+  std::optional<unav::scene::World> scenario_world;
+  if (prm.scenario.given()) {
+    const unav::scene::Scenario sc = prm.scenario.load();
+    prm.pipeline_world = sc.world;
+    scenario_world = unav::scene::scenario_world(sc);  // generated when the scenario says so
+  }
   WaypointFollowerOptions wo;
   wo.acceptance_radius = prm.acceptance_radius;
   const std::vector<double>& flat = prm.waypoints;
@@ -239,7 +245,7 @@ WaypointFollowerNode::WaypointFollowerNode(const unav::NodeOptions& options)
   if (!world.empty() && flat.empty()) {
     unav::scene::World w;
     try {
-      w = unav::scene::load_world(world);
+      w = scenario_world ? std::move(*scenario_world) : unav::scene::load_world(world);
     } catch (const std::exception& e) {
       throw unav::ConfigError(e.what());
     }

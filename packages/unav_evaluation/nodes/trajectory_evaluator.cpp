@@ -77,7 +77,12 @@ TrajectoryEvaluator::TrajectoryEvaluator(const unav::NodeOptions& options)
     : Node("trajectory_evaluator", options, "rov") {
   TrajectoryEvaluatorParams prm;
   declare_params(&prm);
-  if (prm.scenario.given()) prm.pipeline_world = prm.scenario.load().world;
+  std::optional<unav::scene::World> scenario_world;
+  if (prm.scenario.given()) {
+    const unav::scene::Scenario sc = prm.scenario.load();
+    prm.pipeline_world = sc.world;
+    scenario_world = unav::scene::scenario_world(sc);  // generated when the scenario says so
+  }
   const std::vector<std::string>& names = prm.estimates;
   output_dir_ = prm.output_dir;
   trajectory_name_ = prm.trajectory_name;
@@ -98,7 +103,8 @@ TrajectoryEvaluator::TrajectoryEvaluator(const unav::NodeOptions& options)
   const std::string& pipe_world = prm.pipeline_world;
   pipe_loss_m_ = prm.pipe_loss_distance;
   if (!pipe_world.empty()) {
-    pipe_world_ = std::make_unique<unav::scene::World>(unav::scene::load_world(pipe_world));
+    pipe_world_ = std::make_unique<unav::scene::World>(scenario_world ? std::move(*scenario_world)
+                                                                      : unav::scene::load_world(pipe_world));
     if (pipe_world_->pipelines.empty()) throw unav::ConfigError("pipeline_world '" + pipe_world + "' has no pipeline");
   }
   if (!camera.empty() && cams_path.empty()) {

@@ -15,7 +15,7 @@ from unav_gym.sb3 import PipeFollowingVecEnv
 TASK = dict(dynamics="kinematic", max_steps=20, start_offset_m=0.8, start_heading_deg=15.0, start_arc_fraction=0.0,
             max_step_angle_deg=30.0, max_turn_deg=15.0,
             **{"scenario.cameras.width": 64, "scenario.cameras.height": 36, "scenario.render.marine_snow": False,
-               "pipe_scenes.turns": [0, 0], "pipe_scenes.first_segment_m": [30.0, 30.0],
+               "pipe_scenes.pipeline.legs": [], "pipe_scenes.pipeline.first_length_m": 30.0,
                # The images the +20 below was calibrated on. With the renderer's materials (sand
                # settled on the pipe's crown lowers its contrast to the seabed) the same run rose by
                # +18 (80.6 -> 98.5): still learning, closer to the spread of an untrained policy.

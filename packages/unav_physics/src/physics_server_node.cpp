@@ -75,7 +75,7 @@ PhysicsServer::PhysicsServer(const unav::NodeOptions& options) : Node("physics_s
 
   const VehicleParams vehicle = load_vehicle(p.vehicle_config);
   if (scenario) {
-    const unav::scene::World world = unav::scene::load_world(scenario->world);
+    const unav::scene::World world = unav::scene::scenario_world(*scenario);
     sim_ = build_simulator(*scenario, world, so, vehicle);
     logger()->info("scenario {} (seed {}): world {}, vehicle {}", p.scenario.file, scenario->seed, scenario->world,
                    scenario->vehicle.model);

@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <cstring>
+#include <optional>
 
 #include "unav_common/resources.hpp"
 #include "unav_runtime/conversions.hpp"
@@ -48,8 +49,10 @@ SonarNode::SonarNode(const unav::NodeOptions& options) : Node("sonar", options, 
   prm.world = unav::common::resource_or_empty("worlds/pipe_inspection/world.yaml");
   prm.sonars_config = unav::common::resource_or_empty("config/sensors/bluerov2_sonars.yaml");
   declare_params(&prm);
+  std::optional<World> scenario_world;
   if (prm.scenario.given()) {  // the sonar's part of the scenario
     const unav::scene::Scenario sc = prm.scenario.load();
+    scenario_world = unav::scene::scenario_world(sc);
     if (sc.sonars.names.empty())
       throw unav::ConfigError(prm.scenario.file, "sonars.names", "[]",
                               "the sonar node needs at least one sonar of the scenario's sonars.config");
@@ -66,13 +69,13 @@ SonarNode::SonarNode(const unav::NodeOptions& options) : Node("sonar", options, 
   World world;
   std::vector<SonarModel> models;
   try {
-    world = unav::scene::load_world(prm.world);
+    world = scenario_world ? std::move(*scenario_world) : unav::scene::load_world(prm.world);
     if (prm.sonars.empty()) {
       models = unav::scene::load_sonars(prm.sonars_config);
     } else {
       for (const auto& n : prm.sonars) models.push_back(unav::scene::load_sonar(prm.sonars_config, n));
     }
-    if (!prm.water.empty()) world.water = unav::scene::load_water_spec(prm.water);
+    if (!scenario_world && !prm.water.empty()) world.water = unav::scene::load_water_spec(prm.water);
   } catch (const std::exception& e) {
     throw unav::ConfigError(e.what());  // world/sonar/water errors name the file and key
   }

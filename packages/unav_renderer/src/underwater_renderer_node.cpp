@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstring>
+#include <optional>
 
 #include <spdlog/fmt/fmt.h>
 
@@ -53,6 +54,7 @@ UnderwaterRendererNode::UnderwaterRendererNode(const unav::NodeOptions& options)
   prm.cameras_config = unav::common::resource_or_empty("config/sensors/bluerov2_cameras.yaml");
   declare_params(&prm);
   std::vector<CameraModel> scenario_cams;
+  std::optional<World> scenario_world;  // built the one way every run path builds it
   auto noise_seed = static_cast<std::uint64_t>(prm.seed);
   if (prm.scenario.given()) {  // the renderer's part of the scenario, as the in-process Episode takes it
     const scene::Scenario sc = prm.scenario.load();
@@ -64,6 +66,7 @@ UnderwaterRendererNode::UnderwaterRendererNode(const unav::NodeOptions& options)
     prm.rate = sc.cameras.rate_hz;
     noise_seed = unav::common::MixSeed(static_cast<std::uint64_t>(sc.seed));  // as Episode::reset(sc.seed)
     scenario_cams = scene::scenario_cameras(sc);
+    scenario_world = scene::scenario_world(sc);
   }
   const std::string& world_path = prm.world;
   const std::string& cameras_path = prm.cameras_config;
@@ -86,7 +89,7 @@ UnderwaterRendererNode::UnderwaterRendererNode(const unav::NodeOptions& options)
   World world;
   std::vector<CameraModel> cams;
   try {
-    world = load_world(world_path);
+    world = scenario_world ? std::move(*scenario_world) : load_world(world_path);
     cams = load_cameras(cameras_path);
     if (!scenario_cams.empty()) {
       cams = std::move(scenario_cams);
@@ -96,7 +99,7 @@ UnderwaterRendererNode::UnderwaterRendererNode(const unav::NodeOptions& options)
       for (const auto& n : only) picked.push_back(load_camera(cameras_path, n));  // error lists the file's cameras
       cams = std::move(picked);
     }
-    if (!water.empty()) world.water = load_water_spec(water);
+    if (!scenario_world && !water.empty()) world.water = load_water_spec(water);
   } catch (const std::exception& e) {
     throw unav::ConfigError(e.what());  // world/camera/water errors name the file and key
   }

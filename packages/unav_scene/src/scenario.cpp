@@ -49,6 +49,10 @@ void resolve_scenario_paths(Scenario* s, const std::string& file, const std::str
   s->control.mpc = resolve(s->control.mpc, dir, config, file, "control.mpc");
   s->control.allocator = resolve(s->control.allocator, dir, config, file, "control.allocator");
   s->cameras.config = resolve(s->cameras.config, dir, config, file, "cameras.config");
+  if (s->generate.enabled) {
+    check_world_generator(s->generate, file, "generate.");
+    resolve_world_generator_paths(&s->generate, dir, file, "generate.");
+  }
   if (!s->sonars.names.empty()) s->sonars.config = resolve(s->sonars.config, dir, config, file, "sonars.config");
   if ((s->cameras.width > 0) != (s->cameras.height > 0))
     throw unav::ConfigError(file, "cameras.width/cameras.height",
@@ -134,6 +138,13 @@ std::vector<CameraModel> scenario_cameras(const Scenario& s) {
   for (const auto& name : s.cameras.names)
     out.push_back(scale_camera(load_camera(s.cameras.config, name), s.cameras.width, s.cameras.height));
   return out;
+}
+
+World scenario_world(const Scenario& s) {
+  World w = load_world(s.world);
+  if (s.generate.enabled) w = generate_world(s.generate, w, static_cast<std::uint64_t>(s.seed));
+  if (!s.water.empty()) w.water = load_water_spec(s.water);
+  return w;
 }
 
 YAML::Node scenario_yaml(const Scenario& s) { return unav::common::ToYaml(s); }

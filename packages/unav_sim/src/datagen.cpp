@@ -102,15 +102,16 @@ class SonarOutput {
   std::vector<float> azimuths_;
 };
 
-// The sample as a scenario file, world/scenario.yaml beside its world.yaml (relative, so the
-// sample folder can move): the world, camera and render switches the sample was rendered with,
-// the start of its path and the path as a mission (waypoints ~1 m apart, each leg as long as
-// the setpoint takes at `speed`), so `unav run` and every launch file (`scenario:=`) re-fly it.
-// The camera's noise/exposure/gain draws are the spec's and not in it.
+// The sample as a scenario file, world/scenario.yaml (beside its current.yaml when it has one):
+// the base world with the sample's generated world (`generate:`, the same draw, so the same world),
+// the camera and render switches the sample was rendered with, the start of its path and the path
+// as a mission (waypoints ~1 m apart, each leg as long as the setpoint takes at `speed`), so
+// `unav run` and every launch file (`scenario:=`) re-fly it. The camera's noise/exposure/gain
+// draws are the spec's and not in it.
 void write_sample_scenario(unav::scene::Scenario sc, const std::vector<unav::datagen::PathPoint>& path, double speed,
-                           double duration, const std::string& dir) {
+                           double duration, const std::string& dir, bool current) {
   constexpr double kRadToDeg = 180.0 / M_PI;
-  sc.world = "world.yaml";
+  if (current) sc.current = "current.yaml";
   sc.vehicle.initial_position = path.front().p_W;
   sc.vehicle.initial_rpy_deg = Eigen::Vector3d(0.0, 0.0, path.front().yaw * kRadToDeg);
   sc.mission.duration_s = duration;
@@ -146,40 +147,38 @@ bool sample_finished(const std::string& out, std::uint64_t index) {
 SampleResult generate_sample(const unav::datagen::RandomizationSpec& spec, std::uint64_t index, const std::string& out,
                              const std::atomic<bool>* stop, const std::function<void(std::uint64_t)>& on_frame) {
   const auto t0 = std::chrono::steady_clock::now();
-  const YAML::Node s = spec.sample(index);
-  const std::uint64_t seed = s["seed"].as<std::uint64_t>();
+  const unav::datagen::DatagenSample s = spec.sample(index);
+  const auto seed = static_cast<std::uint64_t>(s.seed);
   const fs::path final_dir = fs::path(out) / sample_name(index);
   const fs::path partial = fs::path(out) / ("." + sample_name(index) + ".partial");
   fs::remove_all(partial);
   fs::create_directories(partial);
 
-  const auto files = unav::datagen::write_sample_world(spec, s, (partial / "world").string());
-  World world = unav::scene::load_world(files.world_file);
-
-  // The sample as a scenario, built by the one builder (load_episode_setup + Episode).
+  // The sample as a scenario, built by the one builder (scenario_world, load_episode_setup,
+  // Episode): its world generated over the base world by the sample's `world` draw.
   unav::scene::Scenario sc;
   sc.name = sample_name(index);
   sc.seed = static_cast<int64_t>(seed);
-  sc.world = files.world_file;
-  sc.cameras.config = spec.cameras_config();
-  const std::string camera = s["output"]["camera"].as<std::string>();
+  sc.world = s.base_world;
+  sc.generate = s.world;
+  const std::string current_file = unav::datagen::write_sample_current(s, (partial / "world").string());
+  sc.current = current_file;
+  World world = unav::scene::scenario_world(sc);
+  sc.cameras.config = s.cameras_config;
+  const std::string& camera = s.output.camera;
   sc.cameras.names = {camera};
-  sc.cameras.width = s["output"]["width"].as<int>();
-  sc.cameras.height = s["output"]["height"].as<int>();
-  sc.cameras.rate_hz = s["output"]["rate_hz"].as<double>();
-  // Validated by the spec as "true" or "false".
-  sc.render.shadows = s["render"]["shadows"].as<std::string>() == "true";
-  sc.render.caustics = s["render"]["caustics"].as<std::string>() == "true";
-  sc.render.materials = s["render"]["materials"].as<std::string>() == "true";
+  sc.cameras.width = s.output.width;
+  sc.cameras.height = s.output.height;
+  sc.cameras.rate_hz = s.output.rate_hz;
+  sc.render = s.render;
   EpisodeSetup setup = load_episode_setup(sc);
-  const double gain = s["camera"]["gain"].as<double>();
-  setup.cameras[0].noise_stddev = s["camera"]["noise_stddev"].as<double>() * gain;
-  setup.cameras[0].exposure = s["camera"]["exposure"].as<double>() * gain;
+  setup.cameras[0].noise_stddev = s.camera.noise_stddev * s.camera.gain;
+  setup.cameras[0].exposure = s.camera.exposure * s.camera.gain;
   // Behind a port, the intrinsics a dataset user needs are the water-side model.
   const unav::scene::CameraModel cam = setup.cameras[0].water_equivalent();
 
-  const double rate = s["output"]["rate_hz"].as<double>();
-  const double speed = s["trajectory"]["speed_mps"].as<double>();
+  const double rate = s.output.rate_hz;
+  const double speed = s.trajectory.speed_mps;
   const double step = 0.05;  // path resolution [m]
   const auto path = unav::datagen::plan_trajectory(s, world, step);
 
@@ -188,9 +187,9 @@ SampleResult generate_sample(const unav::datagen::RandomizationSpec& spec, std::
   x0.p_WB_W = path.front().p_W;
   x0.q_WB = Eigen::AngleAxisd(path.front().yaw, Eigen::Vector3d::UnitZ());
   ep.reset(seed, x0);
-  write_sample_scenario(sc, path, speed, s["output"]["frames"].as<double>() / rate, (partial / "world").string());
+  write_sample_scenario(sc, path, speed, s.output.frames / rate, (partial / "world").string(), !current_file.empty());
 
-  const std::string format = s["output"]["format"].as<std::string>();
+  const std::string& format = s.output.format;
   auto writer = unav::datagen::make_sequence_writer(format, partial.string());
   unav::datagen::CameraIntrinsics k;
   k.width = cam.width;
@@ -206,10 +205,10 @@ SampleResult generate_sample(const unav::datagen::RandomizationSpec& spec, std::
   X_BC.translation() = cam.X_BC.translation();
   writer->set_camera_mount(X_BC);
 
-  const std::string sonar_name = s["output"]["sonar"].as<std::string>();
+  const std::string& sonar_name = s.output.sonar;
   std::unique_ptr<SonarOutput> sonar;
   if (!sonar_name.empty())
-    sonar = std::make_unique<SonarOutput>(partial.string(), spec.sonars_config(), sonar_name, world, seed,
+    sonar = std::make_unique<SonarOutput>(partial.string(), s.sonars_config, sonar_name, world, seed,
                                           ep.renderer().shared_context());
   double next_ping_t = 0.0;
   auto body_pose = [&ep] {
@@ -222,7 +221,7 @@ SampleResult generate_sample(const unav::datagen::RandomizationSpec& spec, std::
     sonar->ping(body_pose(), 0.0);  // pings at multiples of the sonar's period, like the frames
     next_ping_t = sonar->period();
   }
-  const std::uint64_t frames = s["output"]["frames"].as<std::uint64_t>();
+  const auto frames = static_cast<std::uint64_t>(s.output.frames);
   const double control_period = setup.scenario.control.period;
   const Eigen::Vector3d g_W(0.0, 0.0, setup.simulator.environment.gravity);
   SampleResult r;
@@ -276,13 +275,13 @@ SampleResult generate_sample(const unav::datagen::RandomizationSpec& spec, std::
   mi.mount_known = true;
   mi.X_BC = X_BC;
   mi.source = {{"spec", fs::path(spec.file()).filename().string()},
-               {"world", "world/world.yaml"},
-               {"base_world", fs::path(spec.base_world()).filename().string()},
+               {"world", "world/scenario.yaml"},
+               {"base_world", fs::path(s.base_world).filename().string()},
                {"generator", "unav datagen (in-process episode)"}};
   mi.labels = {{0, "water"}, {1, "seabed"}, {2, "pipeline"}, {3, "rock"}, {4, "other"}};
   YAML::Emitter e;
   e.SetDoublePrecision(17);
-  e << s;
+  e << unav::common::ToYaml(s);
   mi.randomization_yaml = e.c_str();
   mi.extra_entries = {"world"};
   if (sonar) {

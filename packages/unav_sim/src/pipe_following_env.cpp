@@ -22,9 +22,14 @@ constexpr std::uint64_t kSceneSeedMask = (std::uint64_t{1} << 62U) - 1U;
 
 double wrap(double a) { return std::remainder(a, 2.0 * M_PI); }  // (-pi, pi]
 
-std::string resource(const std::string& p) {
-  if (!p.empty() && p.front() == '/') return p;
-  return unav::common::find_resource(p);
+// The random scenes' spec drawn with `seed`, its cross-field rules checked and its paths
+// resolved (relative to the file that holds it, then the resource roots). Throws ConfigError.
+scene::WorldGenerator draw_scene(const unav::common::Stochastic<scene::WorldGenerator>& scenes, std::uint64_t seed) {
+  scene::WorldGenerator g = scenes.Sample(seed);
+  scene::check_world_generator(g, scenes.file(), "pipe_scenes.");
+  scene::resolve_world_generator_paths(&g, std::filesystem::path(scenes.file()).parent_path().string(), scenes.file(),
+                                       "pipe_scenes.");
+  return g;
 }
 
 double yaw_of(const Eigen::Quaterniond& q) {
@@ -74,8 +79,8 @@ PipeFollowingConfig load_pipe_following_config(const std::string& path) {
     unav::common::LoadYaml(root, path, &c.scenario, "scenario");
     scene::resolve_scenario_paths(&c.scenario, path, dir);
   }
-  if (root["pipe_scenes"]) unav::common::LoadYaml(root, path, &c.scenes, "pipe_scenes");
-  c.scenes.validate(path);
+  if (root["pipe_scenes"]) c.scenes = unav::common::Stochastic<scene::WorldGenerator>(root["pipe_scenes"], path);
+  (void)draw_scene(c.scenes, 0);
   return c;
 }
 
@@ -99,8 +104,9 @@ void apply_override(PipeFollowingConfig* config, const std::string& key, const s
   if (section == "scenario") {
     unav::common::ApplyOverride(&c.scenario, rest, yaml_value, source);
   } else if (section == "pipe_scenes") {
-    unav::common::ApplyOverride(&c.scenes, rest, yaml_value, source);
-    c.scenes.validate(source);
+    c.scenes = unav::common::Stochastic<scene::WorldGenerator>(
+        scene::apply_scenario_overrides(c.scenes.spec(), {rest + "=" + yaml_value}, source), source);
+    (void)draw_scene(c.scenes, 0);
   } else if (section == "env") {
     unav::common::ApplyOverride(&c.env, rest, yaml_value, source);
   } else {
@@ -112,20 +118,18 @@ void apply_override(PipeFollowingConfig* config, const std::string& key, const s
 PipeFollowingEnv::PipeFollowingEnv(PipeFollowingConfig config, std::shared_ptr<unav::renderer::EglContext> context)
     : config_(std::move(config)) {
   unav::common::Validate(config_.env, "env");
-  config_.scenes.validate("pipe_scenes");
   const auto& cams = config_.scenario.cameras.names;
   if (std::find(cams.begin(), cams.end(), config_.env.camera) == cams.end())
     throw ConfigError("env", "camera", config_.env.camera, "must be one of scenario.cameras.names");
   EpisodeSetup setup = load_episode_setup(config_.scenario);
-  base_world_ = scene::load_world(resource(config_.scenes.base_world));
+  base_world_ = scene::scenario_world(config_.scenario);
   scene::World first;
   if (config_.env.scenes == "fixed") {
-    fixed_world_ = scene::load_world(resource(config_.env.world));
-    if (fixed_world_.pipelines.empty())
-      throw ConfigError(config_.env.world, "pipelines", "[]", "the pipe-following world needs a pipeline");
-    first = fixed_world_;
+    if (base_world_.pipelines.empty())
+      throw ConfigError(config_.scenario.world, "pipelines", "[]", "the pipe-following world needs a pipeline");
+    first = base_world_;
   } else {
-    first = generate_pipe_world(config_.scenes, base_world_, 0);
+    first = scene::generate_world(draw_scene(config_.scenes, 0), base_world_, 0);
   }
   episode_ = std::make_unique<Episode>(std::move(setup), std::move(first), std::move(context));
   reset(0);
@@ -144,7 +148,7 @@ PipeFollowingInfo PipeFollowingEnv::reset(std::uint64_t seed) {
   const scene::World* new_world = nullptr;
   if (p.scenes == "random") {
     scene_seed_ = (seed & kSceneSeedMask) | (p.split == "eval" ? (std::uint64_t{1} << 62U) : 0U);
-    world = generate_pipe_world(config_.scenes, base_world_, scene_seed_);
+    world = scene::generate_world(draw_scene(config_.scenes, scene_seed_), base_world_, scene_seed_);
     new_world = &world;
   } else {
     scene_seed_ = 0;
@@ -251,7 +255,7 @@ PipeFollowingInfo PipeFollowingEnv::measure() const {
 PipeFollowingInfo PipeFollowingEnv::info() const { return measure(); }
 
 void PipeFollowingEnv::set_option(const std::string& key, const std::string& yaml_value) {
-  if (key == "scenes" || key == "world" || key == "camera")
+  if (key == "scenes" || key == "camera")
     throw ConfigError("reset options", key, yaml_value, "fixed when the environment is made (pass it to make())");
   PipeFollowingParams p = config_.env;
   unav::common::ApplyOverride(&p, key, yaml_value, "reset options");

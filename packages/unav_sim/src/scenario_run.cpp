@@ -75,8 +75,7 @@ ScenarioRunResult run_scenario_in_process(const scene::Scenario& scenario, const
   const auto wall0 = std::chrono::steady_clock::now();
   EpisodeSetup setup = load_episode_setup(scenario);
   const scene::Scenario& sc = setup.scenario;
-  scene::World world = scene::load_world(sc.world);
-  if (!sc.water.empty()) world.water = scene::load_water_spec(sc.water);
+  const scene::World world = scene::scenario_world(sc);
   write_concrete_scenario(sc, out_dir);
   Episode ep(setup, world);
   ep.reset(static_cast<std::uint64_t>(sc.seed), physics::scenario_initial_state(sc));

@@ -2,8 +2,8 @@
 
 #include <cmath>
 
+#include "unav_scene/world_generator.hpp"
 #include "unav_sim/episode.hpp"
-#include "unav_sim/pipe_scene.hpp"
 
 using namespace unav::sim;
 using unav::control::PoseSetpoint;
@@ -113,7 +113,10 @@ TEST(Episode, ResetWithANewWorldKeepsTheContext) {
   ep.reset(1, at(3.0, 0.0, 8.35));
   const int on_fixed = pipe_pixels(ep.render("down"));
   EXPECT_GT(on_fixed, 500);  // a 0.5 m pipe 1.5 m below a 90 deg camera: ~1/6 of 160 x 90
-  const World gen = generate_pipe_world(PipeSceneRanges{}, pipe_world(), 3);
+  unav::scene::WorldGenerator spec;
+  spec.pipeline.heading_deg = 30.0;
+  spec.pipeline.legs = {{-40.0, 6.0}};
+  const World gen = unav::scene::generate_world(spec, pipe_world(), 3);
   const auto& P = gen.pipelines[0].points_W;
   const Eigen::Vector3d mid = 0.5 * (P[0] + P[1]);
   ep.reset(1, at(mid.x(), mid.y(), mid.z() - 1.5), &gen);

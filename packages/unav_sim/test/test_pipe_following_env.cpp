@@ -181,9 +181,15 @@ TEST(PipeFollowingConfig, OverridesAreCheckedByName) {
   EXPECT_EQ(c.env.max_steps, 50);
   apply_override(&c, "scenario.cameras.width", "64", "test");
   EXPECT_EQ(c.scenario.cameras.width, 64);
-  apply_override(&c, "pipe_scenes.turns", "[1, 2]", "test");
-  EXPECT_EQ(c.scenes.turns[1], 2);
+  apply_override(&c, "pipe_scenes.pipeline.first_length_m", "{uniform: [11, 12]}", "test");
+  EXPECT_GE(c.scenes.Sample(3).pipeline.first_length_m, 11.0);
+  apply_override(&c, "pipe_scenes.pipeline.legs", "[{turn_deg: 30, length_m: 4}]", "test");
+  EXPECT_EQ(c.scenes.Sample(3).pipeline.legs.size(), 1u);
+  EXPECT_EQ(c.scenes.Sample(3).pipeline.legs[0].turn_deg, 30.0);
   EXPECT_THROW(apply_override(&c, "max_stepz", "5", "test"), unav::ConfigError);
   EXPECT_THROW(apply_override(&c, "dynamics", "teleport", "test"), unav::ConfigError);
-  EXPECT_THROW(apply_override(&c, "pipe_scenes.segment_m", "[5, 1]", "test"), unav::ConfigError);
+  EXPECT_THROW(apply_override(&c, "pipe_scenes.pipeline.radius_m", "{uniform: [0.1, 5]}", "test"), unav::ConfigError);
+  // A cross-field rule: a bend tighter than the pipe.
+  EXPECT_THROW(apply_override(&c, "pipe_scenes.pipeline.bend_radius_m", "0.1", "test"), unav::ConfigError);
+  EXPECT_EQ(c.scenes.Sample(3).pipeline.bend_radius_m, 0.0);  // a rejected override changes nothing
 }

@@ -129,7 +129,7 @@ void remove_partials(const Options& o, const std::vector<std::uint64_t>& todo) {
 
 // Runs the given samples here, one after the other.
 int run_inline(const RandomizationSpec& spec, const Options& o, const std::vector<std::uint64_t>& todo, bool report) {
-  Progress prog(todo.size(), spec.sample(0)["output"]["frames"].as<std::uint64_t>());
+  Progress prog(todo.size(), static_cast<std::uint64_t>(spec.sample(0).output.frames));
   for (const auto i : todo) {
     const auto r = unav::sim::generate_sample(spec, i, o.out, &g_stop, [&](std::uint64_t) {
       if (report) {
@@ -164,7 +164,7 @@ int run_local_jobs(const RandomizationSpec& spec, const Options& o, const std::v
     std::uint64_t index;
     std::string buf;
   };
-  Progress prog(todo.size(), spec.sample(0)["output"]["frames"].as<std::uint64_t>());
+  Progress prog(todo.size(), static_cast<std::uint64_t>(spec.sample(0).output.frames));
   std::vector<Child> running;
   size_t next = 0;
   int failures = 0;
@@ -240,13 +240,10 @@ std::string shell_quote(const std::string& s) {
 
 // The sweep as a Slurm job array: each task runs its share of the samples.
 int run_slurm(const RandomizationSpec& spec, const Options& o, const std::vector<std::uint64_t>& todo) {
-  const YAML::Node sl = spec.root()["slurm"];
-  auto get = [&](const char* key, const std::string& fallback) {
-    return sl && sl[key] ? sl[key].as<std::string>() : fallback;
-  };
-  const long long tasks =
-      std::min<long long>(static_cast<long long>(o.samples), std::stoll(get("array_size", std::to_string(o.samples))));
-  if (tasks < 1) throw unav::ConfigError(spec.file(), "slurm.array_size", get("array_size", ""), "must be >= 1");
+  const unav::datagen::SlurmResources sl = spec.sample(0).slurm;
+  const long long tasks = std::min<long long>(static_cast<long long>(o.samples),
+                                              sl.array_size > 0 ? sl.array_size : static_cast<long long>(o.samples));
+  if (tasks < 1) throw unav::ConfigError(spec.file(), "--samples", std::to_string(o.samples), "must be >= 1");
   const fs::path dir = fs::absolute(fs::path(o.out) / "slurm");
   fs::create_directories(dir);
   const fs::path script = dir / "unav_datagen.sbatch";
@@ -254,13 +251,13 @@ int run_slurm(const RandomizationSpec& spec, const Options& o, const std::vector
   f << "#!/bin/bash\n"
     << "#SBATCH --job-name=unav_datagen\n"
     << "#SBATCH --array=0-" << tasks - 1 << "\n"
-    << "#SBATCH --cpus-per-task=" << get("cpus_per_task", "1") << "\n"
-    << "#SBATCH --mem=" << get("mem", "4G") << "\n"
-    << "#SBATCH --time=" << get("time", "01:00:00") << "\n"
+    << "#SBATCH --cpus-per-task=" << sl.cpus_per_task << "\n"
+    << "#SBATCH --mem=" << sl.mem << "\n"
+    << "#SBATCH --time=" << sl.time << "\n"
     << "#SBATCH --output=" << (dir / "task_%A_%a.log").string() << "\n";
-  const std::string partition = o.slurm_partition.empty() ? get("partition", "") : o.slurm_partition;
+  const std::string partition = o.slurm_partition.empty() ? sl.partition : o.slurm_partition;
   if (!partition.empty()) f << "#SBATCH --partition=" << partition << "\n";
-  if (!get("gres", "").empty()) f << "#SBATCH --gres=" << get("gres", "") << "\n";
+  if (!sl.gres.empty()) f << "#SBATCH --gres=" << sl.gres << "\n";
   f << "# Each array task renders the samples i of [" << o.start << ", " << o.start + o.samples
     << ") with (i - start) % " << tasks << " == task; finished samples are skipped.\n"
     << "exec " << shell_quote(exe_path()) << " " << shell_quote(fs::absolute(o.spec).string()) << " --samples "
@@ -311,11 +308,11 @@ void contact_sheet(const RandomizationSpec& spec, const Options& o) {
     cv::Mat img = cv::imread(images[images.size() / 2].string(), cv::IMREAD_COLOR);
     if (img.empty()) continue;
     cv::resize(img, img, cv::Size(tw, th), 0, 0, cv::INTER_AREA);
-    const YAML::Node s = spec.sample(i);
+    const unav::datagen::DatagenSample s = spec.sample(i);
     char label[160];
     std::snprintf(label, sizeof(label), "#%llu %s x%.2f %.0fm %s", static_cast<unsigned long long>(i),
-                  s["water"]["preset"].as<std::string>().c_str(), s["water"]["turbidity"].as<double>(),
-                  s["seabed"]["depth_m"].as<double>(), s["trajectory"]["kind"].as<std::string>().c_str());
+                  s.world.water.preset.c_str(), s.world.water.turbidity, s.world.seabed.depth_m,
+                  s.trajectory.kind.c_str());
     cv::rectangle(img, cv::Point(0, 0), cv::Point(tw, 18), cv::Scalar(0, 0, 0), cv::FILLED);
     cv::putText(img, label, cv::Point(4, 13), cv::FONT_HERSHEY_SIMPLEX, 0.4, cv::Scalar(255, 255, 255), 1, cv::LINE_AA);
     tiles.push_back(img);

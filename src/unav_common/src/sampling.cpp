@@ -204,8 +204,9 @@ YAML::Node Expand(const YAML::Node& node, std::vector<Step>* steps,
 }
 
 // Checks the syntax of every repeat in `node` and that it stands for a list; true if any.
+// `elements`: how many copies of `node` the repeats above it make (nested repeats multiply).
 bool CheckRepeats(const YAML::Node& node, std::vector<Step>* steps, const std::map<std::string, FieldInfo>& rows,
-                  const std::string& file) {
+                  const std::string& file, int64_t elements = 1) {
   if (IsDistribution(node)) return false;
   if (IsRepeat(node)) {
     const std::string path = PathText(*steps);
@@ -214,8 +215,12 @@ bool CheckRepeats(const YAML::Node& node, std::vector<Step>* steps, const std::m
     const FieldInfo* row = Row(rows, *steps, &element);
     if (row != nullptr && (element || row->type.empty() || row->type.back() != ']'))
       throw ConfigError(file, path, Written(node), "a repeat stands for a list, not a " + row->type);
+    elements *= std::max<int64_t>(1, CountRange(node.begin()->second["count"]).second);
+    if (elements > kMaxRepeat)
+      throw ConfigError(file, path, Written(node),
+                        "nested repeats reach more than " + std::to_string(kMaxRepeat) + " elements");
     steps->push_back(std::size_t{0});
-    CheckRepeats(node.begin()->second["each"], steps, rows, file);
+    CheckRepeats(node.begin()->second["each"], steps, rows, file, elements);
     steps->pop_back();
     return true;
   }
@@ -223,13 +228,13 @@ bool CheckRepeats(const YAML::Node& node, std::vector<Step>* steps, const std::m
   if (node.IsMap()) {
     for (const auto& kv : node) {
       steps->push_back(kv.first.Scalar());
-      any = CheckRepeats(kv.second, steps, rows, file) || any;
+      any = CheckRepeats(kv.second, steps, rows, file, elements) || any;
       steps->pop_back();
     }
   } else if (node.IsSequence()) {
     for (std::size_t i = 0; i < node.size(); ++i) {
       steps->push_back(i);
-      any = CheckRepeats(node[i], steps, rows, file) || any;
+      any = CheckRepeats(node[i], steps, rows, file, elements) || any;
       steps->pop_back();
     }
   }

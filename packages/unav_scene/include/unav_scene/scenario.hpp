@@ -24,6 +24,8 @@
 #include "unav_common/config.hpp"
 #include "unav_scene/camera.hpp"
 #include "unav_scene/render_settings.hpp"
+#include "unav_scene/world.hpp"
+#include "unav_scene/world_generator.hpp"
 
 namespace unav::scene {
 
@@ -134,8 +136,9 @@ struct Scenario {
   std::string name = "scenario";
   int64_t seed = 0;  ///< draws of the file's distributions and every noise source
   std::string world = "worlds/pipe_inspection/world.yaml";
-  std::string water;    ///< Jerlov preset or water YAML replacing the world's; "" = the world's
-  std::string current;  ///< water current YAML replacing the world's; "" = the world's
+  std::string water;        ///< Jerlov preset or water YAML replacing the world's; "" = the world's
+  std::string current;      ///< water current YAML replacing the world's; "" = the world's
+  WorldGenerator generate;  ///< enabled: the world is generated over `world` (the base)
   ScenarioVehicle vehicle;
   ScenarioPhysics physics;
   ScenarioControl control;
@@ -152,6 +155,7 @@ struct Scenario {
     a->Visit(Field("world", &world).Doc("world.yaml: relative to the scenario, the resource roots or absolute"));
     a->Visit(Field("water", &water).Doc("Jerlov preset (I, II, 3C, ...) or water YAML; empty = the world's"));
     a->Visit(Field("current", &current).Doc("water current YAML (config/water/currents/); empty = the world's"));
+    a->Visit(Field("generate", &generate).Doc("a randomized pipe world over `world` (unav_scene/world_generator.hpp)"));
     a->Visit(Field("vehicle", &vehicle));
     a->Visit(Field("physics", &physics));
     a->Visit(Field("control", &control));
@@ -217,6 +221,11 @@ void resolve_scenario_paths(Scenario* s, const std::string& file, const std::str
 /// The scenario's cameras: cameras.names of cameras.config, scaled to cameras.width x height.
 /// Throws ConfigError (no camera, an unknown name: the error lists the file's cameras).
 std::vector<CameraModel> scenario_cameras(const Scenario& s);
+
+/// The scenario's world, built the one way every run path builds it: `world` loaded, generated
+/// over when generate.enabled (generate_world with the scenario's seed), its water replaced by
+/// `water` when given. Throws ConfigError.
+World scenario_world(const Scenario& s);
 
 /// The concrete scenario as YAML (what a run records in its output folder).
 YAML::Node scenario_yaml(const Scenario& s);

@@ -9,9 +9,11 @@
 //                error to the pipe direction [rad, 0..pi]
 //   terminated   e_p > termination_distance_m (2.5 m: the pipe leaves the view)
 //   truncated    the end of the pipe reached (within end_margin_m) or max_steps actions
-// Scenes: "random" draws a pipe world per reset from PipeSceneRanges; training seeds and
-// evaluation seeds map to disjoint scene seeds (split train: [0, 2^62), eval: [2^62, 2^63));
-// "fixed" uses one world file (the paper's ~20 m left + right pipe: the evaluation scene).
+// Scenes: "random" draws a pipe world per reset: the `pipe_scenes` spec (a scene::WorldGenerator
+// whose fields may be distributions) sampled by the one sampler and generated over the scenario's
+// world; training seeds and evaluation seeds map to disjoint scene seeds (split train: [0, 2^62),
+// eval: [2^62, 2^63)); "fixed" flies the scenario's world (the paper's ~20 m left + right pipe:
+// the evaluation scene).
 #pragma once
 
 #include <array>
@@ -24,17 +26,17 @@
 #include <vector>
 
 #include "unav_common/config.hpp"
+#include "unav_common/sampling.hpp"
 #include "unav_control/pipe_action.hpp"
 #include "unav_renderer/gl_thread.hpp"
+#include "unav_scene/world_generator.hpp"
 #include "unav_sim/episode.hpp"
-#include "unav_sim/pipe_scene.hpp"
 
 namespace unav::sim {
 
 struct PipeFollowingParams {
   std::string dynamics = "mpc";
   std::string scenes = "random";
-  std::string world = "worlds/pipe_inspection/world.yaml";
   std::string split = "train";
   std::string camera = "down";
   control::PipeActionParams action;  ///< step_length_m, max_step_angle_deg, max_turn_deg
@@ -56,8 +58,9 @@ struct PipeFollowingParams {
     a->Visit(Field("dynamics", &dynamics)
                  .OneOf({"mpc", "kinematic"})
                  .Doc("mpc: the MPC flies each waypoint; kinematic: the vehicle is placed on it (fast)"));
-    a->Visit(Field("scenes", &scenes).OneOf({"random", "fixed"}).Doc("random pipe worlds or the world file"));
-    a->Visit(Field("world", &world).Doc("world.yaml of scenes=fixed (relative to the resource roots)"));
+    a->Visit(Field("scenes", &scenes)
+                 .OneOf({"random", "fixed"})
+                 .Doc("random pipe worlds (pipe_scenes over the scenario's world) or the scenario's world"));
     a->Visit(Field("split", &split).OneOf({"train", "eval"}).Doc("seed space of random scenes (disjoint)"));
     a->Visit(Field("camera", &camera).Doc("observation camera (of the episode's cameras)"));
     action.Serialize(a);
@@ -81,21 +84,22 @@ struct PipeFollowingParams {
 };
 
 /// A learning config file (config/learning/pipe_following.yaml): the sections `env`, `scenario`
-/// (scene::Scenario: vehicle, physics, control, cameras, render; its world and mission are the
+/// (scene::Scenario: world, vehicle, physics, control, cameras, render; its mission is the
 /// env's; a scenario file's path, e.g. scenarios/pipe_following.yaml, which the deploy launch
-/// takes too, or the section itself) and `pipe_scenes`; each absent section keeps its defaults.
+/// takes too, or the section itself) and `pipe_scenes` (the scene::WorldGenerator of random
+/// scenes, any field a distribution); each absent section keeps its defaults.
 struct PipeFollowingConfig {
   PipeFollowingParams env;
   scene::Scenario scenario;
-  PipeSceneRanges scenes;
+  unav::common::Stochastic<scene::WorldGenerator> scenes{YAML::Node(YAML::NodeType::Map), "pipe_scenes"};
 };
 PipeFollowingConfig load_pipe_following_config(const std::string& path);
-/// `config` for the paper's evaluation: the fixed world (env.world), the start on the pipe's
+/// `config` for the paper's evaluation: the fixed world (the scenario's), the start on the pipe's
 /// beginning heading along it (no random offset, heading or arc position), `dynamics` (mpc or
 /// kinematic) and the camera at width x height (0 x 0: its own size).
 PipeFollowingConfig evaluation_config(PipeFollowingConfig config, const std::string& dynamics, int width = 0,
                                       int height = 0);
-/// Sets "env.max_steps", "scenario.cameras.width", "pipe_scenes.turns" ... or a bare env key
+/// Sets "env.max_steps", "scenario.cameras.width", "pipe_scenes.pipeline.legs" ... or a bare env key
 /// ("max_steps") from YAML text. Unknown keys throw ConfigError listing the valid ones.
 void apply_override(PipeFollowingConfig* config, const std::string& key, const std::string& yaml_value,
                     const std::string& source);
@@ -163,7 +167,7 @@ class PipeFollowingEnv {
  private:
   PipeFollowingInfo measure() const;
   PipeFollowingConfig config_;
-  scene::World base_world_, fixed_world_;
+  scene::World base_world_;  ///< the scenario's world: the fixed scene, or the base of random ones
   std::unique_ptr<Episode> episode_;
   double hold_depth_ = 0;
   int steps_ = 0;

@@ -87,6 +87,16 @@ class Stochastic {
       LoadYaml(n, file_, &probe);
     });
   }
+  // Copies own their spec: yaml-cpp's Node assignment writes through every copy of a node.
+  Stochastic(const Stochastic& o) : spec_(YAML::Clone(o.spec_)), file_(o.file_) {}
+  Stochastic& operator=(const Stochastic& o) {
+    if (this != &o) {
+      spec_.reset(YAML::Clone(o.spec_));
+      file_ = o.file_;
+    }
+    return *this;
+  }
+  ~Stochastic() = default;
   /// The concrete config drawn with `seed` (the same seed: the same config, bit for bit).
   T Sample(std::uint64_t seed) const {
     T out{};
