@@ -1,6 +1,7 @@
 // The config schema: reading every field type, the errors (file, key path, value, rule),
 // overrides, documentation and writing back.
 #include "unav_common/config.hpp"
+#include "unav_common/temp_dir.hpp"
 
 #include <unistd.h>
 
@@ -332,18 +333,9 @@ other_node:
 
 class ConfigFile : public ::testing::Test {
  protected:
-  void SetUp() override {
-    char pattern[] = "/tmp/unav_common_config.XXXXXX";
-    ASSERT_NE(::mkdtemp(pattern), nullptr);
-    dir_ = pattern;
-  }
-  void TearDown() override { std::filesystem::remove_all(dir_); }
-  std::string Write(const std::string& name, const std::string& text) {
-    std::string path = dir_ + "/" + name;
-    std::ofstream(path) << text;
-    return path;
-  }
-  std::string dir_;
+  std::string Write(const std::string& name, const std::string& text) { return tmp_.write(name, text); }
+  uc::TempDir tmp_{"unav_common_config"};
+  const std::string& dir_ = tmp_.path();
 };
 
 TEST_F(ConfigFile, LoadsFilesAndNamesBrokenOnes) {

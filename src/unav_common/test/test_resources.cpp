@@ -11,6 +11,7 @@
 #include <gtest/gtest.h>
 
 #include "unav_common/errors.hpp"
+#include "unav_common/temp_dir.hpp"
 
 namespace uc = unav::common;
 using Strings = std::vector<std::string>;
@@ -20,10 +21,6 @@ namespace {
 class Resources : public ::testing::Test {
  protected:
   void SetUp() override {
-    char pattern[] = "/tmp/unav_common_resources.XXXXXX";
-    ASSERT_NE(::mkdtemp(pattern), nullptr);
-    root_ = pattern;
-    prefix_ = root_ + "/install";
     std::filesystem::create_directories(prefix_ + "/share/fakepkg");
     std::filesystem::create_directories(prefix_ + "/lib/fakepkg");
     for (const char* v : {"AMENT_PREFIX_PATH", "CMAKE_PREFIX_PATH", "COLCON_PREFIX_PATH", "UNAV_RESOURCE_PATH"}) {
@@ -36,11 +33,9 @@ class Resources : public ::testing::Test {
     for (const char* v : {"AMENT_PREFIX_PATH", "CMAKE_PREFIX_PATH", "COLCON_PREFIX_PATH", "UNAV_RESOURCE_PATH"})
       ::unsetenv(v);
     for (const auto& [k, v] : saved_) ::setenv(k.c_str(), v.c_str(), 1);
-    std::filesystem::remove_all(root_);
   }
-  static void Write(const std::string& path, const std::string& text = "") {
-    std::filesystem::create_directories(std::filesystem::path(path).parent_path());
-    std::ofstream(path) << text;
+  void Write(const std::string& path, const std::string& text = "") const {
+    tmp_.write(std::filesystem::path(path).lexically_relative(root_).string(), text);
   }
   static std::string ErrorOf(const std::string& path) {
     try {
@@ -52,7 +47,8 @@ class Resources : public ::testing::Test {
     return "";
   }
 
-  std::string root_, prefix_;
+  uc::TempDir tmp_{"unav_common_resources"};
+  const std::string root_ = tmp_.path(), prefix_ = root_ + "/install";
   std::vector<std::pair<std::string, std::string>> saved_;
 };
 

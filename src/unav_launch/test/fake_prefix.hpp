@@ -10,24 +10,19 @@
 
 #include <gtest/gtest.h>
 
+#include "unav_common/temp_dir.hpp"
+
 namespace unav::launch::test {
 
 class FakePrefix : public ::testing::Test {
  protected:
   void SetUp() override {
-    char pattern[] = "/tmp/unav_launch_test.XXXXXX";
-    ASSERT_NE(::mkdtemp(pattern), nullptr);
-    root_ = pattern;
-    prefix_ = root_ + "/install";
-    std::filesystem::create_directories(prefix_ + "/share/fakepkg");
     std::filesystem::create_directories(prefix_ + "/lib/fakepkg");
     write(prefix_ + "/share/fakepkg/package.xml", "<package format=\"3\"><name>fakepkg</name></package>\n");
     ::setenv("AMENT_PREFIX_PATH", prefix_.c_str(), 1);
     ::unsetenv("CMAKE_PREFIX_PATH");
     ::unsetenv("COLCON_PREFIX_PATH");
   }
-
-  void TearDown() override { std::filesystem::remove_all(root_); }
 
   static void write(const std::string& path, const std::string& text) {
     std::filesystem::create_directories(std::filesystem::path(path).parent_path());
@@ -49,8 +44,9 @@ class FakePrefix : public ::testing::Test {
     return path;
   }
 
-  std::string root_;
-  std::string prefix_;
+  unav::common::TempDir tmp_{"unav_launch_test"};
+  const std::string root_ = tmp_.path();
+  const std::string prefix_ = root_ + "/install";
 };
 
 }  // namespace unav::launch::test
