@@ -11,7 +11,7 @@
 namespace unav::physics {
 
 VehiclePorts::VehiclePorts(unav::Node& node, const SensorSuiteParams& sensors, const PortFrames& frames)
-    : world_frame_(frames.world_frame), body_frame_(frames.body_frame) {
+    : world_frame_(frames.world_frame), body_frame_(frames.body_frame), usbl_(sensors.usbl) {
   clock_pub_ = node.create_publisher<rosgraph_msgs::msg::Clock>("/clock", unav::QoS::reliable(1));
   // 100 deep (5 s of lockstep barriers, ~80 kB): a consumer stalled for a while (or dropped from
   // the lockstep) catches up on what its own reader history can hold.
@@ -31,6 +31,9 @@ VehiclePorts::VehiclePorts(unav::Node& node, const SensorSuiteParams& sensors, c
     mag_pub_ = node.create_publisher<sensor_msgs::msg::MagneticField>("mag", unav::QoS::sensor_data());
   if (sensors.gps.enabled)
     gps_pub_ = node.create_publisher<sensor_msgs::msg::NavSatFix>("gps", unav::QoS::sensor_data());
+  // Reliable: a fix comes once a second or less and a navigation filter must not miss one.
+  if (sensors.usbl.enabled)
+    usbl_pub_ = node.create_publisher<unav_msgs::msg::UsblFix>("usbl/fix", unav::QoS::reliable());
   odom_.header().frame_id(world_frame_);
   odom_.child_frame_id(body_frame_);
   thruster_state_.header().frame_id(body_frame_);
@@ -157,6 +160,28 @@ void VehiclePorts::publish_sensors(const Simulator& sim) {
     m.longitude(r.gps.longitude_deg);
     m.altitude(r.gps.altitude_m);
     gps_pub_->publish(m);
+  }
+  if (usbl_pub_ && r.usbl.seq != last_seq_[6] && r.usbl.seq > 0) {
+    last_seq_[6] = r.usbl.seq;
+    unav_msgs::msg::UsblFix m;
+    fill_header(m.header(), r.usbl.stamp, "usbl_transceiver");
+    m.travel_time(r.usbl.stamp - r.usbl.ping_stamp);
+    m.valid(r.usbl.valid);
+    if (r.usbl.valid) {
+      m.range(r.usbl.range_m);
+      m.azimuth(r.usbl.azimuth_rad);
+      m.elevation(r.usbl.elevation_rad);
+      m.position().x(r.usbl.p_X.x());
+      m.position().y(r.usbl.p_X.y());
+      m.position().z(r.usbl.p_X.z());
+      const Eigen::Matrix3d cov = usbl_fix_covariance(usbl_, r.usbl);
+      for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j) m.position_covariance()[static_cast<std::size_t>(3 * i + j)] = cov(i, j);
+      m.position_world().x(r.usbl.p_W.x());
+      m.position_world().y(r.usbl.p_W.y());
+      m.position_world().z(r.usbl.p_W.z());
+    }
+    usbl_pub_->publish(m);
   }
 }
 

@@ -7,6 +7,7 @@
 #include "unav_physics/current.hpp"
 #include "unav_physics/dynamics.hpp"
 #include "unav_physics/vehicle.hpp"
+#include "unav_scene/sonar.hpp"
 
 namespace unav::physics {
 
@@ -43,7 +44,12 @@ std::unique_ptr<Simulator> build_simulator(const unav::scene::Scenario& scenario
 }
 
 std::unique_ptr<Simulator> build_simulator(const unav::scene::Scenario& scenario, const unav::scene::World& world,
-                                           const SimulatorOptions& options, const VehicleParams& vehicle) {
+                                           const SimulatorOptions& options, const VehicleParams& params) {
+  VehicleParams vehicle = params;
+  UsblParams& usbl = vehicle.sensors.usbl;
+  if (usbl.enabled && !(usbl.sound_speed_mps > 0.0))  // the acoustics of the world's water
+    usbl.sound_speed_mps = unav::scene::sound_speed_mackenzie(world.water.temperature_c, world.water.salinity_psu,
+                                                              std::max(0.0, usbl.transceiver_position.z()));
   const std::string& current_file = scenario.current.empty() ? world.current_file : scenario.current;
   std::unique_ptr<CurrentModel> current = current_file.empty() ? nullptr : load_current(current_file);
   return std::make_unique<Simulator>(vehicle, options, std::move(current), seabed_from_world(world),

@@ -25,6 +25,7 @@ SensorSuite::SensorSuite(const SensorSuiteParams& params, const EnvironmentParam
   g_alt_.gen.seed(s + 4);
   g_mag_.gen.seed(s + 5);
   g_gps_.gen.seed(s + 6);
+  usbl_ = Usbl(params.usbl, s + 7);
   s_imu_.period = period_of(params.imu.enabled, params.imu.rate_hz);
   s_pressure_.period = period_of(params.pressure.enabled, params.pressure.rate_hz);
   s_dvl_.period = period_of(params.dvl.enabled, params.dvl.rate_hz);
@@ -174,6 +175,8 @@ void SensorSuite::update(double t, const RigidBodyState& x, const Vector6d& nu_d
     ++r.seq;
     s_gps_.advance(t);
   }
+  if (params_.usbl.enabled && usbl_.step(t, x.p_WB_W + R * params_.usbl.transponder_xyz_m))
+    readings_.usbl = usbl_.reading();
 }
 
 namespace {

@@ -322,6 +322,37 @@ TEST(PhysicsServer, DvlPublishesItsFourBeams) {
   EXPECT_NEAR(last->altitude(), 5.0, 0.5);
 }
 
+// The USBL on the wire (the shipped vehicle's transponder, a transceiver 1 m under the origin):
+// fixes come about once a second, each after the acoustic round trip (2 x range / 1500 m/s + the
+// 0.1 s turnaround), within a few standard deviations (0.1 m range, 1 deg angles at ~4 m) of
+// the transponder on the vehicle held near its start (0, 0, 5) by the thruster failsafe.
+TEST(PhysicsServer, UsblFixesTheVehicleAfterTheAcousticRoundTrip) {
+  std::unique_ptr<unav::Context> server_ctx = make_context({});
+  PhysicsServer server(unav::NodeOptions{server_ctx.get()});
+  std::unique_ptr<unav::Context> test_ctx = make_context({});
+  unav::Node probe("probe", unav::NodeOptions{test_ctx.get()});
+  std::vector<unav_msgs::msg::UsblFix> fixes;
+  auto sub = probe.create_subscription<unav_msgs::msg::UsblFix>(
+      "/rov/usbl/fix", unav::QoS::reliable(), [&](const unav_msgs::msg::UsblFix& m) { fixes.push_back(m); });
+  const std::vector<unav::testing::Link> links = {make_link(server, *sub)};
+  ASSERT_TRUE(unav::testing::wait_for_match({server_ctx.get(), test_ctx.get()}, links))
+      << unav::testing::describe(links);
+  ASSERT_TRUE(unav::testing::spin_until(
+      {server_ctx.get(), test_ctx.get()},
+      [&] { return std::count_if(fixes.begin(), fixes.end(), [](const auto& f) { return f.valid(); }) >= 2; }, 20s))
+      << "fewer than two valid USBL fixes";
+  const auto& f = *std::find_if(fixes.begin(), fixes.end(), [](const auto& m) { return m.valid(); });
+  EXPECT_EQ(f.header().frame_id(), "usbl_transceiver");
+  const Eigen::Vector3d truth = server.simulator().state().p_WB_W + Eigen::Vector3d(-0.1, 0.0, -0.15);
+  const Eigen::Vector3d tx(0.0, 0.0, 1.0);
+  EXPECT_NEAR(f.range(), (truth - tx).norm(), 0.6);  // the vehicle drifts little while held
+  EXPECT_NEAR(f.travel_time(), 2.0 * f.range() / 1500.0 + 0.1, 0.002);
+  const Eigen::Vector3d world(f.position_world().x(), f.position_world().y(), f.position_world().z());
+  EXPECT_NEAR((world - truth).norm(), 0.0, 0.7);
+  EXPECT_NEAR((world - tx - Eigen::Vector3d(f.position().x(), f.position().y(), f.position().z())).norm(), 0.0, 1e-9);
+  for (int i = 0; i < 3; ++i) EXPECT_GT(f.position_covariance()[static_cast<std::size_t>(4 * i)], 0.0);
+}
+
 TEST(LockstepAck, AnAckWrittenBeforeTheServerMatchedStillArrives) {
   unav::Context participant_ctx(unav::testing::test_context_options());
   unav::Node participant("late_ack_participant", {&participant_ctx});

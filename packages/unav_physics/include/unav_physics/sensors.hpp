@@ -11,6 +11,7 @@
 
 #include "unav_common/config.hpp"
 #include "unav_physics/types.hpp"
+#include "unav_physics/usbl.hpp"
 
 namespace unav::physics {
 
@@ -140,6 +141,7 @@ struct SensorSuiteParams {
   AltimeterParams altimeter;
   MagnetometerParams magnetometer;
   GpsParams gps;
+  UsblParams usbl;  ///< the transponder on the vehicle, the transceiver in the world
   template <class Archive>
   void Serialize(Archive* a) {
     using unav::common::Field;
@@ -150,6 +152,7 @@ struct SensorSuiteParams {
     a->Visit(Field("altimeter", &altimeter));
     a->Visit(Field("magnetometer", &magnetometer));
     a->Visit(Field("gps", &gps));
+    a->Visit(Field("usbl", &usbl));
   }
 };
 
@@ -212,6 +215,7 @@ struct SensorReadings {
   RangeReading altimeter;
   MagnetometerReading magnetometer;
   GpsReading gps;
+  UsblReading usbl;
 };
 
 /// Updates every enabled sensor at its own rate from the physics state. Allocation-free.
@@ -251,6 +255,7 @@ class SensorSuite {
   EnvironmentParams env_;
   SensorReadings readings_;
   Gaussian g_imu_, g_pressure_, g_dvl_, g_alt_, g_mag_, g_gps_;
+  Usbl usbl_;
   Schedule s_imu_, s_pressure_, s_dvl_, s_alt_, s_mag_, s_gps_;
   Channel accel_[3], gyro_[3], pressure_, dvl_[4], range_, mag_[3], gps_[3];
 };

@@ -1,5 +1,6 @@
 // The topics a simulated vehicle publishes (DDS adapter, node code): /clock, ground_truth/odom and
-// /tf of its state, thrusters/state, and its sensors (imu, pressure + depth, dvl, range, mag, gps)
+// /tf of its state, thrusters/state, and its sensors (imu, pressure + depth, dvl, range, mag, gps,
+// usbl/fix)
 // as their readings come. One set of ports for every node that owns a vehicle's simulator: the
 // physics server and the autopilot bridge publish alike, so every consumer runs beside either.
 #pragma once
@@ -20,6 +21,7 @@
 #include "unav_common/config.hpp"
 #include "unav_msgs/msg/dvl.hpp"
 #include "unav_msgs/msg/thruster_state.hpp"
+#include "unav_msgs/msg/usbl_fix.hpp"
 #include "unav_physics/simulator.hpp"
 #include "unav_runtime/runtime.hpp"
 
@@ -58,7 +60,8 @@ class VehiclePorts {
   void fill_header(std_msgs::msg::dds_::Header_& h, double t, const std::string& frame) const;
 
   std::string world_frame_, body_frame_;
-  std::uint64_t last_seq_[6] = {0, 0, 0, 0, 0, 0};
+  std::uint64_t last_seq_[7] = {0, 0, 0, 0, 0, 0, 0};
+  UsblParams usbl_;
   std::shared_ptr<unav::Publisher<rosgraph_msgs::msg::Clock>> clock_pub_;
   std::shared_ptr<unav::Publisher<nav_msgs::msg::Odometry>> odom_pub_;
   std::shared_ptr<unav::Publisher<tf2_msgs::msg::TFMessage>> tf_pub_;
@@ -70,6 +73,7 @@ class VehiclePorts {
   std::shared_ptr<unav::Publisher<sensor_msgs::msg::Range>> range_pub_;
   std::shared_ptr<unav::Publisher<sensor_msgs::msg::MagneticField>> mag_pub_;
   std::shared_ptr<unav::Publisher<sensor_msgs::msg::NavSatFix>> gps_pub_;
+  std::shared_ptr<unav::Publisher<unav_msgs::msg::UsblFix>> usbl_pub_;
   // Reused messages (no allocation per publish after the first).
   nav_msgs::msg::Odometry odom_;
   tf2_msgs::msg::TFMessage tf_;
