@@ -11,7 +11,7 @@
 namespace unav::physics {
 
 VehiclePorts::VehiclePorts(unav::Node& node, const SensorSuiteParams& sensors, const PortFrames& frames)
-    : world_frame_(frames.world_frame), body_frame_(frames.body_frame), usbl_(sensors.usbl) {
+    : world_frame_(frames.world_frame), body_frame_(frames.body_frame), usbl_(sensors.usbl), log_(node.logger()) {
   clock_pub_ = node.create_publisher<rosgraph_msgs::msg::Clock>("/clock", unav::QoS::reliable(1));
   // 100 deep (5 s of lockstep barriers, ~80 kB): a consumer stalled for a while (or dropped from
   // the lockstep) catches up on what its own reader history can hold.
@@ -34,6 +34,19 @@ VehiclePorts::VehiclePorts(unav::Node& node, const SensorSuiteParams& sensors, c
   // Reliable: a fix comes once a second or less and a navigation filter must not miss one.
   if (sensors.usbl.enabled)
     usbl_pub_ = node.create_publisher<unav_msgs::msg::UsblFix>("usbl/fix", unav::QoS::reliable());
+  if (sensors.modem.enabled) {
+    const std::uint64_t seed = static_cast<std::uint64_t>(sensors.seed) * 0x9E3779B97F4A7C15ULL + 8;
+    modem_ = std::make_unique<AcousticModem>(sensors.modem, seed);
+    const unav::QoS qos = unav::QoS::reliable(100);
+    vehicle_rx_pub_ = node.create_publisher<unav_msgs::msg::AcousticPacket>("modem/rx", qos);
+    station_rx_pub_ = node.create_publisher<unav_msgs::msg::AcousticPacket>("/surface/modem/rx", qos);
+    vehicle_tx_sub_ = node.create_subscription<unav_msgs::msg::AcousticPacket>(
+        "modem/tx", qos,
+        [this](const unav_msgs::msg::AcousticPacket& m) { queue_packet(AcousticModem::End::kVehicle, m); });
+    station_tx_sub_ = node.create_subscription<unav_msgs::msg::AcousticPacket>(
+        "/surface/modem/tx", qos,
+        [this](const unav_msgs::msg::AcousticPacket& m) { queue_packet(AcousticModem::End::kStation, m); });
+  }
   odom_.header().frame_id(world_frame_);
   odom_.child_frame_id(body_frame_);
   thruster_state_.header().frame_id(body_frame_);
@@ -86,7 +99,34 @@ void VehiclePorts::publish_thruster_state(const Simulator& sim) {
   thruster_pub_->publish(thruster_state_);
 }
 
+void VehiclePorts::queue_packet(AcousticModem::End from, const unav_msgs::msg::AcousticPacket& m) {
+  const auto r = modem_->send(modem_t_, from, m.data());
+  const char* end = from == AcousticModem::End::kVehicle ? "modem/tx" : "/surface/modem/tx";
+  if (r == AcousticModem::Send::kTooLong)
+    log_->warn("{}: a {}-byte packet refused (max_packet_bytes {})", end, m.data().size(),
+               modem_->params().max_packet_bytes);
+  else if (r == AcousticModem::Send::kQueueFull)
+    log_->warn("{}: packet refused, {} already queued (queue_packets)", end, modem_->params().queue_packets);
+}
+
+void VehiclePorts::carry_packets(const Simulator& sim) {
+  const RigidBodyState& x = sim.state();
+  modem_t_ = sim.time();
+  arrivals_.clear();
+  modem_->step(modem_t_, x.p_WB_W + x.q_WB * modem_->params().modem_xyz_m, &arrivals_);
+  for (const auto& pk : arrivals_) {
+    const bool to_vehicle = pk.to == AcousticModem::End::kVehicle;
+    unav_msgs::msg::AcousticPacket m;
+    fill_header(m.header(), pk.arrival, to_vehicle ? "modem" : "surface_modem");
+    m.data(pk.data);
+    m.travel_time(pk.arrival - pk.sent);
+    m.range(pk.range_m);
+    (to_vehicle ? vehicle_rx_pub_ : station_rx_pub_)->publish(m);
+  }
+}
+
 void VehiclePorts::publish_sensors(const Simulator& sim) {
+  if (modem_) carry_packets(sim);
   const SensorReadings& r = sim.sensors();
   if (imu_pub_ && r.imu.valid && r.imu.seq != last_seq_[0]) {
     last_seq_[0] = r.imu.seq;

@@ -73,9 +73,10 @@ PhysicsServer::PhysicsServer(const unav::NodeOptions& options) : Node("physics_s
   // Acks are integer-nanosecond stamps; half a physics step absorbs rounding from doubles.
   barrier_ = std::make_unique<unav::lockstep::Barrier>(participants_, std::llround(0.5 * so.dt * 1e9));
 
-  const VehicleParams vehicle = load_vehicle(p.vehicle_config);
+  VehicleParams vehicle = load_vehicle(p.vehicle_config);
   if (scenario) {
     const unav::scene::World world = unav::scene::scenario_world(*scenario);
+    apply_world_acoustics(world, &vehicle.sensors);  // the ports' modem too
     sim_ = build_simulator(*scenario, world, so, vehicle);
     logger()->info("scenario {} (seed {}): world {}, vehicle {}", p.scenario.file, scenario->seed, scenario->world,
                    scenario->vehicle.model);

@@ -11,6 +11,16 @@
 
 namespace unav::physics {
 
+void apply_world_acoustics(const unav::scene::World& world, SensorSuiteParams* sensors) {
+  const auto at = [&](double depth) {
+    return unav::scene::sound_speed_mackenzie(world.water.temperature_c, world.water.salinity_psu,
+                                              std::max(0.0, depth));
+  };
+  if (!(sensors->usbl.sound_speed_mps > 0.0))
+    sensors->usbl.sound_speed_mps = at(sensors->usbl.transceiver_position.z());
+  if (!(sensors->modem.sound_speed_mps > 0.0)) sensors->modem.sound_speed_mps = at(sensors->modem.station_position.z());
+}
+
 std::unique_ptr<Seabed> seabed_from_world(const unav::scene::World& world) {
   const unav::scene::Seabed& sb = world.seabed;
   if (!sb.enabled) return nullptr;
@@ -46,10 +56,7 @@ std::unique_ptr<Simulator> build_simulator(const unav::scene::Scenario& scenario
 std::unique_ptr<Simulator> build_simulator(const unav::scene::Scenario& scenario, const unav::scene::World& world,
                                            const SimulatorOptions& options, const VehicleParams& params) {
   VehicleParams vehicle = params;
-  UsblParams& usbl = vehicle.sensors.usbl;
-  if (usbl.enabled && !(usbl.sound_speed_mps > 0.0))  // the acoustics of the world's water
-    usbl.sound_speed_mps = unav::scene::sound_speed_mackenzie(world.water.temperature_c, world.water.salinity_psu,
-                                                              std::max(0.0, usbl.transceiver_position.z()));
+  apply_world_acoustics(world, &vehicle.sensors);
   const std::string& current_file = scenario.current.empty() ? world.current_file : scenario.current;
   std::unique_ptr<CurrentModel> current = current_file.empty() ? nullptr : load_current(current_file);
   return std::make_unique<Simulator>(vehicle, options, std::move(current), seabed_from_world(world),

@@ -353,6 +353,33 @@ TEST(PhysicsServer, UsblFixesTheVehicleAfterTheAcousticRoundTrip) {
   for (int i = 0; i < 3; ++i) EXPECT_GT(f.position_covariance()[static_cast<std::size_t>(4 * i)], 0.0);
 }
 
+// The acoustic modem link on the wire: 4 bytes handed to the surface station's modem arrive on
+// the vehicle's after the travel (~4 m at 1500 m/s) plus 0.32 s on the air at 100 bit/s.
+TEST(PhysicsServer, ModemCarriesBytesFromTheSurfaceToTheVehicle) {
+  std::unique_ptr<unav::Context> server_ctx = make_context({});
+  PhysicsServer server(unav::NodeOptions{server_ctx.get()});
+  std::unique_ptr<unav::Context> test_ctx = make_context({});
+  unav::Node probe("probe", unav::NodeOptions{test_ctx.get()});
+  std::vector<unav_msgs::msg::AcousticPacket> got;
+  const unav::QoS qos = unav::QoS::reliable(100);
+  auto sub = probe.create_subscription<unav_msgs::msg::AcousticPacket>(
+      "/rov/modem/rx", qos, [&](const unav_msgs::msg::AcousticPacket& m) { got.push_back(m); });
+  auto pub = probe.create_publisher<unav_msgs::msg::AcousticPacket>("/surface/modem/tx", qos);
+  const std::vector<unav::testing::Link> links = {make_link(server, *sub), make_link(*pub, server)};
+  ASSERT_TRUE(unav::testing::wait_for_match({server_ctx.get(), test_ctx.get()}, links))
+      << unav::testing::describe(links);
+  unav_msgs::msg::AcousticPacket m;
+  m.data({0xDE, 0xAD, 0xBE, 0xEF});
+  pub->publish(m);
+  ASSERT_TRUE(unav::testing::spin_until(
+      {server_ctx.get(), test_ctx.get()}, [&] { return !got.empty(); }, 20s))
+      << "no packet arrived";
+  EXPECT_EQ(got[0].data(), (std::vector<std::uint8_t>{0xDE, 0xAD, 0xBE, 0xEF}));
+  EXPECT_EQ(got[0].header().frame_id(), "modem");
+  EXPECT_NEAR(got[0].range(), 3.9, 0.6);  // the vehicle held near (0, 0, 5), the station at (0, 0, 1)
+  EXPECT_NEAR(got[0].travel_time(), got[0].range() / 1500.0 + 0.32, 0.0011);  // + up to a step of hand-over
+}
+
 TEST(LockstepAck, AnAckWrittenBeforeTheServerMatchedStillArrives) {
   unav::Context participant_ctx(unav::testing::test_context_options());
   unav::Node participant("late_ack_participant", {&participant_ctx});

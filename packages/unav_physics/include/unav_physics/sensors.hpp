@@ -10,6 +10,7 @@
 #include <string>
 
 #include "unav_common/config.hpp"
+#include "unav_physics/acoustic_modem.hpp"
 #include "unav_physics/types.hpp"
 #include "unav_physics/usbl.hpp"
 
@@ -141,7 +142,8 @@ struct SensorSuiteParams {
   AltimeterParams altimeter;
   MagnetometerParams magnetometer;
   GpsParams gps;
-  UsblParams usbl;  ///< the transponder on the vehicle, the transceiver in the world
+  UsblParams usbl;            ///< the transponder on the vehicle, the transceiver in the world
+  AcousticModemParams modem;  ///< the vehicle's acoustic modem and the station's (carried by the node's ports)
   template <class Archive>
   void Serialize(Archive* a) {
     using unav::common::Field;
@@ -153,6 +155,7 @@ struct SensorSuiteParams {
     a->Visit(Field("magnetometer", &magnetometer));
     a->Visit(Field("gps", &gps));
     a->Visit(Field("usbl", &usbl));
+    a->Visit(Field("modem", &modem));
   }
 };
 

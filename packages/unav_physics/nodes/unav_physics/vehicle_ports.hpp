@@ -1,6 +1,7 @@
 // The topics a simulated vehicle publishes (DDS adapter, node code): /clock, ground_truth/odom and
 // /tf of its state, thrusters/state, and its sensors (imu, pressure + depth, dvl, range, mag, gps,
-// usbl/fix)
+// usbl/fix), and the acoustic modem link (modem/tx -> /surface/modem/rx, /surface/modem/tx ->
+// modem/rx, delivered in simulated time)
 // as their readings come. One set of ports for every node that owns a vehicle's simulator: the
 // physics server and the autopilot bridge publish alike, so every consumer runs beside either.
 #pragma once
@@ -19,6 +20,7 @@
 #include "sensor_msgs/msg/range.hpp"
 #include "tf2_msgs/msg/tf_message.hpp"
 #include "unav_common/config.hpp"
+#include "unav_msgs/msg/acoustic_packet.hpp"
 #include "unav_msgs/msg/dvl.hpp"
 #include "unav_msgs/msg/thruster_state.hpp"
 #include "unav_msgs/msg/usbl_fix.hpp"
@@ -74,6 +76,14 @@ class VehiclePorts {
   std::shared_ptr<unav::Publisher<sensor_msgs::msg::MagneticField>> mag_pub_;
   std::shared_ptr<unav::Publisher<sensor_msgs::msg::NavSatFix>> gps_pub_;
   std::shared_ptr<unav::Publisher<unav_msgs::msg::UsblFix>> usbl_pub_;
+  void carry_packets(const Simulator& sim);
+  void queue_packet(AcousticModem::End from, const unav_msgs::msg::AcousticPacket& m);
+  std::unique_ptr<AcousticModem> modem_;
+  double modem_t_ = 0.0;  ///< simulated time of the last step: packets handed over now leave then
+  std::vector<AcousticModem::Packet> arrivals_;
+  std::shared_ptr<unav::Publisher<unav_msgs::msg::AcousticPacket>> vehicle_rx_pub_, station_rx_pub_;
+  std::shared_ptr<unav::Subscription<unav_msgs::msg::AcousticPacket>> vehicle_tx_sub_, station_tx_sub_;
+  unav::Logger log_;
   // Reused messages (no allocation per publish after the first).
   nav_msgs::msg::Odometry odom_;
   tf2_msgs::msg::TFMessage tf_;
