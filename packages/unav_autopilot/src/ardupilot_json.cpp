@@ -191,10 +191,7 @@ std::string format_state_json(const FdmState& s) {
 
 JsonBackend::JsonBackend(const unav::scene::Scenario& scenario, const unav::scene::World& world, MotorMap map,
                          const std::string& map_file)
-    : scenario_(scenario),
-      world_(world),
-      map_(std::move(map)),
-      vehicle_(physics::load_vehicle(scenario_.vehicle.model)) {
+    : scenario_(scenario), world_(world), map_(std::move(map)), vehicle_(physics::scenario_vehicle(scenario_)) {
   check_motor_map(map_, vehicle_, map_file);
   for (const auto& m : map_.motors)
     for (std::size_t i = 0; i < vehicle_.thrusters.size(); ++i)

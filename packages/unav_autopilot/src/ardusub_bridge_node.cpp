@@ -51,7 +51,7 @@ ArduSubBridge::ArduSubBridge(const unav::NodeOptions& options) : Node("ardusub_b
   ::getsockname(fd_, reinterpret_cast<sockaddr*>(&sa), &len);
   bound_port_ = ntohs(sa.sin_port);
 
-  ports_ = std::make_unique<physics::VehiclePorts>(*this, backend_->vehicle().sensors, p.frames);
+  ports_ = std::make_unique<physics::VehiclePorts>(*this, backend_->vehicle(), p.frames);
   ports_->publish_state(backend_->simulator());
   next_publish_ = publish_period_;
   timer_ = create_wall_timer(std::chrono::milliseconds(1), [this] { drain(); });

@@ -10,8 +10,17 @@
 
 namespace unav::physics {
 
-VehiclePorts::VehiclePorts(unav::Node& node, const SensorSuiteParams& sensors, const PortFrames& frames)
-    : world_frame_(frames.world_frame), body_frame_(frames.body_frame), usbl_(sensors.usbl), log_(node.logger()) {
+VehiclePorts::VehiclePorts(unav::Node& node, const VehicleParams& vehicle, const PortFrames& frames)
+    : world_frame_(frames.world_frame),
+      body_frame_(frames.body_frame),
+      usbl_(vehicle.sensors.usbl),
+      log_(node.logger()) {
+  const SensorSuiteParams& sensors = vehicle.sensors;
+  if (vehicle.tether.enabled) {
+    tether_wrench_pub_ =
+        node.create_publisher<geometry_msgs::msg::WrenchStamped>("tether/wrench", unav::QoS::sensor_data());
+    tether_path_pub_ = node.create_publisher<nav_msgs::msg::Path>("tether/path", unav::QoS::reliable(1));
+  }
   clock_pub_ = node.create_publisher<rosgraph_msgs::msg::Clock>("/clock", unav::QoS::reliable(1));
   // 100 deep (5 s of lockstep barriers, ~80 kB): a consumer stalled for a while (or dropped from
   // the lockstep) catches up on what its own reader history can hold.
@@ -97,6 +106,35 @@ void VehiclePorts::publish_thruster_state(const Simulator& sim) {
   }
   fill_header(thruster_state_.header(), sim.time(), body_frame_);
   thruster_pub_->publish(thruster_state_);
+  if (tether_wrench_pub_ && sim.tether() != nullptr) publish_tether(sim);
+}
+
+void VehiclePorts::publish_tether(const Simulator& sim) {
+  // The pull on the vehicle at the thruster-state rate, in body axes about the body origin.
+  const Eigen::Vector3d f_B = sim.state().q_WB.conjugate() * sim.tether_force_W();
+  const Eigen::Vector3d m_B = sim.tether()->params().attach_xyz_m.cross(f_B);
+  geometry_msgs::msg::WrenchStamped w;
+  fill_header(w.header(), sim.time(), body_frame_);
+  w.wrench().force().x(f_B.x());
+  w.wrench().force().y(f_B.y());
+  w.wrench().force().z(f_B.z());
+  w.wrench().torque().x(m_B.x());
+  w.wrench().torque().y(m_B.y());
+  w.wrench().torque().z(m_B.z());
+  tether_wrench_pub_->publish(w);
+  if (tether_calls_++ % 10 != 0) return;  // the shape at a tenth of that rate
+  nav_msgs::msg::Path path;
+  fill_header(path.header(), sim.time(), world_frame_);
+  for (const auto& n : sim.tether()->nodes()) {
+    geometry_msgs::msg::PoseStamped p;
+    p.header(path.header());
+    p.pose().position().x(n.x());
+    p.pose().position().y(n.y());
+    p.pose().position().z(n.z());
+    p.pose().orientation().w(1.0);
+    path.poses().push_back(p);
+  }
+  tether_path_pub_->publish(path);
 }
 
 void VehiclePorts::queue_packet(AcousticModem::End from, const unav_msgs::msg::AcousticPacket& m) {

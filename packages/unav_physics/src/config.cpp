@@ -257,7 +257,7 @@ VehicleParams parse_vehicle(const YAML::Node& node, const std::string& source) {
   // key); what depends on which keys are given is settled on the YAML first: required keys,
   // buoyancy 'neutral' (the default) or a number exclusive with volume, thruster_defaults under
   // every thruster entry that does not set the key itself, default thruster names, and a sensor
-  // whose section is given is enabled unless it says otherwise.
+  // (and the tether) whose section is given is enabled unless it says otherwise.
   if (!node.IsMap()) throw ConfigError(source, "", flow(node), "must be a mapping (a vehicle)");
   require_keys(node, source, "", {"mass", "inertia", "added_mass", "linear_damping", "quadratic_damping", "thrusters"});
   YAML::Node y = YAML::Clone(node);
@@ -291,6 +291,7 @@ VehicleParams parse_vehicle(const YAML::Node& node, const std::string& source) {
     for (const auto& kv : given_defaults)
       if (!t[kv.first.Scalar()].IsDefined()) t[kv.first.Scalar()] = YAML::Clone(kv.second);
   }
+  if (y["tether"].IsMap() && !y["tether"]["enabled"].IsDefined()) y["tether"]["enabled"] = true;
   YAML::Node sensors = y["sensors"];
   if (sensors.IsMap()) {
     for (auto kv : sensors) {

@@ -73,7 +73,7 @@ PhysicsServer::PhysicsServer(const unav::NodeOptions& options) : Node("physics_s
   // Acks are integer-nanosecond stamps; half a physics step absorbs rounding from doubles.
   barrier_ = std::make_unique<unav::lockstep::Barrier>(participants_, std::llround(0.5 * so.dt * 1e9));
 
-  VehicleParams vehicle = load_vehicle(p.vehicle_config);
+  VehicleParams vehicle = scenario ? scenario_vehicle(*scenario) : load_vehicle(p.vehicle_config);
   if (scenario) {
     const unav::scene::World world = unav::scene::scenario_world(*scenario);
     apply_world_acoustics(world, &vehicle.sensors);  // the ports' modem too
@@ -85,11 +85,21 @@ PhysicsServer::PhysicsServer(const unav::NodeOptions& options) : Node("physics_s
   }
 
   // Ports.
-  ports_ = std::make_unique<VehiclePorts>(*this, vehicle.sensors, p.frames);
+  ports_ = std::make_unique<VehiclePorts>(*this, vehicle, p.frames);
   command_sub_ = create_subscription<unav_msgs::msg::ThrusterCommand>(
       "thrusters/command", unav::QoS::reliable(), [this](const unav_msgs::msg::ThrusterCommand& m) { on_command(m); });
   reset_sub_ = create_subscription<geometry_msgs::msg::Pose>(
       "sim/reset", unav::QoS::reliable(), [this](const geometry_msgs::msg::Pose& m) { on_reset(m); });
+  if (vehicle.tether.enabled)  // the winch: the length paid out
+    length_sub_ = create_subscription<std_msgs::msg::Float64>(
+        "tether/length", unav::QoS::reliable(), [this](const std_msgs::msg::Float64& m) {
+          if (!(std::isfinite(m.data()) && m.data() > 0.0)) {
+            rejections_.reject(length_sub_->topic_name(), "a length must be finite and > 0 m");
+            return;
+          }
+          sim_->set_tether_length(m.data());
+          logger()->info("tether paid out to {:.2f} m at t = {:.3f} s", m.data(), sim_->time());
+        });
   if (lockstep_) {
     ack_sub_ = create_subscription<unav_msgs::msg::LockstepAck>(
         "/lockstep/ack", unav::lockstep::ack_qos(), [this](const unav_msgs::msg::LockstepAck& m) { on_ack(m); });
@@ -321,7 +331,12 @@ void PhysicsServer::on_reset(const geometry_msgs::msg::Pose& pose) {
   RigidBodyState x;
   x.p_WB_W = unav::from_msg(pose.position());
   x.q_WB = unav::from_msg(pose.orientation());  // normalised by teleport()
-  sim_->teleport(x);
+  try {
+    sim_->teleport(x);
+  } catch (const ConfigError& e) {  // out of the tether's reach
+    rejections_.reject(reset_sub_->topic_name(), e.what());
+    return;
+  }
   ++episodes_;
   logger()->info("episode {}: the vehicle is at [{:.3f}, {:.3f}, {:.3f}] m (NED), at rest, t = {:.3f} s", episodes_,
                  x.p_WB_W.x(), x.p_WB_W.y(), x.p_WB_W.z(), sim_->time());

@@ -19,6 +19,12 @@
 //   pub  range                 sensor_msgs/Range                  sensor_data  altimeter
 //   pub  mag                   sensor_msgs/MagneticField          sensor_data
 //   pub  gps                   sensor_msgs/NavSatFix              sensor_data  NO_FIX below 0.1 m
+//   pub  usbl/fix              unav_msgs/UsblFix                  reliable     after the acoustic round trip
+//   sub  modem/tx, /surface/modem/tx   unav_msgs/AcousticPacket   reliable 100 bytes to send (acoustic modem)
+//   pub  /surface/modem/rx, modem/rx   unav_msgs/AcousticPacket   reliable 100 what arrived, in simulated time
+//   sub  tether/length         std_msgs/Float64                   reliable     length paid out [m] (> 0)
+//   pub  tether/wrench         geometry_msgs/WrenchStamped        sensor_data  the tether's pull, body frame
+//   pub  tether/path           nav_msgs/Path                      reliable 1   its nodes, anchor first (10 Hz)
 //
 // Time modes:
 //   realtime  simulated time follows the wall clock times real_time_factor.
@@ -54,6 +60,7 @@
 #include "sensor_msgs/msg/magnetic_field.hpp"
 #include "sensor_msgs/msg/nav_sat_fix.hpp"
 #include "sensor_msgs/msg/range.hpp"
+#include "std_msgs/msg/float64.hpp"
 #include "std_msgs/msg/string.hpp"
 #include "tf2_msgs/msg/tf_message.hpp"
 #include "unav_common/config.hpp"
@@ -189,6 +196,7 @@ class PhysicsServer : public unav::Node {
   std::shared_ptr<unav::Subscription<unav_msgs::msg::LockstepAck>> ack_sub_;
   std::shared_ptr<unav::Subscription<std_msgs::msg::String>> drop_sub_;
   std::shared_ptr<unav::Subscription<geometry_msgs::msg::Pose>> reset_sub_;
+  std::shared_ptr<unav::Subscription<std_msgs::msg::Float64>> length_sub_;
   unav::RejectionCounter rejections_{logger()};
   int episodes_ = 1;
   std::shared_ptr<unav::Timer> timer_;

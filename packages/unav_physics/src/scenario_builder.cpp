@@ -11,6 +11,17 @@
 
 namespace unav::physics {
 
+VehicleParams scenario_vehicle(const unav::scene::Scenario& scenario) {
+  const std::string& file = scenario.vehicle.model;
+  if (scenario.vehicle.set.empty()) return load_vehicle(file);
+  std::string label = file + " (vehicle.set:";
+  for (const auto& o : scenario.vehicle.set) label += " " + o;
+  label += ")";
+  return parse_vehicle(
+      unav::scene::apply_scenario_overrides(unav::common::detail::ReadYamlFile(file), scenario.vehicle.set, label),
+      label);
+}
+
 void apply_world_acoustics(const unav::scene::World& world, SensorSuiteParams* sensors) {
   const auto at = [&](double depth) {
     return unav::scene::sound_speed_mackenzie(world.water.temperature_c, world.water.salinity_psu,
@@ -50,7 +61,7 @@ SimulatorOptions scenario_simulator_options(const unav::scene::Scenario& scenari
 
 std::unique_ptr<Simulator> build_simulator(const unav::scene::Scenario& scenario, const unav::scene::World& world,
                                            const SimulatorOptions& options) {
-  return build_simulator(scenario, world, options, load_vehicle(scenario.vehicle.model));
+  return build_simulator(scenario, world, options, scenario_vehicle(scenario));
 }
 
 std::unique_ptr<Simulator> build_simulator(const unav::scene::Scenario& scenario, const unav::scene::World& world,

@@ -3,6 +3,7 @@
 
 #include <cmath>
 #include <sstream>
+#include <utility>
 
 namespace unav::physics {
 
@@ -55,6 +56,7 @@ Simulator::Simulator(const VehicleParams& vehicle, const SimulatorOptions& optio
       seabed_(std::move(seabed)),
       timeout_(options.command_timeout) {
   if (vehicle.thrusters.empty()) throw ConfigError("vehicle '" + vehicle.name + "': thrusters must not be empty");
+  if (vehicle.tether.enabled) tether_ = std::make_unique<Tether>(vehicle.tether, options.environment);
   reset(initial);
 }
 
@@ -63,12 +65,42 @@ void Simulator::teleport(const RigidBodyState& x) {
         x.q_WB.norm() > 1e-9)) {
     throw ConfigError("initial state must be finite with a non-zero quaternion");
   }
-  x_ = x;
-  x_.q_WB.normalize();
+  RigidBodyState y = x;
+  y.q_WB.normalize();
+  // The tether first: a vehicle out of its reach is refused before anything changes.
+  if (tether_) tether_->reset(y.p_WB_W + y.q_WB * tether_->params().attach_xyz_m);
+  x_ = y;
   thrusters_.reset();
   u_cmd_.setZero(thrusters_.size());
   u_zero_.setZero(thrusters_.size());
+  if (tether_) update_tether_wrench();  // laid out anew from the anchor to the vehicle above
   nu_dot_fresh_ = false;
+}
+
+namespace {
+// The attachment point of the tether on the vehicle: position and velocity, world NED.
+std::pair<Eigen::Vector3d, Eigen::Vector3d> attachment(const RigidBodyState& x, const Eigen::Vector3d& r_B) {
+  const Eigen::Matrix3d R = x.q_WB.toRotationMatrix();
+  return {x.p_WB_W + R * r_B, R * (x.v_WB_B + x.w_WB_B.cross(r_B))};
+}
+}  // namespace
+
+void Simulator::update_tether_wrench() {
+  const Eigen::Vector3d& r_B = tether_->params().attach_xyz_m;
+  const auto [p, v] = attachment(x_, r_B);
+  const Eigen::Vector3d f_B = x_.q_WB.conjugate() * tether_->force_on_vehicle_W(p, v);
+  tether_tau_B_ << f_B, r_B.cross(f_B);
+}
+
+Eigen::Vector3d Simulator::tether_force_W() const {
+  if (!tether_) return Eigen::Vector3d::Zero();
+  const auto [p, v] = attachment(x_, tether_->params().attach_xyz_m);
+  return tether_->force_on_vehicle_W(p, v);
+}
+
+void Simulator::set_tether_length(double length_m) {
+  if (!tether_) throw ConfigError("simulator", "tether", "", "the vehicle has no tether (vehicle file: tether)");
+  tether_->set_length(length_m);
 }
 
 void Simulator::reset(const RigidBodyState& x) {
@@ -83,7 +115,7 @@ void Simulator::reset(const RigidBodyState& x) {
 
 DynamicsInputs Simulator::inputs_at(double t) const {
   DynamicsInputs in;
-  in.tau_B = thrusters_.wrench_B() + external_tau_B_;
+  in.tau_B = thrusters_.wrench_B() + external_tau_B_ + tether_tau_B_;
   in.v_c_W = current_->velocity_W(t);
   in.a_c_W = current_->acceleration_W(t);
   in.seabed = seabed_.get();
@@ -133,17 +165,25 @@ void Simulator::step() {
   // The lag filter advances first; the integrator sees the thrust as the lag makes it vary over
   // the step (start, middle, end: RK4 keeps its 4th order; holding the end value made thrust
   // lead by half a step and the integration first order).
-  const Vector6d tau_start_B = thrusters_.wrench_B() + external_tau_B_;
+  // The tether's pull is held over the step (it is stepped after the vehicle, with the vehicle's
+  // end where the step took it).
+  const Vector6d outer_B = external_tau_B_ + tether_tau_B_;
+  const Vector6d tau_start_B = thrusters_.wrench_B() + outer_B;
   thrusters_.step(dt, expired ? u_zero_ : u_cmd_);
   DynamicsInputs in = inputs_at(t0);
   in.tau_staged = true;
   in.tau_B = tau_start_B;
-  in.tau_B_half = thrusters_.wrench_at_B(0.5 * dt) + external_tau_B_;
-  in.tau_B_end = thrusters_.wrench_B() + external_tau_B_;
+  in.tau_B_half = thrusters_.wrench_at_B(0.5 * dt) + outer_B;
+  in.tau_B_end = thrusters_.wrench_B() + outer_B;
   dynamics_.step(x_, dt, in, options_.integrator);
   current_->step(t0, dt);
   ++steps_;
   nu_dot_fresh_ = false;
+  if (tether_) {
+    const auto [p, v] = attachment(x_, tether_->params().attach_xyz_m);
+    tether_->step(dt, p, v, current_->velocity_W(time()), seabed_.get());
+    update_tether_wrench();
+  }
 
   const double t1 = time();
   // nu_dot only when the IMU samples (it costs one more model evaluation).

@@ -447,3 +447,46 @@ TEST(PhysicsServer, ScenarioRunsTheSameOverDdsAndInProcess) {
   EXPECT_LT(bottom, 6.0 + 0.07);
   EXPECT_LT(std::abs(sim->state().v_WB_B.z()), 0.01);
 }
+
+// The tether on the wire, enabled by a scenario's vehicle.set: its shape (anchor first, one pose
+// per node) and its pull arrive; tether/length pays it out; a NaN length is rejected and counted.
+TEST(PhysicsServer, ScenarioTetherIsPublishedAndPaidOut) {
+  const std::string world_path = write_world("tether", "seabed: {depth_m: 20.0}\n");
+  const std::string scenario_path = std::filesystem::path(world_path).parent_path().string() + "/tether.yaml";
+  std::ofstream(scenario_path)
+      << "name: tethered\nworld: world.yaml\n"
+      << "vehicle: {model: " << UNAV_CONFIG_DIR
+      << "/vehicles/bluerov2_heavy.yaml, initial_position: [3.0, 0.0, 5.0],"
+         " set: ['tether.anchor_position=[0, 0, 0.5]', tether.length_m=12, tether.segments=12]}\n";
+  std::unique_ptr<unav::Context> server_ctx = make_context({"-p", "scenario:=" + scenario_path});
+  PhysicsServer server(unav::NodeOptions{server_ctx.get()});
+  ASSERT_NE(server.simulator().tether(), nullptr);
+  std::unique_ptr<unav::Context> test_ctx = make_context({});
+  unav::Node probe("probe", unav::NodeOptions{test_ctx.get()});
+  std::optional<nav_msgs::msg::Path> path;
+  std::optional<geometry_msgs::msg::WrenchStamped> wrench;
+  auto path_sub = probe.create_subscription<nav_msgs::msg::Path>("/rov/tether/path", unav::QoS::reliable(1),
+                                                                 [&](const nav_msgs::msg::Path& m) { path = m; });
+  auto wrench_sub = probe.create_subscription<geometry_msgs::msg::WrenchStamped>(
+      "/rov/tether/wrench", unav::QoS::sensor_data(), [&](const geometry_msgs::msg::WrenchStamped& m) { wrench = m; });
+  auto length_pub = probe.create_publisher<std_msgs::msg::Float64>("/rov/tether/length", unav::QoS::reliable());
+  const std::vector<unav::testing::Link> links = {make_link(server, *path_sub), make_link(server, *wrench_sub),
+                                                  make_link(*length_pub, server)};
+  ASSERT_TRUE(unav::testing::wait_for_match({server_ctx.get(), test_ctx.get()}, links))
+      << unav::testing::describe(links);
+  ASSERT_TRUE(unav::testing::spin_until(
+      {server_ctx.get(), test_ctx.get()}, [&] { return path && wrench; }, 20s));
+  ASSERT_EQ(path->poses().size(), 13u);
+  EXPECT_EQ(path->header().frame_id(), "world_ned");
+  EXPECT_DOUBLE_EQ(path->poses()[0].pose().position().z(), 0.5);
+  EXPECT_TRUE(std::isfinite(wrench->wrench().force().z()));
+  std_msgs::msg::Float64 len;
+  len.data(std::nan(""));
+  length_pub->publish(len);
+  len.data(20.0);
+  length_pub->publish(len);
+  ASSERT_TRUE(unav::testing::spin_until(
+      {server_ctx.get(), test_ctx.get()}, [&] { return std::abs(server.simulator().tether()->length() - 20.0) < 1e-9; },
+      20s));
+  EXPECT_EQ(server.rejections().count("rt/rov/tether/length"), 1u);
+}

@@ -25,7 +25,7 @@ EpisodeSetup load_episode_setup(const scene::Scenario& scenario) {
   scene::resolve_scenario_paths(&s.scenario, "scenario", "");
   const scene::Scenario& sc = s.scenario;
   // The episode sends a command every control period; the failsafe would only mask a bug.
-  s.plant = physics::load_vehicle(sc.vehicle.model);
+  s.plant = physics::scenario_vehicle(sc);
   s.simulator = physics::scenario_simulator_options(sc, 0.0);
   s.mpc = control::load_mpc_config(sc.control.mpc);
   s.mpc.options.max_solve_time_ms = 0.0;  // iterations only: episodes repeat exactly

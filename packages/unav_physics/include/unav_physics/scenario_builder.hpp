@@ -27,6 +27,10 @@ SimulatorOptions scenario_simulator_options(const unav::scene::Scenario& scenari
 /// The simulator of a scenario in `world` (the world the scenario names, loaded by the caller,
 /// who also renders it): vehicle.model, the options above, the world's seabed and current, the
 /// initial state. Throws ConfigError naming the file and key on a bad vehicle or current file.
+/// The scenario's vehicle: its model file with vehicle.set applied (the same rules and errors as
+/// the file's keys; errors name the file and "vehicle.set"). Throws ConfigError.
+VehicleParams scenario_vehicle(const unav::scene::Scenario& scenario);
+
 /// The sound speed of the world's water (Mackenzie at the transceiver's / station's depth) for
 /// the USBL and the acoustic modem that leave theirs at 0.
 void apply_world_acoustics(const unav::scene::World& world, SensorSuiteParams* sensors);

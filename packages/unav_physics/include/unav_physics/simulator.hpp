@@ -14,6 +14,7 @@
 #include "unav_physics/dynamics.hpp"
 #include "unav_physics/seabed.hpp"
 #include "unav_physics/sensors.hpp"
+#include "unav_physics/tether.hpp"
 #include "unav_physics/thrusters.hpp"
 #include "unav_physics/vehicle.hpp"
 
@@ -104,6 +105,11 @@ class Simulator {
   /// Water velocity at the vehicle now, NED, m/s.
   Eigen::Vector3d current_velocity_W() const { return current_->velocity_W(time()); }
   const Seabed* seabed() const { return seabed_.get(); }
+  /// The tether (null without one) and its force on the vehicle now, world NED [N].
+  const Tether* tether() const { return tether_.get(); }
+  Eigen::Vector3d tether_force_W() const;
+  /// Pays the tether out (or in) to `length_m` from now on. Throws ConfigError without a tether.
+  void set_tether_length(double length_m);
   const SimulatorOptions& options() const { return options_; }
 
  private:
@@ -120,6 +126,9 @@ class Simulator {
   mutable Vector6d nu_dot_ = Vector6d::Zero();
   mutable bool nu_dot_fresh_ = false;
   Vector6d external_tau_B_ = Vector6d::Zero();
+  std::unique_ptr<Tether> tether_;
+  Vector6d tether_tau_B_ = Vector6d::Zero();  ///< the tether's wrench at the start of the step
+  void update_tether_wrench();
   ThrusterVector u_cmd_, u_zero_;
   CommandStats stats_;
   bool timed_out_ = false;

@@ -8,6 +8,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include "unav_physics/sensors.hpp"
+#include "unav_physics/tether.hpp"
 #include "unav_physics/types.hpp"
 
 namespace unav::physics {
@@ -84,6 +85,7 @@ struct VehicleParams {
   std::vector<ThrusterParams> thrusters;
   ContactParams contact;
   SensorSuiteParams sensors;
+  TetherParams tether;
 
   /// The file's keys (config/vehicles/*.yaml) but thruster_defaults, which parse_vehicle() applies
   /// to each thruster entry that does not set a key itself, and buoyancy: neutral (the default).
@@ -105,6 +107,7 @@ struct VehicleParams {
     a->Visit(Field("thrusters", &thrusters));
     a->Visit(Field("contact", &contact));
     a->Visit(Field("sensors", &sensors));
+    a->Visit(Field("tether", &tether));
   }
 
   /// Fully submerged buoyancy, N, for this environment.

@@ -1,7 +1,8 @@
 // The topics a simulated vehicle publishes (DDS adapter, node code): /clock, ground_truth/odom and
 // /tf of its state, thrusters/state, and its sensors (imu, pressure + depth, dvl, range, mag, gps,
 // usbl/fix), and the acoustic modem link (modem/tx -> /surface/modem/rx, /surface/modem/tx ->
-// modem/rx, delivered in simulated time)
+// modem/rx, delivered in simulated time) and, with a tether, its pull (tether/wrench) and shape
+// (tether/path)
 // as their readings come. One set of ports for every node that owns a vehicle's simulator: the
 // physics server and the autopilot bridge publish alike, so every consumer runs beside either.
 #pragma once
@@ -11,7 +12,10 @@
 #include <vector>
 
 #include "geometry_msgs/msg/point_stamped.hpp"
+#include "geometry_msgs/msg/pose_stamped.hpp"
+#include "geometry_msgs/msg/wrench_stamped.hpp"
 #include "nav_msgs/msg/odometry.hpp"
+#include "nav_msgs/msg/path.hpp"
 #include "rosgraph_msgs/msg/clock.hpp"
 #include "sensor_msgs/msg/fluid_pressure.hpp"
 #include "sensor_msgs/msg/imu.hpp"
@@ -49,7 +53,7 @@ class VehiclePorts {
  public:
   /// Creates the publishers on `node` (names relative to its namespace; /clock and /tf absolute);
   /// a sensor's topic only when the vehicle has it enabled.
-  VehiclePorts(unav::Node& node, const SensorSuiteParams& sensors, const PortFrames& frames);
+  VehiclePorts(unav::Node& node, const VehicleParams& vehicle, const PortFrames& frames);
   /// /clock, ground_truth/odom (world_frame -> body_frame), /tf at the simulator's time.
   void publish_state(const Simulator& sim);
   void publish_thruster_state(const Simulator& sim);
@@ -76,6 +80,10 @@ class VehiclePorts {
   std::shared_ptr<unav::Publisher<sensor_msgs::msg::MagneticField>> mag_pub_;
   std::shared_ptr<unav::Publisher<sensor_msgs::msg::NavSatFix>> gps_pub_;
   std::shared_ptr<unav::Publisher<unav_msgs::msg::UsblFix>> usbl_pub_;
+  std::shared_ptr<unav::Publisher<geometry_msgs::msg::WrenchStamped>> tether_wrench_pub_;
+  std::shared_ptr<unav::Publisher<nav_msgs::msg::Path>> tether_path_pub_;
+  std::uint64_t tether_calls_ = 0;
+  void publish_tether(const Simulator& sim);
   void carry_packets(const Simulator& sim);
   void queue_packet(AcousticModem::End from, const unav_msgs::msg::AcousticPacket& m);
   std::unique_ptr<AcousticModem> modem_;

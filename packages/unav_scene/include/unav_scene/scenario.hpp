@@ -33,11 +33,15 @@ struct ScenarioVehicle {
   std::string model = "vehicles/bluerov2_heavy.yaml";  ///< plant YAML (config/vehicles/...)
   Eigen::Vector3d initial_position{0.0, 0.0, 0.0};     ///< m, world NED
   Eigen::Vector3d initial_rpy_deg{0.0, 0.0, 0.0};      ///< roll, pitch, yaw [deg]
+  /// Keys of the vehicle file replaced for this run ("key.path=value", checked by the vehicle's
+  /// schema), e.g. ["tether.enabled=true", "tether.length_m=40", "sensors.usbl.rate=2"].
+  std::vector<std::string> set;
 
   template <class Archive>
   void Serialize(Archive* a) {
     using unav::common::Field;
     a->Visit(Field("model", &model).Doc("vehicle YAML: relative to the scenario, config/ or absolute"));
+    a->Visit(Field("set", &set).Doc("vehicle-file keys replaced: [key.path=value, ...] (tether, sensors, ...)"));
     a->Visit(Field("initial_position", &initial_position).Range(-1e5, 1e5).Unit("m").Doc("start, world NED"));
     a->Visit(Field("initial_rpy_deg", &initial_rpy_deg).Range(-360.0, 360.0).Unit("deg").Doc("start roll, pitch, yaw"));
   }
