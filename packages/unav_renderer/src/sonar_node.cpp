@@ -100,6 +100,7 @@ SonarNode::SonarNode(const unav::NodeOptions& options) : Node("sonar", options, 
     } else {
       p.image = create_publisher<marine_acoustic_msgs::msg::ProjectedSonarImage>(base + "/image", qos);
       if (fan_width_ > 0) p.view = create_publisher<sensor_msgs::msg::Image>(base + "/image_fan", qos);
+      if (m.profiling()) p.points = create_publisher<sensor_msgs::msg::PointCloud2>(base + "/points", qos);
     }
     ports_.push_back(std::move(p));
   }
@@ -139,6 +140,34 @@ void SonarNode::on_odom(const nav_msgs::msg::Odometry& odom) {
     p.next_t = (std::floor((t + eps) / p.period) + 1.0) * p.period;  // next multiple: no drift
   }
   if (acker_) acker_->ack(odom.header());
+}
+
+void SonarNode::publish_profile(Ports& p, const SonarPing& ping, double detection_db, const std_msgs::msg::Header& h) {
+  const auto points = detect_profile(ping, detection_db);
+  sensor_msgs::msg::PointCloud2 cloud;
+  cloud.header() = h;
+  cloud.height(1);
+  cloud.width(static_cast<std::uint32_t>(points.size()));
+  const char* names[] = {"x", "y", "z", "intensity"};
+  for (std::uint32_t i = 0; i < 4; ++i) {
+    sensor_msgs::msg::PointField f;
+    f.name(names[i]);
+    f.offset(4 * i);
+    f.datatype(7);  // FLOAT32
+    f.count(1);
+    cloud.fields().push_back(f);
+  }
+  cloud.is_bigendian(false);
+  cloud.point_step(16);
+  cloud.row_step(16 * cloud.width());
+  cloud.is_dense(true);
+  cloud.data().resize(static_cast<std::size_t>(cloud.row_step()));
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const float v[4] = {static_cast<float>(points[i].p_S.x()), static_cast<float>(points[i].p_S.y()),
+                        static_cast<float>(points[i].p_S.z()), points[i].intensity};
+    std::memcpy(cloud.data().data() + 16 * i, v, sizeof(v));
+  }
+  p.points->publish(cloud);
 }
 
 void SonarNode::publish_ping(Ports& p, const SonarPing& ping, const std_msgs::msg::Header& header) {
@@ -199,6 +228,7 @@ void SonarNode::publish_ping(Ports& p, const SonarPing& ping, const std_msgs::ms
       fill_mono8(view, fan.width, fan.height, fan.pixels);
       p.view->publish(view);
     }
+    if (p.points) publish_profile(p, ping, m.detection_db, h);
   }
   ++pings_;
 }

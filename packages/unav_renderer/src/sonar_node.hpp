@@ -1,4 +1,4 @@
-// sonar: pings the vehicle's sonars (forward-looking and side-scan) at the poses the physics
+// sonar: pings the vehicle's sonars (forward-looking, side-scan, profiling) at the poses the physics
 // server publishes, on the renderer's GL scene.
 //
 // Ports (relative to the node namespace, default /rov; <s> = sonar name from sonars_config, all
@@ -7,6 +7,9 @@
 //   FLS:
 //   pub  sonar/<s>/image                marine_acoustic_msgs/ProjectedSonarImage  reliable, depth 5
 //   pub  sonar/<s>/image_fan            sensor_msgs/Image (mono8, Cartesian fan, forward up)
+//   profiling: the FLS topics and
+//   pub  sonar/<s>/points               sensor_msgs/PointCloud2 (x, y, z, intensity float32 in <s>_link:
+//                                       each beam's strongest echo, detection_db above its median)
 //   side-scan:
 //   pub  sonar/<s>/raw                  marine_acoustic_msgs/RawSonarImage (2 beams: port, starboard)
 //   pub  sonar/<s>/waterfall            sensor_msgs/Image (mono8, newest ping on top)
@@ -28,6 +31,8 @@
 #include "marine_acoustic_msgs/msg/raw_sonar_image.hpp"
 #include "nav_msgs/msg/odometry.hpp"
 #include "sensor_msgs/msg/image.hpp"
+#include "sensor_msgs/msg/point_cloud2.hpp"
+#include "sensor_msgs/msg/point_field.hpp"
 #include "tf2_msgs/msg/tf_message.hpp"
 #include "unav_common/config.hpp"
 #include "unav_renderer/sonar_renderer.hpp"
@@ -85,11 +90,13 @@ class SonarNode : public unav::Node {
     double next_t = 0.0;
     std::shared_ptr<unav::Publisher<marine_acoustic_msgs::msg::ProjectedSonarImage>> image;
     std::shared_ptr<unav::Publisher<marine_acoustic_msgs::msg::RawSonarImage>> raw;
-    std::shared_ptr<unav::Publisher<sensor_msgs::msg::Image>> view;  // fan or waterfall
+    std::shared_ptr<unav::Publisher<sensor_msgs::msg::Image>> view;          // fan or waterfall
+    std::shared_ptr<unav::Publisher<sensor_msgs::msg::PointCloud2>> points;  // profiling
     std::unique_ptr<Waterfall> waterfall;
   };
   void on_odom(const nav_msgs::msg::Odometry& odom);
   void publish_ping(Ports& p, const SonarPing& ping, const std_msgs::msg::Header& header);
+  void publish_profile(Ports& p, const SonarPing& ping, double detection_db, const std_msgs::msg::Header& h);
 
   std::unique_ptr<SonarRenderer> sonar_;
   std::vector<Ports> ports_;

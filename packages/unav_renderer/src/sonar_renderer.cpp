@@ -426,6 +426,39 @@ const World& SonarRenderer::world() const { return impl_->world; }
 const EglContext& SonarRenderer::context() const { return *impl_->ctx; }
 SonarTimings SonarRenderer::last_timings() const { return impl_->timings; }
 
+std::vector<ProfilePoint> detect_profile(const SonarPing& ping, double detection_db) {
+  if (ping.side_scan) throw std::invalid_argument("detect_profile: a side-scan ping has no fan of beams");
+  std::vector<ProfilePoint> out;
+  const double ratio = std::pow(10.0, detection_db / 10.0);
+  std::vector<float> column(static_cast<std::size_t>(ping.bins));
+  for (int c = 0; c < ping.channels; ++c) {
+    int peak = 0;
+    for (int b = 0; b < ping.bins; ++b) {
+      column[static_cast<std::size_t>(b)] = ping.at(b, c);
+      if (ping.at(b, c) > ping.at(peak, c)) peak = b;
+    }
+    const float top = ping.at(peak, c);
+    std::nth_element(column.begin(), column.begin() + ping.bins / 2, column.end());
+    const float median = column[static_cast<std::size_t>(ping.bins / 2)];
+    if (!(top > 0.0f) || static_cast<double>(top) < ratio * static_cast<double>(median)) continue;
+    double offset = 0.0;  // sub-bin: the vertex of the parabola through the three log levels
+    if (peak > 0 && peak + 1 < ping.bins && ping.at(peak - 1, c) > 0.0f && ping.at(peak + 1, c) > 0.0f) {
+      const double l0 = std::log(ping.at(peak - 1, c)), l1 = std::log(top), l2 = std::log(ping.at(peak + 1, c));
+      const double den = l0 - 2.0 * l1 + l2;
+      if (den < 0.0) offset = std::clamp(0.5 * (l0 - l2) / den, -0.5, 0.5);
+    }
+    const double dr = ping.bins > 1 ? ping.ranges_m[1] - ping.ranges_m[0] : 0.0;
+    ProfilePoint p;
+    p.beam = c;
+    p.range_m = ping.ranges_m[static_cast<std::size_t>(peak)] + offset * dr;
+    const double az = ping.azimuth_rad[static_cast<std::size_t>(c)];
+    p.p_S = p.range_m * Eigen::Vector3d(0.0, std::sin(az), std::cos(az));
+    p.intensity = top;
+    out.push_back(p);
+  }
+  return out;
+}
+
 FanImage fan_image(const SonarPing& ping, int width) {
   if (ping.side_scan || ping.channels < 2 || ping.bins < 2)
     throw std::invalid_argument("fan_image: needs a forward-looking ping");

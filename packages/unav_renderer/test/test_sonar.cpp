@@ -114,6 +114,45 @@ TEST(Sonar, FlatSeabedFirstReturnAtGeometricRangeInEveryBeam) {
   }
 }
 
+// A profiling sonar looking straight down, its 120 deg fan across track, 2 m above a flat seabed:
+// beam k's return is at the slant range 2 / cos(az_k) (within the range its 1.9 deg beam spans
+// over the flat bottom, and a bin), its point lies on the seabed in the world (same tolerance),
+// and from 15 m up only the beams that reach the seabed within 20 m (|az| < 41.4 deg, give or take
+// the half beam width at the edge) return.
+TEST(Sonar, ProfilerRangesAFlatSeabedAcrossTrack) {
+  SonarModel m = fls(64, 512, 120.0, 3.0, 0.3, 20.0);
+  m.name = "profiler";
+  m.type = SonarModel::Type::kProfiling;
+  m.X_BH = pose_from_xyz_rpy(Eigen::Vector3d::Zero(), {0.0, -M_PI / 2, 0.0});
+  SonarRenderer sr(flat_world(10.0), {m}, exact());
+  const double half_beam = 0.5 * m.horizontal_aperture_rad / m.beams;
+  for (const double altitude : {2.0, 15.0}) {
+    const SonarPing p = sr.ping(body_at({0.0, 0.0, 10.0 - altitude}), "profiler");
+    const auto points = detect_profile(p, m.detection_db);
+    // Beams whose centre reaches the seabed within range return; so may those whose inner edge does.
+    int centre = 0, edge = 0;
+    for (int k = 0; k < m.beams; ++k) {
+      const double az = std::abs(m.beam_azimuth_rad(k));
+      centre += altitude / std::cos(az) < 19.9 ? 1 : 0;
+      edge += altitude / std::cos(std::max(0.0, az - half_beam)) < 20.0 ? 1 : 0;
+    }
+    EXPECT_GE(static_cast<int>(points.size()), centre) << "altitude " << altitude;
+    EXPECT_LE(static_cast<int>(points.size()), edge) << "altitude " << altitude;
+    for (const auto& pt : points) {
+      const double az = std::abs(p.azimuth_rad[static_cast<std::size_t>(pt.beam)]);
+      const double spread = altitude * std::sin(az) / (std::cos(az) * std::cos(az)) * half_beam;  // d r / d az
+      const double tol = spread + m.bin_width_m();
+      EXPECT_NEAR(pt.range_m, altitude / std::cos(az), tol) << "beam " << pt.beam;
+      const Eigen::Vector3d p_W = p.X_WS * pt.p_S;
+      EXPECT_NEAR(p_W.z(), 10.0, tol) << "beam " << pt.beam;
+      EXPECT_NEAR(p_W.x(), 0.0, 0.05 * altitude) << "beam " << pt.beam;  // the fan is across track
+    }
+  }
+  SonarPing s;
+  s.side_scan = true;
+  EXPECT_THROW(detect_profile(s, 10.0), std::invalid_argument);
+}
+
 TEST(Sonar, NormalIncidenceReturnsMoreThanGrazing) {
   // Lambert's law: a surface returns mu cos^2(t) per unit area; the ensonified area of a solid
   // angle grows as 1 / cos(t), so a beam filled by a plane returns ~ cos(t). The same plane

@@ -48,13 +48,16 @@ struct SonarSpec {
   double gain_db = 0.0, dynamic_range_db = 60.0, speckle = 0.7, noise_floor_db = -45.0;
   int vertical_samples = 0, beam_oversample = 2;
   std::string data_type = "uint8";
+  double detection_db = 10.0;
 
   template <class Archive>
   void Serialize(Archive* a) {
     using common::Field;
     a->Visit(Field("name", &name).Doc("sonar name (topics sonar/<name>/..., frame <name>_link); required"));
     a->Visit(Field("preset", &preset).Doc("a real unit's values (keys given here override them)"));
-    a->Visit(Field("type", &type).OneOf({"forward_looking", "side_scan"}).Doc("imaging fan or two side-scan beams"));
+    a->Visit(Field("type", &type)
+                 .OneOf({"forward_looking", "side_scan", "profiling"})
+                 .Doc("imaging fan, two side-scan beams, or a profiling fan (a range per beam)"));
     a->Visit(Field("mount", &mount).Doc("head pose on base_link_frd (side-scan: the vehicle-fixed reference)"));
     a->Visit(Field("beams", &beams).Range(0, 4096).Doc("FLS beams across the fan (side-scan: 1)"));
     a->Visit(Field("bins", &bins).Range(0, 16384).Doc("range bins"));
@@ -79,6 +82,10 @@ struct SonarSpec {
     a->Visit(Field("vertical_samples", &vertical_samples).Range(0, 4096).Doc("render rows; 0 = auto"));
     a->Visit(Field("beam_oversample", &beam_oversample).Range(1, 16).Doc("render columns per beam"));
     a->Visit(Field("data_type", &data_type).OneOf({"uint8", "float32"}).Doc("message samples"));
+    a->Visit(Field("detection_db", &detection_db)
+                 .Range(0.0, 100.0)
+                 .Unit("dB")
+                 .Doc("profiling: a beam's peak this far above its median level is a return"));
   }
 };
 
@@ -95,7 +102,8 @@ struct SonarFile {
 SonarSpec spec_of(const SonarModel& m) {
   SonarSpec s;
   s.name = m.name;
-  s.type = m.side_scan() ? "side_scan" : "forward_looking";
+  s.type = m.side_scan() ? "side_scan" : (m.profiling() ? "profiling" : "forward_looking");
+  s.detection_db = m.detection_db;
   s.beams = m.beams;
   s.bins = m.bins;
   s.horizontal_aperture_deg = m.horizontal_aperture_rad / kDeg;
@@ -121,7 +129,10 @@ SonarSpec spec_of(const SonarModel& m) {
 SonarModel model_of(const SonarSpec& s) {
   SonarModel m;
   m.name = s.name;
-  m.type = s.type == "side_scan" ? SonarModel::Type::kSideScan : SonarModel::Type::kForwardLooking;
+  m.type = s.type == "side_scan"   ? SonarModel::Type::kSideScan
+           : s.type == "profiling" ? SonarModel::Type::kProfiling
+                                   : SonarModel::Type::kForwardLooking;
+  m.detection_db = s.detection_db;
   m.X_BH = common::pose_from_xyz_rpy(s.mount.xyz_m, s.mount.rpy_deg * kDeg);
   m.beams = s.beams;
   m.bins = s.bins;

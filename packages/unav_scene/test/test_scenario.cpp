@@ -82,7 +82,7 @@ TEST(Scenario, DistributionsDrawPerSeedAndRepeat) {
 
 TEST(Scenario, BadInputIsNamedBeforeAnythingRuns) {
   EXPECT_EQ(error_of("vehicle: {modle: x.yaml}"),
-            "FILE: vehicle.modle = x.yaml: unknown key; allowed keys: model, initial_position, initial_rpy_deg");
+            "FILE: vehicle.modle = x.yaml: unknown key; allowed keys: model, set, initial_position, initial_rpy_deg");
   EXPECT_EQ(
       error_of("world: nowhere/world.yaml").rfind("FILE: world = nowhere/world.yaml: no such file (looked under", 0),
       0u);

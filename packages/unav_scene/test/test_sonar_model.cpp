@@ -64,7 +64,7 @@ TEST(Acoustics, FrancoisGarrisonAgreesWithAinslieMcColm) {
 
 TEST(SonarModel, LoadsTheVehicleFileWithPresets) {
   const auto sonars = load_sonars(kRoot + "/config/sensors/bluerov2_sonars.yaml");
-  ASSERT_EQ(sonars.size(), 2u);
+  ASSERT_EQ(sonars.size(), 3u);
   const SonarModel& fls = sonars[0];
   EXPECT_EQ(fls.name, "fls");
   EXPECT_FALSE(fls.side_scan());
@@ -75,6 +75,12 @@ TEST(SonarModel, LoadsTheVehicleFileWithPresets) {
   EXPECT_NEAR(fls.bin_width_m(), (20.0 - 0.3) / 512, 1e-12);
   EXPECT_NEAR(fls.beam_azimuth_rad(0), -65 * kDeg + 0.5 * 130 * kDeg / 256, 1e-12);
   EXPECT_NEAR(fls.beam_azimuth_rad(255), 65 * kDeg - 0.5 * 130 * kDeg / 256, 1e-12);
+  const SonarModel& prof = sonars[2];
+  EXPECT_TRUE(prof.profiling());
+  EXPECT_FALSE(prof.side_scan());
+  EXPECT_EQ(prof.channels(), 256);
+  EXPECT_NEAR(prof.vertical_aperture_rad, 3 * kDeg, 1e-12);
+  EXPECT_DOUBLE_EQ(prof.detection_db, 10.0);
   const SonarModel& ss = sonars[1];
   EXPECT_TRUE(ss.side_scan());
   EXPECT_EQ(ss.channels(), 2);

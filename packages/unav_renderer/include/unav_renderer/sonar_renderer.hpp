@@ -118,6 +118,19 @@ class Waterfall {
   std::vector<std::uint8_t> pixels_;
 };
 
+/// A return of a profiling (or any fan) ping: the range of a beam's strongest echo and its point
+/// in the acoustic frame S (z forward, x up, y = starboard) at the beam's azimuth.
+struct ProfilePoint {
+  int beam = 0;
+  double range_m = 0.0;
+  Eigen::Vector3d p_S = Eigen::Vector3d::Zero();
+  float intensity = 0.0f;  ///< linear echo level of the peak
+};
+/// Per beam, the strongest echo when it stands detection_db above the beam's median level (its
+/// range refined by a parabola through the peak bin's log level and its neighbours': sub-bin);
+/// beams without one give no point. std::invalid_argument for a side-scan ping.
+std::vector<ProfilePoint> detect_profile(const SonarPing& ping, double detection_db);
+
 /// Write a mono8 image as PNG (ConfigError naming the file when it cannot be written).
 void write_png_mono(const std::vector<std::uint8_t>& pixels, int width, int height, const std::string& path);
 

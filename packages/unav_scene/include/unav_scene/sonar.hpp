@@ -6,7 +6,9 @@
 // (azimuth, positive to starboard) with the vertical aperture about H's y axis (elevation,
 // positive up). A side-scan sonar has two heads, port and starboard: each looks abeam, tilted
 // down by `tilt_deg`; its single beam is narrow along track (horizontal_aperture_deg) and wide
-// across track (vertical_aperture_deg).
+// across track (vertical_aperture_deg). A profiling (multibeam) sonar is an FLS fan with a narrow
+// vertical aperture, usually mounted looking down with the fan across track; each beam's
+// strongest echo gives a range: a profile of points across track.
 // Messages use marine_acoustic_msgs' sonar frame S (z forward = H x, x up = -H z, y = H y):
 // frame_acoustic() gives X_BS.
 #pragma once
@@ -21,7 +23,7 @@
 namespace unav::scene {
 
 struct SonarModel {
-  enum class Type { kForwardLooking, kSideScan };
+  enum class Type { kForwardLooking, kSideScan, kProfiling };
   std::string name = "fls";
   Type type = Type::kForwardLooking;
   Pose X_BH = Pose::Identity();  ///< head frame (x boresight, y right, z down) on base_link_frd
@@ -48,7 +50,9 @@ struct SonarModel {
   int beam_oversample = 2;          ///< render columns per beam
   std::string data_type = "uint8";  ///< message samples: uint8 (display-coded) or float32 (linear)
 
+  double detection_db = 10.0;  ///< profiling: a beam's peak this far above its median is a return
   bool side_scan() const { return type == Type::kSideScan; }
+  bool profiling() const { return type == Type::kProfiling; }
   int channels() const { return side_scan() ? 2 : beams; }  ///< beams in the message
   double bin_width_m() const { return (max_range_m - min_range_m) / bins; }
   double bin_center_m(int k) const { return min_range_m + (k + 0.5) * bin_width_m(); }
