@@ -41,13 +41,18 @@ void BM_DynamicsStep(benchmark::State& state, up::Integrator integrator) {
 // One Simulator step (lagged thrusters, current, seabed) with every sensor of the vehicle (IMU,
 // pressure, the 4-beam DVL ray-casting the seabed at 10 Hz, altimeter, magnetometer, GPS), with
 // the DVL alone off, or with no sensor: the figures split the step's cost.
-enum class Sensors { kAll, kNoDvl, kNone };
+enum class Sensors { kAll, kNoDvl, kNone, kAllUsblTether };
 void BM_SimulatorStep(benchmark::State& state, up::Integrator integrator, Sensors sensors) {
   up::VehicleParams v = up::bluerov2_heavy_params();
   if (sensors != Sensors::kNone) {
     v.sensors.imu.enabled = v.sensors.pressure.enabled = v.sensors.dvl.enabled = true;
     v.sensors.altimeter.enabled = v.sensors.magnetometer.enabled = v.sensors.gps.enabled = true;
-    v.sensors.dvl.enabled = sensors == Sensors::kAll;
+    v.sensors.dvl.enabled = sensors == Sensors::kAll || sensors == Sensors::kAllUsblTether;
+  }
+  if (sensors == Sensors::kAllUsblTether) {  // the marine navigation additions: USBL and a 30 m tether
+    v.sensors.usbl.enabled = true;
+    v.tether.enabled = true;
+    v.tether.anchor_position = Eigen::Vector3d(0.0, 0.0, 0.5);
   }
   v.sensors.imu.accel.noise_stddev = 0.02;
   up::SimulatorOptions o;
@@ -72,4 +77,5 @@ BENCHMARK_CAPTURE(BM_SimulatorStep, velocity_verlet, up::Integrator::kVelocityVe
 BENCHMARK_CAPTURE(BM_SimulatorStep, rk4, up::Integrator::kRk4, Sensors::kAll);
 BENCHMARK_CAPTURE(BM_SimulatorStep, verlet_no_dvl, up::Integrator::kVelocityVerlet, Sensors::kNoDvl);
 BENCHMARK_CAPTURE(BM_SimulatorStep, verlet_no_sensors, up::Integrator::kVelocityVerlet, Sensors::kNone);
+BENCHMARK_CAPTURE(BM_SimulatorStep, verlet_usbl_tether, up::Integrator::kVelocityVerlet, Sensors::kAllUsblTether);
 BENCHMARK_MAIN();
