@@ -15,6 +15,7 @@
 #include "unav_common/frames.hpp"
 #include "unav_common/sampling.hpp"
 #include "unav_renderer/errors.hpp"
+#include "unav_renderer/sonar_speckle.hpp"
 #include "unav_scene/scene_geometry.hpp"
 
 namespace unav::renderer {
@@ -66,7 +67,8 @@ struct SonarState {
   std::vector<int> channel;
   std::vector<float> weight;
   std::vector<int> column_slice;
-  std::vector<float> readback;  // RGBA32F
+  mutable std::vector<float> speckle;  // the ping's speckle field (reused)
+  std::vector<float> readback;         // RGBA32F
 };
 
 // Slice geometry and the per-pixel tables of a sonar (no GL).
@@ -324,13 +326,23 @@ void SonarRenderer::Impl::accumulate(const SonarState& st, const Pose& X_WB, Son
   const double n0 = std::pow(10.0, (m.noise_floor_db - m.gain_db) / 10.0);
   const double s = m.speckle;
   const double inv_bin = 1.0 / dr_bin;
+  if (options.noise && s > 0.0) {
+    SpeckleParams sp;
+    sp.shape = m.speckle_shape;
+    sp.grain_beams = m.side_scan() ? 0.0 : m.speckle_grain_beams;  // port and starboard share nothing
+    sp.grain_bins = m.speckle_grain_bins;
+    speckle_field(B, C, sp, &rng, &st.speckle);
+  }
+  DisplayCoding coding;
+  coding.coding = m.display;
+  coding.gain_db = m.gain_db;
+  coding.dynamic_range_db = m.dynamic_range_db;
+  coding.gamma = m.display_gamma;
   for (std::size_t k = 0; k < acc.size(); ++k) {
     double v = acc[k] * inv_bin;
-    if (options.noise) v = v * ((1.0 - s) + s * rng.exponential()) + n0 * rng.exponential();
+    if (options.noise) v = v * (s > 0.0 ? (1.0 - s) + s * st.speckle[k] : 1.0) + n0 * rng.exponential();
     out->intensity[k] = static_cast<float>(v);
-    const double db = v > 0.0 ? 10.0 * std::log10(v) + m.gain_db : -1e9;
-    const double level = std::clamp(1.0 + db / m.dynamic_range_db, 0.0, 1.0);
-    out->image[k] = static_cast<std::uint8_t>(std::lround(255.0 * level));
+    out->image[k] = coding(v);
   }
   out->sound_speed_mps = acoustics.sound_speed_mps;
   out->absorption_db_per_m = alpha;

@@ -45,7 +45,10 @@ struct SonarSpec {
   double spreading_exponent = 2.0;
   bool tvg = true;
   double tvg_db_per_decade = 30.0;
-  double gain_db = 0.0, dynamic_range_db = 60.0, speckle = 0.7, noise_floor_db = -45.0;
+  double gain_db = 0.0, dynamic_range_db = 60.0, speckle = 1.0, noise_floor_db = -45.0;
+  double speckle_shape = 4.0, speckle_grain_beams = 1.7, speckle_grain_bins = 1.5;
+  std::string display = "db";
+  double display_gamma = 0.5;
   int vertical_samples = 0, beam_oversample = 2;
   std::string data_type = "uint8";
   double detection_db = 10.0;
@@ -77,11 +80,23 @@ struct SonarSpec {
     a->Visit(Field("tvg_db_per_decade", &tvg_db_per_decade).Range(0.0, 60.0).Unit("dB").Doc("30: seabed, 40: points"));
     a->Visit(Field("gain_db", &gain_db).Range(-200.0, 200.0).Unit("dB").Doc("display gain"));
     a->Visit(Field("dynamic_range_db", &dynamic_range_db).Range(1.0, 200.0).Unit("dB").Doc("display dynamic range"));
-    a->Visit(Field("speckle", &speckle).Range(0.0, 1.0).Doc("multiplicative speckle share (0 = none)"));
+    a->Visit(Field("speckle", &speckle).Range(0.0, 1.0).Doc("multiplicative speckle share (0 = none, 1 = developed)"));
+    a->Visit(Field("speckle_shape", &speckle_shape)
+                 .Range(0.0, 1000.0)
+                 .Doc("K-distribution shape of the speckle (contrast sqrt(1 + 2 / shape)); 0 = Rayleigh"));
+    a->Visit(Field("speckle_grain_beams", &speckle_grain_beams)
+                 .Range(0.0, 64.0)
+                 .Doc("speckle grain across beams: FWHM of its autocorrelation [beams]; <= 1 independent"));
+    a->Visit(Field("speckle_grain_bins", &speckle_grain_bins)
+                 .Range(0.0, 64.0)
+                 .Doc("speckle grain along range (the pulse length) [bins]"));
     a->Visit(Field("noise_floor_db", &noise_floor_db).Range(-200.0, 0.0).Unit("dB").Doc("background re full scale"));
     a->Visit(Field("vertical_samples", &vertical_samples).Range(0, 4096).Doc("render rows; 0 = auto"));
     a->Visit(Field("beam_oversample", &beam_oversample).Range(1, 16).Doc("render columns per beam"));
     a->Visit(Field("data_type", &data_type).OneOf({"uint8", "float32"}).Doc("message samples"));
+    a->Visit(
+        Field("display", &display).OneOf({"db", "gamma"}).Doc("8-bit coding: dB (gain, range) or amplitude^gamma"));
+    a->Visit(Field("display_gamma", &display_gamma).Range(0.05, 4.0).Doc("gamma coding's exponent on the amplitude"));
     a->Visit(Field("detection_db", &detection_db)
                  .Range(0.0, 100.0)
                  .Unit("dB")
@@ -119,6 +134,11 @@ SonarSpec spec_of(const SonarModel& m) {
   s.gain_db = m.gain_db;
   s.dynamic_range_db = m.dynamic_range_db;
   s.speckle = m.speckle;
+  s.speckle_shape = m.speckle_shape;
+  s.speckle_grain_beams = m.speckle_grain_beams;
+  s.speckle_grain_bins = m.speckle_grain_bins;
+  s.display = m.display;
+  s.display_gamma = m.display_gamma;
   s.noise_floor_db = m.noise_floor_db;
   s.vertical_samples = m.vertical_samples;
   s.beam_oversample = m.beam_oversample;
@@ -149,6 +169,11 @@ SonarModel model_of(const SonarSpec& s) {
   m.gain_db = s.gain_db;
   m.dynamic_range_db = s.dynamic_range_db;
   m.speckle = s.speckle;
+  m.speckle_shape = s.speckle_shape;
+  m.speckle_grain_beams = s.speckle_grain_beams;
+  m.speckle_grain_bins = s.speckle_grain_bins;
+  m.display = s.display;
+  m.display_gamma = s.display_gamma;
   m.noise_floor_db = s.noise_floor_db;
   m.vertical_samples = s.vertical_samples;
   m.beam_oversample = s.beam_oversample;

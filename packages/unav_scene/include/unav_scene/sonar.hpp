@@ -42,13 +42,22 @@ struct SonarModel {
   /// beam-filling target at normal incidence; 40: point targets). false = raw echo level.
   bool tvg = true;
   double tvg_db_per_decade = 30.0;
-  double gain_db = 0.0;             ///< display gain: echo level 0 dB + gain maps to full scale
-  double dynamic_range_db = 60.0;   ///< display: full scale - dynamic range maps to 0
-  double speckle = 0.7;             ///< multiplicative speckle: I (1 - s + s X), X ~ Exp(1) (Rayleigh amplitude)
-  double noise_floor_db = -45.0;    ///< additive background, Rayleigh amplitude, mean level re full scale
-  int vertical_samples = 0;         ///< render rows across the vertical aperture; 0 = auto
-  int beam_oversample = 2;          ///< render columns per beam
-  std::string data_type = "uint8";  ///< message samples: uint8 (display-coded) or float32 (linear)
+  double gain_db = 0.0;            ///< display gain: echo level 0 dB + gain maps to full scale
+  double dynamic_range_db = 60.0;  ///< display: full scale - dynamic range maps to 0
+  /// Multiplicative speckle I (1 - s + s X) (unav_renderer/sonar_speckle.hpp): X the intensity of a
+  /// coherent echo, exponential (Rayleigh amplitude) times a Gamma texture of shape speckle_shape
+  /// (K-distributed; contrast sqrt(1 + 2 / shape)), correlated over speckle_grain_beams and
+  /// speckle_grain_bins cells (FWHM of its autocorrelation: the beam pattern and the pulse length).
+  double speckle = 1.0;
+  double speckle_shape = 4.0;        ///< K shape nu; 0 = Rayleigh (no texture)
+  double speckle_grain_beams = 1.7;  ///< across beams [beams]
+  double speckle_grain_bins = 1.5;   ///< along range [bins]
+  double noise_floor_db = -45.0;     ///< additive background, Rayleigh amplitude, mean level re full scale
+  int vertical_samples = 0;          ///< render rows across the vertical aperture; 0 = auto
+  int beam_oversample = 2;           ///< render columns per beam
+  std::string data_type = "uint8";   ///< message samples: uint8 (display-coded) or float32 (linear)
+  std::string display = "db";        ///< 8-bit coding: db (gain, dynamic range) or gamma (amplitude^gamma)
+  double display_gamma = 0.5;        ///< gamma coding's exponent on the amplitude
 
   double detection_db = 10.0;  ///< profiling: a beam's peak this far above its median is a return
   bool side_scan() const { return type == Type::kSideScan; }

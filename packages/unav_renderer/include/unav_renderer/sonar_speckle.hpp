@@ -1,0 +1,52 @@
+// Sonar speckle from the physics of a coherent echo, and the display codings real sonars use. No
+// OpenGL: SonarRenderer applies it to every ping; tests check its statistics directly.
+//
+// Speckle. The echo of a resolution cell is the coherent sum of many scatterers: a complex
+// Gaussian amplitude, so an exponential intensity (Rayleigh amplitude) of unit mean. Neighbouring
+// cells share scatterers through the beam pattern (across beams) and the pulse length (along
+// range): the complex field is white noise filtered by a Gaussian kernel whose intensity
+// autocorrelation has a full width at half maximum of `grain_beams` and `grain_bins` cells (the
+// kernel is normalised, so the marginal stays exponential). Sparse scatterers (a few per cell, as
+// on a real seabed) make the intensity K-distributed: the exponential speckle times a Gamma texture
+// of shape `shape` and unit mean (the scatterers' density: constant over patches of about twice
+// the grain), so the intensity's contrast (std / mean) is sqrt(1 + 2 / shape) (1 for shape ->
+// infinity; shape = 0 here means no texture: Rayleigh). The white field is drawn from a table of
+// 4096 exact complex Gaussians by random index (12 bits of the seeded stream a sample).
+//
+// Display. An 8-bit sample from a linear intensity v (full scale: v = 10^(-gain_db / 10)):
+//   db:    255 (1 + 10 log10(v / full) / dynamic_range_db), clamped to [0, 255]
+//   gamma: 255 (v / full)^(gamma / 2) (amplitude to the power gamma), clamped; v > full saturates.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "unav_common/sampling.hpp"
+
+namespace unav::renderer {
+
+struct SpeckleParams {
+  double shape = 0.0;        ///< K-distribution shape nu (> 0); 0 = Rayleigh (no texture)
+  double grain_beams = 1.0;  ///< FWHM of the intensity autocorrelation across beams [cells]; <= 1: independent
+  double grain_bins = 1.0;   ///< the same along range [bins]
+};
+
+/// A unit-mean speckle field of bins x channels (row = bin) into *out, drawn from *rng.
+void speckle_field(int bins, int channels, const SpeckleParams& p, unav::common::SplitMix64* rng,
+                   std::vector<float>* out);
+
+/// The Gaussian kernel (normalised to unit sum of squares) whose intensity autocorrelation has a
+/// FWHM of `grain` cells: a single 1 for grain <= 1.
+std::vector<double> speckle_kernel(double grain);
+
+struct DisplayCoding {
+  std::string coding = "db";  ///< db or gamma
+  double gain_db = 0.0;
+  double dynamic_range_db = 60.0;  ///< db coding
+  double gamma = 0.5;              ///< gamma coding: exponent on the amplitude
+  /// The 8-bit sample of linear intensity v.
+  std::uint8_t operator()(double v) const;
+};
+
+}  // namespace unav::renderer
