@@ -161,7 +161,7 @@ TEST(SonarNode, PublishesMountsOnTfStaticAndRejectsBadConfig) {
 }
 
 // A profiling sonar over DDS: looking straight down from 3 m above the demo world's seabed (5 m
-// east of the pipe: sand with 0.15 m of relief), every beam of its 90 deg fan returns: a
+// east of the pipe: sand with 0.15 m of relief), (nearly) every beam of its 90 deg fan returns: a
 // PointCloud2 of x, y, z, intensity in prof_link whose nearest point is the nadir, ~3 m away.
 TEST(SonarNode, ProfilerPublishesAPointCloudAcrossTrack) {
   const std::string path = ::testing::TempDir() + "node_profiler.yaml";
@@ -195,7 +195,11 @@ TEST(SonarNode, ProfilerPublishesAPointCloudAcrossTrack) {
   EXPECT_EQ(c.header().frame_id(), "prof_link");
   ASSERT_EQ(c.fields().size(), 4u);
   EXPECT_EQ(c.point_step(), 16u);
-  EXPECT_EQ(c.width(), 48u);  // 3 m / cos 45 deg = 4.2 m: every beam reaches the seabed
+  // 3 m / cos 45 deg = 4.2 m: every beam reaches the seabed; a grazing beam at the fan's edge may
+  // miss it when its speckle (K texture) leaves its echo less than 10 dB above its median, as real
+  // profilers drop beams there: at most 3 of 48.
+  EXPECT_GE(c.width(), 45u);
+  EXPECT_LE(c.width(), 48u);
   ASSERT_EQ(c.data().size(), 16u * c.width());
   double nearest = 1e9;
   for (std::uint32_t i = 0; i < c.width(); ++i) {
