@@ -82,7 +82,7 @@ std::string write_sample_current(const DatagenSample& s, const std::string& dir)
   v.push_back(0.0);
   cur["current"]["velocity"] = v;
   fs::create_directories(dir);
-  const std::string path = (fs::path(dir) / "current.yaml").string();
+  std::string path = (fs::path(dir) / "current.yaml").string();
   std::ofstream out(path);
   YAML::Emitter e;
   e.SetDoublePrecision(17);

@@ -254,7 +254,8 @@ void VehiclePorts::publish_sensors(const Simulator& sim) {
       m.position().z(r.usbl.p_X.z());
       const Eigen::Matrix3d cov = usbl_fix_covariance(usbl_, r.usbl);
       for (int i = 0; i < 3; ++i)
-        for (int j = 0; j < 3; ++j) m.position_covariance()[static_cast<std::size_t>(3 * i + j)] = cov(i, j);
+        for (int j = 0; j < 3; ++j)
+          m.position_covariance()[(3 * static_cast<std::size_t>(i)) + static_cast<std::size_t>(j)] = cov(i, j);
       m.position_world().x(r.usbl.p_W.x());
       m.position_world().y(r.usbl.p_W.y());
       m.position_world().z(r.usbl.p_W.z());

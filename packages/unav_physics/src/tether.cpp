@@ -45,7 +45,7 @@ void Tether::reset(const Eigen::Vector3d& attach_W) {
   const double h = std::sqrt(std::max(0.0, 0.25 * total * total - 0.25 * dist * dist));
   const Eigen::Vector3d apex = a + 0.5 * d + h * down;
   const int n = prm_.segments;
-  p_.assign(static_cast<std::size_t>(n + 1), a);
+  p_.assign(static_cast<std::size_t>(n) + 1, a);
   v_.assign(p_.size(), Eigen::Vector3d::Zero());
   f_.assign(p_.size(), Eigen::Vector3d::Zero());
   const double leg = 0.5 * total;

@@ -51,7 +51,7 @@ std::vector<UsblReading> fly(const UsblParams& p, double seconds, const std::fun
 // The next interrogation waits for the reply (0.5 s period < 0.77 s round trip).
 TEST(Usbl, StillTransponderRoundTripAndFixAreExact) {
   const Eigen::Vector3d target(300.0, 400.0, 1.0);
-  const auto r = fly(quiet(), 3.0, [&](double) { return target; });
+  const auto r = fly(quiet(), 3.0, [&](double) { return Eigen::Vector3d(target); });
   ASSERT_GE(r.size(), 3u);
   const double round_trip = 2.0 * 500.0 / 1500.0 + 0.1;
   EXPECT_NEAR(r[0].stamp, round_trip, 1e-9);
@@ -89,7 +89,7 @@ TEST(Usbl, SoundSpeedSettingScalesRangesAndTheMountTurnsAngles) {
   p.assumed_sound_speed_mps = 1450.0;
   p.transceiver_rpy_deg = Eigen::Vector3d(0.0, 0.0, 90.0);
   const Eigen::Vector3d target(100.0, 0.0, 1.0);
-  const auto r = fly(p, 1.0, [&](double) { return target; });
+  const auto r = fly(p, 1.0, [&](double) { return Eigen::Vector3d(target); });
   ASSERT_FALSE(r.empty());
   EXPECT_NEAR(r[0].range_m, 100.0 * 1450.0 / 1500.0, 1e-9);
   EXPECT_NEAR(r[0].azimuth_rad, -M_PI / 2, 1e-12);

@@ -204,7 +204,7 @@ TEST(SonarNode, ProfilerPublishesAPointCloudAcrossTrack) {
   double nearest = 1e9;
   for (std::uint32_t i = 0; i < c.width(); ++i) {
     float v[4];
-    std::memcpy(v, c.data().data() + 16 * i, sizeof(v));
+    std::memcpy(v, c.data().data() + (std::size_t{16} * i), sizeof(v));
     EXPECT_NEAR(v[0], 0.0f, 1e-6f);  // in the fan's plane (x up is out of it)
     nearest = std::min(nearest, std::hypot(static_cast<double>(v[1]), static_cast<double>(v[2])));
   }

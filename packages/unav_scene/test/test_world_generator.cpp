@@ -145,9 +145,8 @@ TEST(WorldGenerator, BadSpecsAreNamed) {
   EXPECT_THROW(check_world_generator(g, "s.yaml", "generate."), unav::ConfigError);
   // Through the sampler: a distribution reaching outside a field's rule.
   try {
-    unav::common::Stochastic<WorldGenerator>(YAML::Load("pipeline: {legs: {repeat: {count: 2, each: {turn_deg: "
-                                                        "{uniform: [0, 200]}}}}}"),
-                                             "s.yaml");
+    const unav::common::Stochastic<WorldGenerator> bad(
+        YAML::Load("pipeline: {legs: {repeat: {count: 2, each: {turn_deg: {uniform: [0, 200]}}}}}"), "s.yaml");
     FAIL() << "a 200 deg turn accepted";
   } catch (const unav::ConfigError& e) {
     EXPECT_EQ(e.key(), "pipeline.legs[0].turn_deg");

@@ -170,7 +170,7 @@ class RandomizationSpec {
   const YAML::Node& root() const { return spec_.spec(); }
 
  private:
-  explicit RandomizationSpec(unav::common::Stochastic<DatagenSample> spec) : spec_(std::move(spec)) {}
+  explicit RandomizationSpec(const unav::common::Stochastic<DatagenSample>& spec) : spec_(spec) {}
   unav::common::Stochastic<DatagenSample> spec_;
   std::uint64_t base_seed_ = 0;
 };

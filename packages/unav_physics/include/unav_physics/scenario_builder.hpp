@@ -40,6 +40,6 @@ std::unique_ptr<Simulator> build_simulator(const unav::scene::Scenario& scenario
 /// The same with the vehicle already loaded from scenario.vehicle.model (callers that keep it:
 /// no file read per episode).
 std::unique_ptr<Simulator> build_simulator(const unav::scene::Scenario& scenario, const unav::scene::World& world,
-                                           const SimulatorOptions& options, const VehicleParams& vehicle);
+                                           const SimulatorOptions& options, const VehicleParams& params);
 
 }  // namespace unav::physics
