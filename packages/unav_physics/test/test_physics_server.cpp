@@ -94,6 +94,30 @@ struct Harness {
   }
 };
 
+// A physics server and a probe node, each on its own participant: the probe's links matched on
+// both sides before a test counts anything.
+struct ServerProbe {
+  std::unique_ptr<unav::Context> server_ctx, test_ctx;
+  std::unique_ptr<PhysicsServer> server;
+  std::unique_ptr<unav::Node> probe;
+  explicit ServerProbe(const std::vector<std::string>& params)
+      : server_ctx(make_context(params)),
+        test_ctx(make_context({})),
+        server(std::make_unique<PhysicsServer>(unav::NodeOptions{server_ctx.get()})),
+        probe(std::make_unique<unav::Node>("probe", unav::NodeOptions{test_ctx.get()})) {}
+  ~ServerProbe() {
+    probe.reset();
+    server.reset();
+  }
+  ::testing::AssertionResult match(const std::vector<unav::testing::Link>& links) {
+    if (unav::testing::wait_for_match({server_ctx.get(), test_ctx.get()}, links)) return ::testing::AssertionSuccess();
+    return ::testing::AssertionFailure() << unav::testing::describe(links);
+  }
+  bool spin_until(const std::function<bool()>& done, std::chrono::milliseconds timeout = 20s) {
+    return unav::testing::spin_until({server_ctx.get(), test_ctx.get()}, done, timeout);
+  }
+};
+
 // Forward thrust from the four horizontal thrusters of the Heavy (REFERENCE.md directions).
 const std::vector<double> kSurge = {0.5, 0.5, -0.5, -0.5, 0, 0, 0, 0};
 
@@ -300,19 +324,15 @@ TEST(PhysicsServer, NodeParametersOverrideTheWorld) {
 // 5 m, every beam locks at a slant range of altitude / cos(22.5 deg) (the vehicle stays near level;
 // 2 % covers its small tilt and drift while the failsafe holds the thrusters at zero).
 TEST(PhysicsServer, DvlPublishesItsFourBeams) {
-  std::unique_ptr<unav::Context> server_ctx = make_context({});
-  PhysicsServer server(unav::NodeOptions{server_ctx.get()});
-  std::unique_ptr<unav::Context> test_ctx = make_context({});
-  unav::Node probe("probe", unav::NodeOptions{test_ctx.get()});
+  ServerProbe h({});
+  PhysicsServer& server = *h.server;
+  unav::Node& probe = *h.probe;
   std::optional<unav_msgs::msg::Dvl> last;
   auto sub = probe.create_subscription<unav_msgs::msg::Dvl>("/rov/dvl", unav::QoS::sensor_data(),
                                                             [&](const unav_msgs::msg::Dvl& m) { last = m; });
   const std::vector<unav::testing::Link> links = {make_link(server, *sub)};
-  ASSERT_TRUE(unav::testing::wait_for_match({server_ctx.get(), test_ctx.get()}, links))
-      << unav::testing::describe(links);
-  ASSERT_TRUE(unav::testing::spin_until(
-      {server_ctx.get(), test_ctx.get()}, [&] { return last && last->valid(); }, 20s))
-      << "no valid DVL reading";
+  ASSERT_TRUE(h.match(links));
+  ASSERT_TRUE(h.spin_until([&] { return last && last->valid(); }, 20s)) << "no valid DVL reading";
   EXPECT_EQ(last->locked_beams(), 4);
   const double cos_a = std::cos(22.5 * M_PI / 180.0);
   for (std::size_t i = 0; i < 4; ++i) {
@@ -327,18 +347,15 @@ TEST(PhysicsServer, DvlPublishesItsFourBeams) {
 // 0.1 s turnaround), within a few standard deviations (0.1 m range, 1 deg angles at ~4 m) of
 // the transponder on the vehicle held near its start (0, 0, 5) by the thruster failsafe.
 TEST(PhysicsServer, UsblFixesTheVehicleAfterTheAcousticRoundTrip) {
-  std::unique_ptr<unav::Context> server_ctx = make_context({});
-  PhysicsServer server(unav::NodeOptions{server_ctx.get()});
-  std::unique_ptr<unav::Context> test_ctx = make_context({});
-  unav::Node probe("probe", unav::NodeOptions{test_ctx.get()});
+  ServerProbe h({});
+  PhysicsServer& server = *h.server;
+  unav::Node& probe = *h.probe;
   std::vector<unav_msgs::msg::UsblFix> fixes;
   auto sub = probe.create_subscription<unav_msgs::msg::UsblFix>(
       "/rov/usbl/fix", unav::QoS::reliable(), [&](const unav_msgs::msg::UsblFix& m) { fixes.push_back(m); });
   const std::vector<unav::testing::Link> links = {make_link(server, *sub)};
-  ASSERT_TRUE(unav::testing::wait_for_match({server_ctx.get(), test_ctx.get()}, links))
-      << unav::testing::describe(links);
-  ASSERT_TRUE(unav::testing::spin_until(
-      {server_ctx.get(), test_ctx.get()},
+  ASSERT_TRUE(h.match(links));
+  ASSERT_TRUE(h.spin_until(
       [&] { return std::count_if(fixes.begin(), fixes.end(), [](const auto& f) { return f.valid(); }) >= 2; }, 20s))
       << "fewer than two valid USBL fixes";
   const auto& f = *std::find_if(fixes.begin(), fixes.end(), [](const auto& m) { return m.valid(); });
@@ -356,24 +373,20 @@ TEST(PhysicsServer, UsblFixesTheVehicleAfterTheAcousticRoundTrip) {
 // The acoustic modem link on the wire: 4 bytes handed to the surface station's modem arrive on
 // the vehicle's after the travel (~4 m at 1500 m/s) plus 0.32 s on the air at 100 bit/s.
 TEST(PhysicsServer, ModemCarriesBytesFromTheSurfaceToTheVehicle) {
-  std::unique_ptr<unav::Context> server_ctx = make_context({});
-  PhysicsServer server(unav::NodeOptions{server_ctx.get()});
-  std::unique_ptr<unav::Context> test_ctx = make_context({});
-  unav::Node probe("probe", unav::NodeOptions{test_ctx.get()});
+  ServerProbe h({});
+  PhysicsServer& server = *h.server;
+  unav::Node& probe = *h.probe;
   std::vector<unav_msgs::msg::AcousticPacket> got;
   const unav::QoS qos = unav::QoS::reliable(100);
   auto sub = probe.create_subscription<unav_msgs::msg::AcousticPacket>(
       "/rov/modem/rx", qos, [&](const unav_msgs::msg::AcousticPacket& m) { got.push_back(m); });
   auto pub = probe.create_publisher<unav_msgs::msg::AcousticPacket>("/surface/modem/tx", qos);
   const std::vector<unav::testing::Link> links = {make_link(server, *sub), make_link(*pub, server)};
-  ASSERT_TRUE(unav::testing::wait_for_match({server_ctx.get(), test_ctx.get()}, links))
-      << unav::testing::describe(links);
+  ASSERT_TRUE(h.match(links));
   unav_msgs::msg::AcousticPacket m;
   m.data({0xDE, 0xAD, 0xBE, 0xEF});
   pub->publish(m);
-  ASSERT_TRUE(unav::testing::spin_until(
-      {server_ctx.get(), test_ctx.get()}, [&] { return !got.empty(); }, 20s))
-      << "no packet arrived";
+  ASSERT_TRUE(h.spin_until([&] { return !got.empty(); }, 20s)) << "no packet arrived";
   EXPECT_EQ(got[0].data(), (std::vector<std::uint8_t>{0xDE, 0xAD, 0xBE, 0xEF}));
   EXPECT_EQ(got[0].header().frame_id(), "modem");
   EXPECT_NEAR(got[0].range(), 3.9, 0.6);  // the vehicle held near (0, 0, 5), the station at (0, 0, 1)
@@ -458,11 +471,10 @@ TEST(PhysicsServer, ScenarioTetherIsPublishedAndPaidOut) {
       << "vehicle: {model: " << UNAV_CONFIG_DIR
       << "/vehicles/bluerov2_heavy.yaml, initial_position: [3.0, 0.0, 5.0],"
          " set: ['tether.anchor_position=[0, 0, 0.5]', tether.length_m=12, tether.segments=12]}\n";
-  std::unique_ptr<unav::Context> server_ctx = make_context({"-p", "scenario:=" + scenario_path});
-  PhysicsServer server(unav::NodeOptions{server_ctx.get()});
+  ServerProbe h({"-p", "scenario:=" + scenario_path});
+  PhysicsServer& server = *h.server;
+  unav::Node& probe = *h.probe;
   ASSERT_NE(server.simulator().tether(), nullptr);
-  std::unique_ptr<unav::Context> test_ctx = make_context({});
-  unav::Node probe("probe", unav::NodeOptions{test_ctx.get()});
   std::optional<nav_msgs::msg::Path> path;
   std::optional<geometry_msgs::msg::WrenchStamped> wrench;
   auto path_sub = probe.create_subscription<nav_msgs::msg::Path>("/rov/tether/path", unav::QoS::reliable(1),
@@ -472,10 +484,8 @@ TEST(PhysicsServer, ScenarioTetherIsPublishedAndPaidOut) {
   auto length_pub = probe.create_publisher<std_msgs::msg::Float64>("/rov/tether/length", unav::QoS::reliable());
   const std::vector<unav::testing::Link> links = {make_link(server, *path_sub), make_link(server, *wrench_sub),
                                                   make_link(*length_pub, server)};
-  ASSERT_TRUE(unav::testing::wait_for_match({server_ctx.get(), test_ctx.get()}, links))
-      << unav::testing::describe(links);
-  ASSERT_TRUE(unav::testing::spin_until(
-      {server_ctx.get(), test_ctx.get()}, [&] { return path && wrench; }, 20s));
+  ASSERT_TRUE(h.match(links));
+  ASSERT_TRUE(h.spin_until([&] { return path && wrench; }, 20s));
   ASSERT_EQ(path->poses().size(), 13u);
   EXPECT_EQ(path->header().frame_id(), "world_ned");
   EXPECT_DOUBLE_EQ(path->poses()[0].pose().position().z(), 0.5);
@@ -485,8 +495,6 @@ TEST(PhysicsServer, ScenarioTetherIsPublishedAndPaidOut) {
   length_pub->publish(len);
   len.data(20.0);
   length_pub->publish(len);
-  ASSERT_TRUE(unav::testing::spin_until(
-      {server_ctx.get(), test_ctx.get()}, [&] { return std::abs(server.simulator().tether()->length() - 20.0) < 1e-9; },
-      20s));
+  ASSERT_TRUE(h.spin_until([&] { return std::abs(server.simulator().tether()->length() - 20.0) < 1e-9; }, 20s));
   EXPECT_EQ(server.rejections().count("rt/rov/tether/length"), 1u);
 }
