@@ -61,34 +61,39 @@ class SonarOutput {
     index_.close();
     const Eigen::Isometry3d X = model_.frame_acoustic();
     const Eigen::Quaterniond q(X.linear());
-    nlohmann::json j = {{"name", model_.name},
-                        {"type", model_.side_scan() ? "side_scan" : "forward_looking"},
-                        {"frame", model_.name + "_link"},
-                        {"parent_frame", "base_link_frd"},
-                        {"frame_axes", "z forward (boresight), x up (marine_acoustic_msgs)"},
-                        {"mount_xyz_m", {X.translation().x(), X.translation().y(), X.translation().z()}},
-                        {"mount_quaternion_xyzw", {q.x(), q.y(), q.z(), q.w()}},
-                        {"channels", model_.channels()},
-                        {"bins", model_.bins},
-                        {"min_range_m", model_.min_range_m},
-                        {"max_range_m", model_.max_range_m},
-                        {"bin_width_m", model_.bin_width_m()},
-                        {"channel_azimuth_rad", azimuths_},
-                        {"horizontal_aperture_rad", model_.horizontal_aperture_rad},
-                        {"vertical_aperture_rad", model_.vertical_aperture_rad},
-                        {"tilt_rad", model_.tilt_rad},
-                        {"frequency_hz", model_.frequency_hz},
-                        {"sound_speed_mps", sound_speed_},
-                        {"absorption_db_per_m", absorption_},
-                        {"tvg_db_per_decade", model_.tvg ? model_.tvg_db_per_decade : 0.0},
-                        {"gain_db", model_.gain_db},
-                        {"dynamic_range_db", model_.dynamic_range_db},
-                        {"ping_rate_hz", model_.ping_rate_hz},
-                        {"pings", pings_},
-                        {"index", "sonar/" + model_.name + "/pings.txt"},
-                        {"png",
-                         "mono8, row = range bin (centre min_range_m + (k + 0.5) bin_width_m), column = channel; value "
-                         "255 (1 + (10 log10 I + gain_db) / dynamic_range_db), clamped"}};
+    nlohmann::json j = {
+        {"name", model_.name},
+        {"type", model_.side_scan() ? "side_scan" : "forward_looking"},
+        {"frame", model_.name + "_link"},
+        {"parent_frame", "base_link_frd"},
+        {"frame_axes", "z forward (boresight), x up (marine_acoustic_msgs)"},
+        {"mount_xyz_m", {X.translation().x(), X.translation().y(), X.translation().z()}},
+        {"mount_quaternion_xyzw", {q.x(), q.y(), q.z(), q.w()}},
+        {"channels", model_.channels()},
+        {"bins", model_.bins},
+        {"min_range_m", model_.min_range_m},
+        {"max_range_m", model_.max_range_m},
+        {"bin_width_m", model_.bin_width_m()},
+        {"channel_azimuth_rad", azimuths_},
+        {"horizontal_aperture_rad", model_.horizontal_aperture_rad},
+        {"vertical_aperture_rad", model_.vertical_aperture_rad},
+        {"tilt_rad", model_.tilt_rad},
+        {"frequency_hz", model_.frequency_hz},
+        {"sound_speed_mps", sound_speed_},
+        {"absorption_db_per_m", absorption_},
+        {"tvg_db_per_decade", model_.tvg ? model_.tvg_db_per_decade : 0.0},
+        {"gain_db", model_.gain_db},
+        {"dynamic_range_db", model_.dynamic_range_db},
+        {"display", model_.display},
+        {"display_gamma", model_.display_gamma},
+        {"ping_rate_hz", model_.ping_rate_hz},
+        {"pings", pings_},
+        {"index", "sonar/" + model_.name + "/pings.txt"},
+        {"png", std::string("mono8, row = range bin (centre min_range_m + (k + 0.5) bin_width_m), "
+                            "column = channel; value ") +
+                    (model_.display == "gamma" ? "255 (I 10^(gain_db / 10))^(display_gamma / 2), clamped"
+                                               : "255 (1 + (10 log10 I + gain_db) / dynamic_range_db), "
+                                                 "clamped")}};
     return j.dump();
   }
 
