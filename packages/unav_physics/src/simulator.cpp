@@ -86,9 +86,13 @@ std::pair<Eigen::Vector3d, Eigen::Vector3d> attachment(const RigidBodyState& x, 
 }  // namespace
 
 void Simulator::update_tether_wrench() {
+  const auto [p, v] = attachment(x_, tether_->params().attach_xyz_m);
+  update_tether_wrench(p, v);
+}
+
+void Simulator::update_tether_wrench(const Eigen::Vector3d& attach_W, const Eigen::Vector3d& attach_v_W) {
   const Eigen::Vector3d& r_B = tether_->params().attach_xyz_m;
-  const auto [p, v] = attachment(x_, r_B);
-  const Eigen::Vector3d f_B = x_.q_WB.conjugate() * tether_->force_on_vehicle_W(p, v);
+  const Eigen::Vector3d f_B = x_.q_WB.conjugate() * tether_->force_on_vehicle_W(attach_W, attach_v_W);
   tether_tau_B_ << f_B, r_B.cross(f_B);
 }
 
@@ -182,7 +186,7 @@ void Simulator::step() {
   if (tether_) {
     const auto [p, v] = attachment(x_, tether_->params().attach_xyz_m);
     tether_->step(dt, p, v, current_->velocity_W(time()), seabed_.get());
-    update_tether_wrench();
+    update_tether_wrench(p, v);  // the attachment where the step left it
   }
 
   const double t1 = time();

@@ -333,11 +333,7 @@ void SonarRenderer::Impl::accumulate(const SonarState& st, const Pose& X_WB, Son
     sp.grain_bins = m.speckle_grain_bins;
     speckle_field(B, C, sp, &rng, &st.speckle);
   }
-  DisplayCoding coding;
-  coding.coding = m.display;
-  coding.gain_db = m.gain_db;
-  coding.dynamic_range_db = m.dynamic_range_db;
-  coding.gamma = m.display_gamma;
+  const DisplayCoding coding(m.display, m.gain_db, m.dynamic_range_db, m.display_gamma);
   for (std::size_t k = 0; k < acc.size(); ++k) {
     double v = acc[k] * inv_bin;
     if (options.noise) v = v * (s > 0.0 ? (1.0 - s) + s * st.speckle[k] : 1.0) + n0 * rng.exponential();

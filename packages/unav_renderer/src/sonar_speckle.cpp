@@ -141,14 +141,17 @@ void speckle_field(int bins, int channels, const SpeckleParams& p, unav::common:
       (*out)[static_cast<std::size_t>(y) * channels + x] *= texture[static_cast<std::size_t>(y / tb) * nc + x / tc];
 }
 
+DisplayCoding::DisplayCoding(const std::string& coding, double gain_db, double dynamic_range_db, double gamma)
+    : gamma_(coding == "gamma"),
+      gain_db_(gain_db),
+      dynamic_range_db_(dynamic_range_db),
+      exponent_(0.5 * gamma),
+      gain_(std::pow(10.0, gain_db / 10.0)) {}
+
 std::uint8_t DisplayCoding::operator()(double v) const {
   if (!(v > 0.0)) return 0;
-  double level;
-  if (coding == "gamma") {
-    level = std::pow(v * std::pow(10.0, gain_db / 10.0), 0.5 * gamma);
-  } else {
-    level = 1.0 + (10.0 * std::log10(v) + gain_db) / dynamic_range_db;
-  }
+  const double level =
+      gamma_ ? std::pow(v * gain_, exponent_) : 1.0 + (10.0 * std::log10(v) + gain_db_) / dynamic_range_db_;
   return static_cast<std::uint8_t>(std::lround(255.0 * std::clamp(level, 0.0, 1.0)));
 }
 

@@ -113,16 +113,14 @@ TEST(SonarSpeckle, GrainCorrelatesNeighboursAsThePatternAndPulseSay) {
 }
 
 TEST(SonarSpeckle, DisplayCodingsLevelsAndSaturation) {
-  DisplayCoding db;  // 0 dB gain: full scale at v = 1, 60 dB below it 0
+  const DisplayCoding db;  // 0 dB gain: full scale at v = 1, 60 dB below it 0
   EXPECT_EQ(db(1.0), 255);
   EXPECT_EQ(db(1e-3), 128);  // -30 dB: half way
   EXPECT_EQ(db(1e-7), 0);
   EXPECT_EQ(db(0.0), 0);
-  DisplayCoding gamma;
-  gamma.coding = "gamma";
-  gamma.gamma = 0.5;
-  EXPECT_EQ(gamma(0.25), 180);  // amplitude 0.5, to the power 0.5: 0.707
-  EXPECT_EQ(gamma(4.0), 255);   // above full scale: saturated
-  gamma.gain_db = 6.0206;       // x4 in intensity: 0.25 becomes full scale
-  EXPECT_EQ(gamma(0.25), 255);
+  const DisplayCoding gamma("gamma", 0.0, 60.0, 0.5);
+  EXPECT_EQ(gamma(0.25), 180);                             // amplitude 0.5, to the power 0.5: 0.707
+  EXPECT_EQ(gamma(4.0), 255);                              // above full scale: saturated
+  const DisplayCoding gained("gamma", 6.0206, 60.0, 0.5);  // x4 in intensity: 0.25 becomes full scale
+  EXPECT_EQ(gained(0.25), 255);
 }

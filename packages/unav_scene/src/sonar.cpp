@@ -117,7 +117,7 @@ struct SonarFile {
 SonarSpec spec_of(const SonarModel& m) {
   SonarSpec s;
   s.name = m.name;
-  s.type = m.side_scan() ? "side_scan" : (m.profiling() ? "profiling" : "forward_looking");
+  s.type = m.type_name();
   s.detection_db = m.detection_db;
   s.beams = m.beams;
   s.bins = m.bins;
@@ -182,6 +182,18 @@ SonarModel model_of(const SonarSpec& s) {
 }
 
 }  // namespace
+
+const char* SonarModel::type_name() const {
+  switch (type) {
+    case Type::kSideScan:
+      return "side_scan";
+    case Type::kProfiling:
+      return "profiling";
+    case Type::kForwardLooking:
+      break;
+  }
+  return "forward_looking";
+}
 
 double SonarModel::beam_azimuth_rad(int k) const {
   const double step = horizontal_aperture_rad / beams;

@@ -63,7 +63,7 @@ class SonarOutput {
     const Eigen::Quaterniond q(X.linear());
     nlohmann::json j = {
         {"name", model_.name},
-        {"type", model_.side_scan() ? "side_scan" : "forward_looking"},
+        {"type", model_.type_name()},
         {"frame", model_.name + "_link"},
         {"parent_frame", "base_link_frd"},
         {"frame_axes", "z forward (boresight), x up (marine_acoustic_msgs)"},

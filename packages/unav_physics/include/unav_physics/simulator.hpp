@@ -128,7 +128,8 @@ class Simulator {
   Vector6d external_tau_B_ = Vector6d::Zero();
   std::unique_ptr<Tether> tether_;
   Vector6d tether_tau_B_ = Vector6d::Zero();  ///< the tether's wrench at the start of the step
-  void update_tether_wrench();
+  void update_tether_wrench();                // at the vehicle's present attachment point
+  void update_tether_wrench(const Eigen::Vector3d& attach_W, const Eigen::Vector3d& attach_v_W);
   ThrusterVector u_cmd_, u_zero_;
   CommandStats stats_;
   bool timed_out_ = false;

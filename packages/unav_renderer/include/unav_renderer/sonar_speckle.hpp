@@ -40,13 +40,18 @@ void speckle_field(int bins, int channels, const SpeckleParams& p, unav::common:
 /// FWHM of `grain` cells: a single 1 for grain <= 1.
 std::vector<double> speckle_kernel(double grain);
 
-struct DisplayCoding {
-  std::string coding = "db";  ///< db or gamma
-  double gain_db = 0.0;
-  double dynamic_range_db = 60.0;  ///< db coding
-  double gamma = 0.5;              ///< gamma coding: exponent on the amplitude
+/// The coding is chosen and its constants computed once: operator() runs for every sample of a ping.
+class DisplayCoding {
+ public:
+  /// coding: db or gamma; dynamic_range_db for db, gamma (the exponent on the amplitude) for gamma.
+  explicit DisplayCoding(const std::string& coding = "db", double gain_db = 0.0, double dynamic_range_db = 60.0,
+                         double gamma = 0.5);
   /// The 8-bit sample of linear intensity v.
   std::uint8_t operator()(double v) const;
+
+ private:
+  bool gamma_;
+  double gain_db_, dynamic_range_db_, exponent_, gain_;
 };
 
 }  // namespace unav::renderer

@@ -62,6 +62,8 @@ struct SonarModel {
   double detection_db = 10.0;  ///< profiling: a beam's peak this far above its median is a return
   bool side_scan() const { return type == Type::kSideScan; }
   bool profiling() const { return type == Type::kProfiling; }
+  /// The type as sonar files and dataset manifests spell it: forward_looking, side_scan, profiling.
+  const char* type_name() const;
   int channels() const { return side_scan() ? 2 : beams; }  ///< beams in the message
   double bin_width_m() const { return (max_range_m - min_range_m) / bins; }
   double bin_center_m(int k) const { return min_range_m + (k + 0.5) * bin_width_m(); }
