@@ -33,16 +33,22 @@ for f in "${files[@]}"; do
   if [ "$fix" -eq 1 ]; then clang-format -i "$f"; continue; fi
   clang-format --dry-run --Werror "$f" 2>/dev/null || { echo "check_style: $f is not clang-formatted (run scripts/check_style.sh --fix)"; bad=1; }
 done
+# clang-tidy on the changed .cpp files that a package's compile database knows, one process per
+# core (each file's report printed whole), since the range of files grows with every round.
+tidy_one() {
+  local f="$1" db="build/$(basename "$(echo "$1" | cut -d/ -f1-2)")"
+  [ -f "$db/compile_commands.json" ] && grep -q "\"file\": \"$PWD/$f\"" "$db/compile_commands.json" || return 0
+  local out
+  out=$(clang-tidy --quiet -p "$db" "$f" 2>/dev/null || true)
+  if echo "$out" | grep -qE "(warning|error):"; then echo "$out" | grep -A3 -E "(warning|error):"; return 1; fi
+}
 if command -v clang-tidy >/dev/null && [ "${UNAV_SKIP_TIDY:-0}" != "1" ]; then
-  for f in "${files[@]}"; do
-    case "$f" in *.cpp) ;; *) continue ;; esac
-    [ -f "$f" ] || continue
-    pkg_dir=$(echo "$f" | cut -d/ -f1-2)
-    db="build/$(basename "$pkg_dir")"
-    [ -f "$db/compile_commands.json" ] && grep -q "\"file\": \"$PWD/$f\"" "$db/compile_commands.json" || continue
-    out=$(clang-tidy --quiet -p "$db" "$f" 2>/dev/null || true)
-    if echo "$out" | grep -qE "(warning|error):"; then echo "$out" | grep -A3 -E "(warning|error):"; bad=1; fi
-  done
+  export -f tidy_one
+  cpps=()
+  for f in "${files[@]}"; do case "$f" in *.cpp) [ -f "$f" ] && cpps+=("$f") ;; esac; done
+  if [ ${#cpps[@]} -gt 0 ]; then
+    printf '%s\n' "${cpps[@]}" | xargs -r -P "${UNAV_TIDY_JOBS:-$(nproc)}" -I{} bash -c 'tidy_one "$1"' _ {} || bad=1
+  fi
 fi
 [ "$bad" -eq 0 ] && echo "check_style: ${#files[@]} changed file(s) since $base are clean"
 exit "$bad"

@@ -107,7 +107,8 @@ macro(unav_interface_package)
   add_library(${PROJECT_NAME} SHARED ${_uip_sources})
   add_library(${PROJECT_NAME}::${PROJECT_NAME} ALIAS ${PROJECT_NAME})
   # Generated code is not ours to fix: no warnings from it.
-  set_source_files_properties(${_uip_sources} PROPERTIES COMPILE_OPTIONS "-w")
+  target_compile_options(${PROJECT_NAME} PRIVATE -w)
+  set_target_properties(${PROJECT_NAME} PROPERTIES UNITY_BUILD ON UNITY_BUILD_BATCH_SIZE 16)
   target_include_directories(${PROJECT_NAME} PUBLIC
     $<BUILD_INTERFACE:${_uip_gen}> $<INSTALL_INTERFACE:include>)
   target_link_libraries(${PROJECT_NAME} PUBLIC fastcdr fastrtps ${_uip_dep_targets})
