@@ -145,6 +145,7 @@ void PhysicsServer::run_steps() {
         }
         barrier_t_ = -1.0;
         held_since_ = -1.0;
+        hold_profile_.passed(last_input_, wall_now_s());
       }
       step_once();
       if (finishing_) return;  // max_sim_time: finish() takes over
@@ -169,6 +170,7 @@ void PhysicsServer::run_steps() {
 void PhysicsServer::hold_at_barrier() {
   // Participants that joined late missed the barrier's state: send it again every second.
   const double now = wall_now_s();
+  hold_profile_.held(now);
   if (held_since_ < 0.0) {
     held_since_ = now;
     last_republish_ = now;
@@ -232,9 +234,16 @@ void PhysicsServer::step_once() {
 
 void PhysicsServer::finish() {
   const bool acked = !lockstep_ || barrier_->open(barrier_ns());
-  if (!acked && wall_now_s() - finish_started_ < 10.0) return;  // spin on: acks are on their way
+  if (!acked && wall_now_s() - finish_started_ < 10.0) {  // spin on: acks are on their way
+    hold_profile_.held(wall_now_s());
+    return;
+  }
   if (!acked) {
     logger()->warn("lockstep: the last state was not acked within 10 s by:{}", missing_with_acks());
+  }
+  if (lockstep_) {
+    hold_profile_.passed(last_input_, wall_now_s());
+    logger()->info("lockstep: {}", hold_profile_.report(sim_->time(), wall_now_s()));
   }
   const eprosima::fastrtps::Duration_t wait(2, 0);
   for (auto* w : ports_->state_writers()) w->wait_for_acknowledgments(wait);
@@ -300,12 +309,14 @@ void PhysicsServer::on_command(const unav_msgs::msg::ThrusterCommand& msg) {
     timeout_logged_ = false;
   }
   last_command_ns_ = std::max(last_command_ns_, unav::nanoseconds(msg.header()));
+  last_input_ = "thruster command";
   if (lockstep_ && barrier_t_ >= 0.0 && barrier_open()) run_steps();
 }
 
 void PhysicsServer::on_ack(const unav_msgs::msg::LockstepAck& msg) {
   const std::string& who = msg.participant();
   const bool known = barrier_->has_acked(who);
+  last_input_ = who;
   if (!barrier_->on_ack(who, unav::nanoseconds(msg.header())) && !known)
     logger()->warn("lockstep ack from '{}', which is not in lockstep_participants", who);
   if (barrier_t_ >= 0.0 && barrier_open()) run_steps();

@@ -183,6 +183,8 @@ class PhysicsServer : public unav::Node {
   double barrier_t_ = -1.0;                           ///< barrier the server is holding at, < 0 when running
   std::unique_ptr<unav::lockstep::Barrier> barrier_;  ///< who must ack (lockstep mode)
   int64_t last_command_ns_ = INT64_MIN;               ///< newest thruster command stamp
+  std::string last_input_;                            ///< the last ack's participant or "thruster command"
+  unav::lockstep::HoldProfile hold_profile_;          ///< wall time held at barriers, per input that ended it
   double held_since_ = -1.0, last_republish_ = 0.0, last_wait_log_ = 0.0;  ///< wall s
   double wall_start_ = 0.0;  ///< realtime: wall time [s] that maps to simulated time 0
   bool timeout_logged_ = false;

@@ -3,6 +3,7 @@
 #include <fcntl.h>
 #include <poll.h>
 #include <sys/prctl.h>
+#include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -88,7 +89,14 @@ struct Process {
   std::string partial;
   bool respawn_pending = false;
   Clock::time_point respawn_at;
+  // Resource use over every run of the process (respawns summed): from wait4() at each exit.
+  Clock::time_point started;
+  double alive_s = 0, user_s = 0, system_s = 0;
+  long max_rss_kb = 0;
+  int runs = 0;
 };
+
+double seconds_of(const timeval& t) { return static_cast<double>(t.tv_sec) + 1e-6 * static_cast<double>(t.tv_usec); }
 
 class Supervisor {
  public:
@@ -142,6 +150,7 @@ class Supervisor {
       }
       wait_for_events();
     }
+    report_resources();
     if (result_ >= 0) {
       return result_;
     }
@@ -217,6 +226,8 @@ class Supervisor {
     ::fcntl(fds[0], F_SETFL, ::fcntl(fds[0], F_GETFL) | O_NONBLOCK);
     process.pid = pid;
     process.out_fd = fds[0];
+    process.started = Clock::now();
+    ++process.runs;
     log("INFO", process.label, "process started with pid [" + std::to_string(pid) + "]");
   }
 
@@ -232,8 +243,13 @@ class Supervisor {
       // The main process is a zombie and still holds its group: end what is left of it.
       ::kill(-process.pid, SIGKILL);
       int status = 0;
-      while (::waitpid(process.pid, &status, 0) < 0 && errno == EINTR) {
+      rusage usage{};
+      while (::wait4(process.pid, &status, 0, &usage) < 0 && errno == EINTR) {
       }
+      process.alive_s += std::chrono::duration<double>(Clock::now() - process.started).count();
+      process.user_s += seconds_of(usage.ru_utime);
+      process.system_s += seconds_of(usage.ru_stime);
+      process.max_rss_kb = std::max(process.max_rss_kb, usage.ru_maxrss);
       on_exit(process, status);
     }
   }
@@ -261,6 +277,35 @@ class Supervisor {
       process.respawn_pending = true;
       process.respawn_at = Clock::now() + seconds(process.node->respawn_delay_s);
     }
+  }
+
+  // Where the wall time went, per process: CPU (user + system, all its threads and the children it
+  // waited for) against the time it was alive. A lockstep participant's idle share is the time
+  // it waited for the others (or for the clock); the run's CPU sum against its wall time says
+  // whether the machine's cores were the limit.
+  void report_resources() {
+    if (std::none_of(processes_.begin(), processes_.end(), [](const Process& p) { return p.runs > 0; })) return;
+    const double wall = std::chrono::duration<double>(Clock::now() - launch_start_).count();
+    double total_cpu = 0;
+    std::size_t width = 0;
+    for (const auto& p : processes_) width = std::max(width, p.label.size());
+    std::ostringstream table;
+    table << std::fixed << std::setprecision(2);
+    for (const auto& p : processes_) {
+      if (p.runs == 0) continue;
+      const double cpu = p.user_s + p.system_s;
+      total_cpu += cpu;
+      table << "\n  " << std::left << std::setw(static_cast<int>(width)) << p.label << std::right << "  cpu "
+            << std::setw(7) << cpu << " s (user " << p.user_s << ", sys " << p.system_s << ") over " << p.alive_s
+            << " s alive: " << std::setprecision(0) << std::setw(3) << (p.alive_s > 0 ? 100.0 * cpu / p.alive_s : 0.0)
+            << " % busy, max RSS " << std::setw(4) << p.max_rss_kb / 1024 << " MiB" << std::setprecision(2);
+      if (p.runs > 1) table << ", " << p.runs << " runs";
+    }
+    std::ostringstream head;
+    head << std::fixed << std::setprecision(2) << "resource use: " << total_cpu << " s of CPU in " << wall
+         << " s of wall time (" << std::setprecision(2) << (wall > 0 ? total_cpu / wall : 0.0)
+         << " cores busy on average)";
+    log("INFO", "launch", head.str() + table.str());
   }
 
   static Clock::duration seconds(double s) {
@@ -408,6 +453,7 @@ class Supervisor {
   Clock::time_point next_escalation_;
   int result_ = -1;
   bool any_failed_ = false;
+  Clock::time_point launch_start_ = Clock::now();
 };
 
 }  // namespace

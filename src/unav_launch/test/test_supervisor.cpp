@@ -193,6 +193,27 @@ TEST_F(SupervisorTest, NodesDieWithAKilledLauncher) {
   }
 }
 
+// The resource table at the end: each process's CPU (user + system) against its time alive.
+// A shell counting to 300000 spends ~0.3-1 s of CPU whatever the load (fixed work; 0.05 s is far
+// below it); a sleeping one spends a few ms (0.05 s is far above that).
+TEST_F(SupervisorTest, ReportsEachProcesssCpuAgainstItsTimeAlive) {
+  EXPECT_EQ(
+      run_nodes({node("burner", "i=0; while [ $i -lt 300000 ]; do i=$((i+1)); done"), node("sleeper", "sleep 0.3")}),
+      0);
+  const std::string out = output_.str();
+  ASSERT_TRUE(contains("[INFO] [launch]: resource use: ")) << out;
+  auto cpu_of = [&](const std::string& label) {
+    const std::size_t row = out.find("\n  " + label + " ");  // labels are padded to one width
+    const std::size_t at = row == std::string::npos ? row : out.find(" cpu ", row);
+    EXPECT_NE(at, std::string::npos) << out;
+    return at == std::string::npos ? -1.0 : std::stod(out.substr(at + 5));
+  };
+  EXPECT_GT(cpu_of("burner-1"), 0.05) << out;
+  EXPECT_GE(cpu_of("sleeper-2"), 0.0) << out;
+  EXPECT_LT(cpu_of("sleeper-2"), 0.05) << out;
+  EXPECT_TRUE(contains("% busy, max RSS")) << out;
+}
+
 TEST_F(SupervisorTest, EmptyDescriptionReturnsZero) { EXPECT_EQ(run_nodes({}), 0); }
 
 }  // namespace

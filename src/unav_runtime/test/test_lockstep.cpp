@@ -4,6 +4,7 @@
 #include "unav_runtime/lockstep.hpp"
 
 using unav::lockstep::Barrier;
+using unav::lockstep::HoldProfile;
 using unav::lockstep::Participant;
 
 namespace {
@@ -69,4 +70,34 @@ TEST(LockstepParticipant, FrameConsumerAcksUpToJustBeforeItsNextFrame) {
   EXPECT_FALSE(b.open(1100 * kMs));
   b.on_ack("orb_slam", p.ack_for(1100 * kMs));
   EXPECT_TRUE(b.open(1100 * kMs));
+}
+
+TEST(LockstepHoldProfile, ChargesEachHoldToTheInputThatEndedIt) {
+  HoldProfile p;
+  p.held(10.0);  // t = 0: the participants start up for 1.5 s
+  p.passed("renderer", 11.5);
+  p.passed("renderer", 11.6);  // passed at once: a barrier, no hold
+  p.held(11.7);
+  p.held(11.8);                // still the same hold
+  p.passed("renderer", 11.9);  // 0.2 s for the renderer
+  p.held(12.0);
+  p.passed("orb_slam", 12.05);  // 0.05 s for the SLAM
+  p.held(12.1);
+  p.passed("renderer", 12.4);  // 0.3 s more for the renderer
+  EXPECT_DOUBLE_EQ(p.startup_s(), 1.5);
+  EXPECT_EQ(p.barriers(), 4u);
+  EXPECT_NEAR(p.held_for("renderer"), 0.5, 1e-12);
+  EXPECT_NEAR(p.held_for("orb_slam"), 0.05, 1e-12);
+  EXPECT_EQ(p.held_for("recorder"), 0.0);
+  // 0.2 s simulated in the 1.0 s after start-up, 0.55 s of it held.
+  EXPECT_EQ(p.report(0.2, 12.5),
+            "0.200 s simulated in 1.00 s of wall time (0.20x real time) after 1.50 s of start-up; 4 barriers, "
+            "0.55 s held (55 %): for renderer 0.50 s (2), orb_slam 0.05 s (1); between barriers 0.45 s");
+}
+
+TEST(LockstepHoldProfile, ReportsARunThatNeverStarted) {
+  const HoldProfile p;
+  EXPECT_EQ(p.report(0.0, 5.0),
+            "0.000 s simulated in 0.00 s of wall time (-x real time) after 0.00 s of start-up; 0 barriers, 0.00 s "
+            "held (- %); between barriers 0.00 s");
 }
