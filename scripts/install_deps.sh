@@ -16,6 +16,7 @@ PKGS=(
   munge slurmctld slurmd slurm-client
   pybind11-dev python3-dev python3-venv python3-pytest python3-numpy python3-torch
   python3-pandas python3-matplotlib python3-tqdm python3-rich python3-typing-extensions
+  python3-scipy python3-pil
 )
 missing=()
 for p in "${PKGS[@]}"; do
