@@ -14,10 +14,12 @@
 #  2. Seabed contact with saturated thrusters, in a world the scenario generates (`generate:`, built
 #     by each node and the Episode from the scenario: a different world in one of them shows in the
 #     images and the contact): the same vehicle driven at 2 m/s towards a point 2 m below the
-#     seabed (10 m +- 0.15 m relief) stops on it in both paths: its bottom (z + 0.127 m)
+#     seabed (10 m +- 0.15 m relief), 2.2 m aside and turned by 90 deg, stops on it in both paths: its bottom (z + 0.127 m)
 #     ends within the relief plus <= 0.1 m of penalty spring (2000 N/m against at most the
 #     vertical thrusters' force), not moving vertically by more than 5 mm in the last second (it
-#     pushes and slides on the sand). The allocator saturates for most of the run, so the achieved
+#     pushes and slides on the sand). The allocator saturates (surge, sway and yaw at once: >= 100
+#     of the 200 commands, scaled down to 0.55 and less; a straight dive alone stays within the
+#     thrusters' box since the MPC's Jacobians are analytic), so the achieved
 #     wrench's way back to the MPC (control/wrench_achieved; Mpc::SetAppliedWrench in process) is
 #     exercised: the DDS log must show it.
 source "$(dirname "$0")/common.sh"
@@ -59,7 +61,8 @@ run_both pipe "$out/pipe.yaml"
 # The flight moved: 10 s along the mission's first legs (not a hold that would match trivially).
 awk 'END { exit !($2 > 2.0) }' "$out/pipe/inproc/ground_truth.tum" || fail "the vehicle did not fly the mission"
 
-# 2. Seabed contact in a generated world: one waypoint 2 m below the seabed under the start, at 2 m/s.
+# 2. Seabed contact in a generated world: one waypoint 2 m below the seabed, 2.2 m away and turned by
+# 90 deg, at 2 m/s: surge, sway and yaw all at once on the horizontal thrusters saturate them.
 sed -n '/^mission:/q;p' "$out/pipe.yaml" | sed 's/^name: .*/name: seabed_contact/' > "$out/contact.yaml"
 cat >> "$out/contact.yaml" <<'YAML'
 generate:
@@ -72,7 +75,7 @@ mission:
   duration_s: 10.0
   speed_mps: 2.0
   waypoints:
-    - {position: [-1.5, 0.0, 12.0], yaw_deg: 0.0, hold_s: 10.0}
+    - {position: [-2.0, 1.0, 12.0], yaw_deg: 90.0, hold_s: 10.0}
 YAML
 run_both contact "$out/contact.yaml"
 grep -q "wrench saturates the thrusters" "$out/contact/launch.log" || fail "contact: the thrusters never saturated"

@@ -22,6 +22,12 @@ bool parse_integrator(const std::string& name, Integrator* out) {
 
 const char* to_string(Integrator integrator) { return integrator == Integrator::kRk4 ? "rk4" : "velocity_verlet"; }
 
+Eigen::Quaterniond exp_rotation(const Eigen::Vector3d& phi) {
+  const double angle = phi.norm();
+  if (angle < 1e-12) return Eigen::Quaterniond(1.0, 0.5 * phi.x(), 0.5 * phi.y(), 0.5 * phi.z()).normalized();
+  return Eigen::Quaterniond(Eigen::AngleAxisd(angle, phi / angle));
+}
+
 Matrix6d coriolis_matrix(const Matrix6d& M, const Vector6d& nu) {
   const Eigen::Vector3d a1 = M.topLeftCorner<3, 3>() * nu.head<3>() + M.topRightCorner<3, 3>() * nu.tail<3>();
   const Eigen::Vector3d a2 = M.bottomLeftCorner<3, 3>() * nu.head<3>() + M.bottomRightCorner<3, 3>() * nu.tail<3>();
@@ -158,13 +164,6 @@ Vector6d VehicleDynamics::acceleration(const RigidBodyState& x, const Eigen::Mat
 
 namespace {
 
-// Rotation of a body-frame rotation vector phi (rad) as a quaternion.
-Eigen::Quaterniond exp_quaternion(const Eigen::Vector3d& phi) {
-  const double angle = phi.norm();
-  if (angle < 1e-12) return Eigen::Quaterniond(1.0, 0.5 * phi.x(), 0.5 * phi.y(), 0.5 * phi.z()).normalized();
-  return Eigen::Quaterniond(Eigen::AngleAxisd(angle, phi / angle));
-}
-
 struct Derivative {
   Eigen::Vector3d p_dot;
   Eigen::Vector4d q_dot;  // quaternion coefficients (x, y, z, w)
@@ -183,7 +182,7 @@ void VehicleDynamics::step(RigidBodyState& x, double dt, const DynamicsInputs& i
     const Vector6d nu0 = x.nu();
     const Eigen::Vector3d dp_B = dt * x.v_WB_B + 0.5 * dt * dt * (a0.head<3>() + x.w_WB_B.cross(x.v_WB_B));
     x.p_WB_W += R0 * dp_B;
-    x.q_WB = (x.q_WB * exp_quaternion(dt * x.w_WB_B + 0.5 * dt * dt * a0.tail<3>())).normalized();
+    x.q_WB = (x.q_WB * exp_rotation(dt * x.w_WB_B + 0.5 * dt * dt * a0.tail<3>())).normalized();
     x.set_nu(nu0 + dt * a0);
     DynamicsInputs in_end = in;
     if (in.tau_staged) in_end.tau_B = in.tau_B_end;

@@ -103,10 +103,10 @@ class Mpc {
   Mpc(const Mpc&) = delete;
   Mpc& operator=(const Mpc&) = delete;
 
-  /// One control step at time t (s): state x (NED pose + body twist), setpoint -> *wrench_B (body
-  /// FRD, N / N m, within input_bounds, always finite). Never throws. On any failure *wrench_B is
-  /// the safe wrench: the previous plan's input for now, clamped to the bounds, or zero.
-  MpcSummary Solve(const physics::RigidBodyState& x, const PoseSetpoint& setpoint, double t, Vector6d* wrench_B);
+  /// One control step at time t (s): state x_in (NED pose + body twist), setpoint sp -> *wrench_B
+  /// (body FRD, N / N m, within input_bounds, always finite). Never throws. On any failure
+  /// *wrench_B is the safe wrench: the previous plan's input for now, clamped to the bounds, or zero.
+  MpcSummary Solve(const physics::RigidBodyState& x_in, const PoseSetpoint& sp, double t, Vector6d* wrench_B);
 
   /// Tells the estimator which wrench was really applied since the last Solve (e.g. the
   /// allocator's achieved wrench when it had to scale); default: the wrench Solve returned.

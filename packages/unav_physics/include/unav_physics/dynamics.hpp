@@ -25,17 +25,21 @@ const char* to_string(Integrator integrator);
 
 /// Inputs held over one step (zero-order hold, except the current: first-order hold).
 struct DynamicsInputs {
-  Vector6d tau_B = Vector6d::Zero();                    ///< generalised force [F; M] in body FRD, N / N m
+  Vector6d tau_B = Vector6d::Zero();  ///< generalised force [F; M] in body FRD, N / N m
   /// When true, the force varies within the step: tau_B at its start, tau_B_half at dt/2 and
   /// tau_B_end at dt (e.g. lagged thrust). RK4 evaluates each stage at its own time (4th order);
   /// velocity Verlet uses the start and end values. False: tau_B is held over the step.
   bool tau_staged = false;
   Vector6d tau_B_half = Vector6d::Zero();
   Vector6d tau_B_end = Vector6d::Zero();
-  Eigen::Vector3d v_c_W = Eigen::Vector3d::Zero();      ///< water velocity at the step start, NED, m/s
-  Eigen::Vector3d a_c_W = Eigen::Vector3d::Zero();      ///< its time derivative, m/s^2
-  const Seabed* seabed = nullptr;                       ///< contact when non-null
+  Eigen::Vector3d v_c_W = Eigen::Vector3d::Zero();  ///< water velocity at the step start, NED, m/s
+  Eigen::Vector3d a_c_W = Eigen::Vector3d::Zero();  ///< its time derivative, m/s^2
+  const Seabed* seabed = nullptr;                   ///< contact when non-null
 };
+
+/// The rotation Exp(phi) of a rotation vector phi [rad] as a quaternion (the integrators' and the
+/// controllers' one exponential map).
+Eigen::Quaterniond exp_rotation(const Eigen::Vector3d& phi);
 
 /// C(nu) of Fossen eq. 6.43 for a symmetric 6x6 inertia M (skew-symmetric parametrisation).
 Matrix6d coriolis_matrix(const Matrix6d& M, const Vector6d& nu);
@@ -55,6 +59,16 @@ class VehicleDynamics {
   /// Advances x by dt seconds; the quaternion is renormalised.
   void step(RigidBodyState& x, double dt, const DynamicsInputs& in, Integrator integrator) const;
 
+  /// One velocity Verlet step under a wrench held over it, with no current and no seabed (the
+  /// model a controller predicts with), and its Jacobians in tangent coordinates: a state moves
+  /// as (p + dp, q Exp(dtheta), nu + dnu) with dp in NED and dtheta in body axes, and
+  ///   [dp; dtheta; dnu]_{k+1} = A [dp; dtheta; dnu]_k + B dtau.
+  /// Advances x exactly as step(x, dt, {tau_B}, kVelocityVerlet) does (same arithmetic, same
+  /// result); A and B are the analytic derivatives of that step (chain rule through both
+  /// acceleration evaluations, the pose update and the rotation's exponential), ~1e-7 from its
+  /// central differences. Either pointer may be null.
+  void verlet_step_jacobians(RigidBodyState& x, double dt, const Vector6d& tau_B, Eigen::Matrix<double, 12, 12>* A,
+                             Eigen::Matrix<double, 12, 6>* B) const;
   /// Restoring generalised force g(eta) (weight at r_g, buoyancy at r_b), body frame.
   Vector6d restoring(const RigidBodyState& x) const;
   Vector6d restoring(const Eigen::Matrix3d& R_WB, double z) const;
@@ -68,7 +82,7 @@ class VehicleDynamics {
   const Matrix6d& M_RB() const { return M_RB_; }
   const Matrix6d& M_A() const { return M_A_; }
   const Matrix6d& M() const { return M_; }
-  double weight() const { return W_; }     ///< N
+  double weight() const { return W_; }    ///< N
   double buoyancy() const { return B_; }  ///< N, fully submerged
   const VehicleParams& params() const { return params_; }
 
@@ -80,6 +94,12 @@ class VehicleDynamics {
   };
   static Blocks make_blocks(const Matrix6d& M);
   static Vector6d coriolis_fast(const Blocks& b, const Eigen::Vector3d& v1, const Eigen::Vector3d& v2);
+  /// d coriolis_fast / d [v1; v2] (6 x 6).
+  static Matrix6d coriolis_jacobian(const Blocks& b, const Eigen::Vector3d& v1, const Eigen::Vector3d& v2);
+  /// Derivatives of acceleration() without current or contact: with respect to a body-axes
+  /// rotation of the attitude (6 x 3), the depth z (near the surface only) and nu (6 x 6).
+  void acceleration_jacobians(const Eigen::Matrix3d& R_WB, double z, const Vector6d& nu,
+                              Eigen::Matrix<double, 6, 3>* d_theta, Vector6d* d_z, Matrix6d* d_nu) const;
 
   VehicleParams params_;
   Blocks rb_, a_;
