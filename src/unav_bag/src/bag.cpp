@@ -280,6 +280,64 @@ void BagWriter::close() {
 
 // ---------------------------------------------------------------------------------------------
 
+namespace {
+
+std::unique_ptr<BagReader::Source> open_source(const std::string& file) {
+  const std::string ext = fs::path(file).extension().string();
+  if (ext == ".mcap") return open_mcap_source(file);
+  if (ext == ".db3") return open_sqlite_source(file);
+  throw BagError(file + ": unknown storage (expected .mcap or .db3)");
+}
+
+// A bag rosbag2 split over several files (max_bag_size / max_bag_duration): the files one after
+// the other in metadata.yaml's order, their topics merged by name (each file lists its own).
+class SplitSource final : public BagReader::Source {
+ public:
+  explicit SplitSource(const std::vector<std::string>& files) {
+    for (const auto& f : files) {
+      parts_.push_back(open_source(f));
+      std::vector<size_t> map;
+      for (const auto& t : parts_.back()->topics()) {
+        const auto it =
+            std::find_if(topics_.begin(), topics_.end(), [&](const TopicMetadata& u) { return u.name == t.name; });
+        if (it != topics_.end() && it->type != t.type)
+          throw BagError(f + ": topic '" + t.name + "' has type " + t.type + " here and " + it->type +
+                         " in an earlier file of the bag");
+        map.push_back(it != topics_.end() ? static_cast<size_t>(it - topics_.begin()) : topics_.size());
+        if (it == topics_.end()) topics_.push_back(t);
+      }
+      index_.push_back(std::move(map));
+    }
+  }
+  const std::vector<TopicMetadata>& topics() const override { return topics_; }
+  bool next(Message& out) override {
+    for (; current_ < parts_.size(); ++current_) {
+      if (parts_[current_]->next(out)) {
+        out.topic = index_[current_].at(out.topic);
+        return true;
+      }
+    }
+    return false;
+  }
+  void rewind() override {
+    for (auto& p : parts_) p->rewind();
+    current_ = 0;
+  }
+  BagInfo scan_info() override {
+    BagInfo info;
+    scan_messages(*this, info);
+    return info;
+  }
+
+ private:
+  std::vector<std::unique_ptr<BagReader::Source>> parts_;
+  std::vector<std::vector<size_t>> index_;  // per file: its topic index -> ours
+  std::vector<TopicMetadata> topics_;
+  size_t current_ = 0;
+};
+
+}  // namespace
+
 BagReader::BagReader(const std::string& path) : path_(path) {
   std::error_code ec;
   std::string file;
@@ -289,9 +347,11 @@ BagReader::BagReader(const std::string& path) : path_(path) {
       info_ = read_metadata(path);
       have_metadata = true;
       if (info_.files.empty()) throw BagError(path + "/metadata.yaml: no storage file listed");
-      if (info_.files.size() > 1)
-        throw BagError(path + ": bags split over " + std::to_string(info_.files.size()) +
-                       " files are not supported yet (read one file at a time)");
+      if (info_.files.size() > 1) {
+        std::vector<std::string> files;
+        for (const auto& f : info_.files) files.push_back((fs::path(path) / f.path).string());
+        source_ = std::make_unique<SplitSource>(files);
+      }
       file = (fs::path(path) / info_.files.front().path).string();
     } else {
       for (const auto& entry : fs::directory_iterator(path)) {
@@ -308,14 +368,7 @@ BagReader::BagReader(const std::string& path) : path_(path) {
   } else {
     throw BagError(path + ": no such bag");
   }
-  const std::string ext = fs::path(file).extension().string();
-  if (ext == ".mcap") {
-    source_ = open_mcap_source(file);
-  } else if (ext == ".db3") {
-    source_ = open_sqlite_source(file);
-  } else {
-    throw BagError(file + ": unknown storage (expected .mcap or .db3)");
-  }
+  if (!source_) source_ = open_source(file);
   topics_ = source_->topics();
   if (!have_metadata) {
     info_ = source_->scan_info();

@@ -163,6 +163,84 @@ INSTANTIATE_TEST_SUITE_P(Storages, RoundTrip,
                                            std::make_pair(std::string("mcap"), std::string("zstd")),
                                            std::make_pair(std::string("sqlite3"), std::string("none"))));
 
+// A bag rosbag2 split over files (max_bag_size): read one file after the other in metadata.yaml's
+// order, each file's topics (listed in its own order) merged by name.
+TEST(BagReader, ReadsABagSplitOverFiles) {
+  struct Part {
+    std::vector<TopicMetadata> topics;
+    std::vector<std::pair<size_t, int64_t>> messages;  // (topic index in the part, stamp)
+  };
+  const std::vector<Part> parts = {
+      {{topic("/x", "std_msgs/msg/Float64"), topic("/y", "std_msgs/msg/String")}, {{0, 10}, {1, 20}, {0, 30}}},
+      {{topic("/z", "std_msgs/msg/Float64"), topic("/y", "std_msgs/msg/String")}, {{1, 40}, {0, 50}}},
+  };
+  const std::string split = temp_dir("split");
+  fs::create_directories(split);
+  BagInfo info;
+  for (size_t k = 0; k < parts.size(); ++k) {
+    const std::string dir = temp_dir("part" + std::to_string(k));
+    BagWriter::Options opt;
+    opt.storage_id = k == 0 ? "sqlite3" : "mcap";  // the reader picks each file's storage by its name
+    BagWriter w(dir, opt);
+    for (const auto& t : parts[k].topics) w.add_topic(t);
+    for (const auto& [t, ns] : parts[k].messages) {
+      const auto data = payload(8, static_cast<int>(ns));
+      w.write(t, ns, data.data(), data.size());
+    }
+    w.close();
+    const BagInfo part = read_metadata(dir);
+    const std::string name = "split_" + std::to_string(k) + (k == 0 ? ".db3" : ".mcap");
+    fs::copy_file(fs::path(dir) / part.files.at(0).path, fs::path(split) / name);
+    info.storage_identifier = part.storage_identifier;
+    info.files.push_back({name, part.starting_time_ns, part.duration_ns, part.message_count});
+    info.message_count += part.message_count;
+    for (const auto& t : part.topics) info.topics.push_back(t);
+  }
+  info.starting_time_ns = 10;
+  info.duration_ns = 40;
+  {
+    std::ofstream out(fs::path(split) / "metadata.yaml");
+    out << to_metadata_yaml(info);
+  }
+  BagReader r(split);
+  ASSERT_EQ(r.topics().size(), 3u);  // /x, /y, /z: /y once
+  std::vector<std::pair<std::string, int64_t>> read;
+  Message m;
+  while (r.next(m)) read.emplace_back(r.topics().at(m.topic).name, m.timestamp_ns);
+  const std::vector<std::pair<std::string, int64_t>> expected = {
+      {"/x", 10}, {"/y", 20}, {"/x", 30}, {"/y", 40}, {"/z", 50}};
+  EXPECT_EQ(read, expected);
+  r.rewind();
+  ASSERT_TRUE(r.next(m));
+  EXPECT_EQ(m.timestamp_ns, 10);
+  EXPECT_TRUE(m.data == payload(8, 10));
+
+  // A topic whose type changes between the files is refused, naming both.
+  const std::string bad = temp_dir("split_bad");
+  fs::create_directories(bad);
+  const std::string bad_part = temp_dir("bad_part");
+  {
+    BagWriter w(bad_part, {});
+    w.add_topic(topic("/y", "std_msgs/msg/Float64"));
+    w.close();
+  }
+  fs::copy_file(fs::path(split) / "split_0.db3", fs::path(bad) / "bad_0.db3");
+  fs::copy_file(fs::path(bad_part) / "bad_part_0.mcap", fs::path(bad) / "bad_1.mcap");
+  info.files = {{"bad_0.db3", 10, 20, 3}, {"bad_1.mcap", 0, 0, 0}};
+  {
+    std::ofstream out(fs::path(bad) / "metadata.yaml");
+    out << to_metadata_yaml(info);
+  }
+  try {
+    BagReader rb(bad);
+    FAIL() << "a type change was accepted";
+  } catch (const BagError& e) {
+    EXPECT_NE(std::string(e.what()).find("'/y' has type std_msgs/msg/Float64 here and std_msgs/msg/String"),
+              std::string::npos)
+        << e.what();
+  }
+}
+
 TEST(BagWriter, BadInputNamesTheValue) {
   const std::string dir = temp_dir("bad");
   BagWriter::Options opt;

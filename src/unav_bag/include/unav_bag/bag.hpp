@@ -119,7 +119,8 @@ struct Message {
 };
 
 /// Reads a rosbag2 folder written by us or by ROS 2 (MCAP with uncompressed or zstd chunks,
-/// sqlite3 with schema version 1-4), or a single .mcap/.db3 file. Messages come in timestamp
+/// sqlite3 with schema version 1-4; a bag split over several files is read file after file in
+/// metadata.yaml's order, its topics merged by name), or a single .mcap/.db3 file. Messages come in timestamp
 /// order for sqlite3 and in file order for MCAP (which rosbag2 writes in arrival order).
 class BagReader {
  public:
