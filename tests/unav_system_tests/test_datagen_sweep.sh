@@ -44,6 +44,26 @@ assert s["name"] == "fls" and s["pings"] == 6 and s["channels"] == 256 and s["bi
 assert len(s["channel_azimuth_rad"]) == 256 and 1400 < s["sound_speed_mps"] < 1600
 pngs = [f["path"] for f in m["files"] if f["path"].startswith("sonar/fls/") and f["path"].endswith(".png")]
 assert len(pngs) == 6 and "sonar/fls/pings.txt" in [f["path"] for f in m["files"]], pngs
+# The navigation sensors as they sampled over the 0.55 s flown: pressure at 50 Hz, DVL at 10 Hz,
+# every sample kept. Each frame's body depth (groundtruth_body.txt) against the pressure sample
+# nearest in time (<= 10 ms): within 3 cm (20 Pa noise = 2 mm, <= 1 cm of motion in 10 ms).
+import math, os
+d = os.path.dirname(sys.argv[1])
+n = m["nav"]
+assert 26 <= n["pressure"]["rows"] <= 29 and 5 <= n["dvl"]["rows"] <= 6, n
+rows = lambda f: [[float(v) for v in l.split(",")] for l in open(os.path.join(d, f)) if not l.startswith("#")]
+pressure, dvl = rows("nav/pressure.csv"), rows("nav/dvl.csv")
+assert len(pressure) == n["pressure"]["rows"] and len(dvl) == n["dvl"]["rows"], (len(pressure), len(dvl))
+assert all(b[0] - a[0] > 0.0199 for a, b in zip(pressure, pressure[1:]))  # 50 Hz, none twice
+for l in open(os.path.join(d, "groundtruth_body.txt")):
+    if l.startswith("#"):
+        continue
+    t, z = float(l.split()[0]), float(l.split()[3])
+    near = min(pressure, key=lambda r: abs(r[0] - t))
+    assert abs(near[0] - t) <= 0.0101 and abs(near[3] - z) < 0.03, (t, z, near)
+# Over the sand 1-3 m below: bottom lock on all four beams, the altitude in that range.
+assert all(r[1] == 1 and r[6] == 4 and 0.5 < r[5] < 6.0 for r in dvl), dvl
+assert all(math.isfinite(v) for r in dvl for v in r[7:15]), dvl
 PY
 done
 [ -f "$out/a/contact_sheet.png" ] || fail "no contact sheet"

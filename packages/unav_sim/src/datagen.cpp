@@ -8,7 +8,9 @@
 #include <nlohmann/json.hpp>
 
 #include <fstream>
+#include <functional>
 #include <iomanip>
+#include <map>
 #include <sstream>
 
 #include "unav_datagen/dataset_writer.hpp"
@@ -105,6 +107,93 @@ class SonarOutput {
   std::uint64_t pings_ = 0;
   double sound_speed_ = 0.0, absorption_ = 0.0;
   std::vector<float> azimuths_;
+};
+
+// The vehicle's navigation sensors as they sampled, each at its own rate and every sample kept
+// (checked after every physics step): CSV files under nav/ with a header line, times in
+// simulated seconds; the tether's length and pull at every frame when the vehicle has one.
+class NavOutput {
+ public:
+  NavOutput(const fs::path& root, const physics::Simulator& sim) : dir_(root / "nav") {
+    fs::create_directories(dir_);
+    open(&pressure_, "pressure.csv", "t,valid,pressure_pa,depth_m");
+    open(&dvl_, "dvl.csv",
+         "t,valid,vx_mps,vy_mps,vz_mps,altitude_m,locked_beams,"
+         "range0_m,range1_m,range2_m,range3_m,beam_velocity0_mps,beam_velocity1_mps,beam_velocity2_mps,"
+         "beam_velocity3_mps");
+    open(&usbl_, "usbl.csv",
+         "ping_t,t,valid,range_m,azimuth_rad,elevation_rad,x_m,y_m,z_m,truth_x_m,truth_y_m,truth_z_m,"
+         "truth_range_m,outlier");
+    if (sim.tether() != nullptr) open(&tether_, "tether.csv", "t,length_m,force_x_n,force_y_n,force_z_n");
+  }
+  void after_step(const physics::Simulator& sim) {
+    const physics::SensorReadings& r = sim.sensors();
+    if (r.pressure.seq != pressure_seq_) {
+      pressure_seq_ = r.pressure.seq;
+      pressure_ << r.pressure.stamp << ',' << r.pressure.valid << ',' << r.pressure.pressure_pa << ','
+                << r.pressure.depth_m << '\n';
+      ++rows_["pressure"];
+    }
+    if (r.dvl.seq != dvl_seq_) {
+      const physics::DvlReading& d = r.dvl;
+      dvl_seq_ = d.seq;
+      dvl_ << d.stamp << ',' << d.valid << ',' << d.velocity_B.x() << ',' << d.velocity_B.y() << ',' << d.velocity_B.z()
+           << ',' << d.altitude_m << ',' << d.locked_beams;
+      for (int i = 0; i < 4; ++i) dvl_ << ',' << (d.beam_valid[i] ? d.beam_range_m[i] : std::nan(""));
+      for (int i = 0; i < 4; ++i) dvl_ << ',' << (d.beam_valid[i] ? d.beam_velocity[i] : std::nan(""));
+      dvl_ << '\n';
+      ++rows_["dvl"];
+    }
+    if (r.usbl.seq != usbl_seq_) {
+      const physics::UsblReading& u = r.usbl;
+      usbl_seq_ = u.seq;
+      usbl_ << u.ping_stamp << ',' << u.stamp << ',' << u.valid << ',' << u.range_m << ',' << u.azimuth_rad << ','
+            << u.elevation_rad << ',' << u.p_W.x() << ',' << u.p_W.y() << ',' << u.p_W.z() << ',' << u.truth_p_W.x()
+            << ',' << u.truth_p_W.y() << ',' << u.truth_p_W.z() << ',' << u.truth_range_m << ',' << u.outlier << '\n';
+      ++rows_["usbl"];
+    }
+  }
+  void at_frame(const physics::Simulator& sim) {
+    if (sim.tether() == nullptr) return;
+    const Eigen::Vector3d f = sim.tether_force_W();
+    tether_ << sim.time() << ',' << sim.tether()->length() << ',' << f.x() << ',' << f.y() << ',' << f.z() << '\n';
+    ++rows_["tether"];
+  }
+  std::string manifest_json() {
+    for (auto* f : {&pressure_, &dvl_, &usbl_, &tether_}) {
+      if (!f->is_open()) continue;
+      f->flush();
+      if (!*f) throw unav::ConfigError(dir_.string() + ": cannot write the navigation sensors' files");
+      f->close();
+    }
+    nlohmann::json j = {
+        {"pressure", {{"file", "nav/pressure.csv"}, {"rows", rows_["pressure"]}, {"units", "Pa, m (depth)"}}},
+        {"dvl",
+         {{"file", "nav/dvl.csv"},
+          {"rows", rows_["dvl"]},
+          {"frame", "base_link_frd"},
+          {"units", "m/s seabed-relative velocity (FRD), m; per beam slant range and velocity, nan when unlocked"}}},
+        {"usbl",
+         {{"file", "nav/usbl.csv"},
+          {"rows", rows_["usbl"]},
+          {"frame", "world_ned (x y z), transceiver axes (azimuth, elevation)"},
+          {"units", "s (interrogation, reply), m, rad; truth_* the transponder when the ping reached it"}}}};
+    if (rows_.count("tether") != 0 || tether_.is_open())
+      j["tether"] = {
+          {"file", "nav/tether.csv"}, {"rows", rows_["tether"]}, {"units", "m, N (pull on the vehicle, NED)"}};
+    return j.dump();
+  }
+
+ private:
+  void open(std::ofstream* f, const std::string& name, const std::string& header) {
+    f->open(dir_ / name);
+    if (!*f) throw unav::ConfigError((dir_ / name).string() + ": cannot write");
+    *f << std::setprecision(17) << "# " << header << '\n';
+  }
+  fs::path dir_;
+  std::ofstream pressure_, dvl_, usbl_, tether_;
+  std::uint64_t pressure_seq_ = 0, dvl_seq_ = 0, usbl_seq_ = 0;
+  std::map<std::string, std::uint64_t> rows_;
 };
 
 // The sample as a scenario file, world/scenario.yaml (beside its current.yaml when it has one):
@@ -215,6 +304,8 @@ SampleResult generate_sample(const unav::datagen::RandomizationSpec& spec, std::
   if (!sonar_name.empty())
     sonar = std::make_unique<SonarOutput>(partial.string(), s.sonars_config, sonar_name, world, seed,
                                           ep.renderer().shared_context());
+  NavOutput nav(partial, ep.simulator());
+  const std::function<void()> record_nav = [&nav, &ep] { nav.after_step(ep.simulator()); };
   double next_ping_t = 0.0;
   auto body_pose = [&ep] {
     Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
@@ -244,7 +335,7 @@ SampleResult generate_sample(const unav::datagen::RandomizationSpec& spec, std::
       const double arc = speed * (t + control_period);
       const auto& target = path[std::min(path.size() - 1, static_cast<size_t>(arc / step))];
       ep.set_setpoint(unav::control::PoseSetpoint::FromPositionYaw(target.p_W, target.yaw));
-      ep.advance(control_period);
+      ep.advance(control_period, record_nav);
       t = ep.time();
       const auto& x = ep.state();
       const auto nu_dot = ep.simulator().acceleration();
@@ -257,6 +348,7 @@ SampleResult generate_sample(const unav::datagen::RandomizationSpec& spec, std::
       }
     }
     Frame fr = ep.render(camera);
+    nav.at_frame(ep.simulator());
     const auto& x = ep.state();
     Eigen::Isometry3d X_WB = Eigen::Isometry3d::Identity();
     X_WB.linear() = x.q_WB.toRotationMatrix();
@@ -288,7 +380,8 @@ SampleResult generate_sample(const unav::datagen::RandomizationSpec& spec, std::
   e.SetDoublePrecision(17);
   e << unav::common::ToYaml(s);
   mi.randomization_yaml = e.c_str();
-  mi.extra_entries = {"world"};
+  mi.extra_entries = {"world", "nav"};
+  mi.extra_json["nav"] = nav.manifest_json();
   if (sonar) {
     mi.extra_entries.emplace_back("sonar");
     mi.extra_json["sonar"] = sonar->manifest_json();

@@ -73,7 +73,7 @@ void Episode::reset(std::uint64_t seed, const RigidBodyState& initial, const Wor
 
 void Episode::set_setpoint(const control::PoseSetpoint& setpoint) { setpoint_ = setpoint; }
 
-void Episode::advance(double duration) {
+void Episode::advance(double duration, const std::function<void()>& after_step) {
   const int periods = std::max(1, static_cast<int>(std::lround(duration / setup_.scenario.control.period)));
   physics::ThrusterVector u;
   for (int k = 0; k < periods; ++k) {
@@ -90,7 +90,14 @@ void Episode::advance(double duration) {
     timings_.control_s += seconds_since(t0);
     ++timings_.control_steps;
     t0 = Clock::now();
-    for (int i = 0; i < substeps_; ++i) sim_->step();
+    if (after_step) {
+      for (int i = 0; i < substeps_; ++i) {
+        sim_->step();
+        after_step();
+      }
+    } else {
+      for (int i = 0; i < substeps_; ++i) sim_->step();
+    }
     timings_.physics_s += seconds_since(t0);
     timings_.physics_steps += static_cast<std::uint64_t>(substeps_);
   }

@@ -14,6 +14,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <string>
@@ -77,8 +78,10 @@ class Episode {
   const control::PoseSetpoint& setpoint() const { return setpoint_; }
   /// Closed loop for `duration` s (rounded to whole control periods, at least one): each period
   /// the MPC solves for the setpoint, the allocator maps the wrench to thruster commands, the
-  /// physics integrates.
-  void advance(double duration);
+  /// physics integrates. `after_step`, when given, runs after every physics step (e.g. to record
+  /// the sensors, which sample at their own rates: the pressure sensor at 50 Hz is faster than
+  /// the 20 Hz control).
+  void advance(double duration, const std::function<void()>& after_step = {});
   /// Places the vehicle at `x` (kinematic moves: no dynamics); time goes on by `duration` s.
   void teleport(const RigidBodyState& x, double duration);
 
