@@ -2,6 +2,7 @@
 #include "unav_control/mpc.hpp"
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <sstream>
@@ -24,23 +25,12 @@ PoseSetpoint PoseSetpoint::FromPositionYaw(const Eigen::Vector3d& p_W, double ya
 }
 
 const char* to_string(MpcStatus status) {
-  switch (status) {
-    case MpcStatus::kConverged:
-      return "converged";
-    case MpcStatus::kMaxIterations:
-      return "max_iterations";
-    case MpcStatus::kTimeLimit:
-      return "time_limit";
-    case MpcStatus::kSolverFailure:
-      return "solver_failure";
-    case MpcStatus::kInvalidState:
-      return "invalid_state";
-    case MpcStatus::kInvalidSetpoint:
-      return "invalid_setpoint";
-    case MpcStatus::kInvalidTime:
-      return "invalid_time";
-  }
-  return "unknown";
+  // In the enum's order (mpc.hpp).
+  static constexpr std::array<const char*, 7> kNames = {"converged",      "max_iterations", "time_limit",
+                                                        "solver_failure", "invalid_state",  "invalid_setpoint",
+                                                        "invalid_time"};
+  const auto i = static_cast<std::size_t>(status);
+  return i < kNames.size() ? kNames[i] : "unknown";
 }
 
 namespace {
