@@ -229,12 +229,6 @@ WaypointFollowerNode::WaypointFollowerNode(const unav::NodeOptions& options)
     : Node("waypoint_follower", options, "rov") {
   WaypointFollowerParams prm;
   declare_params(&prm);
-  std::optional<unav::scene::World> scenario_world;
-  if (prm.scenario.given()) {
-    const unav::scene::Scenario sc = prm.scenario.load();
-    prm.pipeline_world = sc.world;
-    scenario_world = unav::scene::scenario_world(sc);  // generated when the scenario says so
-  }
   WaypointFollowerOptions wo;
   wo.acceptance_radius = prm.acceptance_radius;
   const std::vector<double>& flat = prm.waypoints;
@@ -242,14 +236,9 @@ WaypointFollowerNode::WaypointFollowerNode(const unav::NodeOptions& options)
   const double height = prm.height_above_pipe;
   follower_ = WaypointFollower(wo);
   std::vector<PoseSetpoint> path;
-  if (!world.empty() && flat.empty()) {
-    unav::scene::World w;
-    try {
-      w = scenario_world ? std::move(*scenario_world) : unav::scene::load_world(world);
-    } catch (const std::exception& e) {
-      throw unav::ConfigError(e.what());
-    }
-    if (w.pipelines.empty()) throw unav::ParameterError("pipeline_world '" + world + "' has no pipeline");
+  if ((!world.empty() || prm.scenario.given()) && flat.empty()) {
+    // The scenario's world (generated when it says so), else pipeline_world.
+    const unav::scene::World w = unav::scene::pipeline_world(prm.scenario, world);
     std::vector<Eigen::Vector3d> pts;
     const auto& c = w.pipelines.front().centerline_W;
     for (size_t i = 0; i < c.size(); i += 10) pts.push_back(c[i]);  // ~1 m spacing

@@ -77,12 +77,6 @@ TrajectoryEvaluator::TrajectoryEvaluator(const unav::NodeOptions& options)
     : Node("trajectory_evaluator", options, "rov") {
   TrajectoryEvaluatorParams prm;
   declare_params(&prm);
-  std::optional<unav::scene::World> scenario_world;
-  if (prm.scenario.given()) {
-    const unav::scene::Scenario sc = prm.scenario.load();
-    prm.pipeline_world = sc.world;
-    scenario_world = unav::scene::scenario_world(sc);  // generated when the scenario says so
-  }
   const std::vector<std::string>& names = prm.estimates;
   output_dir_ = prm.output_dir;
   trajectory_name_ = prm.trajectory_name;
@@ -102,11 +96,8 @@ TrajectoryEvaluator::TrajectoryEvaluator(const unav::NodeOptions& options)
   body_frame_ = prm.body_frame;
   const std::string& pipe_world = prm.pipeline_world;
   pipe_loss_m_ = prm.pipe_loss_distance;
-  if (!pipe_world.empty()) {
-    pipe_world_ = std::make_unique<unav::scene::World>(scenario_world ? std::move(*scenario_world)
-                                                                      : unav::scene::load_world(pipe_world));
-    if (pipe_world_->pipelines.empty()) throw unav::ConfigError("pipeline_world '" + pipe_world + "' has no pipeline");
-  }
+  if (!pipe_world.empty() || prm.scenario.given())  // the scenario's world, else pipeline_world
+    pipe_world_ = std::make_unique<unav::scene::World>(unav::scene::pipeline_world(prm.scenario, pipe_world));
   if (!camera.empty() && cams_path.empty()) {
     // The mount's owner (the renderer) publishes it once, latched: look it up like tf2 does.
     camera_frame_ = camera + "_optical";

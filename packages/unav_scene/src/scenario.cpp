@@ -147,6 +147,20 @@ World scenario_world(const Scenario& s) {
   return w;
 }
 
+World pipeline_world(const ScenarioParam& scenario, const std::string& world_file) {
+  std::string file = world_file;
+  World w;
+  if (scenario.given()) {
+    const Scenario sc = scenario.load();
+    file = sc.world;
+    w = scenario_world(sc);
+  } else {
+    w = load_world(world_file);
+  }
+  if (w.pipelines.empty()) throw ConfigError("pipeline_world '" + file + "' has no pipeline");
+  return w;
+}
+
 YAML::Node scenario_yaml(const Scenario& s) { return unav::common::ToYaml(s); }
 
 }  // namespace unav::scene

@@ -230,6 +230,10 @@ std::vector<CameraModel> scenario_cameras(const Scenario& s);
 /// over when generate.enabled (generate_world with the scenario's seed), its water replaced by
 /// `water` when given. Throws ConfigError.
 World scenario_world(const Scenario& s);
+/// The world whose first pipeline a node follows or scores (waypoint_follower,
+/// trajectory_evaluator): the scenario's (scenario_world()) when `scenario` is given, else
+/// `world_file`. Throws ConfigError naming the file (also when the world has no pipeline).
+World pipeline_world(const ScenarioParam& scenario, const std::string& world_file);
 
 /// The concrete scenario as YAML (what a run records in its output folder).
 YAML::Node scenario_yaml(const Scenario& s);
