@@ -72,10 +72,25 @@ PipeFollowingConfig load_pipe_following_config(const std::string& path) {
   }
   if (root["env"]) unav::common::LoadYaml(root, path, &c.env, "env");
   const std::string dir = std::filesystem::path(path).parent_path().string();
-  if (root["scenario"] && root["scenario"].IsScalar()) {  // a scenario file, as the deploy launch takes it
-    c.scenario =
-        scene::load_scenario(scene::find_scenario_file(root["scenario"].as<std::string>(), dir, path, "scenario"));
-  } else if (root["scenario"]) {
+  const YAML::Node sc = root["scenario"];
+  if (sc && sc.IsScalar()) {  // a scenario file, as the deploy launch takes it
+    c.scenario = scene::load_scenario(scene::find_scenario_file(sc.as<std::string>(), dir, path, "scenario"));
+  } else if (sc && sc.IsMap() && sc["file"]) {
+    // {file: F, set: [key=value, ...]}: a scenario file with some of its keys replaced (the same
+    // language as a node's scenario_set), e.g. a render profile for learning.
+    for (const auto& kv : sc) {
+      const auto key = kv.first.as<std::string>();
+      if (key != "file" && key != "set")
+        throw ConfigError(path, "scenario." + key, "", "unknown key (a scenario reference has file and set)");
+    }
+    std::vector<std::string> set;
+    if (sc["set"]) {
+      if (!sc["set"].IsSequence()) throw ConfigError(path, "scenario.set", "", "expected a list of key=value");
+      for (const auto& v : sc["set"]) set.push_back(v.as<std::string>());
+    }
+    c.scenario = scene::load_scenario_param(
+        scene::find_scenario_file(sc["file"].as<std::string>(), dir, path, "scenario.file"), -1, set);
+  } else if (sc) {
     unav::common::LoadYaml(root, path, &c.scenario, "scenario");
     scene::resolve_scenario_paths(&c.scenario, path, dir);
   }

@@ -3,10 +3,13 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <fstream>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "unav_common/errors.hpp"
+#include "unav_common/temp_dir.hpp"
 #include "unav_sim/pipe_following_env.hpp"
 
 using namespace unav::sim;
@@ -192,4 +195,34 @@ TEST(PipeFollowingConfig, OverridesAreCheckedByName) {
   // A cross-field rule: a bend tighter than the pipe.
   EXPECT_THROW(apply_override(&c, "pipe_scenes.pipeline.bend_radius_m", "0.1", "test"), unav::ConfigError);
   EXPECT_EQ(c.scenes.Sample(3).pipeline.bend_radius_m, 0.0);  // a rejected override changes nothing
+}
+
+// A learning config may name its scenario with keys replaced ({file, set}): e.g. a render profile.
+TEST(PipeFollowingConfig, ScenarioReferenceWithReplacedKeys) {
+  unav::common::TempDir dir("pipe_cfg");
+  const std::string scenario = std::string(UNAV_REPO_ROOT) + "/config/scenarios/pipe_following.yaml";
+  {
+    std::ofstream f(dir.path() + "/learn.yaml");
+    f << "scenario: {file: " << scenario << ", set: [render.shadows=false, render.lamp_scatter_samples=0]}\n";
+  }
+  const PipeFollowingConfig c = load_pipe_following_config(dir.path() + "/learn.yaml");
+  EXPECT_FALSE(c.scenario.render.shadows);
+  EXPECT_EQ(c.scenario.render.lamp_scatter_samples, 0);
+  EXPECT_TRUE(c.scenario.render.marine_snow);  // the file's other keys kept
+  EXPECT_EQ(c.scenario.cameras.names, std::vector<std::string>{"down"});
+  {
+    std::ofstream f(dir.path() + "/bad.yaml");
+    f << "scenario: {file: " << scenario << ", set: [render.shadowz=false]}\n";
+  }
+  EXPECT_THROW(load_pipe_following_config(dir.path() + "/bad.yaml"), unav::ConfigError);
+  {
+    std::ofstream f(dir.path() + "/bad2.yaml");
+    f << "scenario: {file: " << scenario << ", sett: []}\n";
+  }
+  try {
+    load_pipe_following_config(dir.path() + "/bad2.yaml");
+    FAIL() << "an unknown key was accepted";
+  } catch (const unav::ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("scenario.sett"), std::string::npos) << e.what();
+  }
 }
