@@ -40,9 +40,9 @@ struct PoseSetpoint {
 };
 
 struct MpcOptions {
-  int horizon_steps = 20;   ///< N, >= 1
-  double dt = 0.05;         ///< model step, s, > 0
-  int control_blocks = 5;   ///< move blocking: free wrenches over the horizon, 1..min(N, 20)
+  int horizon_steps = 20;  ///< N, >= 1
+  double dt = 0.05;        ///< model step, s, > 0
+  int control_blocks = 5;  ///< move blocking: free wrenches over the horizon, 1..min(N, 20)
   /// Diagonal of Wx^2: [x y z (1/m^2), roll pitch yaw error (1/rad^2), u v w (s^2/m^2), p q r (s^2/rad^2)], >= 0.
   Vector12d state_weights = (Vector12d() << 200, 200, 200, 60, 60, 60, 30, 30, 30, 4, 4, 4).finished();
   double terminal_weight_scale = 5.0;  ///< multiplies state_weights at the last step, >= 0
@@ -58,7 +58,7 @@ struct MpcOptions {
   double disturbance_gain = 0.15;
   /// |d_hat| limits as a fraction of input_bounds (anti-windup), >= 0.
   double disturbance_limit_fraction = 0.8;
-  int max_iterations = 10;          ///< Ceres iterations per solve, >= 1
+  int max_iterations = 10;  ///< Ceres iterations per solve, >= 1
   /// Ceres wall-time budget, ms, >= 0 (a late solve returns its best iterate). 0 = none: the solve
   /// is bounded by max_iterations only and repeats exactly (lockstep, learning, data generation).
   double max_solve_time_ms = 0.0;
@@ -82,11 +82,11 @@ const char* to_string(MpcStatus status);
 
 struct MpcSummary {
   MpcStatus status = MpcStatus::kConverged;
-  int iterations = 0;           ///< Ceres iterations
-  double solve_time_ms = 0.0;   ///< wall time of Solve(), ms
-  double initial_cost = 0.0;    ///< cost of the warm start
-  double cost = 0.0;            ///< cost of the returned plan
-  std::string message;          ///< empty unless something went wrong
+  int iterations = 0;          ///< Ceres iterations
+  double solve_time_ms = 0.0;  ///< wall time of Solve(), ms
+  double initial_cost = 0.0;   ///< cost of the warm start
+  double cost = 0.0;           ///< cost of the returned plan
+  std::string message;         ///< empty unless something went wrong
   /// True when the wrench came from this solve (converged, iteration or time limit).
   bool ok() const {
     return status == MpcStatus::kConverged || status == MpcStatus::kMaxIterations || status == MpcStatus::kTimeLimit;
