@@ -10,7 +10,6 @@
 #include <fstream>
 #include <functional>
 #include <iomanip>
-#include <map>
 #include <sstream>
 
 #include "unav_datagen/dataset_writer.hpp"
@@ -128,72 +127,78 @@ class NavOutput {
   }
   void after_step(const physics::Simulator& sim) {
     const physics::SensorReadings& r = sim.sensors();
-    if (r.pressure.seq != pressure_seq_) {
-      pressure_seq_ = r.pressure.seq;
-      pressure_ << r.pressure.stamp << ',' << r.pressure.valid << ',' << r.pressure.pressure_pa << ','
-                << r.pressure.depth_m << '\n';
-      ++rows_["pressure"];
+    if (fresh(&pressure_, r.pressure.seq)) {
+      pressure_.out << r.pressure.stamp << ',' << r.pressure.valid << ',' << r.pressure.pressure_pa << ','
+                    << r.pressure.depth_m << '\n';
     }
-    if (r.dvl.seq != dvl_seq_) {
+    if (fresh(&dvl_, r.dvl.seq)) {
       const physics::DvlReading& d = r.dvl;
-      dvl_seq_ = d.seq;
-      dvl_ << d.stamp << ',' << d.valid << ',' << d.velocity_B.x() << ',' << d.velocity_B.y() << ',' << d.velocity_B.z()
-           << ',' << d.altitude_m << ',' << d.locked_beams;
-      for (int i = 0; i < 4; ++i) dvl_ << ',' << (d.beam_valid[i] ? d.beam_range_m[i] : std::nan(""));
-      for (int i = 0; i < 4; ++i) dvl_ << ',' << (d.beam_valid[i] ? d.beam_velocity[i] : std::nan(""));
-      dvl_ << '\n';
-      ++rows_["dvl"];
+      std::ofstream& o = dvl_.out;
+      o << d.stamp << ',' << d.valid << ',' << d.velocity_B.x() << ',' << d.velocity_B.y() << ',' << d.velocity_B.z()
+        << ',' << d.altitude_m << ',' << d.locked_beams;
+      for (int i = 0; i < 4; ++i) o << ',' << (d.beam_valid[i] ? d.beam_range_m[i] : std::nan(""));
+      for (int i = 0; i < 4; ++i) o << ',' << (d.beam_valid[i] ? d.beam_velocity[i] : std::nan(""));
+      o << '\n';
     }
-    if (r.usbl.seq != usbl_seq_) {
+    if (fresh(&usbl_, r.usbl.seq)) {
       const physics::UsblReading& u = r.usbl;
-      usbl_seq_ = u.seq;
-      usbl_ << u.ping_stamp << ',' << u.stamp << ',' << u.valid << ',' << u.range_m << ',' << u.azimuth_rad << ','
-            << u.elevation_rad << ',' << u.p_W.x() << ',' << u.p_W.y() << ',' << u.p_W.z() << ',' << u.truth_p_W.x()
-            << ',' << u.truth_p_W.y() << ',' << u.truth_p_W.z() << ',' << u.truth_range_m << ',' << u.outlier << '\n';
-      ++rows_["usbl"];
+      usbl_.out << u.ping_stamp << ',' << u.stamp << ',' << u.valid << ',' << u.range_m << ',' << u.azimuth_rad << ','
+                << u.elevation_rad << ',' << u.p_W.x() << ',' << u.p_W.y() << ',' << u.p_W.z() << ',' << u.truth_p_W.x()
+                << ',' << u.truth_p_W.y() << ',' << u.truth_p_W.z() << ',' << u.truth_range_m << ',' << u.outlier
+                << '\n';
     }
   }
   void at_frame(const physics::Simulator& sim) {
     if (sim.tether() == nullptr) return;
     const Eigen::Vector3d f = sim.tether_force_W();
-    tether_ << sim.time() << ',' << sim.tether()->length() << ',' << f.x() << ',' << f.y() << ',' << f.z() << '\n';
-    ++rows_["tether"];
+    tether_.out << sim.time() << ',' << sim.tether()->length() << ',' << f.x() << ',' << f.y() << ',' << f.z() << '\n';
+    ++tether_.rows;
   }
   std::string manifest_json() {
-    for (auto* f : {&pressure_, &dvl_, &usbl_, &tether_}) {
-      if (!f->is_open()) continue;
-      f->flush();
-      if (!*f) throw unav::ConfigError(dir_.string() + ": cannot write the navigation sensors' files");
-      f->close();
+    const bool tethered = tether_.out.is_open();
+    for (Csv* c : {&pressure_, &dvl_, &usbl_, &tether_}) {
+      if (!c->out.is_open()) continue;
+      c->out.flush();
+      if (!c->out) throw unav::ConfigError(dir_.string() + ": cannot write the navigation sensors' files");
+      c->out.close();
     }
     nlohmann::json j = {
-        {"pressure", {{"file", "nav/pressure.csv"}, {"rows", rows_["pressure"]}, {"units", "Pa, m (depth)"}}},
+        {"pressure", {{"file", "nav/pressure.csv"}, {"rows", pressure_.rows}, {"units", "Pa, m (depth)"}}},
         {"dvl",
          {{"file", "nav/dvl.csv"},
-          {"rows", rows_["dvl"]},
+          {"rows", dvl_.rows},
           {"frame", "base_link_frd"},
           {"units", "m/s seabed-relative velocity (FRD), m; per beam slant range and velocity, nan when unlocked"}}},
         {"usbl",
          {{"file", "nav/usbl.csv"},
-          {"rows", rows_["usbl"]},
+          {"rows", usbl_.rows},
           {"frame", "world_ned (x y z), transceiver axes (azimuth, elevation)"},
           {"units", "s (interrogation, reply), m, rad; truth_* the transponder when the ping reached it"}}}};
-    if (rows_.count("tether") != 0 || tether_.is_open())
-      j["tether"] = {
-          {"file", "nav/tether.csv"}, {"rows", rows_["tether"]}, {"units", "m, N (pull on the vehicle, NED)"}};
+    if (tethered)
+      j["tether"] = {{"file", "nav/tether.csv"}, {"rows", tether_.rows}, {"units", "m, N (pull on the vehicle, NED)"}};
     return j.dump();
   }
 
  private:
-  void open(std::ofstream* f, const std::string& name, const std::string& header) {
-    f->open(dir_ / name);
-    if (!*f) throw unav::ConfigError((dir_ / name).string() + ": cannot write");
-    *f << std::setprecision(17) << "# " << header << '\n';
+  struct Csv {
+    std::ofstream out;
+    std::uint64_t seq = 0;   ///< the sensor's last sample written
+    std::uint64_t rows = 0;  ///< rows written
+  };
+  /// True (and counted) when `seq` is a sample not written yet.
+  static bool fresh(Csv* c, std::uint64_t seq) {
+    if (seq == c->seq) return false;
+    c->seq = seq;
+    ++c->rows;
+    return true;
+  }
+  void open(Csv* c, const std::string& name, const std::string& header) {
+    c->out.open(dir_ / name);
+    if (!c->out) throw unav::ConfigError((dir_ / name).string() + ": cannot write");
+    c->out << std::setprecision(17) << "# " << header << '\n';
   }
   fs::path dir_;
-  std::ofstream pressure_, dvl_, usbl_, tether_;
-  std::uint64_t pressure_seq_ = 0, dvl_seq_ = 0, usbl_seq_ = 0;
-  std::map<std::string, std::uint64_t> rows_;
+  Csv pressure_, dvl_, usbl_, tether_;
 };
 
 // The sample as a scenario file, world/scenario.yaml (beside its current.yaml when it has one):

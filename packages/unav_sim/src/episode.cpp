@@ -90,13 +90,9 @@ void Episode::advance(double duration, const std::function<void()>& after_step) 
     timings_.control_s += seconds_since(t0);
     ++timings_.control_steps;
     t0 = Clock::now();
-    if (after_step) {
-      for (int i = 0; i < substeps_; ++i) {
-        sim_->step();
-        after_step();
-      }
-    } else {
-      for (int i = 0; i < substeps_; ++i) sim_->step();
+    for (int i = 0; i < substeps_; ++i) {
+      sim_->step();
+      if (after_step) after_step();
     }
     timings_.physics_s += seconds_since(t0);
     timings_.physics_steps += static_cast<std::uint64_t>(substeps_);

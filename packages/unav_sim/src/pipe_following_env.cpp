@@ -58,6 +58,19 @@ std::pair<Eigen::Vector3d, double> point_at(const scene::Pipeline& pipe, double 
   return {c[k - 1] + t * d, std::atan2(d.y(), d.x())};
 }
 
+// A learning config's scenario as {file: F, set: [key=value, ...]}: a scenario file with some of
+// its keys replaced (the language of a node's scenario_set), e.g. a render profile for learning.
+struct ScenarioReference {
+  std::string file;
+  std::vector<std::string> set;
+  template <class Archive>
+  void Serialize(Archive* a) {
+    using unav::common::Field;
+    a->Visit(Field("file", &file).Doc("scenario file (config/scenarios/*.yaml)"));
+    a->Visit(Field("set", &set).Doc("its keys replaced: [key.path=value, ...]"));
+  }
+};
+
 }  // namespace
 
 PipeFollowingConfig load_pipe_following_config(const std::string& path) {
@@ -76,20 +89,10 @@ PipeFollowingConfig load_pipe_following_config(const std::string& path) {
   if (sc && sc.IsScalar()) {  // a scenario file, as the deploy launch takes it
     c.scenario = scene::load_scenario(scene::find_scenario_file(sc.as<std::string>(), dir, path, "scenario"));
   } else if (sc && sc.IsMap() && sc["file"]) {
-    // {file: F, set: [key=value, ...]}: a scenario file with some of its keys replaced (the same
-    // language as a node's scenario_set), e.g. a render profile for learning.
-    for (const auto& kv : sc) {
-      const auto key = kv.first.as<std::string>();
-      if (key != "file" && key != "set")
-        throw ConfigError(path, "scenario." + key, "", "unknown key (a scenario reference has file and set)");
-    }
-    std::vector<std::string> set;
-    if (sc["set"]) {
-      if (!sc["set"].IsSequence()) throw ConfigError(path, "scenario.set", "", "expected a list of key=value");
-      for (const auto& v : sc["set"]) set.push_back(v.as<std::string>());
-    }
-    c.scenario = scene::load_scenario_param(
-        scene::find_scenario_file(sc["file"].as<std::string>(), dir, path, "scenario.file"), -1, set);
+    ScenarioReference ref;
+    unav::common::LoadYaml(root, path, &ref, "scenario");
+    c.scenario =
+        scene::load_scenario_param(scene::find_scenario_file(ref.file, dir, path, "scenario.file"), -1, ref.set);
   } else if (sc) {
     unav::common::LoadYaml(root, path, &c.scenario, "scenario");
     scene::resolve_scenario_paths(&c.scenario, path, dir);
