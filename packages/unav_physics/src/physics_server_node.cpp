@@ -144,7 +144,6 @@ void PhysicsServer::run_steps() {
           return;
         }
         barrier_t_ = -1.0;
-        held_since_ = -1.0;
         hold_profile_.passed(last_input_, wall_now_s());
       }
       step_once();
@@ -170,21 +169,21 @@ void PhysicsServer::run_steps() {
 void PhysicsServer::hold_at_barrier() {
   // Participants that joined late missed the barrier's state: send it again every second.
   const double now = wall_now_s();
-  hold_profile_.held(now);
-  if (held_since_ < 0.0) {
-    held_since_ = now;
+  if (hold_profile_.holding_since() < 0.0) {
+    hold_profile_.held(now);
     last_republish_ = now;
     return;
   }
+  const double held_since = hold_profile_.holding_since();
   if (now - last_republish_ >= 1.0) {
     last_republish_ = now;
     publish_state();
   }
   // A participant that stopped answering is named 3 s into the hold (then every 5 s): well
   // within a barrier's normal wait on a loaded machine (~0.1 s), and soon enough to act on.
-  if (now - held_since_ >= 3.0 && now - last_wait_log_ >= 5.0) {
+  if (now - held_since >= 3.0 && now - last_wait_log_ >= 5.0) {
     last_wait_log_ = now;
-    logger()->warn("lockstep: holding at t = {:.3f} s for {:.0f} s, waiting for:{}", barrier_t_, now - held_since_,
+    logger()->warn("lockstep: holding at t = {:.3f} s for {:.0f} s, waiting for:{}", barrier_t_, now - held_since,
                    missing_with_acks());
   }
 }

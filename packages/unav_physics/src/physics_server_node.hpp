@@ -180,13 +180,13 @@ class PhysicsServer : public unav::Node {
   int64_t steps_per_publish_ = 5, steps_per_thruster_state_ = 10, steps_per_barrier_ = 50;
 
   // Lockstep bookkeeping (simulated seconds).
-  double barrier_t_ = -1.0;                           ///< barrier the server is holding at, < 0 when running
-  std::unique_ptr<unav::lockstep::Barrier> barrier_;  ///< who must ack (lockstep mode)
-  int64_t last_command_ns_ = INT64_MIN;               ///< newest thruster command stamp
-  std::string last_input_;                            ///< the last ack's participant or "thruster command"
-  unav::lockstep::HoldProfile hold_profile_;          ///< wall time held at barriers, per input that ended it
-  double held_since_ = -1.0, last_republish_ = 0.0, last_wait_log_ = 0.0;  ///< wall s
-  double wall_start_ = 0.0;  ///< realtime: wall time [s] that maps to simulated time 0
+  double barrier_t_ = -1.0;                            ///< barrier the server is holding at, < 0 when running
+  std::unique_ptr<unav::lockstep::Barrier> barrier_;   ///< who must ack (lockstep mode)
+  int64_t last_command_ns_ = INT64_MIN;                ///< newest thruster command stamp
+  std::string last_input_;                             ///< the last ack's participant or "thruster command"
+  unav::lockstep::HoldProfile hold_profile_;           ///< wall time held at barriers, per input that ended it
+  double last_republish_ = 0.0, last_wait_log_ = 0.0;  ///< wall s (the hold's start: hold_profile_)
+  double wall_start_ = 0.0;                            ///< realtime: wall time [s] that maps to simulated time 0
   bool timeout_logged_ = false;
   bool finishing_ = false;       ///< max_sim_time reached: waiting for the last acks, then exit
   double finish_started_ = 0.0;  ///< wall time [s] the finishing began

@@ -125,6 +125,8 @@ class HoldProfile {
            (wall > 0.0 ? fixed(100.0 * held / wall, 0) : std::string("-")) + " %)" + by + "; between barriers " +
            fixed(std::max(0.0, wall - held), 2) + " s";
   }
+  /// When the hold now under way began (wall s); < 0 when not holding.
+  double holding_since() const { return hold_start_; }
   /// Hold time charged to `who` so far [s].
   double held_for(const std::string& who) const {
     const auto it = charges_.find(who);
