@@ -357,17 +357,21 @@ def correlation_length(blocks_: list[np.ndarray], axis: int, max_lag: int = 8) -
     if not blocks_:
         return float("nan")
     acf = np.zeros(max_lag + 1)
+    used = 0
     for b in blocks_:
         d = b - b.mean()
         var = np.mean(d * d)
-        if var <= 0:
+        if var <= 0:  # a flat (e.g. saturated) block has no autocorrelation to average
             continue
+        used += 1
         for lag in range(max_lag + 1):
             if axis == 1:
                 acf[lag] += np.mean(d[:, :d.shape[1] - lag] * d[:, lag:]) / var
             else:
                 acf[lag] += np.mean(d[:d.shape[0] - lag, :] * d[lag:, :]) / var
-    acf /= len(blocks_)
+    if used == 0:
+        return float("nan")
+    acf /= used
     target = math.exp(-1.0)
     for lag in range(1, max_lag + 1):
         if acf[lag] <= target:
