@@ -332,6 +332,8 @@ void CheckExpanded(const YAML::Node& tree, const std::string& file, const std::m
   Collect(tree, &steps, &found);
   // Kind against type: a distribution stands for one leaf value (or one element of a list).
   for (const auto& f : found) {
+    if (f.steps.empty())  // the whole document is one, e.g. a file holding `choice: [a, b]`
+      throw ConfigError(file, "", Written(f.node), "a distribution stands for one value, not the whole file");
     const std::string path = PathText(f.steps);
     CheckDistributionSyntax(f.node, file, path);
     bool element = false;

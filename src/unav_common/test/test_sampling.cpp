@@ -153,6 +153,20 @@ TEST(Sampling, RepeatDrawsAListWhoseLengthAndElementsAreDistributions) {
   EXPECT_EQ(lengths, (std::set<std::size_t>{0, 1, 2, 3}));
 }
 
+// A file that is one distribution as a whole (a mapping like `choice: [...]`) is refused with the
+// file named; it crashed the support check (fuzz_spec found it).
+TEST(Sampling, AWholeFileThatIsADistributionIsRefused) {
+  for (const char* text : {"choice: [1, 2]", "uniform: [0, 1]"}) {
+    try {
+      Parse(text);
+      FAIL() << text << " was accepted";
+    } catch (const unav::ConfigError& e) {
+      EXPECT_NE(std::string(e.what()).find("s.yaml"), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find("not the whole file"), std::string::npos) << e.what();
+    }
+  }
+}
+
 TEST(Sampling, BadRepeatsAreNamed) {
   const std::pair<const char*, const char*> cases[] = {
       {"sizes: {repeat: {count: 2}}",
