@@ -22,6 +22,8 @@ bool MonoSlamOptions::IsValid(std::string* msg) const {
   if (!(init_homography_ratio >= 0 && init_homography_ratio <= 1))
     return fail("init_homography_ratio must be in [0, 1], got " + std::to_string(init_homography_ratio));
   if (init_max_frames < 2) return fail("init_max_frames must be >= 2, got " + std::to_string(init_max_frames));
+  if (!(inertial_init_window_s > 0.0 && inertial_init_window_s <= 60.0))
+    return fail("inertial_init_window_s must be in (0, 60], got " + std::to_string(inertial_init_window_s));
   if (!(clahe_clip >= 0.0 && clahe_clip <= 40.0))
     return fail("clahe_clip must be in [0, 40], got " + std::to_string(clahe_clip));
   if (!(clahe_max_stddev > 0.0 && clahe_max_stddev <= 256.0))
@@ -100,6 +102,8 @@ auto MonoSlam::Impl::ResetForReinitialization() -> void {
     ++stats.maps;
   }
   map = std::make_unique<Map>();
+  inertial_stage = 0;
+  map_sets_global_scale = false;
   db = BowDatabase();
   traj.clear();
   initialized = false;
@@ -221,6 +225,10 @@ auto MonoSlam::Impl::Track(const cv::Mat& gray, double stamp) -> SlamFrameSummar
       cur.T_cw = map->kf(ref_kf).T_cw;
       has_velocity = false;
     }
+    if (inertial && inertial_stage < 3) {
+      const std::string said = TryInertialInit();
+      if (!said.empty()) s.message += (s.message.empty() ? "" : "; ") + said;
+    }
     s.mapping_ms = Ms(t1);
   }
   traj.push_back({cur.stamp, ref_kf, cur.T_cw * map->kf(ref_kf).T_cw.inverse()});
@@ -271,6 +279,21 @@ MonoSlam::MonoSlam(const PinholeCamera& camera, const std::vector<double>& disto
 }
 
 MonoSlam::~MonoSlam() = default;
+
+void MonoSlam::EnableInertial(const Eigen::Isometry3d& T_bc, const ImuNoise& noise) {
+  const Eigen::Matrix3d R = T_bc.linear();
+  if (!T_bc.matrix().allFinite() || (R.transpose() * R - Eigen::Matrix3d::Identity()).norm() > 1e-6 ||
+      R.determinant() < 0.0)
+    throw std::invalid_argument("MonoSlam::EnableInertial: T_bc must be a finite rigid transform");
+  ImuPreintegration check({}, noise);  // validates the noise densities
+  impl_->inertial = true;
+  impl_->T_bc = T_bc;
+  impl_->imu_noise = noise;
+}
+
+void MonoSlam::AddImu(double stamp, const Eigen::Vector3d& gyro, const Eigen::Vector3d& accel) {
+  impl_->AddImu(stamp, gyro, accel);
+}
 
 SlamFrameSummary MonoSlam::Track(const cv::Mat& gray, double stamp) {
   try {

@@ -106,6 +106,28 @@ struct MonoSlam::Impl {
   int last_good_ref_kf = -1;  ///< reference keyframe of the last tracked frame
   SlamStats stats;
   std::mt19937 rng{12345};
+  // ------------------------------------------------------------------ inertial (mono_slam_inertial.cpp)
+  struct ImuSample {
+    double t;
+    Eigen::Vector3d gyro, accel;
+  };
+  bool inertial = false;  ///< EnableInertial was called
+  Eigen::Isometry3d T_bc = Eigen::Isometry3d::Identity();
+  ImuNoise imu_noise;
+  std::deque<ImuSample> imu;  ///< samples from the current map's first keyframe on (bounded)
+  /// 0: the current map is not in metres yet; 1, 2, 3: scaled once, refined once, twice.
+  int inertial_stage = 0;
+  bool map_sets_global_scale = false;  ///< the current map defined global_per_metric
+  double global_per_metric = 0.0;      ///< global units per metre, once a map was scaled (0: not yet)
+  void AddImu(double stamp, const Eigen::Vector3d& gyro, const Eigen::Vector3d& accel);
+  /// The samples over [t0, t1], each held until the next; dt() == 0 when they do not cover it.
+  ImuPreintegration PreintegrateImu(double t0, double t1) const;
+  /// After a keyframe: scales the map to metres when its keyframes span the window, and again
+  /// (a refinement) at 2.5 and 7.5 times the window (ORB-SLAM3: 2 s, then 5 s and 15 s); what it
+  /// did ("" when it did nothing).
+  std::string TryInertialInit();
+  /// Multiplies every length of the current map and its tracking state by s.
+  void ScaleMap(double s);
 
   // ---------------------------------------------------------------- features
   void ExtractFeatures(const cv::Mat& gray, const OrbExtractor& extractor, Frame* f);

@@ -19,6 +19,7 @@
 #include <opencv2/core.hpp>
 
 #include "unav_localization/bow_vocabulary.hpp"
+#include "unav_localization/imu_preintegration.hpp"
 #include "unav_localization/orb_extractor.hpp"
 #include "unav_localization/slam_map.hpp"
 
@@ -77,6 +78,9 @@ struct MonoSlamOptions {
   /// orb.features is per 640x480 of image: a larger image gets proportionally more (at most 4x;
   /// 1000 -> 1478 at 1226x370, 3000 at 1280x720); a smaller one keeps orb.features.
   bool features_scale_with_area = true;
+  /// With an IMU (MonoSlam::EnableInertial): each map is scaled to metres by an inertial-only
+  /// initialisation once its keyframes span this long [s] (ORB-SLAM3: 2 s), at least 6 of them.
+  double inertial_init_window_s = 2.0;
   bool IsValid(std::string* msg) const;
 };
 
@@ -99,7 +103,12 @@ struct SlamFrameSummary {
 struct SlamStats {
   int frames = 0, tracked_frames = 0, lost_frames = 0, keyframes = 0, points = 0;
   int loops = 0, relocalizations = 0, reinitializations = 0, maps = 1;
-  int relocalizations_rejected = 0;  ///< by the plausibility gate
+  int relocalizations_rejected = 0;   ///< by the plausibility gate
+  int inertial_inits = 0;             ///< maps scaled to metres by the IMU
+  int inertial_refinements = 0;       ///< scales refined over a longer span (2 a map at most)
+  double inertial_scale = 0.0;        ///< the last scaling: metres per map unit before it (0: none)
+  double inertial_gravity_deg = 0.0;  ///< its gravity's angle from the first keyframe's camera z axis
+  int imu_samples_rejected = 0;       ///< non-finite or out of time order
 };
 
 class MonoSlam {
@@ -114,6 +123,15 @@ class MonoSlam {
 
   /// gray: CV_8UC1 of the camera's size; stamp [s], increasing. Never throws.
   SlamFrameSummary Track(const cv::Mat& gray, double stamp);
+  /// Monocular-inertial mode: IMU samples (AddImu) scale every map to metres (its trajectory and
+  /// points) once its keyframes span options.inertial_init_window_s (InertialOnlyInit), so the
+  /// trajectory comes out metric and a re-initialised map continues at the right scale. T_bc: the
+  /// camera in the IMU's body frame (metric). Throws std::invalid_argument on a non-rigid T_bc.
+  void EnableInertial(const Eigen::Isometry3d& T_bc, const ImuNoise& noise);
+  /// One IMU sample (angular rate [rad/s], specific force [m/s^2], body frame) at stamp [s], on the
+  /// images' clock, in time order; samples up to the next image's stamp should come before it.
+  /// Non-finite or out-of-order samples are dropped and counted. Never throws.
+  void AddImu(double stamp, const Eigen::Vector3d& gyro, const Eigen::Vector3d& accel);
 
   struct StampedPose {
     double stamp;

@@ -1,0 +1,103 @@
+// MonoSlam, inertial: IMU samples, preintegration between keyframes and the inertial-only
+// initialisation that puts each map in metres (unav_localization/inertial_init.hpp).
+#include "mono_slam_impl.hpp"
+#include "unav_localization/inertial_init.hpp"
+
+namespace unav::localization {
+
+namespace {
+constexpr double kImuHistoryS = 60.0;       // samples kept at most (a map that never initialises)
+constexpr double kCoverSlackS = 0.02;       // a sample this close to an interval's end still covers it
+constexpr std::size_t kInitKeyframes = 60;  // the most recent keyframes an initialisation uses
+constexpr std::size_t kMinInitKeyframes = 6;
+}  // namespace
+
+auto MonoSlam::Impl::AddImu(double stamp, const Eigen::Vector3d& gyro, const Eigen::Vector3d& accel) -> void {
+  if (!inertial) return;
+  if (!std::isfinite(stamp) || !gyro.allFinite() || !accel.allFinite() || (!imu.empty() && stamp <= imu.back().t)) {
+    ++stats.imu_samples_rejected;
+    return;
+  }
+  imu.push_back({stamp, gyro, accel});
+  while (!imu.empty() && imu.front().t < stamp - kImuHistoryS) imu.pop_front();
+}
+
+auto MonoSlam::Impl::PreintegrateImu(double t0, double t1) const -> ImuPreintegration {
+  ImuPreintegration pre({}, imu_noise);
+  if (imu.empty() || imu.front().t > t0 + kCoverSlackS || imu.back().t < t1 - kCoverSlackS || t1 <= t0) return pre;
+  for (std::size_t k = 0; k < imu.size(); ++k) {
+    const double a = std::max(imu[k].t, t0);
+    const double b = std::min(k + 1 < imu.size() ? imu[k + 1].t : t1, t1);
+    if (b <= a) {
+      if (imu[k].t >= t1) break;
+      continue;
+    }
+    pre.Integrate(imu[k].gyro, imu[k].accel, b - a);
+  }
+  return pre;
+}
+
+auto MonoSlam::Impl::ScaleMap(double s) -> void {
+  for (auto& k : map->keyframes) k->T_cw.translation() *= s;
+  for (auto& p : map->points) {
+    p->X_w *= s;
+    p->min_distance *= s;
+    p->max_distance *= s;
+  }
+  for (auto& e : traj) e.T_cr.translation() *= s;
+  cur.T_cw.translation() *= s;
+  last.T_cw.translation() *= s;
+  velocity.translation() *= s;
+  for (double& d : recent_steps) d *= s;
+}
+
+auto MonoSlam::Impl::TryInertialInit() -> std::string {
+  if (imu.empty()) return "";
+  std::vector<const KeyFrame*> kfs;
+  for (const auto& k : map->keyframes)
+    if (!k->bad && k->stamp >= imu.front().t - kCoverSlackS) kfs.push_back(k.get());
+  std::sort(kfs.begin(), kfs.end(), [](const KeyFrame* a, const KeyFrame* b) { return a->stamp < b->stamp; });
+  if (kfs.size() > kInitKeyframes) kfs.erase(kfs.begin(), kfs.end() - static_cast<std::ptrdiff_t>(kInitKeyframes));
+  constexpr double kStageSpan[] = {1.0, 2.5, 7.5};  // x the window
+  const double span = opt.inertial_init_window_s * kStageSpan[inertial_stage];
+  if (kfs.size() < kMinInitKeyframes || kfs.back()->stamp - kfs.front()->stamp < span) return "";
+  std::vector<Eigen::Isometry3d> poses;
+  std::vector<ImuPreintegration> pres;
+  for (std::size_t k = 0; k < kfs.size(); ++k) {
+    poses.push_back(kfs[k]->T_cw.inverse());
+    if (k == 0) continue;
+    pres.push_back(PreintegrateImu(kfs[k - 1]->stamp, kfs[k]->stamp));
+    if (pres.back().dt() <= 0.0) return "";  // the IMU does not cover it (yet)
+  }
+  const InertialInitResult r = InertialOnlyInit(poses, pres, T_bc);
+  if (!r.ok) return "inertial initialisation not accepted: " + r.message;
+  ScaleMap(r.scale);
+  if (inertial_stage == 0 && global_per_metric <= 0.0) {
+    // The first map in metres: the global frame becomes metric when it is the first map of the
+    // run; a later one keeps the global units the earlier maps were written in.
+    G.s = map_number == 0 ? 1.0 : G.s / r.scale;
+    global_per_metric = G.s;
+    map_sets_global_scale = true;
+  } else if (map_sets_global_scale) {
+    if (map_number > 0) G.s /= r.scale;  // a better estimate of the same global units per metre
+    global_per_metric = G.s;
+  } else {
+    G.s = global_per_metric;  // continues from the join at the earlier maps' scale
+  }
+  UpdateGoodPose();
+  ++(inertial_stage == 0 ? stats.inertial_inits : stats.inertial_refinements);
+  ++inertial_stage;
+  stats.inertial_scale = r.scale;
+  const Eigen::Vector3d z_cam = kfs.front()->T_cw.linear().transpose().col(2);
+  stats.inertial_gravity_deg = std::acos(std::clamp(r.gravity_w.normalized().dot(z_cam), -1.0, 1.0)) * 180.0 / M_PI;
+  char buf[240];
+  std::snprintf(buf, sizeof(buf),
+                "inertial %s over %zu keyframes (%.1f s): %.4f m per map unit, gravity %.1f deg from the "
+                "first camera's axis, gyro bias (%.4f, %.4f, %.4f) rad/s",
+                inertial_stage == 1 ? "initialisation" : "refinement", kfs.size(),
+                kfs.back()->stamp - kfs.front()->stamp, r.scale, stats.inertial_gravity_deg, r.bias.gyro.x(),
+                r.bias.gyro.y(), r.bias.gyro.z());
+  return buf;
+}
+
+}  // namespace unav::localization
