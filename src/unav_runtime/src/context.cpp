@@ -10,6 +10,7 @@
 
 #include <fastdds/rtps/transport/UDPv4TransportDescriptor.h>
 #include <fastdds/rtps/transport/shared_mem/SharedMemTransportDescriptor.h>
+#include <fastrtps/utils/IPLocator.h>
 #include <fastdds/dds/domain/DomainParticipant.hpp>
 #include <fastdds/dds/domain/DomainParticipantFactory.hpp>
 #include <fastdds/dds/log/Log.hpp>
@@ -24,6 +25,7 @@
 #include "rmw_dds_common/msg/gid.hpp"
 #include "rmw_dds_common/msg/participant_entities_info.hpp"
 #include "rosgraph_msgs/msg/clock.hpp"
+#include "unav_runtime/discovery.hpp"
 #include "unav_runtime/errors.hpp"
 #include "unav_runtime/logging.hpp"
 #include "unav_runtime/node.hpp"
@@ -74,6 +76,44 @@ void apply_qos(const QoS& q, fdds::ReliabilityQosPolicy& rel, fdds::DurabilityQo
 }  // namespace
 
 constexpr uint32_t kUdpBufferBytes = 4u * 1024u * 1024u;
+
+namespace {
+
+eprosima::fastrtps::rtps::Locator_t udp_locator(const std::string& address, uint32_t port) {
+  eprosima::fastrtps::rtps::Locator_t l;
+  l.kind = LOCATOR_KIND_UDPv4;
+  eprosima::fastrtps::rtps::IPLocator::setIPv4(l, address);
+  l.port = port;  // 0: Fast DDS fills in the participant's well-known port (initial peers: the first N)
+  return l;
+}
+
+// Discovery as the plan says (unav_runtime/discovery.hpp). SUBNET keeps Fast DDS' multicast
+// defaults; LOCALHOST and OFF announce by unicast only, so no multicast socket is opened and every
+// announcement arrives on the one metatraffic unicast thread.
+void apply_discovery_plan(const DiscoveryPlan& plan, int domain, fdds::DomainParticipantQos& pqos,
+                          eprosima::fastdds::rtps::UDPv4TransportDescriptor& udp, const std::string& who) {
+  auto& builtin = pqos.wire_protocol().builtin;
+  const bool peers = !plan.static_peers.empty();
+  if (plan.range == DiscoveryRange::kSubnet) {
+    if (peers) {  // an explicit initial peers list replaces the multicast default: keep it in
+      const auto port =
+          static_cast<uint32_t>(pqos.wire_protocol().port.getMulticastPort(static_cast<uint32_t>(domain)));
+      builtin.initialPeersList.push_back(udp_locator("239.255.0.1", port));
+      for (const auto& p : plan.static_peers) builtin.initialPeersList.push_back(udp_locator(p, 0));
+    }
+  } else {
+    // Reachable from other hosts only when there are static peers.
+    builtin.metatrafficUnicastLocatorList.push_back(udp_locator(peers ? "0.0.0.0" : "127.0.0.1", 0));
+    if (plan.range == DiscoveryRange::kLocalhost) builtin.initialPeersList.push_back(udp_locator("127.0.0.1", 0));
+    for (const auto& p : plan.static_peers) builtin.initialPeersList.push_back(udp_locator(p, 0));
+    udp.maxInitialPeersRange = plan.localhost_participants;
+    if (!peers) udp.interfaceWhiteList.emplace_back("127.0.0.1");
+  }
+  if (!plan.warning.empty()) make_logger(who)->warn("{}", plan.warning);
+  if (!plan.reason.empty()) make_logger(who)->debug("discovery {}: {}", to_string(plan.range), plan.reason);
+}
+
+}  // namespace
 
 bool shm_transport_from_environment() {
   const char* env = std::getenv("UNAV_TRANSPORT");
@@ -201,8 +241,8 @@ void Context::create_participant(
   // wmem_max (Debian 12: 208 KiB unless raised, e.g. sysctl -w net.core.rmem_max=4194304).
   udp->receiveBufferSize = kUdpBufferBytes;
   udp->sendBufferSize = kUdpBufferBytes;
-  if (const char* lo = std::getenv("ROS_LOCALHOST_ONLY"); lo && std::string(lo) == "1")
-    udp->interfaceWhiteList.emplace_back("127.0.0.1");
+  apply_discovery_plan(discovery_plan_from_env(security_properties.has_value()), domain_id_, pqos, *udp,
+                       pqos.name().to_string());
   pqos.transport().user_transports.push_back(udp);
 
   participant_ = fdds::DomainParticipantFactory::get_instance()->create_participant(
