@@ -10,14 +10,8 @@
 
 namespace {
 
-using unav::common::ExpSO3;
-using unav::common::LogSO3;
-using unav::localization::ImuBias;
-using unav::localization::ImuNoise;
-using unav::localization::ImuPreintegration;
-using unav::localization::Matrix9d;
-using unav::localization::NavState;
-using unav::localization::Vector9d;
+using namespace unav::common;        // ExpSO3, LogSO3
+using namespace unav::localization;  // ImuPreintegration and its types
 
 const Eigen::Vector3d kGravity(0.0, 0.0, 9.81);  // NED
 

@@ -11,12 +11,8 @@
 
 namespace {
 
-using unav::common::ExpSO3;
-using unav::common::RightJacobianSO3;
-using unav::localization::ImuBias;
-using unav::localization::ImuNoise;
-using unav::localization::ImuPreintegration;
-using unav::localization::InertialOnlyInit;
+using namespace unav::common;        // ExpSO3, RightJacobianSO3
+using namespace unav::localization;  // ImuPreintegration, InertialOnlyInit
 
 const Eigen::Vector3d kGravity(0.0, 0.0, 9.81);  // NED
 

@@ -7,11 +7,7 @@
 
 namespace {
 
-using unav::common::ExpSO3;
-using unav::common::LogSO3;
-using unav::common::RightJacobianInverseSO3;
-using unav::common::RightJacobianSO3;
-using unav::common::Skew;
+using namespace unav::common;  // Skew, ExpSO3, LogSO3, RightJacobian(Inverse)SO3
 
 TEST(SO3, SkewIsTheCrossProduct) {
   const Eigen::Vector3d a(0.3, -1.2, 2.0), b(-0.7, 0.4, 1.1);
