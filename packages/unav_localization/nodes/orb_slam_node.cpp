@@ -12,6 +12,10 @@
 //   pub  localization/orb_slam/path    nav_msgs/Path: every tracked frame so far (camera poses), as
 //                                      corrected by bundle adjustment and loop closing; after each
 //                                      keyframe
+//   sub  imu                           sensor_msgs/Imu (imu: true): angular rate and specific force in
+//                                      body_frame; with the camera's mount (body_frame -> <camera>_optical
+//                                      on /tf_static) they scale each map to metres (monocular-inertial
+//                                      mode): the odometry and path are then metric
 //   pub  /lockstep/ack                 unav_msgs/LockstepAck (lockstep: true): after processing the
 //                                      image at t, acks up to t + image_period (just under the next
 //                                      image), so a lockstep simulation waits for the SLAM
@@ -19,6 +23,7 @@
 #include <cmath>
 #include <cstdint>
 #include <deque>
+#include <optional>
 
 #include <opencv2/imgproc.hpp>
 
@@ -26,11 +31,13 @@
 #include "nav_msgs/msg/path.hpp"
 #include "sensor_msgs/msg/camera_info.hpp"
 #include "sensor_msgs/msg/image.hpp"
+#include "sensor_msgs/msg/imu.hpp"
 #include "unav_common/config.hpp"
 #include "unav_common/resources.hpp"
 #include "unav_localization/mono_slam.hpp"
 #include "unav_runtime/lockstep_ack.hpp"
 #include "unav_runtime/runtime.hpp"
+#include "unav_runtime/tf_static.hpp"
 
 namespace unav::localization {
 
@@ -43,6 +50,12 @@ struct OrbSlamNodeParams {
   unav::lockstep::ParticipantParams lockstep{"orb_slam"};
   double image_period = 0.1;
   std::string frame_id = "orb_slam_map";
+  bool imu = false;
+  std::string body_frame = "base_link_frd";
+  // Our vehicle's IMU (config/vehicles/bluerov2_heavy.yaml): 0.002 rad/s and 0.02 m/s^2 per
+  // sample at 200 Hz, i.e. these densities.
+  double imu_gyro_noise_density = 1.414e-4;
+  double imu_accel_noise_density = 1.414e-3;
 
   template <class Archive>
   void Serialize(Archive* a) {
@@ -59,6 +72,16 @@ struct OrbSlamNodeParams {
     a->Visit(
         Field("image_period", &image_period).Range(1e-3, 10.0).Unit("s").Doc("camera frame period (lockstep acks)"));
     a->Visit(Field("frame_id", &frame_id).Doc("odometry frame"));
+    a->Visit(Field("imu", &imu).Doc("monocular-inertial mode: the imu topic scales each map to metres"));
+    a->Visit(Field("body_frame", &body_frame).Doc("the IMU's frame, parent of the camera mount on /tf_static"));
+    a->Visit(Field("imu_gyro_noise_density", &imu_gyro_noise_density)
+                 .Range(1e-7, 1.0)
+                 .Unit("rad/s/sqrt(Hz)")
+                 .Doc("gyro white noise (weights the IMU against the map)"));
+    a->Visit(Field("imu_accel_noise_density", &imu_accel_noise_density)
+                 .Range(1e-6, 10.0)
+                 .Unit("m/s^2/sqrt(Hz)")
+                 .Doc("accelerometer white noise"));
   }
 };
 
@@ -90,6 +113,22 @@ class OrbSlamNode : public unav::Node {
     } else {
       logger()->warn("no vocabulary: loop closing and relocalisation are off");
     }
+    if (prm.imu) {
+      imu_noise_.gyro_noise_density = prm.imu_gyro_noise_density;
+      imu_noise_.accel_noise_density = prm.imu_accel_noise_density;
+      imu_sub_ = create_subscription<sensor_msgs::msg::Imu>("imu", unav::QoS::sensor_data(),
+                                                            [this](const sensor_msgs::msg::Imu& m) { on_imu(m); });
+      // The mount's owner (the renderer) publishes it latched; the mode starts when it is known.
+      tf_static_ = std::make_unique<unav::StaticTransformListener>(*this);
+      tf_static_->on_update([this, body = prm.body_frame] {
+        if (X_BC_) return;
+        if (const auto X = tf_static_->lookup(body, camera_ + "_optical")) {
+          X_BC_ = *X;
+          logger()->info("monocular-inertial: camera mount {} -> {}_optical from /tf_static", body, camera_);
+          enable_inertial();
+        }
+      });
+    }
     const std::string base = "camera/" + cam;
     odom_pub_ = create_publisher<nav_msgs::msg::Odometry>("localization/orb_slam/odom", unav::QoS::reliable());
     path_pub_ = create_publisher<nav_msgs::msg::Path>("localization/orb_slam/path", unav::QoS::reliable(1));
@@ -110,6 +149,11 @@ class OrbSlamNode : public unav::Node {
           "re-initialisations",
           st.frames, st.tracked_frames, st.lost_frames, st.keyframes, st.points, st.loops, st.relocalizations,
           st.reinitializations);
+      if (inertial_on_)
+        logger()->info(
+            "monocular-inertial: {} map(s) scaled to metres, {} refinement(s), {} initialisation(s) refused, {} IMU "
+            "samples rejected",
+            st.inertial_inits, st.inertial_refinements, st.inertial_rejections, st.imu_samples_rejected);
     }
   }
 
@@ -129,10 +173,25 @@ class OrbSlamNode : public unav::Node {
       logger()->error("camera_info rejected: {}", e.what());
       return;
     }
+    enable_inertial();
     while (!pending_.empty()) {
       process(pending_.front());
       pending_.pop_front();
     }
+  }
+
+  void enable_inertial() {
+    if (!slam_ || !X_BC_ || inertial_on_) return;
+    slam_->EnableInertial(*X_BC_, imu_noise_);
+    inertial_on_ = true;
+  }
+
+  void on_imu(const sensor_msgs::msg::Imu& m) {
+    if (!inertial_on_) return;  // before the camera and its mount are known
+    const double t = unav::Time::from_msg(m.header().stamp().sec(), m.header().stamp().nanosec()).seconds();
+    slam_->AddImu(
+        t, Eigen::Vector3d(m.angular_velocity().x(), m.angular_velocity().y(), m.angular_velocity().z()),
+        Eigen::Vector3d(m.linear_acceleration().x(), m.linear_acceleration().y(), m.linear_acceleration().z()));
   }
 
   void on_image(const sensor_msgs::msg::Image& m) {
@@ -239,6 +298,11 @@ class OrbSlamNode : public unav::Node {
   int64_t received_ns_ = INT64_MIN;  ///< the newest image stamp received
   std::shared_ptr<unav::Subscription<sensor_msgs::msg::CameraInfo>> info_sub_;
   std::shared_ptr<unav::Subscription<sensor_msgs::msg::Image>> image_sub_;
+  std::shared_ptr<unav::Subscription<sensor_msgs::msg::Imu>> imu_sub_;
+  std::unique_ptr<unav::StaticTransformListener> tf_static_;
+  std::optional<Eigen::Isometry3d> X_BC_;
+  ImuNoise imu_noise_;
+  bool inertial_on_ = false;
 };
 
 }  // namespace unav::localization

@@ -104,6 +104,7 @@ auto MonoSlam::Impl::ResetForReinitialization() -> void {
   map = std::make_unique<Map>();
   inertial_stage = 0;
   map_sets_global_scale = false;
+  inertial_rejection_said = false;
   db = BowDatabase();
   traj.clear();
   initialized = false;

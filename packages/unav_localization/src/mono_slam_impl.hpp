@@ -117,8 +117,9 @@ struct MonoSlam::Impl {
   std::deque<ImuSample> imu;  ///< samples from the current map's first keyframe on (bounded)
   /// 0: the current map is not in metres yet; 1, 2, 3: scaled once, refined once, twice.
   int inertial_stage = 0;
-  bool map_sets_global_scale = false;  ///< the current map defined global_per_metric
-  double global_per_metric = 0.0;      ///< global units per metre, once a map was scaled (0: not yet)
+  bool map_sets_global_scale = false;    ///< the current map defined global_per_metric
+  bool inertial_rejection_said = false;  ///< a rejected initialisation was reported for this map
+  double global_per_metric = 0.0;        ///< global units per metre, once a map was scaled (0: not yet)
   void AddImu(double stamp, const Eigen::Vector3d& gyro, const Eigen::Vector3d& accel);
   /// The samples over [t0, t1], each held until the next; dt() == 0 when they do not cover it.
   ImuPreintegration PreintegrateImu(double t0, double t1) const;

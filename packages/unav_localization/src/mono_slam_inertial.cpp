@@ -3,6 +3,8 @@
 #include "mono_slam_impl.hpp"
 #include "unav_localization/inertial_init.hpp"
 
+#include <utility>
+
 namespace unav::localization {
 
 namespace {
@@ -70,7 +72,11 @@ auto MonoSlam::Impl::TryInertialInit() -> std::string {
     if (pres.back().dt() <= 0.0) return "";  // the IMU does not cover it (yet)
   }
   const InertialInitResult r = InertialOnlyInit(poses, pres, T_bc);
-  if (!r.ok) return "inertial initialisation not accepted: " + r.message;
+  if (!r.ok) {
+    ++stats.inertial_rejections;
+    // Said once a map (it is tried again at every keyframe).
+    return std::exchange(inertial_rejection_said, true) ? "" : "inertial initialisation not accepted: " + r.message;
+  }
   ScaleMap(r.scale);
   if (inertial_stage == 0 && global_per_metric <= 0.0) {
     // The first map in metres: the global frame becomes metric when it is the first map of the

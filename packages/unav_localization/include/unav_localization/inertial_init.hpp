@@ -22,8 +22,11 @@ struct InertialInitOptions {
   double gyro_bias_prior_std = 0.1;    ///< [rad/s]
   double accel_bias_prior_std = 0.01;  ///< [m/s^2]
   int max_iterations = 100;
-  /// Smallest acceptable scale; a smaller one means the motion did not excite the accelerometer.
-  double min_scale = 1e-3;
+  /// Smallest acceptable scale (ORB-SLAM3's 0.1 in LocalMapping::InitializeIMU). With too little
+  /// acceleration against the IMU's noise the keyframes' own errors pull the scale towards 0
+  /// (regression dilution): a map whose first views are ~1 unit deep and come out at millimetres
+  /// was not observed, not measured.
+  double min_scale = 0.1;
 };
 
 struct InertialInitResult {

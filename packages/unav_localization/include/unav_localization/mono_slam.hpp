@@ -106,6 +106,7 @@ struct SlamStats {
   int relocalizations_rejected = 0;   ///< by the plausibility gate
   int inertial_inits = 0;             ///< maps scaled to metres by the IMU
   int inertial_refinements = 0;       ///< scales refined over a longer span (2 a map at most)
+  int inertial_rejections = 0;        ///< initialisations refused (InertialInitResult::ok false)
   double inertial_scale = 0.0;        ///< the last scaling: metres per map unit before it (0: none)
   double inertial_gravity_deg = 0.0;  ///< its gravity's angle from the first keyframe's camera z axis
   int imu_samples_rejected = 0;       ///< non-finite or out of time order
