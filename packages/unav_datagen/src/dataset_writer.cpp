@@ -1,6 +1,7 @@
 #include "unav_datagen/dataset_writer.hpp"
 
 #include "png_io.hpp"
+#include "unav_datagen/manifest.hpp"
 
 #include <cmath>
 #include <filesystem>
@@ -16,8 +17,10 @@ using detail::write_png;
 
 namespace detail {
 
-void write_png(const std::string& path, const cv::Mat& m) {
-  if (!cv::imwrite(path, m)) throw DatasetError(path + ": PNG write failed");
+void write_png(const std::string& root, const std::string& relative, const cv::Mat& m) {
+  std::vector<std::uint8_t> png;
+  if (!cv::imencode(".png", m, png)) throw DatasetError(root + "/" + relative + ": PNG encoding failed");
+  write_file_logged(root, relative, std::string(png.begin(), png.end()));
 }
 
 cv::Mat depth_png(int width, int height, const float* depth_m, double units_per_metre) {
@@ -101,7 +104,7 @@ void DatasetWriter::write_rgb(double stamp, int width, int height, const std::ui
   const std::string name = "rgb/" + stamp_name(stamp) + ".png";
   cv::Mat in(height, width, CV_8UC3, const_cast<std::uint8_t*>(rgb)), bgr;
   cv::cvtColor(in, bgr, cv::COLOR_RGB2BGR);
-  write_png(root_ + "/" + name, bgr);
+  write_png(root_, name, bgr);
   rgb_txt_ << stamp << ' ' << name << '\n';
   rgb_txt_.flush();
   ++counts_.images;
@@ -109,7 +112,7 @@ void DatasetWriter::write_rgb(double stamp, int width, int height, const std::ui
 
 void DatasetWriter::write_depth(double stamp, int width, int height, const float* depth_m) {
   const std::string name = "depth/" + stamp_name(stamp) + ".png";
-  write_png(root_ + "/" + name, detail::depth_png(width, height, depth_m, kDepthScale));
+  write_png(root_, name, detail::depth_png(width, height, depth_m, kDepthScale));
   depth_txt_ << stamp << ' ' << name << '\n';
   depth_txt_.flush();
   ++counts_.depth;
@@ -117,7 +120,7 @@ void DatasetWriter::write_depth(double stamp, int width, int height, const float
 
 void DatasetWriter::write_segmentation(double stamp, int width, int height, const std::uint8_t* ids) {
   const std::string name = "segmentation/" + stamp_name(stamp) + ".png";
-  write_png(root_ + "/" + name, cv::Mat(height, width, CV_8UC1, const_cast<std::uint8_t*>(ids)));
+  write_png(root_, name, cv::Mat(height, width, CV_8UC1, const_cast<std::uint8_t*>(ids)));
   seg_txt_ << stamp << ' ' << name << '\n';
   seg_txt_.flush();
   ++counts_.segmentation;

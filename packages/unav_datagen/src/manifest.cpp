@@ -12,6 +12,7 @@
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <sstream>
+#include <unordered_map>
 
 #include "unav_datagen_version.hpp"
 
@@ -47,6 +48,18 @@ std::string sha256_bytes(const std::string& bytes) {
   Sha256 h;
   h.update(bytes.data(), bytes.size());
   return h.hex();
+}
+
+void write_file_logged(const std::string& root, const std::string& relative, const std::string& bytes) {
+  const std::string path = root + "/" + relative;
+  {
+    std::ofstream f(path, std::ios::binary);
+    if (!f || !f.write(bytes.data(), static_cast<std::streamsize>(bytes.size())))
+      throw DatasetError(path + ": cannot be written");
+  }
+  std::ofstream log(root + "/.sha256", std::ios::app);
+  log << sha256_bytes(bytes) << ' ' << bytes.size() << ' ' << relative << '\n';
+  if (!log) throw DatasetError(root + "/.sha256: cannot be written");
 }
 
 std::string sha256_file(const std::string& path) {
@@ -141,10 +154,22 @@ void write_manifest(const SequenceWriter& writer, const ManifestInput& in) {
     }
   }
   std::sort(files.begin(), files.end());
+  // Digests logged as the files were written (write_file_logged): used when the size still matches.
+  std::unordered_map<std::string, std::pair<std::uintmax_t, std::string>> logged;
+  const fs::path log_path = root / ".sha256";
+  if (std::ifstream log(log_path); log) {
+    std::string sha, rel;
+    std::uintmax_t bytes = 0;
+    while (log >> sha >> bytes && std::getline(log >> std::ws, rel)) logged[rel] = {bytes, sha};
+  }
   json list = json::array();
   for (const std::string& f : files) {
     const fs::path p = root / f;
-    list.push_back({{"path", f}, {"bytes", fs::file_size(p)}, {"sha256", sha256_file(p.string())}});
+    const std::uintmax_t bytes = fs::file_size(p);
+    const auto it = logged.find(f);
+    const std::string sha =
+        it != logged.end() && it->second.first == bytes ? it->second.second : sha256_file(p.string());
+    list.push_back({{"path", f}, {"bytes", bytes}, {"sha256", sha}});
   }
   m["files"] = list;
   const std::string out = (root / "manifest.json").string(), tmp = out + ".tmp";
@@ -156,6 +181,7 @@ void write_manifest(const SequenceWriter& writer, const ManifestInput& in) {
   }
   fs::rename(tmp, out, ec);
   if (ec) throw DatasetError(out + ": cannot be written: " + ec.message());
+  fs::remove(log_path, ec);  // its content is in the manifest now
 }
 
 }  // namespace unav::datagen

@@ -11,8 +11,9 @@
 
 namespace unav::datagen::detail {
 
-/// Throws DatasetError naming the path when OpenCV cannot write it.
-void write_png(const std::string& path, const cv::Mat& m);
+/// Writes <root>/<relative> with its digest logged (write_file_logged). Throws DatasetError naming
+/// the path when OpenCV cannot encode it or the file cannot be written.
+void write_png(const std::string& root, const std::string& relative, const cv::Mat& m);
 /// A float depth image (metres) as uint16 units (encode_depth), row-major width x height.
 cv::Mat depth_png(int width, int height, const float* depth_m, double units_per_metre);
 

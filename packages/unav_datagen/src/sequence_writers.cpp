@@ -15,6 +15,7 @@
 #include "unav_datagen/kitti_writer.hpp"
 
 #include "png_io.hpp"
+#include "unav_datagen/manifest.hpp"
 
 namespace unav::datagen {
 namespace fs = std::filesystem;
@@ -111,7 +112,7 @@ void EurocWriter::set_camera_mount(const Eigen::Isometry3d& X_BC) {
 void EurocWriter::write_rgb(double stamp, int width, int height, const std::uint8_t* rgb) {
   const long long ns = to_ns(stamp);
   const std::string name = std::to_string(ns) + ".png";
-  write_png(mav_ + "/cam0/data/" + name, grey_of(width, height, rgb));
+  write_png(root(), "mav0/cam0/data/" + name, grey_of(width, height, rgb));
   cam_csv_ << ns << ',' << name << '\n' << std::flush;
   images_.add(ns);
   ++counts_.images;
@@ -120,7 +121,7 @@ void EurocWriter::write_rgb(double stamp, int width, int height, const std::uint
 void EurocWriter::write_depth(double stamp, int width, int height, const float* depth_m) {
   const long long ns = to_ns(stamp);
   const std::string name = std::to_string(ns) + ".png";
-  write_png(mav_ + "/depth0/data/" + name, depth_png(width, height, depth_m, kDepthUnitsPerMetre));
+  write_png(root(), "mav0/depth0/data/" + name, depth_png(width, height, depth_m, kDepthUnitsPerMetre));
   depth_csv_ << ns << ',' << name << '\n' << std::flush;
   ++counts_.depth;
 }
@@ -128,7 +129,7 @@ void EurocWriter::write_depth(double stamp, int width, int height, const float* 
 void EurocWriter::write_segmentation(double stamp, int width, int height, const std::uint8_t* ids) {
   const long long ns = to_ns(stamp);
   const std::string name = std::to_string(ns) + ".png";
-  write_png(mav_ + "/seg0/data/" + name, cv::Mat(height, width, CV_8UC1, const_cast<std::uint8_t*>(ids)));
+  write_png(root(), "mav0/seg0/data/" + name, cv::Mat(height, width, CV_8UC1, const_cast<std::uint8_t*>(ids)));
   seg_csv_ << ns << ',' << name << '\n' << std::flush;
   ++counts_.segmentation;
 }
@@ -218,7 +219,7 @@ void KittiWriter::write_camera(const CameraIntrinsics& k) {
 void KittiWriter::write_rgb(double stamp, int width, int height, const std::uint8_t* rgb) {
   std::ostringstream name;
   name << std::setw(6) << std::setfill('0') << image_stamps_.size() << ".png";
-  write_png(seq_dir_ + "/image_0/" + name.str(), grey_of(width, height, rgb));
+  write_png(root(), seq_dir_.substr(root().size() + 1) + "/image_0/" + name.str(), grey_of(width, height, rgb));
   image_stamps_.push_back(stamp);
   ++counts_.images;
   times_ << stamp - image_stamps_.front() << '\n' << std::flush;
@@ -262,10 +263,9 @@ void KittiWriter::put(double stamp, Png png) {
 
 void KittiWriter::write_per_pixel(std::size_t index, const Png& png) {
   std::ostringstream name;
-  name << seq_dir_ << (png.first ? "/depth_0/" : "/seg_0/") << std::setw(6) << std::setfill('0') << index << ".png";
-  std::ofstream f(name.str(), std::ios::binary);
-  f.write(reinterpret_cast<const char*>(png.second.data()), static_cast<std::streamsize>(png.second.size()));
-  if (!f) throw DatasetError(name.str() + ": PNG write failed");
+  name << seq_dir_.substr(root().size() + 1) << (png.first ? "/depth_0/" : "/seg_0/") << std::setw(6)
+       << std::setfill('0') << index << ".png";
+  write_file_logged(root(), name.str(), std::string(png.second.begin(), png.second.end()));
   ++(png.first ? counts_.depth : counts_.segmentation);
 }
 

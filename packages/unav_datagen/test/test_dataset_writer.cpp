@@ -314,3 +314,41 @@ TEST(Manifest, ListsEveryFileWithItsChecksumAndIsReproducible) {
   }
   EXPECT_EQ(manifests[0], manifests[1]) << "the same recording must give the same manifest, byte for byte";
 }
+
+TEST(Manifest, UsesTheDigestsLoggedAsFilesWereWrittenAndRehashesChangedOnes) {
+  // Every PNG of every layout is logged with its size and digest as it is written (so a long
+  // recording's manifest does not hash tens of thousands of files at shutdown); the manifest
+  // takes those, hashes a file whose size changed since, and removes the log.
+  Flight f;
+  ManifestInput in;
+  in.camera = "down";
+  in.intrinsics = f.k;
+  for (const std::string layout : {"tum", "euroc", "kitti"}) {
+    SCOPED_TRACE(layout);
+    const std::string root = ::testing::TempDir() + "digest_log_" + layout;
+    std::filesystem::remove_all(root);
+    auto w = make_sequence_writer(layout, root);
+    f.record(w.get());
+    std::ifstream log(root + "/.sha256");
+    std::string sha, rel;
+    std::uintmax_t bytes = 0;
+    std::vector<std::string> logged;
+    while (log >> sha >> bytes >> rel) {
+      EXPECT_EQ(sha, sha256_file(root + "/" + rel)) << rel;
+      EXPECT_EQ(bytes, std::filesystem::file_size(root + "/" + rel)) << rel;
+      logged.push_back(rel);
+    }
+    EXPECT_EQ(logged.size(), 9u);  // 3 images, 3 depth, 3 segmentation
+    std::ofstream(root + "/" + logged.front(), std::ios::app) << "changed after it was logged";
+    write_manifest(*w, in);
+    EXPECT_FALSE(std::filesystem::exists(root + "/.sha256"));
+    const nlohmann::json m = nlohmann::json::parse(std::ifstream(root + "/manifest.json"));
+    int checked = 0;
+    for (const auto& e : m["files"]) {
+      const std::string path = root + "/" + e["path"].get<std::string>();
+      EXPECT_EQ(e["sha256"], sha256_file(path)) << e["path"];
+      ++checked;
+    }
+    EXPECT_GE(checked, 9);
+  }
+}

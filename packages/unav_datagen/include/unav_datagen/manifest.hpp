@@ -51,6 +51,12 @@ struct ManifestInput {
 std::string sha256_file(const std::string& path);
 /// Lowercase hex SHA-256 of a byte string.
 std::string sha256_bytes(const std::string& bytes);
+/// Writes `bytes` to <root>/<relative> and appends its size and SHA-256 to <root>/.sha256, the
+/// digest log that write_manifest reads instead of hashing the file again: an hour of frames
+/// (tens of thousands of PNGs) is then listed in the manifest at once when the recorder stops,
+/// not after a minute of hashing that a launch's shutdown would cut short. Throws DatasetError
+/// naming the file.
+void write_file_logged(const std::string& root, const std::string& relative, const std::string& bytes);
 /// The git commit the library was built from ("unknown" outside a git checkout).
 std::string software_commit();
 
