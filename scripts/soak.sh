@@ -134,12 +134,23 @@ if [ "$long_s" -gt 0 ]; then
   end=$((SECONDS + long_s))
   next_episode=$((SECONDS + episode_s))
   next_kill=$((SECONDS + respawn_s))
-  resets=0 kills=0 respawned=0
+  resets=0 resent=0 kills=0 respawned=0
   while [ $SECONDS -lt $end ]; do
     sample
     if [ $SECONDS -ge $next_episode ]; then
-      unav topic pub --once -w 1 /rov/sim/reset geometry_msgs/msg/Pose "$start_pose" >/dev/null 2>&1 \
-        && resets=$((resets + 1))
+      # A one-shot publish of a volatile topic can be lost on a loaded machine (ros2 topic pub
+      # --once has the same caveat): wait for the episode's log line, send again once if missing.
+      started=$(grep -c "]: episode [0-9]*: the vehicle is at" "$log" || true)
+      for attempt in 1 2; do
+        unav topic pub --once -w 1 /rov/sim/reset geometry_msgs/msg/Pose "$start_pose" >/dev/null 2>&1 || true
+        for _ in $(seq 1 30); do
+          [ "$(grep -c "]: episode [0-9]*: the vehicle is at" "$log" || true)" -gt "$started" ] && break
+          sleep 0.5
+        done
+        [ "$(grep -c "]: episode [0-9]*: the vehicle is at" "$log" || true)" -gt "$started" ] && break
+        resent=$((resent + 1))
+      done
+      resets=$((resets + 1))
       next_episode=$((next_episode + episode_s))
     fi
     if [ $SECONDS -ge $next_kill ]; then
@@ -161,7 +172,7 @@ if [ "$long_s" -gt 0 ]; then
   sleep 1
   episodes=$(grep -c "]: episode [0-9]*: the vehicle is at" "$log" || true)
   say "long-lived system: $((long_s / 60)) min, $(processes | wc -w) processes"
-  say "  episodes: $((episodes + 1)) ($resets resets sent, $episodes started)"
+  say "  episodes: $((episodes + 1)) ($resets resets, $episodes started; $resent sent a second time after 15 s without a start)"
   [ "$episodes" -eq "$resets" ] || say "FAIL: $resets resets sent but $episodes episodes started"
   say "  renderer: $kills times killed (SIGKILL), $respawned respawned"
   [ "$kills" -eq "$respawned" ] || say "FAIL: the renderer was killed $kills times but respawned $respawned"
