@@ -540,6 +540,7 @@ TEST(MonoSlam, InertialModeGivesAMetricTrajectory) {
   // trajectory's best Sim(3) alignment to the truth has scale ~1 (without the IMU: the first
   // map's median depth is 1 unit, here ~1.5 m).
   std::vector<Eigen::Isometry3d> X_WB;
+  X_WB.reserve(100);
   for (int k = 0; k < 100; ++k) X_WB.push_back(WeaveFlight::X_WB(0.1 * k));
   const RenderedRun run = Render(X_WB);
   const Eigen::Vector3d g(0.0, 0.0, 9.81), gyro_bias(0.0, 0.0, 0.005);
