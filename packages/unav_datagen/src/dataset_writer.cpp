@@ -20,7 +20,7 @@ namespace detail {
 void write_png(const std::string& root, const std::string& relative, const cv::Mat& m) {
   std::vector<std::uint8_t> png;
   if (!cv::imencode(".png", m, png)) throw DatasetError(root + "/" + relative + ": PNG encoding failed");
-  write_file_logged(root, relative, std::string(png.begin(), png.end()));
+  write_file_logged(root, relative, png);
 }
 
 cv::Mat depth_png(int width, int height, const float* depth_m, double units_per_metre) {

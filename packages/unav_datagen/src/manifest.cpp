@@ -50,15 +50,18 @@ std::string sha256_bytes(const std::string& bytes) {
   return h.hex();
 }
 
-void write_file_logged(const std::string& root, const std::string& relative, const std::string& bytes) {
+void write_file_logged(const std::string& root, const std::string& relative, const std::vector<std::uint8_t>& bytes) {
   const std::string path = root + "/" + relative;
+  const auto* data = reinterpret_cast<const char*>(bytes.data());
   {
     std::ofstream f(path, std::ios::binary);
-    if (!f || !f.write(bytes.data(), static_cast<std::streamsize>(bytes.size())))
+    if (!f || !f.write(data, static_cast<std::streamsize>(bytes.size())))
       throw DatasetError(path + ": cannot be written");
   }
+  Sha256 h;
+  h.update(data, bytes.size());
   std::ofstream log(root + "/.sha256", std::ios::app);
-  log << sha256_bytes(bytes) << ' ' << bytes.size() << ' ' << relative << '\n';
+  log << h.hex() << ' ' << bytes.size() << ' ' << relative << '\n';
   if (!log) throw DatasetError(root + "/.sha256: cannot be written");
 }
 

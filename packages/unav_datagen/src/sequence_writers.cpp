@@ -265,7 +265,7 @@ void KittiWriter::write_per_pixel(std::size_t index, const Png& png) {
   std::ostringstream name;
   name << seq_dir_.substr(root().size() + 1) << (png.first ? "/depth_0/" : "/seg_0/") << std::setw(6)
        << std::setfill('0') << index << ".png";
-  write_file_logged(root(), name.str(), std::string(png.second.begin(), png.second.end()));
+  write_file_logged(root(), name.str(), png.second);
   ++(png.first ? counts_.depth : counts_.segmentation);
 }
 

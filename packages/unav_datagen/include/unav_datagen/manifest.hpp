@@ -19,6 +19,7 @@
 //   }
 #pragma once
 
+#include <cstdint>
 #include <map>
 #include <string>
 #include <utility>
@@ -56,7 +57,7 @@ std::string sha256_bytes(const std::string& bytes);
 /// (tens of thousands of PNGs) is then listed in the manifest at once when the recorder stops,
 /// not after a minute of hashing that a launch's shutdown would cut short. Throws DatasetError
 /// naming the file.
-void write_file_logged(const std::string& root, const std::string& relative, const std::string& bytes);
+void write_file_logged(const std::string& root, const std::string& relative, const std::vector<std::uint8_t>& bytes);
 /// The git commit the library was built from ("unknown" outside a git checkout).
 std::string software_commit();
 
