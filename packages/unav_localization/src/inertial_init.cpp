@@ -12,8 +12,6 @@ namespace unav::localization {
 
 namespace {
 
-using Matrix3T = Eigen::Matrix3d;
-
 // One preintegration between keyframes i and j with the map's rotations of the bodies fixed:
 // parameters [tilt of gravity (2), log scale (1), v_i (3), v_j (3), gyro bias (3), accel bias (3)].
 struct InertialError {

@@ -226,7 +226,7 @@ auto MonoSlam::Impl::Track(const cv::Mat& gray, double stamp) -> SlamFrameSummar
       cur.T_cw = map->kf(ref_kf).T_cw;
       has_velocity = false;
     }
-    if (inertial && inertial_stage < 3) {
+    if (inertial) {
       const std::string said = TryInertialInit();
       if (!said.empty()) s.message += (s.message.empty() ? "" : "; ") + said;
     }

@@ -3,6 +3,7 @@
 #include "mono_slam_impl.hpp"
 #include "unav_localization/inertial_init.hpp"
 
+#include <iterator>
 #include <utility>
 
 namespace unav::localization {
@@ -27,7 +28,9 @@ auto MonoSlam::Impl::AddImu(double stamp, const Eigen::Vector3d& gyro, const Eig
 auto MonoSlam::Impl::PreintegrateImu(double t0, double t1) const -> ImuPreintegration {
   ImuPreintegration pre({}, imu_noise);
   if (imu.empty() || imu.front().t > t0 + kCoverSlackS || imu.back().t < t1 - kCoverSlackS || t1 <= t0) return pre;
-  for (std::size_t k = 0; k < imu.size(); ++k) {
+  // From the sample that holds at t0 (the last one at or before it).
+  const auto first = std::upper_bound(imu.begin(), imu.end(), t0, [](double t, const ImuSample& m) { return t < m.t; });
+  for (auto k = static_cast<std::size_t>(std::max<std::ptrdiff_t>(0, first - imu.begin() - 1)); k < imu.size(); ++k) {
     const double a = std::max(imu[k].t, t0);
     const double b = std::min(k + 1 < imu.size() ? imu[k + 1].t : t1, t1);
     if (b <= a) {
@@ -54,13 +57,13 @@ auto MonoSlam::Impl::ScaleMap(double s) -> void {
 }
 
 auto MonoSlam::Impl::TryInertialInit() -> std::string {
-  if (imu.empty()) return "";
+  constexpr double kStageSpan[] = {1.0, 2.5, 7.5};  // x the window: the initialisation, two refinements
+  if (imu.empty() || inertial_stage >= static_cast<int>(std::size(kStageSpan))) return "";
   std::vector<const KeyFrame*> kfs;
   for (const auto& k : map->keyframes)
     if (!k->bad && k->stamp >= imu.front().t - kCoverSlackS) kfs.push_back(k.get());
   std::sort(kfs.begin(), kfs.end(), [](const KeyFrame* a, const KeyFrame* b) { return a->stamp < b->stamp; });
   if (kfs.size() > kInitKeyframes) kfs.erase(kfs.begin(), kfs.end() - static_cast<std::ptrdiff_t>(kInitKeyframes));
-  constexpr double kStageSpan[] = {1.0, 2.5, 7.5};  // x the window
   const double span = opt.inertial_init_window_s * kStageSpan[inertial_stage];
   if (kfs.size() < kMinInitKeyframes || kfs.back()->stamp - kfs.front()->stamp < span) return "";
   std::vector<Eigen::Isometry3d> poses;

@@ -29,16 +29,17 @@ Eigen::Matrix3d Rot(double roll, double pitch, double yaw) {
       .toRotationMatrix();
 }
 
-// Sim(3)-aligned position RMSE of est against gt (same length, paired by index).
+// Sim(3)-aligned (SE(3) with fix_scale) position RMSE of est against gt (same length, paired by
+// index).
 double AlignedRmse(const std::vector<Eigen::Vector3d>& gt, const std::vector<Eigen::Vector3d>& est,
-                   double* scale = nullptr) {
+                   double* scale = nullptr, bool fix_scale = false) {
   Eigen::Matrix3Xd a(3, static_cast<long>(est.size())), b(3, static_cast<long>(gt.size()));
   for (size_t i = 0; i < est.size(); ++i) {
     a.col(static_cast<long>(i)) = est[i];
     b.col(static_cast<long>(i)) = gt[i];
   }
   ul::Sim3 S;
-  if (!ul::EstimateSim3(a, b, false, &S)) return 1e9;
+  if (!ul::EstimateSim3(a, b, fix_scale, &S)) return 1e9;
   if (scale) *scale = S.s;
   double se = 0;
   for (size_t i = 0; i < est.size(); ++i) se += (S * est[i] - gt[i]).squaredNorm();
@@ -563,16 +564,7 @@ TEST(MonoSlam, InertialModeGivesAMetricTrajectory) {
       est.push_back(p.T_wc.translation());
     }
     AlignedRmse(gt, est, scale);
-    Eigen::Matrix3Xd a(3, static_cast<long>(est.size())), b(3, static_cast<long>(gt.size()));
-    for (size_t i = 0; i < est.size(); ++i) {
-      a.col(static_cast<long>(i)) = est[i];
-      b.col(static_cast<long>(i)) = gt[i];
-    }
-    ul::Sim3 S;
-    double se = 0;
-    if (ul::EstimateSim3(a, b, true, &S))
-      for (size_t i = 0; i < est.size(); ++i) se += (S * est[i] - gt[i]).squaredNorm();
-    *se3_ape = std::sqrt(se / static_cast<double>(std::max<size_t>(1, est.size())));
+    *se3_ape = AlignedRmse(gt, est, nullptr, true);
     return slam.stats();
   };
   double scale_vo = 0, ape_vo = 0, scale_vi = 0, ape_vi = 0;
