@@ -55,6 +55,7 @@ if [ "$episodes_s" -gt 0 ]; then
   echo "episode,seed,exit,wall_s,rtf,frames,poses,klt_ape_m,orb_ape_m,orb_poses,shm_segments,shm_mb" >"$out/episodes.csv"
   echo "episode,process,max_rss_mib,cpu_s" >"$out/episode_rss.csv"
   shm0=$(shm_segments)
+  ape() { awk -F, -v a="$1" -v c="$2" '$2==a {print $c}' "$dir/evaluation/results.csv" 2>/dev/null || true; }
   end=$((SECONDS + episodes_s))
   i=0
   while [ $SECONDS -lt $end ]; do
@@ -69,7 +70,6 @@ if [ "$episodes_s" -gt 0 ]; then
     frames=$(grep -vc '^#' "$dir/rgb.txt" 2>/dev/null || true)
     poses=$(grep -vc '^#' "$dir/groundtruth.txt" 2>/dev/null || true)
     rtf=$(grep -o '([0-9.]*x real time)' "$log" | head -1 | tr -dc '0-9.' || true)
-    ape() { awk -F, -v a="$1" -v c="$2" '$2==a {print $c}' "$dir/evaluation/results.csv" 2>/dev/null || true; }
     echo "$i,$i,$rc,$((SECONDS - t0)),${rtf:-nan},${frames:-0},${poses:-0},$(ape klt_vo 3),$(ape orb_slam 3),$(ape orb_slam 7),$(shm_segments),$(shm_mb)" \
       >>"$out/episodes.csv"
     awk -v e="$i" '/^  [a-z_]+-[0-9]+ +cpu/ {n = $1; sub(/-[0-9]+$/, "", n); print e "," n "," $(NF - 1) "," $3}' "$log" \
@@ -119,6 +119,7 @@ if [ "$long_s" -gt 0 ]; then
       | sed 's/\[\([a-z_]*\)-[0-9]*\]: process started with pid \[\([0-9]*\)\]/\1 \2/' \
       | awk '{p[$1] = $2} END {for (n in p) print n ":" p[n]}'
   }
+  episodes_started() { grep -c "]: episode [0-9]*: the vehicle is at" "$log" || true; }
   [ -n "$(processes)" ] || { say "FAIL: no process started"; tail -20 "$log"; exit 1; }
   echo "t_s,process,pid,rss_kb,sim_time_s,open_fds" >"$out/long_rss.csv"
   sample() {
@@ -140,14 +141,14 @@ if [ "$long_s" -gt 0 ]; then
     if [ $SECONDS -ge $next_episode ]; then
       # A one-shot publish of a volatile topic can be lost on a loaded machine (ros2 topic pub
       # --once has the same caveat): wait for the episode's log line, send again once if missing.
-      started=$(grep -c "]: episode [0-9]*: the vehicle is at" "$log" || true)
+      started=$(episodes_started)
       for attempt in 1 2; do
         unav topic pub --once -w 1 /rov/sim/reset geometry_msgs/msg/Pose "$start_pose" >/dev/null 2>&1 || true
         for _ in $(seq 1 30); do
-          [ "$(grep -c "]: episode [0-9]*: the vehicle is at" "$log" || true)" -gt "$started" ] && break
+          [ "$(episodes_started)" -gt "$started" ] && break
           sleep 0.5
         done
-        [ "$(grep -c "]: episode [0-9]*: the vehicle is at" "$log" || true)" -gt "$started" ] && break
+        [ "$(episodes_started)" -gt "$started" ] && break
         resent=$((resent + 1))
       done
       resets=$((resets + 1))
@@ -170,7 +171,7 @@ if [ "$long_s" -gt 0 ]; then
   wait "$launch_pid" 2>/dev/null || true
   trap - EXIT
   sleep 1
-  episodes=$(grep -c "]: episode [0-9]*: the vehicle is at" "$log" || true)
+  episodes=$(episodes_started)
   say "long-lived system: $((long_s / 60)) min, $(processes | wc -w) processes"
   say "  episodes: $((episodes + 1)) ($resets resets, $episodes started; $resent sent a second time after 15 s without a start)"
   [ "$episodes" -eq "$resets" ] || say "FAIL: $resets resets sent but $episodes episodes started"
