@@ -2,18 +2,26 @@
 
 #include <atomic>
 #include <chrono>
+#include <deque>
 #include <iostream>
 #include <map>
 #include <memory>
 #include <mutex>
 #include <set>
 #include <string>
+#include <tuple>
 #include <vector>
+
+#include <fastdds/rtps/common/SerializedPayload.h>
 
 #include "cli_common.hpp"
 #include "foxglove_server.hpp"
 #include "graph.hpp"
+#include "image_compression.hpp"
 #include "raw_type.hpp"
+#include "rosgraph_msgs/msg/clock.hpp"
+#include "sensor_msgs/msg/compressed_image.hpp"
+#include "sensor_msgs/msg/image.hpp"
 #include "unav_bag/msg_definition.hpp"
 
 using namespace std::chrono_literals;
@@ -21,59 +29,199 @@ using namespace std::chrono_literals;
 namespace unav::cli {
 namespace {
 
+constexpr const char* kImageType = "sensor_msgs::msg::dds_::Image_";
+constexpr const char* kCompressedImageType = "sensor_msgs/msg/CompressedImage";
+constexpr std::size_t kMaxPendingClientMessages = 256;  // per client channel, until its writer exists
+
 struct FoxgloveOptions {
   std::string address = "127.0.0.1";
   int port = 8765;
   std::vector<std::string> topics;  // empty: every topic with a publisher
+  bool no_publish = false;
+  bool allow_secured = false;
+  int jpeg_quality = 90;
 };
+
+// A channel we offer: a DDS topic as it is, or the compressed twin of an image topic.
+struct Offered {
+  std::string topic;     // the DDS topic read (the image topic for a compressed twin)
+  std::string dds_type;  // its type
+  bool compressed = false;
+  std::shared_ptr<unav::SubscriptionBase> sub;  // while some client wants the channel
+};
+
+// A channel a client advertised: a DDS writer made on the DDS thread, samples queued until then.
+struct ClientWriter {
+  std::string topic, dds_type;
+  std::shared_ptr<RawPublisher> writer;
+  std::deque<RawSample> pending;
+  bool closed = false;
+};
+
+template <typename Msg>
+void publish_typed(FoxgloveServer& server, std::uint32_t channel, Msg& msg) {
+  unav::TypeSupportOf<Msg> type;
+  eprosima::fastrtps::rtps::SerializedPayload_t payload(type.getSerializedSizeProvider(&msg)());
+  if (type.serialize(&msg, &payload))
+    server.publish(channel, static_cast<std::uint64_t>(wall_ns()), payload.data, payload.length);
+}
 
 int run(const FoxgloveOptions& o) {
   if (o.port < 0 || o.port > 65535) throw UsageError("--port " + std::to_string(o.port) + ": must be in [0, 65535]");
+  if (o.jpeg_quality < 1 || o.jpeg_quality > 100)
+    throw UsageError("--jpeg-quality " + std::to_string(o.jpeg_quality) + ": must be in [1, 100]");
   std::set<std::string> only;
   for (const auto& t : o.topics) only.insert(normalize_topic(t));
   auto reg = make_registry();
+  std::mutex reg_mutex;  // the registry is used on the DDS thread and by the server's advertise handler
   Graph g;
-  struct Topic {
-    std::string name, dds_type;
-    std::shared_ptr<RawSubscription> sub;
-  };
-  std::map<std::uint32_t, Topic> channels;  // touched on this thread only
+  if (!g.context().secured_enclave().empty()) {
+    if (!o.allow_secured)
+      throw UsageError("this participant is secured (enclave '" + g.context().secured_enclave() +
+                       "'): the topics it can read are protected by DDS Security and would leave it unencrypted "
+                       "over the WebSocket; pass --allow-secured to bridge them anyway");
+    std::cerr << "[WARN] [unav_foxglove]: --allow-secured: secured topics are forwarded in clear over the WebSocket"
+              << std::endl;
+  }
+  std::map<std::uint32_t, Offered> channels;  // touched on this thread only
   std::map<std::string, std::uint32_t> channel_of_topic;
   std::mutex wanted_mutex;  // the server's thread says which channels clients want
   std::map<std::uint32_t, bool> wanted;
+  std::mutex writers_mutex;  // client channels: the server's thread adds and feeds, this thread makes writers
+  std::map<std::pair<std::uint64_t, std::uint32_t>, ClientWriter> writers;
+
   FoxgloveServer::Options so;
   so.address = o.address;
   so.port = static_cast<std::uint16_t>(o.port);
+  so.client_publish = !o.no_publish;
+  so.time = true;
+  FoxgloveServer::Handlers handlers;
+  handlers.on_interest = [&](std::uint32_t channel, bool want) {
+    const std::lock_guard<std::mutex> lock(wanted_mutex);
+    wanted[channel] = want;
+  };
+  handlers.on_client_advertise = [&](const FoxgloveServer::ClientChannel& c) -> std::string {
+    try {
+      const std::lock_guard<std::mutex> lock(reg_mutex);
+      reg.load(c.schema_name);
+    } catch (const std::exception& e) {
+      return std::string("no IDL for this type here: ") + e.what();
+    }
+    ClientWriter w;
+    w.topic = normalize_topic(c.topic);
+    w.dds_type = unav::dds_type_from_ros(c.schema_name);
+    const std::lock_guard<std::mutex> lock(writers_mutex);
+    writers[{c.client, c.id}] = std::move(w);
+    std::cout << "[INFO] [unav_foxglove]: a client publishes '" << c.topic << "' [" << c.schema_name << "]"
+              << std::endl;
+    return "";
+  };
+  handlers.on_client_message = [&](const FoxgloveServer::ClientChannel& c, const std::uint8_t* cdr, std::size_t n) {
+    RawSample s;
+    s.bytes.assign(cdr, cdr + n);
+    std::shared_ptr<RawPublisher> writer;
+    {
+      const std::lock_guard<std::mutex> lock(writers_mutex);
+      const auto it = writers.find({c.client, c.id});
+      if (it == writers.end()) return;
+      if (!it->second.writer) {
+        if (it->second.pending.size() < kMaxPendingClientMessages) it->second.pending.push_back(std::move(s));
+        return;
+      }
+      writer = it->second.writer;
+    }
+    writer->publish(s);  // DataWriter::write is thread-safe
+  };
+  handlers.on_client_unadvertise = [&](const FoxgloveServer::ClientChannel& c) {
+    const std::lock_guard<std::mutex> lock(writers_mutex);
+    const auto it = writers.find({c.client, c.id});
+    if (it != writers.end()) it->second.closed = true;  // the writer is deleted on the DDS thread
+  };
   std::unique_ptr<FoxgloveServer> server;
   try {
-    server = std::make_unique<FoxgloveServer>(so, [&](std::uint32_t channel, bool want) {
-      const std::lock_guard<std::mutex> lock(wanted_mutex);
-      wanted[channel] = want;
-    });
+    server = std::make_unique<FoxgloveServer>(so, handlers);
   } catch (const std::runtime_error& e) {
     throw UsageError(e.what());
   }
-  // Every 100 ms: advertise topics whose publisher appeared, and hold a DDS subscription exactly
-  // for the channels some client subscribed to.
+
+  auto advertise = [&](const std::string& name, const std::string& topic, const std::string& dds_type,
+                       const std::string& schema_type, bool compressed) {
+    FoxgloveServer::Channel c;
+    c.topic = name;
+    c.schema_name = unav::ros_type_from_dds(unav::dds_type_from_ros(schema_type));
+    try {
+      const std::lock_guard<std::mutex> lock(reg_mutex);
+      c.schema = unav::bag::ros2msg_definition(reg, schema_type);
+    } catch (const std::exception& e) {
+      std::cerr << "[WARN] [unav_foxglove]: no IDL for " << c.schema_name << " (" << e.what() << "): '" << name
+                << "' not advertised" << std::endl;
+      channel_of_topic[name] = 0;
+      return;
+    }
+    const std::uint32_t id = server->add_channel(c);
+    channel_of_topic[name] = id;
+    channels[id] = Offered{topic, dds_type, compressed, nullptr};
+  };
+  auto subscribe = [&](std::uint32_t id, Offered& t) {
+    const unav::QoS qos = g.matching_qos(t.topic);
+    FoxgloveServer& s = *server;
+    if (!t.compressed) {
+      auto sub = std::make_shared<RawSubscription>(
+          g.context(), unav::to_dds_topic(t.topic), t.dds_type, qos, [&s, id](RawSample& m) {
+            s.publish(id, static_cast<std::uint64_t>(wall_ns()), m.bytes.data(), m.bytes.size());
+          });
+      sub->start(qos);
+      t.sub = sub;
+      return;
+    }
+    const int quality = o.jpeg_quality;
+    const std::string topic = t.topic;
+    auto sub = std::make_shared<unav::Subscription<sensor_msgs::msg::Image>>(
+        g.context(), unav::to_dds_topic(t.topic), qos,
+        [&s, id, quality, topic, warned = false](const sensor_msgs::msg::Image& m) mutable {
+          sensor_msgs::msg::CompressedImage out;
+          try {
+            CompressedImageData c = compress_image(
+                ImageView{m.encoding(), m.width(), m.height(), m.step(), m.is_bigendian() != 0, m.data().data(),
+                          m.data().size()},
+                quality);
+            out.format(std::move(c.format));
+            out.data(std::move(c.data));
+          } catch (const std::invalid_argument& e) {
+            if (!warned) std::cerr << "[WARN] [unav_foxglove]: '" << topic << "': " << e.what() << std::endl;
+            warned = true;
+            return;
+          }
+          out.header(m.header());
+          publish_typed(s, id, out);
+        });
+    sub->start(qos);
+    t.sub = sub;
+  };
+  std::shared_ptr<unav::Subscription<rosgraph_msgs::msg::Clock>> clock;
+
+  // Every 100 ms: advertise topics whose publisher appeared (and the compressed twin of each
+  // image topic), hold a DDS subscription exactly for the channels some client subscribed to,
+  // and make or delete the DDS writers of the clients' channels.
   auto tick = [&] {
-    for (const auto& [topic, types] : g.topics()) {
+    const auto topics = g.topics();
+    for (const auto& [topic, types] : topics) {
       if (channel_of_topic.count(topic) || types.empty() || (!only.empty() && !only.count(topic))) continue;
       const std::string dds_type = g.writer_type(topic);  // a reader alone does not make a channel
       if (dds_type.empty()) continue;
-      FoxgloveServer::Channel c;
-      c.topic = topic;
-      c.schema_name = unav::ros_type_from_dds(dds_type);
-      try {
-        c.schema = unav::bag::ros2msg_definition(reg, dds_type);
-      } catch (const std::exception& e) {
-        std::cerr << "[WARN] [unav_foxglove]: no IDL for " << c.schema_name << " (" << e.what() << "): '" << topic
-                  << "' not advertised" << std::endl;
-        channel_of_topic[topic] = 0;
-        continue;
-      }
-      const std::uint32_t id = server->add_channel(c);
-      channel_of_topic[topic] = id;
-      channels[id] = Topic{topic, dds_type, nullptr};
+      advertise(topic, topic, dds_type, dds_type, false);
+      const std::string twin = topic + "/compressed";  // image_transport's name
+      if (dds_type == kImageType && !channel_of_topic.count(twin) && !topics.count(twin))
+        advertise(twin, topic, dds_type, kCompressedImageType, true);
+    }
+    if (!clock && !g.writer_type("/clock").empty()) {
+      FoxgloveServer& s = *server;
+      clock = std::make_shared<unav::Subscription<rosgraph_msgs::msg::Clock>>(
+          g.context(), unav::to_dds_topic("/clock"), g.matching_qos("/clock"),
+          [&s](const rosgraph_msgs::msg::Clock& c) {
+            s.publish_time(static_cast<std::uint64_t>(c.clock().sec()) * 1000000000ull + c.clock().nanosec());
+          });
+      clock->start(g.matching_qos("/clock"));
     }
     std::map<std::uint32_t, bool> now;
     {
@@ -83,18 +231,31 @@ int run(const FoxgloveOptions& o) {
     for (auto& [id, t] : channels) {
       const bool want = now.count(id) && now.at(id);
       if (want && !t.sub) {
-        const unav::QoS qos = g.matching_qos(t.name);
-        const std::uint32_t channel = id;
-        t.sub = std::make_shared<RawSubscription>(
-            g.context(), unav::to_dds_topic(t.name), t.dds_type, qos, [&server, channel](RawSample& s) {
-              server->publish(channel, static_cast<std::uint64_t>(wall_ns()), s.bytes.data(), s.bytes.size());
-            });
-        t.sub->start(qos);
-        std::cout << "[INFO] [unav_foxglove]: forwarding '" << t.name << "'" << std::endl;
+        subscribe(id, t);
+        std::cout << "[INFO] [unav_foxglove]: forwarding '" << t.topic << "'" << (t.compressed ? " compressed" : "")
+                  << std::endl;
       } else if (!want && t.sub) {
         t.sub.reset();
-        std::cout << "[INFO] [unav_foxglove]: '" << t.name << "' unsubscribed" << std::endl;
+        std::cout << "[INFO] [unav_foxglove]: '" << t.topic << "'" << (t.compressed ? " compressed" : "")
+                  << " unsubscribed" << std::endl;
       }
+    }
+    std::vector<std::shared_ptr<RawPublisher>> to_delete;  // deleted outside the lock
+    const std::lock_guard<std::mutex> lock(writers_mutex);
+    for (auto it = writers.begin(); it != writers.end();) {
+      ClientWriter& w = it->second;
+      if (w.closed) {
+        to_delete.push_back(std::move(w.writer));
+        it = writers.erase(it);
+        continue;
+      }
+      if (!w.writer) {
+        w.writer = std::make_shared<RawPublisher>(g.context(), unav::to_dds_topic(w.topic), w.dds_type,
+                                                  unav::QoS::reliable());
+        for (const auto& s : w.pending) w.writer->publish(s);
+        w.pending.clear();
+      }
+      ++it;
     }
   };
   auto timer = std::make_shared<unav::Timer>(100ms, tick, false);
@@ -104,9 +265,13 @@ int run(const FoxgloveOptions& o) {
   while (g.context().ok()) g.context().spin_until([] { return false; }, 200ms);
   timer->cancel();
   for (auto& [id, t] : channels) t.sub.reset();
-  std::cout << "[INFO] [unav_foxglove]: " << channels.size() << " topics advertised, " << server->sent()
-            << " messages sent, " << server->dropped() << " dropped (a client's queue was full)" << std::endl;
-  server.reset();
+  clock.reset();
+  std::cout << "[INFO] [unav_foxglove]: " << channels.size() << " channels advertised, " << server->sent()
+            << " messages sent, " << server->dropped() << " dropped (a client's queue was full), "
+            << server->received() << " received from clients" << std::endl;
+  server.reset();  // its thread stops: no handler runs after this
+  const std::lock_guard<std::mutex> lock(writers_mutex);
+  writers.clear();
   return 0;
 }
 
@@ -120,6 +285,11 @@ std::function<int()> add_foxglove_command(CLI::App& app) {
   cmd->add_option("topics", o->topics, "topics to offer (default: every topic with a publisher)");
   cmd->add_option("--address", o->address, "address to listen on (0.0.0.0: every interface)");
   cmd->add_option("-p,--port", o->port, "port (default 8765, as foxglove_bridge; 0: any free port)");
+  cmd->add_flag("--no-publish", o->no_publish, "do not let clients publish (teleop, Publish panel, 3-D goal poses)");
+  cmd->add_flag("--allow-secured", o->allow_secured,
+                "bridge even when this participant is secured (the WebSocket is not encrypted)");
+  cmd->add_option("--jpeg-quality", o->jpeg_quality,
+                  "JPEG quality of the <image topic>/compressed channels (1-100, default 90)");
   return [o] { return run(*o); };
 }
 

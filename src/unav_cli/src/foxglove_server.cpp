@@ -24,6 +24,7 @@ using Handle = websocketpp::connection_hdl;
 using Json = nlohmann::json;
 constexpr const char* kSubprotocol = "foxglove.websocket.v1";
 constexpr std::uint8_t kMessageData = 0x01;
+constexpr std::uint8_t kTime = 0x02;
 
 Json channel_json(std::uint32_t id, const FoxgloveServer::Channel& c) {
   return {{"id", id},           {"topic", c.topic},           {"encoding", "cdr"}, {"schemaName", c.schema_name},
@@ -34,24 +35,27 @@ Json channel_json(std::uint32_t id, const FoxgloveServer::Channel& c) {
 
 struct FoxgloveServer::Impl {
   Options options;
-  InterestCallback on_interest;
+  Handlers handlers;
   Server server;
   std::thread thread;
   std::uint16_t port = 0;
 
   // Everything below is touched on the server's thread only (handlers and posted work).
   struct Client {
+    std::uint64_t key = 0;
     std::map<std::uint32_t, std::uint32_t> subscription_of_channel;  // channel -> client's subscription id
     std::map<std::uint32_t, std::uint32_t> channel_of_subscription;
+    std::map<std::uint32_t, ClientChannel> advertised;  // the client's own channels, by its id
   };
   std::map<Handle, Client, std::owner_less<Handle>> clients;
   std::map<std::uint32_t, Channel> channels;
   std::map<std::uint32_t, int> interest;  // channel -> subscribed clients
   std::uint32_t next_channel = 1;
+  std::uint64_t next_client = 1;
   std::mutex id_mutex;  // next_channel is handed out on the caller's thread
 
   std::atomic<std::size_t> client_count{0};
-  std::atomic<std::uint64_t> sent{0}, dropped{0};
+  std::atomic<std::uint64_t> sent{0}, dropped{0}, received{0};
 
   void send_text(const Handle& h, const Json& j) {
     websocketpp::lib::error_code ec;
@@ -64,16 +68,21 @@ struct FoxgloveServer::Impl {
     const int before = interest[channel];
     const int after = before + delta;
     interest[channel] = after;
-    if (on_interest && (before == 0) != (after == 0)) on_interest(channel, after > 0);
+    if (handlers.on_interest && (before == 0) != (after == 0)) handlers.on_interest(channel, after > 0);
   }
 
   void on_open(const Handle& h) {
-    clients[h] = Client{};
+    Client client;
+    client.key = next_client++;
+    clients[h] = client;
     client_count = clients.size();
+    Json capabilities = Json::array();
+    if (options.client_publish) capabilities.push_back("clientPublish");
+    if (options.time) capabilities.push_back("time");
     send_text(h, {{"op", "serverInfo"},
                   {"name", options.name},
-                  {"capabilities", Json::array()},
-                  {"supportedEncodings", Json::array()},
+                  {"capabilities", capabilities},
+                  {"supportedEncodings", options.client_publish ? Json::array({"cdr"}) : Json::array()},
                   {"metadata", Json::object()},
                   {"sessionId", std::to_string(std::chrono::system_clock::now().time_since_epoch().count())}});
     Json list = Json::array();
@@ -85,6 +94,8 @@ struct FoxgloveServer::Impl {
     const auto it = clients.find(h);
     if (it == clients.end()) return;
     for (const auto& [channel, sub] : it->second.subscription_of_channel) change_interest(channel, -1);
+    for (const auto& [id, ch] : it->second.advertised)
+      if (handlers.on_client_unadvertise) handlers.on_client_unadvertise(ch);
     clients.erase(it);
     client_count = clients.size();
   }
@@ -93,8 +104,7 @@ struct FoxgloveServer::Impl {
     const auto it = clients.find(h);
     if (it == clients.end()) return;
     Client& c = it->second;
-    if (msg->get_opcode() != websocketpp::frame::opcode::text)
-      return status(h, 1, "binary client messages are not supported");
+    if (msg->get_opcode() != websocketpp::frame::opcode::text) return on_binary(h, c, msg->get_payload());
     Json j;
     try {
       j = Json::parse(msg->get_payload());
@@ -128,12 +138,50 @@ struct FoxgloveServer::Impl {
           change_interest(found->second, -1);
           c.channel_of_subscription.erase(found);
         }
+      } else if (op == "advertise" && options.client_publish) {
+        for (const auto& a : j.at("channels")) client_advertise(h, c, a);
+      } else if (op == "unadvertise" && options.client_publish) {
+        for (const auto& id : j.at("channelIds")) {
+          const auto found = c.advertised.find(id.get<std::uint32_t>());
+          if (found == c.advertised.end()) continue;
+          if (handlers.on_client_unadvertise) handlers.on_client_unadvertise(found->second);
+          c.advertised.erase(found);
+        }
       } else {
         status(h, 1, "unsupported op '" + op + "'");
       }
     } catch (const Json::exception& e) {
       status(h, 2, op + ": " + e.what());
     }
+  }
+
+  void client_advertise(const Handle& h, Client& c, const Json& a) {
+    ClientChannel ch;
+    ch.client = c.key;
+    ch.id = a.at("id").get<std::uint32_t>();
+    ch.topic = a.at("topic").get<std::string>();
+    ch.schema_name = a.at("schemaName").get<std::string>();
+    const std::string encoding = a.at("encoding").get<std::string>();
+    const std::string what = "advertise of '" + ch.topic + "' [" + ch.schema_name + "]: ";
+    if (c.advertised.count(ch.id)) return status(h, 2, what + "channel id " + std::to_string(ch.id) + " is in use");
+    if (encoding != "cdr") return status(h, 2, what + "encoding '" + encoding + "' is not supported (only cdr)");
+    const std::string refused = handlers.on_client_advertise ? handlers.on_client_advertise(ch) : "";
+    if (!refused.empty()) return status(h, 2, what + refused);
+    c.advertised[ch.id] = ch;
+  }
+
+  void on_binary(const Handle& h, Client& c, const std::string& frame) {
+    if (!options.client_publish) return status(h, 2, "client publishing is not enabled on this server");
+    if (frame.size() < 5 || static_cast<std::uint8_t>(frame[0]) != kMessageData)
+      return status(h, 2, "binary client message: only Message Data (opcode 1, uint32 channel id, payload)");
+    std::uint32_t id = 0;
+    std::memcpy(&id, frame.data() + 1, 4);
+    const auto found = c.advertised.find(id);
+    if (found == c.advertised.end()) return status(h, 1, "message on channel " + std::to_string(id) + ", never advertised");
+    if (handlers.on_client_message)
+      handlers.on_client_message(found->second, reinterpret_cast<const std::uint8_t*>(frame.data()) + 5,
+                                 frame.size() - 5);
+    ++received;
   }
 
   // Sends a message to every subscriber of `channel`, each in a frame of its own (the header
@@ -160,10 +208,10 @@ struct FoxgloveServer::Impl {
   }
 };
 
-FoxgloveServer::FoxgloveServer(const Options& options, InterestCallback on_interest) : impl_(std::make_unique<Impl>()) {
+FoxgloveServer::FoxgloveServer(const Options& options, Handlers handlers) : impl_(std::make_unique<Impl>()) {
   Impl& m = *impl_;
   m.options = options;
-  m.on_interest = std::move(on_interest);
+  m.handlers = std::move(handlers);
   m.server.clear_access_channels(websocketpp::log::alevel::all);
   m.server.clear_error_channels(websocketpp::log::elevel::all);
   m.server.init_asio();
@@ -240,7 +288,7 @@ void FoxgloveServer::remove_channel(std::uint32_t channel) {
       }
       m.send_text(h, {{"op", "unadvertise"}, {"channelIds", {channel}}});
     }
-    if (m.interest[channel] > 0 && m.on_interest) m.on_interest(channel, false);
+    if (m.interest[channel] > 0 && m.handlers.on_interest) m.handlers.on_interest(channel, false);
     m.interest.erase(channel);
   });
 }
@@ -253,8 +301,23 @@ void FoxgloveServer::publish(std::uint32_t channel, std::uint64_t receive_ns, co
              [&m, channel, receive_ns, payload] { m.deliver(channel, receive_ns, payload); });
 }
 
+void FoxgloveServer::publish_time(std::uint64_t time_ns) {
+  Impl& m = *impl_;
+  if (!m.options.time) return;
+  asio::post(m.server.get_io_service(), [&m, time_ns] {
+    std::string frame(1 + 8, '\0');
+    frame[0] = static_cast<char>(kTime);
+    std::memcpy(frame.data() + 1, &time_ns, 8);
+    for (const auto& [h, c] : m.clients) {
+      websocketpp::lib::error_code ec;
+      m.server.send(h, frame, websocketpp::frame::opcode::binary, ec);
+    }
+  });
+}
+
 std::size_t FoxgloveServer::clients() const { return impl_->client_count; }
 std::uint64_t FoxgloveServer::sent() const { return impl_->sent; }
 std::uint64_t FoxgloveServer::dropped() const { return impl_->dropped; }
+std::uint64_t FoxgloveServer::received() const { return impl_->received; }
 
 }  // namespace unav::cli

@@ -13,6 +13,7 @@
 #include <condition_variable>
 #include <cstring>
 #include <deque>
+#include <functional>
 #include <mutex>
 #include <thread>
 
@@ -82,6 +83,11 @@ class TestClient {
     return b;
   }
   void send(const Json& j) { c_.send(hdl_, j.dump(), websocketpp::frame::opcode::text); }
+  void send_binary(const std::string& b) { c_.send(hdl_, b, websocketpp::frame::opcode::binary); }
+  void close() {
+    websocketpp::lib::error_code ec;
+    c_.close(hdl_, websocketpp::close::status::normal, "", ec);
+  }
 
  private:
   void set_state(int s) {
@@ -105,10 +111,12 @@ class TestClient {
 TEST(FoxgloveServer, AdvertisesSubscribesAndFramesMessagesAsTheSpecSays) {
   std::mutex m;
   std::vector<std::pair<std::uint32_t, bool>> interest;
-  FoxgloveServer s({"127.0.0.1", 0, "test", 1u << 20}, [&](std::uint32_t c, bool w) {
+  FoxgloveServer::Handlers handlers;
+  handlers.on_interest = [&](std::uint32_t c, bool w) {
     const std::lock_guard<std::mutex> lock(m);
     interest.emplace_back(c, w);
-  });
+  };
+  FoxgloveServer s({"127.0.0.1", 0, "test", 1u << 20}, handlers);
   ASSERT_GT(s.port(), 0);
   const std::uint32_t odom = s.add_channel({"/rov/odom", "nav_msgs/msg/Odometry", "std_msgs/Header header\n"});
 
@@ -117,6 +125,7 @@ TEST(FoxgloveServer, AdvertisesSubscribesAndFramesMessagesAsTheSpecSays) {
   const Json info = client.next_text();
   EXPECT_EQ(info["op"], "serverInfo") << info;
   EXPECT_EQ(info["name"], "test");
+  EXPECT_EQ(info["capabilities"], Json::array());  // publishing and time are opt-in
   const Json adv = client.next_text();
   ASSERT_EQ(adv["op"], "advertise") << adv;
   ASSERT_EQ(adv["channels"].size(), 1u);
@@ -197,4 +206,117 @@ TEST(FoxgloveServer, RefusesClientsWithoutTheSubprotocolAndBusyPorts) {
     EXPECT_NE(std::string(e.what()).find("cannot listen on 127.0.0.1:" + std::to_string(s.port())), std::string::npos)
         << e.what();
   }
+}
+
+// Client publishing (capability clientPublish): a client advertises a channel of its own, the
+// handler accepts or refuses it (the refusal reaches the client as an error status), Message Data
+// frames (opcode 1, uint32 client channel id, payload) reach the handler byte for byte, and the
+// channel is unadvertised when the client says so or goes away. The time capability sends
+// opcode 2 | uint64 ns to every client.
+TEST(FoxgloveServer, ClientsPublishOnChannelsTheyAdvertiseAndReceiveTheClock) {
+  std::mutex m;
+  std::vector<FoxgloveServer::ClientChannel> advertised, unadvertised;
+  std::vector<std::string> payloads;
+  FoxgloveServer::Handlers handlers;
+  handlers.on_client_advertise = [&](const FoxgloveServer::ClientChannel& c) -> std::string {
+    const std::lock_guard<std::mutex> lock(m);
+    if (c.schema_name == "no_such/msg/Type") return "unknown type";
+    advertised.push_back(c);
+    return "";
+  };
+  handlers.on_client_message = [&](const FoxgloveServer::ClientChannel& c, const std::uint8_t* d, std::size_t n) {
+    const std::lock_guard<std::mutex> lock(m);
+    payloads.push_back(c.topic + ":" + std::string(reinterpret_cast<const char*>(d), n));
+  };
+  handlers.on_client_unadvertise = [&](const FoxgloveServer::ClientChannel& c) {
+    const std::lock_guard<std::mutex> lock(m);
+    unadvertised.push_back(c);
+  };
+  FoxgloveServer::Options o{"127.0.0.1", 0, "test", 1u << 20};
+  o.client_publish = true;
+  o.time = true;
+  FoxgloveServer s(o, handlers);
+  auto wait_for = [&](const std::function<bool()>& done) {
+    for (int i = 0; i < 250; ++i) {  // the handlers run on the server's thread
+      {
+        const std::lock_guard<std::mutex> lock(m);
+        if (done()) return true;
+      }
+      std::this_thread::sleep_for(20ms);
+    }
+    return false;
+  };
+
+  TestClient client(s.port());
+  ASSERT_EQ(client.wait_state(), 1);
+  const Json info = client.next_text();
+  EXPECT_EQ(info["capabilities"], Json::array({"clientPublish", "time"})) << info;
+  EXPECT_EQ(info["supportedEncodings"], Json::array({"cdr"}));
+  EXPECT_EQ(client.next_text()["op"], "advertise");  // the server's (empty) channel list
+
+  client.send({{"op", "advertise"},
+               {"channels",
+                {{{"id", 3}, {"topic", "/rov/control/pose_setpoint"}, {"encoding", "cdr"},
+                  {"schemaName", "geometry_msgs/msg/PoseStamped"}},
+                 {{"id", 4}, {"topic", "/x"}, {"encoding", "json"}, {"schemaName", "std_msgs/msg/String"}},
+                 {{"id", 5}, {"topic", "/y"}, {"encoding", "cdr"}, {"schemaName", "no_such/msg/Type"}}}}});
+  const Json json_refused = client.next_text();
+  EXPECT_EQ(json_refused["level"], 2) << json_refused;
+  EXPECT_NE(json_refused["message"].get<std::string>().find("encoding 'json' is not supported"), std::string::npos);
+  const Json type_refused = client.next_text();
+  EXPECT_NE(type_refused["message"].get<std::string>().find("'/y' [no_such/msg/Type]: unknown type"),
+            std::string::npos)
+      << type_refused;
+  ASSERT_TRUE(wait_for([&] { return advertised.size() == 1; }));
+  EXPECT_EQ(advertised[0].id, 3u);
+  EXPECT_EQ(advertised[0].topic, "/rov/control/pose_setpoint");
+
+  std::string frame("\x01\x03\x00\x00\x00", 5);
+  frame += std::string("\x00\x01\x00\x00\xff\x7f", 6);  // any bytes: the server does not look inside
+  client.send_binary(frame);
+  client.send_binary(std::string("\x01\x09\x00\x00\x00zz", 7));  // channel 9 was never advertised
+  const Json unknown = client.next_text();
+  EXPECT_EQ(unknown["level"], 1) << unknown;
+  ASSERT_TRUE(wait_for([&] { return payloads.size() == 1; }));
+  EXPECT_EQ(payloads[0], "/rov/control/pose_setpoint:" + std::string("\x00\x01\x00\x00\xff\x7f", 6));
+  EXPECT_EQ(s.received(), 1u);
+
+  s.publish_time(1234567890123ull);
+  const std::string t = client.next_binary();
+  ASSERT_EQ(t.size(), 9u);
+  EXPECT_EQ(static_cast<std::uint8_t>(t[0]), 0x02);
+  std::uint64_t ns = 0;
+  std::memcpy(&ns, t.data() + 1, 8);
+  EXPECT_EQ(ns, 1234567890123ull);
+
+  client.send({{"op", "unadvertise"}, {"channelIds", {3}}});
+  ASSERT_TRUE(wait_for([&] { return unadvertised.size() == 1; }));
+  EXPECT_EQ(unadvertised[0].id, 3u);
+
+  // A client that goes away unadvertises what it still had.
+  client.send({{"op", "advertise"},
+               {"channels",
+                {{{"id", 6}, {"topic", "/rov/thrusters/command"}, {"encoding", "cdr"},
+                  {"schemaName", "unav_msgs/msg/ThrusterCommand"}}}}});
+  ASSERT_TRUE(wait_for([&] { return advertised.size() == 2; }));
+  client.close();
+  ASSERT_TRUE(wait_for([&] { return unadvertised.size() == 2; }));
+  EXPECT_EQ(unadvertised[1].topic, "/rov/thrusters/command");
+}
+
+TEST(FoxgloveServer, RefusesPublishingWhenNotOffered) {
+  FoxgloveServer s({"127.0.0.1", 0, "test", 1u << 20});
+  TestClient client(s.port());
+  ASSERT_EQ(client.wait_state(), 1);
+  client.next_text();
+  client.next_text();
+  client.send({{"op", "advertise"},
+               {"channels", {{{"id", 1}, {"topic", "/x"}, {"encoding", "cdr"}, {"schemaName", "std_msgs/msg/String"}}}}});
+  const Json st = client.next_text();
+  EXPECT_EQ(st["op"], "status") << st;
+  EXPECT_NE(st["message"].get<std::string>().find("unsupported op 'advertise'"), std::string::npos) << st;
+  client.send_binary(std::string("\x01\x01\x00\x00\x00", 5));
+  const Json st2 = client.next_text();
+  EXPECT_EQ(st2["level"], 2) << st2;
+  EXPECT_EQ(s.received(), 0u);
 }
