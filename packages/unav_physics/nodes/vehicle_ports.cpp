@@ -25,6 +25,7 @@ VehiclePorts::VehiclePorts(unav::Node& node, const VehicleParams& vehicle, const
   // 100 deep (5 s of lockstep barriers, ~80 kB): a consumer stalled for a while (or dropped from
   // the lockstep) catches up on what its own reader history can hold.
   odom_pub_ = node.create_publisher<nav_msgs::msg::Odometry>("ground_truth/odom", unav::QoS::reliable(100));
+  path_pub_ = node.create_publisher<nav_msgs::msg::Path>("ground_truth/path", unav::QoS::reliable(1));
   tf_pub_ = node.create_publisher<tf2_msgs::msg::TFMessage>("/tf", unav::QoS::reliable(100));
   tf_.transforms().resize(1);
   thruster_pub_ = node.create_publisher<unav_msgs::msg::ThrusterState>("thrusters/state", unav::QoS::reliable());
@@ -84,6 +85,18 @@ void VehiclePorts::publish_state(const Simulator& sim) {
   odom_.twist().twist().linear() = unav::to_vector3_msg(x.v_WB_B);
   odom_.twist().twist().angular() = unav::to_vector3_msg(x.w_WB_B);
   odom_pub_->publish(odom_);
+  if (path_t_ < 0.0 || t >= path_t_ + kPathPeriod - 1e-9 || t < path_t_) {  // (1e-9: steps sum to 0.5 inexactly)
+    if (t < path_t_) path_.poses().clear();  // time went back: a new run
+    path_t_ = t;
+    auto& poses = path_.poses();
+    if (poses.size() >= kPathPoses) poses.erase(poses.begin());
+    geometry_msgs::msg::PoseStamped pose;
+    pose.header() = odom_.header();
+    pose.pose() = odom_.pose().pose();
+    poses.push_back(pose);
+    path_.header() = odom_.header();
+    path_pub_->publish(path_);
+  }
   // The vehicle on /tf (world_frame -> body_frame), for RViz, Foxglove and tf2 users.
   auto& tf = tf_.transforms()[0];
   tf.header() = odom_.header();

@@ -126,6 +126,12 @@ const std::vector<double> kSurge = {0.5, 0.5, -0.5, -0.5, 0, 0, 0, 0};
 TEST(PhysicsServer, LockstepHoldsEachBarrierUntilTheCommandArrives) {
   Harness h({"-p", "mode:=lockstep", "-p", "lockstep_wait_for_command:=true", "-p", "lockstep_period:=0.05", "-p",
              "publish_rate:=20.0"});
+  std::vector<nav_msgs::msg::Path> paths;
+  auto path_sub = h.probe->create_subscription<nav_msgs::msg::Path>(
+      "/rov/ground_truth/path", unav::QoS::reliable(10), [&](const nav_msgs::msg::Path& m) { paths.push_back(m); });
+  const std::vector<unav::testing::Link> path_link = {make_link(*h.server, *path_sub)};
+  ASSERT_TRUE(unav::testing::wait_for_match({h.server_ctx.get(), h.test_ctx.get()}, path_link))
+      << unav::testing::describe(path_link);
   // Closed loop over DDS: answer each barrier's odometry with a command stamped at its time.
   double answered = -1.0;
   for (int k = 0; k <= 20; ++k) {
@@ -151,6 +157,19 @@ TEST(PhysicsServer, LockstepHoldsEachBarrierUntilTheCommandArrives) {
   EXPECT_EQ(stamp_s(t.header()), stamp_s(h.odoms.back().header()));
   EXPECT_EQ(t.transform().translation().x(), p.x());
   EXPECT_EQ(t.transform().rotation().w(), h.odoms.back().pose().pose().orientation().w());
+  // ground_truth/path: a pose every 0.5 s of simulated time (0, 0.5, 1.0), each the odometry
+  // of its instant; the last one published holds all three.
+  ASSERT_TRUE(h.spin_until([&] { return !paths.empty() && paths.back().poses().size() == 3; }, 10s))
+      << paths.size() << " paths";
+  const auto& poses = paths.back().poses();
+  for (std::size_t i = 0; i < poses.size(); ++i) EXPECT_NEAR(stamp_s(poses[i].header()), 0.5 * i, 1e-9);
+  EXPECT_EQ(paths.back().header().frame_id(), "world_ned");
+  const auto at_1s = std::find_if(h.odoms.begin(), h.odoms.end(),
+                                  [](const nav_msgs::msg::Odometry& o) { return std::abs(stamp_s(o.header()) - 1.0) < 1e-9; });
+  ASSERT_NE(at_1s, h.odoms.end());
+  EXPECT_EQ(poses[2].pose().position().x(), at_1s->pose().pose().position().x());
+  EXPECT_GT(poses[2].pose().position().x(), poses[0].pose().position().x());
+  path_sub.reset();
 }
 
 // A new episode on sim/reset: the vehicle jumps to the pose given, at rest, while simulated

@@ -1,6 +1,6 @@
 #include "foxglove_command.hpp"
 
-#include <atomic>
+#include <algorithm>
 #include <chrono>
 #include <deque>
 #include <iostream>
@@ -59,11 +59,23 @@ struct ClientWriter {
 };
 
 template <typename Msg>
-void publish_typed(FoxgloveServer& server, std::uint32_t channel, Msg& msg) {
+void publish_typed(FoxgloveServer& server, std::uint32_t channel, std::uint64_t receive_ns, Msg& msg) {
   unav::TypeSupportOf<Msg> type;
   eprosima::fastrtps::rtps::SerializedPayload_t payload(type.getSerializedSizeProvider(&msg)());
-  if (type.serialize(&msg, &payload))
-    server.publish(channel, static_cast<std::uint64_t>(wall_ns()), payload.data, payload.length);
+  if (type.serialize(&msg, &payload)) server.publish(channel, receive_ns, payload.data, payload.length);
+}
+
+template <typename Msg>
+bool decode_typed(const std::vector<std::uint8_t>& cdr, Msg& msg) {
+  unav::TypeSupportOf<Msg> type;
+  eprosima::fastrtps::rtps::SerializedPayload_t payload(static_cast<std::uint32_t>(cdr.size()));
+  std::copy(cdr.begin(), cdr.end(), payload.data);
+  payload.length = static_cast<std::uint32_t>(cdr.size());
+  try {
+    return type.deserialize(&payload, &msg);
+  } catch (const std::exception&) {  // Fast CDR throws on truncated data
+    return false;
+  }
 }
 
 int run(const FoxgloveOptions& o) {
@@ -101,15 +113,18 @@ int run(const FoxgloveOptions& o) {
     wanted[channel] = want;
   };
   handlers.on_client_advertise = [&](const FoxgloveServer::ClientChannel& c) -> std::string {
+    // Foxglove names ROS 2 types either way: geometry_msgs/msg/Twist or geometry_msgs/Twist.
+    std::string type = c.schema_name;
+    if (std::count(type.begin(), type.end(), '/') == 1) type.insert(type.find('/'), "/msg");
     try {
       const std::lock_guard<std::mutex> lock(reg_mutex);
-      reg.load(c.schema_name);
+      reg.load(type);
     } catch (const std::exception& e) {
       return std::string("no IDL for this type here: ") + e.what();
     }
     ClientWriter w;
     w.topic = normalize_topic(c.topic);
-    w.dds_type = unav::dds_type_from_ros(c.schema_name);
+    w.dds_type = unav::dds_type_from_ros(type);
     const std::lock_guard<std::mutex> lock(writers_mutex);
     writers[{c.client, c.id}] = std::move(w);
     std::cout << "[INFO] [unav_foxglove]: a client publishes '" << c.topic << "' [" << c.schema_name << "]"
@@ -174,13 +189,18 @@ int run(const FoxgloveOptions& o) {
       t.sub = sub;
       return;
     }
+    // The same raw reader as above (one type per DDS topic in this participant, whichever
+    // channels are wanted), each sample decoded into a sensor_msgs/Image to compress it.
     const int quality = o.jpeg_quality;
     const std::string topic = t.topic;
-    auto sub = std::make_shared<unav::Subscription<sensor_msgs::msg::Image>>(
-        g.context(), unav::to_dds_topic(t.topic), qos,
-        [&s, id, quality, topic, warned = false](const sensor_msgs::msg::Image& m) mutable {
+    auto sub = std::make_shared<RawSubscription>(
+        g.context(), unav::to_dds_topic(t.topic), t.dds_type, qos,
+        [&s, id, quality, topic, warned = false](RawSample& raw) mutable {
+          const auto received = static_cast<std::uint64_t>(wall_ns());
+          sensor_msgs::msg::Image m;
           sensor_msgs::msg::CompressedImage out;
           try {
+            if (!decode_typed(raw.bytes, m)) throw std::invalid_argument("a sample that does not decode as an Image");
             CompressedImageData c = compress_image(
                 ImageView{m.encoding(), m.width(), m.height(), m.step(), m.is_bigendian() != 0, m.data().data(),
                           m.data().size()},
@@ -193,12 +213,12 @@ int run(const FoxgloveOptions& o) {
             return;
           }
           out.header(m.header());
-          publish_typed(s, id, out);
+          publish_typed(s, id, received, out);
         });
     sub->start(qos);
     t.sub = sub;
   };
-  std::shared_ptr<unav::Subscription<rosgraph_msgs::msg::Clock>> clock;
+  std::shared_ptr<RawSubscription> clock;  // the sim clock, for the time capability
 
   // Every 100 ms: advertise topics whose publisher appeared (and the compressed twin of each
   // image topic), hold a DDS subscription exactly for the channels some client subscribed to,
@@ -214,14 +234,19 @@ int run(const FoxgloveOptions& o) {
       if (dds_type == kImageType && !channel_of_topic.count(twin) && !topics.count(twin))
         advertise(twin, topic, dds_type, kCompressedImageType, true);
     }
-    if (!clock && !g.writer_type("/clock").empty()) {
+    const std::string clock_type = g.writer_type("/clock");
+    if (!clock && !clock_type.empty()) {
       FoxgloveServer& s = *server;
-      clock = std::make_shared<unav::Subscription<rosgraph_msgs::msg::Clock>>(
-          g.context(), unav::to_dds_topic("/clock"), g.matching_qos("/clock"),
-          [&s](const rosgraph_msgs::msg::Clock& c) {
-            s.publish_time(static_cast<std::uint64_t>(c.clock().sec()) * 1000000000ull + c.clock().nanosec());
-          });
-      clock->start(g.matching_qos("/clock"));
+      const unav::QoS qos = g.matching_qos("/clock");
+      clock = std::make_shared<RawSubscription>(g.context(), unav::to_dds_topic("/clock"), clock_type, qos,
+                                                [&s](RawSample& raw) {
+                                                  rosgraph_msgs::msg::Clock c;
+                                                  if (!decode_typed(raw.bytes, c)) return;
+                                                  s.publish_time(static_cast<std::uint64_t>(c.clock().sec()) *
+                                                                     1000000000ull +
+                                                                 c.clock().nanosec());
+                                                });
+      clock->start(qos);
     }
     std::map<std::uint32_t, bool> now;
     {

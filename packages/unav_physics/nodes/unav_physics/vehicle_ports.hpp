@@ -1,5 +1,6 @@
 // The topics a simulated vehicle publishes (DDS adapter, node code): /clock, ground_truth/odom and
-// /tf of its state, thrusters/state, and its sensors (imu, pressure + depth, dvl, range, mag, gps,
+// /tf of its state, ground_truth/path (its last 10 minutes, a pose every 0.5 s: the trajectory for
+// RViz and Foxglove; bounded, the full record is the recorders'), thrusters/state, and its sensors (imu, pressure + depth, dvl, range, mag, gps,
 // usbl/fix), and the acoustic modem link (modem/tx -> /surface/modem/rx, /surface/modem/tx ->
 // modem/rx, delivered in simulated time) and, with a tether, its pull (tether/wrench) and shape
 // (tether/path)
@@ -70,6 +71,10 @@ class VehiclePorts {
   UsblParams usbl_;
   std::shared_ptr<unav::Publisher<rosgraph_msgs::msg::Clock>> clock_pub_;
   std::shared_ptr<unav::Publisher<nav_msgs::msg::Odometry>> odom_pub_;
+  std::shared_ptr<unav::Publisher<nav_msgs::msg::Path>> path_pub_;
+  static constexpr double kPathPeriod = 0.5;      ///< [s] of simulated time between path poses
+  static constexpr std::size_t kPathPoses = 1200;  ///< 10 minutes of them; older ones are dropped
+  double path_t_ = -1.0;                           ///< time of the last path pose
   std::shared_ptr<unav::Publisher<tf2_msgs::msg::TFMessage>> tf_pub_;
   std::shared_ptr<unav::Publisher<unav_msgs::msg::ThrusterState>> thruster_pub_;
   std::shared_ptr<unav::Publisher<sensor_msgs::msg::Imu>> imu_pub_;
@@ -94,6 +99,7 @@ class VehiclePorts {
   unav::Logger log_;
   // Reused messages (no allocation per publish after the first).
   nav_msgs::msg::Odometry odom_;
+  nav_msgs::msg::Path path_;
   tf2_msgs::msg::TFMessage tf_;
   rosgraph_msgs::msg::Clock clock_;
   unav_msgs::msg::ThrusterState thruster_state_;
