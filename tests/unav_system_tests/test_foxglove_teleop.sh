@@ -1,0 +1,94 @@
+#!/usr/bin/env bash
+# Fly the ROV from Foxglove: teleop.launch.yaml (physics, allocator, MPC, cameras, sonar in real
+# time) and `unav foxglove`; a client made of Foxglove's own libraries
+# (src/unav_bag/test/foxglove/foxglove_client.mjs: @foxglove/ws-protocol, rosmsg2-serialization,
+# rosmsg-msgs-common) checks that
+#  - every topic docs/foxglove/unav_layout.json shows is advertised (the setpoint it publishes
+#    and the estimators' paths, which pipe_inspection.launch.yaml adds, aside),
+#  - the front camera arrives compressed (whole JPEG frames, compressed_image_transport's format),
+#  - setpoints it publishes as PoseStamped (geometry_msgs/PoseStamped of ROS 2 Humble, as the
+#    Publish panel writes them) reach the MPC: the vehicle moves >= 1 m towards a point 3 m ahead;
+# then Ctrl-C: the bridge exits 0 and counts what clients sent; a secured bridge is refused unless
+# --allow-secured.
+source "$(dirname "$0")/common.sh"
+log=$(mktemp); blog=$(mktemp); out=$(mktemp); tmp=$(mktemp -d)
+fail() { echo "FAIL: $*"; echo "--- launch:"; tail -20 "$log"; echo "--- bridge:"; tail -20 "$blog"; exit 1; }
+client="$ws/src/unav_bag/test/foxglove/foxglove_client.mjs"
+[ -d "$ws/src/unav_bag/test/foxglove/node_modules/@foxglove/ws-protocol" ] \
+  || fail "no node_modules/@foxglove/ws-protocol (scripts/install_deps.sh runs npm ci)"
+unav launch "$ws/launch_scripts/teleop.launch.yaml" >"$log" 2>&1 &
+launch_pid=$!
+port=$((20000 + RANDOM % 20000))
+unav foxglove --port "$port" >"$blog" 2>&1 &
+bridge_pid=$!
+trap 'kill -INT $launch_pid $bridge_pid 2>/dev/null || true; wait $launch_pid $bridge_pid 2>/dev/null || true; rm -rf "$tmp"' EXIT
+for _ in $(seq 1 100); do grep -q "Foxglove WebSocket server on" "$blog" && break; sleep 0.1; done
+grep -q "ws://127.0.0.1:$port" "$blog" || fail "bridge did not start"
+url="ws://127.0.0.1:$port"
+
+# 1. The layout's topics: wait until the last node's (the sonar's fan) is advertised.
+for _ in $(seq 1 60); do
+  node "$client" "$url" channels 1 >"$out" 2>>"$blog" || fail "channels"
+  grep -q '"/rov/sonar/fls/image_fan"' "$out" && grep -q '"/rov/camera/front/image_raw/compressed"' "$out" && break
+done
+"$py" - "$ws/docs/foxglove/unav_layout.json" "$out" <<'PY' || fail "layout topics"
+import json, sys
+layout = json.load(open(sys.argv[1]))
+advertised = {json.loads(l)["topic"] for l in open(sys.argv[2])}
+shown = set()
+def walk(v):
+    if isinstance(v, dict):
+        for k, x in v.items():
+            if k in ("imageTopic", "calibrationTopic", "topicPath") and isinstance(x, str): shown.add(x)
+            elif k == "value" and isinstance(x, str) and x.startswith("/"): shown.add(x.split(".")[0])
+            elif k == "topics" and isinstance(x, dict): shown.update(x)
+            else: walk(x)
+    elif isinstance(v, list):
+        for x in v: walk(x)
+walk(layout["configById"])
+published = {layout["configById"]["3D!scene"]["publish"]["poseTopic"]}
+elsewhere = {"/rov/localization/orb_slam/path", "/rov/localization/klt_vo/path"}  # pipe_inspection's estimators
+missing = sorted(shown - advertised - elsewhere)
+assert not missing, f"layout topics not advertised: {missing}"
+assert published == {"/rov/control/pose_setpoint"}, published
+print(f"layout: {len(shown)} topics shown, {len(shown & advertised)} advertised, {sorted(shown & elsewhere)} from the estimators")
+PY
+
+# 2. The front camera, compressed on request.
+node "$client" "$url" measure /rov/camera/front/image_raw/compressed 3 >"$out" 2>>"$blog" || fail "compressed camera"
+"$py" - "$out" <<'PY' || fail "compressed frames: $(cat "$out")"
+import json, sys
+r = json.loads(open(sys.argv[1]).read())
+assert r["formats"] == ["rgb8; jpeg compressed bgr8"], r
+assert r["frames"] >= 2 and 2000 < r["bytes_per_frame"] < 640 * 480 * 3 / 4, r  # a JPEG, far below raw
+print(f"compressed front camera: {r['frames']} frames, {r['bytes_per_frame']} bytes each, {r['fps']} frames/s")
+PY
+
+# 3. Teleop: setpoints published by the client fly the vehicle.
+node "$client" "$url" teleop /rov/control/pose_setpoint /rov/ground_truth/odom 3 0 0 1.0 90 >"$out" 2>>"$blog" \
+  || fail "teleop: $(cat "$out")"
+"$py" - "$out" <<'PY' || fail "teleop result: $(cat "$out")"
+import json, sys
+r = json.loads(open(sys.argv[1]).read())
+assert r["moved"] >= 1.0 and r["sent"] >= 1, r
+assert abs(r["now"]["y"] - r["start"]["y"]) < 0.5 and abs(r["now"]["z"] - r["start"]["z"]) < 0.5, r  # along x only
+print(f"teleop: moved {r['moved']:.2f} m towards the setpoint after {r['sent']} setpoints")
+PY
+grep -q "a client publishes '/rov/control/pose_setpoint' \[geometry_msgs/msg/PoseStamped\]" "$blog" || fail "no publish line"
+
+kill -INT "$bridge_pid"
+rc=0; wait "$bridge_pid" || rc=$?
+[ "$rc" -eq 0 ] || fail "bridge exit code $rc after SIGINT"
+grep -Eq "messages sent, [0-9]+ dropped .*, [1-9][0-9]* received from clients" "$blog" || fail "summary: $(tail -1 "$blog")"
+grep "messages sent" "$blog" | sed 's/^.*\]: //'
+
+# 4. A secured participant is not bridged without --allow-secured.
+unav security create_keystore "$tmp/ks" >/dev/null
+unav security create_enclave "$tmp/ks" /bridge >/dev/null
+rc=0
+ROS_SECURITY_ENABLE=true ROS_SECURITY_STRATEGY=Enforce ROS_SECURITY_KEYSTORE="$tmp/ks" ROS_SECURITY_ENCLAVE_OVERRIDE=/bridge \
+  unav foxglove --port 0 >"$out" 2>&1 || rc=$?
+[ "$rc" -eq 2 ] || fail "secured bridge: exit $rc, $(cat "$out")"
+grep -q "is secured (enclave '/bridge').*--allow-secured" "$out" || fail "secured refusal: $(cat "$out")"
+echo "secured: refused without --allow-secured"
+echo "1 passed, 0 failed"
