@@ -5,6 +5,7 @@
 # rosmsg-msgs-common) checks that
 #  - every topic docs/foxglove/unav_layout.json shows is advertised (the setpoint it publishes
 #    and the estimators' paths, which pipe_inspection.launch.yaml adds, aside),
+#  - every advertised schema parses and every message of every channel decodes (4 s of all),
 #  - the front camera arrives compressed (whole JPEG frames, compressed_image_transport's format),
 #  - setpoints it publishes as PoseStamped (geometry_msgs/PoseStamped of ROS 2 Humble, as the
 #    Publish panel writes them) reach the MPC: the vehicle moves >= 1 m towards a point 3 m ahead;
@@ -54,7 +55,21 @@ assert published == {"/rov/control/pose_setpoint"}, published
 print(f"layout: {len(shown)} topics shown, {len(shown & advertised)} advertised, {sorted(shown & elsewhere)} from the estimators")
 PY
 
-# 2. The front camera, compressed on request.
+# 2. Every channel: its schema parses and every message decodes with Foxglove's parsers.
+node "$client" "$url" all 4 >"$out" 2>>"$blog" || fail "all channels"
+"$py" - "$out" <<'PY' || fail "decoded: $(cat "$out")"
+import json, sys
+r = json.loads(open(sys.argv[1]).read())
+types = {t for t, n in r["decoded"].values()}
+need = {"nav_msgs/msg/Odometry", "nav_msgs/msg/Path", "sensor_msgs/msg/Imu", "unav_msgs/msg/Dvl",
+        "tf2_msgs/msg/TFMessage", "std_msgs/msg/String", "sensor_msgs/msg/Image", "sensor_msgs/msg/CompressedImage",
+        "sensor_msgs/msg/CameraInfo", "marine_acoustic_msgs/msg/ProjectedSonarImage", "unav_msgs/msg/ThrusterState",
+        "rosgraph_msgs/msg/Clock", "unav_msgs/msg/UsblFix", "sensor_msgs/msg/FluidPressure"}
+assert need <= types, f"not decoded: {sorted(need - types)}; silent: {r['silent']}"
+print(f"all channels: {len(r['decoded'])} decoded ({len(types)} types), silent: {r['silent']}")
+PY
+
+# 3. The front camera, compressed on request.
 node "$client" "$url" measure /rov/camera/front/image_raw/compressed 3 >"$out" 2>>"$blog" || fail "compressed camera"
 "$py" - "$out" <<'PY' || fail "compressed frames: $(cat "$out")"
 import json, sys
@@ -64,7 +79,7 @@ assert r["frames"] >= 2 and 2000 < r["bytes_per_frame"] < 640 * 480 * 3 / 4, r  
 print(f"compressed front camera: {r['frames']} frames, {r['bytes_per_frame']} bytes each, {r['fps']} frames/s")
 PY
 
-# 3. Teleop: setpoints published by the client fly the vehicle.
+# 4. Teleop: setpoints published by the client fly the vehicle.
 node "$client" "$url" teleop /rov/control/pose_setpoint /rov/ground_truth/odom 3 0 0 1.0 90 >"$out" 2>>"$blog" \
   || fail "teleop: $(cat "$out")"
 "$py" - "$out" <<'PY' || fail "teleop result: $(cat "$out")"
@@ -82,7 +97,7 @@ rc=0; wait "$bridge_pid" || rc=$?
 grep -Eq "messages sent, [0-9]+ dropped .*, [1-9][0-9]* received from clients" "$blog" || fail "summary: $(tail -1 "$blog")"
 grep "messages sent" "$blog" | sed 's/^.*\]: //'
 
-# 4. A secured participant is not bridged without --allow-secured.
+# 5. A secured participant is not bridged without --allow-secured.
 unav security create_keystore "$tmp/ks" >/dev/null
 unav security create_enclave "$tmp/ks" /bridge >/dev/null
 rc=0

@@ -208,7 +208,11 @@ int run(const FoxgloveOptions& o) {
             out.format(std::move(c.format));
             out.data(std::move(c.data));
           } catch (const std::invalid_argument& e) {
-            if (!warned) std::cerr << "[WARN] [unav_foxglove]: '" << topic << "': " << e.what() << std::endl;
+            // E.g. a 32FC1 depth image: its /compressed channel is withdrawn (the raw one stays).
+            if (!warned)
+              std::cerr << "[WARN] [unav_foxglove]: '" << topic << "': " << e.what() << "; '" << topic
+                        << "/compressed' withdrawn" << std::endl;
+            if (!warned) s.remove_channel(id);
             warned = true;
             return;
           }

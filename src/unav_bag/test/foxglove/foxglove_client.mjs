@@ -4,6 +4,9 @@
 //
 //   node foxglove_client.mjs URL channels [WAIT_S]
 //       prints every advertised channel as a JSON line {topic, schemaName} after WAIT_S seconds
+//   node foxglove_client.mjs URL all SECONDS
+//       subscribes to every advertised channel, parses each schema and decodes every message for
+//       SECONDS; prints one JSON line {decoded: {topic: [schemaName, count]}, silent: [topics]}
 //   node foxglove_client.mjs URL measure TOPIC SECONDS
 //       subscribes, decodes every message and prints one JSON line: frames, frames/s, MB/s, and
 //       the latency from the bridge's receive stamp to this client (p50/p95/max, ms); for a
@@ -72,6 +75,32 @@ const percentile = (xs, p) => xs.length ? [...xs].sort((a, b) => a - b)[Math.min
 async function channelsMode(waitS) {
   await new Promise((r) => setTimeout(r, 1000 * Number(waitS ?? 3)));
   for (const c of channels.values()) console.log(JSON.stringify({ topic: c.topic, schemaName: c.schemaName }));
+  process.exit(0);
+}
+
+async function allMode(seconds) {
+  await new Promise((r) => setTimeout(r, 2000));  // the advertisements of the topics there are
+  const bySubscription = new Map();
+  for (const c of channels.values()) {
+    const entry = { channel: c, reader: readerOf(c), count: 0 };
+    bySubscription.set(client.subscribe(c.id), entry);
+  }
+  client.on("message", ({ subscriptionId, data }) => {
+    const e = bySubscription.get(subscriptionId);
+    try {
+      e.reader.readMessage(data);
+    } catch (err) {
+      fail(`message ${e.count} of ${e.channel.topic} [${e.channel.schemaName}] does not decode: ${err.message}`);
+    }
+    ++e.count;
+  });
+  await new Promise((r) => setTimeout(r, 1000 * Number(seconds)));
+  const decoded = {}, silent = [];
+  for (const e of bySubscription.values()) {
+    if (e.count) decoded[e.channel.topic] = [e.channel.schemaName, e.count];
+    else silent.push(e.channel.topic);
+  }
+  console.log(JSON.stringify({ decoded, silent }));
   process.exit(0);
 }
 
@@ -159,6 +188,7 @@ async function teleopMode(setpointTopic, odomTopic, dx, dy, dz, moveM, timeoutS)
 
 client.on("open", () => {
   const run = mode === "channels" ? channelsMode(...args) : mode === "measure" ? measureMode(...args)
+    : mode === "all" ? allMode(...args)
     : mode === "teleop" ? teleopMode(...args) : Promise.reject(new Error(`unknown mode '${mode}'`));
   run.catch((e) => fail(e.message));
 });
