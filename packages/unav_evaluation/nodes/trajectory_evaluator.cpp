@@ -22,10 +22,14 @@ namespace {
 
 // Appends the pose unless its stamp is not after the last one (re-published states, reordering);
 // returns why it cannot be used (NaN/Inf, not a unit quaternion), empty otherwise.
-std::string append_pose(Trajectory& t, const std_msgs::msg::Header& h, const geometry_msgs::msg::Pose& p) {
+// (T: a Trajectory in memory, or the TrajectorySpool of a topic.)
+double last_stamp(const Trajectory& t) { return t.stamps.back(); }
+double last_stamp(const TrajectorySpool& t) { return t.last_stamp(); }
+template <class T>
+std::string append_pose(T& t, const std_msgs::msg::Header& h, const geometry_msgs::msg::Pose& p) {
   if (std::string why = unav::pose_problem(p); !why.empty()) return why;
   const double stamp = unav::Time::from_msg(h.stamp().sec(), h.stamp().nanosec()).seconds();
-  if (!t.empty() && stamp <= t.stamps.back()) return "";
+  if (!t.empty() && stamp <= last_stamp(t)) return "";
   Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
   X.translation() = unav::from_msg(p.position());
   X.linear() = unav::from_msg(p.orientation()).normalized().toRotationMatrix();
@@ -33,7 +37,8 @@ std::string append_pose(Trajectory& t, const std_msgs::msg::Header& h, const geo
   return "";
 }
 
-std::string append(Trajectory& t, const nav_msgs::msg::Odometry& m) {
+template <class T>
+std::string append(T& t, const nav_msgs::msg::Odometry& m) {
   return append_pose(t, m.header(), m.pose().pose());
 }
 
@@ -117,14 +122,25 @@ TrajectoryEvaluator::TrajectoryEvaluator(const unav::NodeOptions& options)
   std::error_code ec;
   std::filesystem::create_directories(output_dir_, ec);
   if (ec) throw unav::ConfigError("output_dir '" + output_dir_ + "': cannot create: " + ec.message());
+  // The poses received are recorded on disk as they come (hours of ground truth at 100 Hz would
+  // otherwise grow the node without bound) and read back once, to evaluate.
+  spool_dir_ = output_dir_ + "/.spool_" + trajectory_name_ + "_" + std::to_string(::getpid());
+  std::filesystem::create_directories(spool_dir_, ec);
+  if (ec) throw unav::ConfigError("output_dir '" + output_dir_ + "': cannot create " + spool_dir_ + ": " + ec.message());
+  ground_truth_ = TrajectorySpool(spool_dir_ + "/ground_truth.bin");
+  auto spool_of = [this](const std::string& n) {
+    std::string file = n;
+    std::replace(file.begin(), file.end(), '/', '_');
+    return TrajectorySpool(spool_dir_ + "/" + file + ".bin");
+  };
   subs_.push_back(create_subscription<nav_msgs::msg::Odometry>(
       "ground_truth/odom", unav::QoS::reliable(100),
       [this](const nav_msgs::msg::Odometry& m) { check(append(ground_truth_, m), "ground_truth/odom"); }));
   for (const auto& n : names) {
-    estimates_[n];
+    estimates_.emplace(n, spool_of(n));
     subs_.push_back(create_subscription<nav_msgs::msg::Odometry>(
         "localization/" + n + "/odom", unav::QoS::reliable(100),
-        [this, n](const nav_msgs::msg::Odometry& m) { check(append(estimates_[n], m), n); }));
+        [this, n](const nav_msgs::msg::Odometry& m) { check(append(estimates_.at(n), m), n); }));
     path_subs_.push_back(create_subscription<nav_msgs::msg::Path>(
         "localization/" + n + "/path", unav::QoS::reliable(2),
         [this, n](const nav_msgs::msg::Path& m) { paths_[n] = from_path(m); }));
@@ -145,7 +161,7 @@ TrajectoryEvaluator::TrajectoryEvaluator(const unav::NodeOptions& options)
     const std::string n = in.substr(0, eq), kind = in.substr(eq + 1, colon - eq - 1), src = in.substr(colon + 1);
     if (estimates_.count(n))
       throw unav::ParameterError("node '" + name() + "': parameter 'inputs': estimator name '" + n + "' used twice");
-    estimates_[n];
+    estimates_.emplace(n, spool_of(n));
     if (!frame.empty()) {
       input_frames_[n] = frame;
       if (!tf_static_) tf_static_ = std::make_unique<unav::StaticTransformListener>(*this);
@@ -153,16 +169,16 @@ TrajectoryEvaluator::TrajectoryEvaluator(const unav::NodeOptions& options)
     if (kind == "odom") {
       subs_.push_back(create_subscription<nav_msgs::msg::Odometry>(
           src, unav::QoS::reliable(100),
-          [this, n](const nav_msgs::msg::Odometry& m) { check(append(estimates_[n], m), n); }));
+          [this, n](const nav_msgs::msg::Odometry& m) { check(append(estimates_.at(n), m), n); }));
     } else if (kind == "pose") {
       pose_subs_.push_back(create_subscription<geometry_msgs::msg::PoseStamped>(
           src, unav::QoS::reliable(100), [this, n](const geometry_msgs::msg::PoseStamped& m) {
-            check(append_pose(estimates_[n], m.header(), m.pose()), n);
+            check(append_pose(estimates_.at(n), m.header(), m.pose()), n);
           }));
     } else if (kind == "pose_cov") {
       pose_cov_subs_.push_back(create_subscription<geometry_msgs::msg::PoseWithCovarianceStamped>(
           src, unav::QoS::reliable(100), [this, n](const geometry_msgs::msg::PoseWithCovarianceStamped& m) {
-            check(append_pose(estimates_[n], m.header(), m.pose().pose()), n);
+            check(append_pose(estimates_.at(n), m.header(), m.pose().pose()), n);
           }));
     } else if (kind == "tf") {
       const size_t dot = src.find('.');
@@ -185,7 +201,7 @@ TrajectoryEvaluator::TrajectoryEvaluator(const unav::NodeOptions& options)
             p.position().y(tr.transform().translation().y());
             p.position().z(tr.transform().translation().z());
             p.orientation(tr.transform().rotation());
-            check(append_pose(estimates_[it->second], tr.header(), p), it->second);
+            check(append_pose(estimates_.at(it->second), tr.header(), p), it->second);
           }
         });
   }
@@ -218,6 +234,7 @@ std::vector<AlgorithmResult> TrajectoryEvaluator::write_outputs() {
   written_ = true;
   if (ground_truth_.empty()) {
     logger()->warn("no ground truth received: nothing to evaluate");
+    drop_spool();
     return results;
   }
   if (!have_mount_) {
@@ -227,14 +244,16 @@ std::vector<AlgorithmResult> TrajectoryEvaluator::write_outputs() {
         body_frame_, camera_frame_);
   }
   const std::string prefix = output_dir_ + "/" + (combine_ ? trajectory_name_ + "_" : "");
-  if (pipe_world_) write_pipe_tracking(prefix + "pipe_tracking.json");
+  const Trajectory ground_truth = ground_truth_.load();
+  if (pipe_world_) write_pipe_tracking(prefix + "pipe_tracking.json", ground_truth);
   // Ground truth of the frame the estimators report (the body, or a camera on it).
-  Trajectory truth = ground_truth_;
+  Trajectory truth = ground_truth;
   for (auto& X : truth.poses) X = X * X_BE_;
   write_tum(prefix + "ground_truth.tum", truth);
   std::vector<std::pair<std::string, Trajectory>> aligned;
-  for (const auto& [name, odom] : estimates_) {
+  for (auto& [name, spool] : estimates_) {
     // The latest whole path (corrected history), then the odometry after its end.
+    const Trajectory odom = spool.load();
     Trajectory traj = odom;
     const auto p = paths_.find(name);
     if (p != paths_.end() && !p->second.empty()) {
@@ -258,7 +277,7 @@ std::vector<AlgorithmResult> TrajectoryEvaluator::write_outputs() {
                        name, f->second, body_frame_);
         continue;
       }
-      mapped = ground_truth_;
+      mapped = ground_truth;
       for (auto& X : mapped.poses) X = X * *X_BF;
     }
     const Trajectory& ref_truth = input_frames_.count(name) ? mapped : truth;
@@ -293,16 +312,24 @@ std::vector<AlgorithmResult> TrajectoryEvaluator::write_outputs() {
     write_results(output_dir_ + "/results", all, alignment_);
   }
   logger()->info("evaluation written to {}", output_dir_);
+  drop_spool();  // everything is in the outputs now
   return results;
 }
 
-void TrajectoryEvaluator::write_pipe_tracking(const std::string& path) {
+void TrajectoryEvaluator::drop_spool() {
+  ground_truth_.remove();
+  for (auto& [name, spool] : estimates_) spool.remove();
+  std::error_code ec;
+  std::filesystem::remove_all(spool_dir_, ec);
+}
+
+void TrajectoryEvaluator::write_pipe_tracking(const std::string& path, const Trajectory& ground_truth) {
   std::vector<Eigen::Vector3d> p;
-  for (const auto& X : ground_truth_.poses) p.push_back(X.translation());
+  for (const auto& X : ground_truth.poses) p.push_back(X.translation());
   const unav::scene::PipeTracking t = unav::scene::track_pipe(*pipe_world_, p, pipe_loss_m_);
   nlohmann::json j{{"trajectory", trajectory_name_},
-                   {"poses", ground_truth_.size()},
-                   {"duration_s", ground_truth_.stamps.back() - ground_truth_.stamps.front()},
+                   {"poses", ground_truth.size()},
+                   {"duration_s", ground_truth.stamps.back() - ground_truth.stamps.front()},
                    {"mean_e_p_m", t.mean_e_p_m},
                    {"rms_e_p_m", t.rms_e_p_m},
                    {"max_e_p_m", t.max_e_p_m},
@@ -312,7 +339,7 @@ void TrajectoryEvaluator::write_pipe_tracking(const std::string& path) {
                    {"lost", t.lost},
                    {"completed", t.completed},
                    {"loss_distance_m", pipe_loss_m_}};
-  if (t.lost) j["lost_at_s"] = ground_truth_.stamps[static_cast<std::size_t>(t.lost_at_index)];
+  if (t.lost) j["lost_at_s"] = ground_truth.stamps[static_cast<std::size_t>(t.lost_at_index)];
   std::ofstream(path) << j.dump(2) << "\n";
   logger()->info("pipe tracking: mean e_p {:.3f} m, max {:.3f} m, followed {:.1f} of {:.1f} m ({:.0f} %){}",
                  t.mean_e_p_m, t.max_e_p_m, t.followed_m, t.pipe_length_m, 100.0 * t.followed_fraction,

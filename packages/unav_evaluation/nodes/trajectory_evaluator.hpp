@@ -109,7 +109,8 @@ class TrajectoryEvaluator : public unav::Node {
   const unav::RejectionCounter& rejections() const { return rejections_; }
 
  private:
-  void write_pipe_tracking(const std::string& path);
+  void write_pipe_tracking(const std::string& path, const Trajectory& ground_truth);
+  void drop_spool();
   void check(const std::string& problem, const std::string& source) {
     if (!problem.empty()) rejections_.reject(source, problem);
   }
@@ -128,12 +129,14 @@ class TrajectoryEvaluator : public unav::Node {
   RpeOptions rpe_;
   double max_diff_ = 0.02;
   bool written_ = false, combine_ = false;
-  Trajectory ground_truth_;
+  std::string spool_dir_;        ///< output_dir_/.spool_<trajectory>_<pid>: the poses received so far
+  TrajectorySpool ground_truth_;
   Eigen::Isometry3d X_BE_ = Eigen::Isometry3d::Identity();  ///< estimated frame on the body
   std::string camera_frame_, body_frame_;                   ///< tf lookup of X_BE_ (camera_frame_ empty: not needed)
   bool have_mount_ = true;                                  ///< false until the camera mount is known
   std::unique_ptr<unav::StaticTransformListener> tf_static_;
-  std::map<std::string, Trajectory> estimates_, paths_;
+  std::map<std::string, TrajectorySpool> estimates_;
+  std::map<std::string, Trajectory> paths_;  ///< the latest whole path of each estimator (replaced)
   std::vector<std::shared_ptr<unav::Subscription<nav_msgs::msg::Odometry>>> subs_;
   std::vector<std::shared_ptr<unav::Subscription<nav_msgs::msg::Path>>> path_subs_;
   std::vector<std::shared_ptr<unav::Subscription<geometry_msgs::msg::PoseStamped>>> pose_subs_;

@@ -229,3 +229,54 @@ std::pair<Trajectory, Trajectory> associate(const Trajectory& first, const Traje
 }
 
 }  // namespace unav::evaluation
+
+namespace unav::evaluation {
+
+namespace {
+constexpr size_t kSpoolRecord = 13;  // doubles: stamp, then R row-major with t as the 4th column
+}  // namespace
+
+void TrajectorySpool::push_back(double stamp, const Eigen::Isometry3d& pose) {
+  if (!out_.is_open()) {
+    out_.open(path_, std::ios::binary | std::ios::trunc);
+    if (!out_) throw TrajectoryError(path_ + ": cannot create the trajectory spool");
+  }
+  double r[kSpoolRecord];
+  r[0] = stamp;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 4; ++j) r[1 + 4 * i + j] = pose.matrix()(i, j);
+  out_.write(reinterpret_cast<const char*>(r), sizeof(r));
+  if (!out_) throw TrajectoryError(path_ + ": cannot write the trajectory spool");
+  ++size_;
+  last_stamp_ = stamp;
+}
+
+Trajectory TrajectorySpool::load() {
+  Trajectory t;
+  if (size_ == 0) return t;
+  out_.flush();
+  std::ifstream in(path_, std::ios::binary);
+  if (!in) throw TrajectoryError(path_ + ": cannot read the trajectory spool");
+  t.stamps.reserve(size_);
+  t.poses.reserve(size_);
+  double r[kSpoolRecord];
+  for (size_t k = 0; k < size_; ++k) {
+    if (!in.read(reinterpret_cast<char*>(r), sizeof(r)))
+      throw TrajectoryError(path_ + ": the trajectory spool ends at pose " + std::to_string(k) + " of " +
+                            std::to_string(size_));
+    Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 4; ++j) X.matrix()(i, j) = r[1 + 4 * i + j];
+    t.push_back(r[0], X);
+  }
+  return t;
+}
+
+void TrajectorySpool::remove() {
+  if (out_.is_open()) out_.close();
+  std::remove(path_.c_str());
+  size_ = 0;
+  last_stamp_ = 0.0;
+}
+
+}  // namespace unav::evaluation

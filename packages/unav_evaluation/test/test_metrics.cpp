@@ -1,9 +1,11 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <random>
 
+#include "unav_common/temp_dir.hpp"
 #include "unav_evaluation/metrics.hpp"
 
 using namespace unav::evaluation;
@@ -258,4 +260,47 @@ TEST(Timing, AssociationOfTwentyThousandPosesIsFast) {
   }
   const auto [ra, rb] = associate(a, b, 0.005);
   EXPECT_EQ(ra.size(), 20000u);
+}
+
+// A spooled trajectory gives back exactly what went in (bit for bit: the evaluation's numbers do
+// not depend on whether poses were spooled), holds nothing in memory but its count and last stamp,
+// and its file is the record until removed.
+TEST(TrajectorySpool, GivesBackTheSamePosesBitForBit) {
+  unav::common::TempDir dir("spool");
+  TrajectorySpool spool(dir.path() + "/gt.bin");
+  EXPECT_TRUE(spool.empty());
+  EXPECT_TRUE(spool.load().empty());
+  EXPECT_FALSE(std::filesystem::exists(spool.path()));  // created at the first pose
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  Trajectory in;
+  for (int i = 0; i < 5000; ++i) {
+    Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
+    X.linear() = Eigen::Quaterniond(u(rng), u(rng), u(rng), u(rng)).normalized().toRotationMatrix();
+    X.translation() = Eigen::Vector3d(100 * u(rng), 100 * u(rng), 10 * u(rng));
+    in.push_back(0.01 * i + 1e-7 * u(rng), X);
+    spool.push_back(in.stamps.back(), X);
+  }
+  EXPECT_EQ(spool.size(), 5000u);
+  EXPECT_EQ(spool.last_stamp(), in.stamps.back());
+  const Trajectory out = spool.load();
+  EXPECT_EQ(std::filesystem::file_size(spool.path()), 5000u * 13u * sizeof(double));  // flushed by load()
+  ASSERT_EQ(out.size(), in.size());
+  for (size_t i = 0; i < in.size(); ++i) {
+    ASSERT_EQ(out.stamps[i], in.stamps[i]) << i;
+    ASSERT_TRUE(out.poses[i].matrix() == in.poses[i].matrix()) << i;  // exact, not approximately
+  }
+  spool.push_back(99.0, Eigen::Isometry3d::Identity());  // appending goes on after a load
+  EXPECT_EQ(spool.load().size(), 5001u);
+  spool.remove();
+  EXPECT_TRUE(spool.empty());
+  EXPECT_FALSE(std::filesystem::exists(spool.path()));
+  TrajectorySpool nowhere("/nonexistent_dir_for_unav/gt.bin");
+  try {
+    nowhere.push_back(0.0, Eigen::Isometry3d::Identity());
+    ADD_FAILURE() << "wrote into a missing folder";
+  } catch (const TrajectoryError& e) {
+    EXPECT_NE(std::string(e.what()).find("/nonexistent_dir_for_unav/gt.bin: cannot create"), std::string::npos)
+        << e.what();
+  }
 }

@@ -98,6 +98,9 @@ TEST(TrajectoryEvaluator, WritesTableTumAndPlotOnShutdown) {
   node.reset();  // shutdown: writes everything
   for (const char* f : {"ground_truth.tum", "mono.tum", "results.md", "results.csv", "results.json", "top_view.png"})
     EXPECT_TRUE(std::filesystem::exists(out + "/" + f)) << f;
+  // The poses were spooled on disk while they came; once written out, the spool is gone.
+  for (const auto& e : std::filesystem::directory_iterator(out))
+    EXPECT_EQ(e.path().filename().string().rfind(".spool", 0), std::string::npos) << e.path();
   nlohmann::json j;
   std::ifstream(out + "/results.json") >> j;
   ASSERT_EQ(j.size(), 1u);

@@ -1,8 +1,10 @@
 // Trajectories in TUM format and their time association, as the evo tool reads and pairs them.
 #pragma once
 
+#include <fstream>
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Geometry>
@@ -29,6 +31,31 @@ struct Trajectory {
   }
   /// Sum of distances between consecutive positions [m].
   double path_length() const;
+};
+
+/// A trajectory recorded on disk as it grows, so a node that records for hours holds O(1) memory:
+/// each pose is appended to a binary file (the stamp and the 3x4 [R | t], as doubles: load() gives
+/// back the same bits), created at the first pose. The file is the run's record until remove(), also
+/// when the process is killed. Throws TrajectoryError naming the file on I/O failure.
+class TrajectorySpool {
+ public:
+  TrajectorySpool() = default;
+  explicit TrajectorySpool(std::string path) : path_(std::move(path)) {}
+  void push_back(double stamp, const Eigen::Isometry3d& pose);
+  size_t size() const { return size_; }
+  bool empty() const { return size_ == 0; }
+  double last_stamp() const { return last_stamp_; }  ///< of the last pose (0 when empty)
+  /// Every pose so far, in order.
+  Trajectory load();
+  /// Deletes the file; the spool is empty again.
+  void remove();
+  const std::string& path() const { return path_; }
+
+ private:
+  std::string path_;
+  std::ofstream out_;
+  size_t size_ = 0;
+  double last_stamp_ = 0.0;
 };
 
 /// Reads `timestamp tx ty tz qx qy qz qw` lines ('#' comments and blank lines skipped; commas
