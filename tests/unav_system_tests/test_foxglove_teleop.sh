@@ -5,6 +5,7 @@
 # rosmsg-msgs-common) checks that
 #  - every topic docs/foxglove/unav_layout.json shows is advertised (the setpoint it publishes
 #    and the estimators' paths, which pipe_inspection.launch.yaml adds, aside),
+#  - the odometry decodes to the scenario's start, in Foxglove's time type,
 #  - every advertised schema parses and every message of every channel decodes (4 s of all),
 #  - the front camera arrives compressed (whole JPEG frames, compressed_image_transport's format),
 #  - setpoints it publishes as PoseStamped (geometry_msgs/PoseStamped of ROS 2 Humble, as the
@@ -55,7 +56,25 @@ assert published == {"/rov/control/pose_setpoint"}, published
 print(f"layout: {len(shown)} topics shown, {len(shown & advertised)} advertised, {sorted(shown & elsewhere)} from the estimators")
 PY
 
-# 2. Every channel: its schema parses and every message decodes with Foxglove's parsers.
+# 2. The odometry, decoded: the frames, the scenario's start (-1.5, 0, ~8.35 m), a unit
+#    quaternion, Foxglove's time type {sec, nsec}, stamps that advance.
+node "$client" "$url" echo /rov/ground_truth/odom 3 >"$out" 2>>"$blog" || fail "echo odometry"
+"$py" - "$out" <<'PY' || fail "decoded odometry: $(head -c 600 "$out")"
+import json, math, sys
+msgs = [json.loads(l)["message"] for l in open(sys.argv[1])]
+assert len(msgs) == 3, len(msgs)
+for m in msgs:
+    assert m["header"]["frame_id"] == "world_ned" and m["child_frame_id"] == "base_link_frd", m["header"]
+    p, q = m["pose"]["pose"]["position"], m["pose"]["pose"]["orientation"]
+    assert abs(p["x"] + 1.5) < 0.5 and abs(p["y"]) < 0.5 and 7.5 < p["z"] < 9.5, p
+    assert abs(math.sqrt(q["x"]**2 + q["y"]**2 + q["z"]**2 + q["w"]**2) - 1) < 1e-6, q
+    assert len(m["pose"]["covariance"]) == 36 and all(math.isfinite(c) for c in m["pose"]["covariance"])
+stamps = [m["header"]["stamp"]["sec"] + 1e-9 * m["header"]["stamp"]["nsec"] for m in msgs]
+assert stamps == sorted(stamps) and stamps[-1] > stamps[0], stamps
+print("odometry: 3 messages decoded; first position", msgs[0]["pose"]["pose"]["position"])
+PY
+
+# 3. Every channel: its schema parses and every message decodes with Foxglove's parsers.
 node "$client" "$url" all 4 >"$out" 2>>"$blog" || fail "all channels"
 "$py" - "$out" <<'PY' || fail "decoded: $(cat "$out")"
 import json, sys
@@ -69,7 +88,7 @@ assert need <= types, f"not decoded: {sorted(need - types)}; silent: {r['silent'
 print(f"all channels: {len(r['decoded'])} decoded ({len(types)} types), silent: {r['silent']}")
 PY
 
-# 3. The front camera, compressed on request.
+# 4. The front camera, compressed on request.
 node "$client" "$url" measure /rov/camera/front/image_raw/compressed 3 >"$out" 2>>"$blog" || fail "compressed camera"
 "$py" - "$out" <<'PY' || fail "compressed frames: $(cat "$out")"
 import json, sys
@@ -79,7 +98,7 @@ assert r["frames"] >= 2 and 2000 < r["bytes_per_frame"] < 640 * 480 * 3 / 4, r  
 print(f"compressed front camera: {r['frames']} frames, {r['bytes_per_frame']} bytes each, {r['fps']} frames/s")
 PY
 
-# 4. Teleop: setpoints published by the client fly the vehicle.
+# 5. Teleop: setpoints published by the client fly the vehicle.
 node "$client" "$url" teleop /rov/control/pose_setpoint /rov/ground_truth/odom 3 0 0 1.0 90 >"$out" 2>>"$blog" \
   || fail "teleop: $(cat "$out")"
 "$py" - "$out" <<'PY' || fail "teleop result: $(cat "$out")"
@@ -97,7 +116,7 @@ rc=0; wait "$bridge_pid" || rc=$?
 grep -Eq "messages sent, [0-9]+ dropped .*, [1-9][0-9]* received from clients" "$blog" || fail "summary: $(tail -1 "$blog")"
 grep "messages sent" "$blog" | sed 's/^.*\]: //'
 
-# 5. A secured participant is not bridged without --allow-secured.
+# 6. A secured participant is not bridged without --allow-secured.
 unav security create_keystore "$tmp/ks" >/dev/null
 unav security create_enclave "$tmp/ks" /bridge >/dev/null
 rc=0

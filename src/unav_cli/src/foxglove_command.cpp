@@ -311,12 +311,12 @@ std::function<int()> add_foxglove_command(CLI::App& app) {
   auto* cmd = app.add_subcommand(
       "foxglove",
       "live view in Foxglove: a Foxglove WebSocket server forwarding the ROS 2 topics (like foxglove_bridge)");
-  cmd->add_option("topics", o->topics, "topics to offer (default: every topic with a publisher)");
-  cmd->add_option("--address", o->address, "address to listen on (0.0.0.0: every interface)");
-  cmd->add_option("-p,--port", o->port, "port (default 8765, as foxglove_bridge; 0: any free port)");
   cmd->add_flag("--no-publish", o->no_publish, "do not let clients publish (teleop, Publish panel, 3-D goal poses)");
   cmd->add_flag("--allow-secured", o->allow_secured,
                 "bridge even when this participant is secured (the WebSocket is not encrypted)");
+  cmd->add_option("topics", o->topics, "topics to offer (default: every topic with a publisher)");
+  cmd->add_option("--address", o->address, "address to listen on (0.0.0.0: every interface)");
+  cmd->add_option("-p,--port", o->port, "port (default 8765, as foxglove_bridge; 0: any free port)");
   cmd->add_option("--jpeg-quality", o->jpeg_quality,
                   "JPEG quality of the <image topic>/compressed channels (1-100, default 90)");
   return [o] { return run(*o); };

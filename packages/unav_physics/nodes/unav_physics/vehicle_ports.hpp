@@ -72,9 +72,6 @@ class VehiclePorts {
   std::shared_ptr<unav::Publisher<rosgraph_msgs::msg::Clock>> clock_pub_;
   std::shared_ptr<unav::Publisher<nav_msgs::msg::Odometry>> odom_pub_;
   std::shared_ptr<unav::Publisher<nav_msgs::msg::Path>> path_pub_;
-  static constexpr double kPathPeriod = 0.5;      ///< [s] of simulated time between path poses
-  static constexpr std::size_t kPathPoses = 1200;  ///< 10 minutes of them; older ones are dropped
-  double path_t_ = -1.0;                           ///< time of the last path pose
   std::shared_ptr<unav::Publisher<tf2_msgs::msg::TFMessage>> tf_pub_;
   std::shared_ptr<unav::Publisher<unav_msgs::msg::ThrusterState>> thruster_pub_;
   std::shared_ptr<unav::Publisher<sensor_msgs::msg::Imu>> imu_pub_;
@@ -87,6 +84,9 @@ class VehiclePorts {
   std::shared_ptr<unav::Publisher<unav_msgs::msg::UsblFix>> usbl_pub_;
   std::shared_ptr<unav::Publisher<geometry_msgs::msg::WrenchStamped>> tether_wrench_pub_;
   std::shared_ptr<unav::Publisher<nav_msgs::msg::Path>> tether_path_pub_;
+  static constexpr double kPathPeriod = 0.5;      ///< [s] of simulated time between ground_truth/path poses
+  static constexpr std::size_t kPathPoses = 1200;  ///< 10 minutes of them; older ones are dropped
+  double path_t_ = -1.0;                           ///< time of the last path pose
   std::uint64_t tether_calls_ = 0;
   void publish_tether(const Simulator& sim);
   void carry_packets(const Simulator& sim);

@@ -4,6 +4,9 @@
 //
 //   node foxglove_client.mjs URL channels [WAIT_S]
 //       prints every advertised channel as a JSON line {topic, schemaName} after WAIT_S seconds
+//   node foxglove_client.mjs URL echo TOPIC N
+//       subscribes and prints the first N decoded messages, one JSON line each
+//       {receive_ns, message} (byte arrays as "<n bytes>", other typed arrays as lists)
 //   node foxglove_client.mjs URL all SECONDS
 //       subscribes to every advertised channel, parses each schema and decodes every message for
 //       SECONDS; prints one JSON line {decoded: {topic: [schemaName, count]}, silent: [topics]}
@@ -76,6 +79,25 @@ async function channelsMode(waitS) {
   await new Promise((r) => setTimeout(r, 1000 * Number(waitS ?? 3)));
   for (const c of channels.values()) console.log(JSON.stringify({ topic: c.topic, schemaName: c.schemaName }));
   process.exit(0);
+}
+
+async function echoMode(topic, count) {
+  const c = await channelOf(topic, 60);
+  const reader = readerOf(c);
+  const plain = (k, v) => typeof v === "bigint" ? v.toString() : v instanceof Uint8Array ? `<${v.length} bytes>`
+    : ArrayBuffer.isView(v) ? Array.from(v) : v;
+  let received = 0;
+  client.on("message", ({ timestamp, data }) => {
+    let m;
+    try {
+      m = reader.readMessage(data);
+    } catch (e) {
+      fail(`message ${received} of ${topic} does not decode: ${e.message}`);
+    }
+    console.log(JSON.stringify({ receive_ns: timestamp.toString(), message: m }, plain));
+    if (++received === Number(count)) process.exit(0);
+  });
+  client.subscribe(c.id);
 }
 
 async function allMode(seconds) {
@@ -188,7 +210,7 @@ async function teleopMode(setpointTopic, odomTopic, dx, dy, dz, moveM, timeoutS)
 
 client.on("open", () => {
   const run = mode === "channels" ? channelsMode(...args) : mode === "measure" ? measureMode(...args)
-    : mode === "all" ? allMode(...args)
+    : mode === "all" ? allMode(...args) : mode === "echo" ? echoMode(...args)
     : mode === "teleop" ? teleopMode(...args) : Promise.reject(new Error(`unknown mode '${mode}'`));
   run.catch((e) => fail(e.message));
 });
