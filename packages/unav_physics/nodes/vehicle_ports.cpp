@@ -10,51 +10,58 @@
 
 namespace unav::physics {
 
-VehiclePorts::VehiclePorts(unav::Node& node, const VehicleParams& vehicle, const PortFrames& frames)
+VehiclePorts::VehiclePorts(unav::Node& node, const VehicleParams& vehicle, const PortFrames& frames,
+                           const std::string& fleet_name)
     : world_frame_(frames.world_frame),
-      body_frame_(frames.body_frame),
+      body_frame_(fleet_name.empty() ? frames.body_frame : fleet_name + "/" + frames.body_frame),
       usbl_(vehicle.sensors.usbl),
       log_(node.logger()) {
   const SensorSuiteParams& sensors = vehicle.sensors;
+  // A fleet vehicle's topics are under /<fleet_name>, the primary's under the node's namespace.
+  const auto topic = [&](const std::string& relative) {
+    return fleet_name.empty() ? relative : "/" + fleet_name + "/" + relative;
+  };
+  const std::string station = fleet_name.empty() ? "/surface/modem/" : "/surface/" + fleet_name + "/modem/";
   if (vehicle.tether.enabled) {
     tether_wrench_pub_ =
-        node.create_publisher<geometry_msgs::msg::WrenchStamped>("tether/wrench", unav::QoS::sensor_data());
-    tether_path_pub_ = node.create_publisher<nav_msgs::msg::Path>("tether/path", unav::QoS::reliable(1));
+        node.create_publisher<geometry_msgs::msg::WrenchStamped>(topic("tether/wrench"), unav::QoS::sensor_data());
+    tether_path_pub_ = node.create_publisher<nav_msgs::msg::Path>(topic("tether/path"), unav::QoS::reliable(1));
   }
-  clock_pub_ = node.create_publisher<rosgraph_msgs::msg::Clock>("/clock", unav::QoS::reliable(1));
+  if (fleet_name.empty())  // one clock: the primary vehicle's
+    clock_pub_ = node.create_publisher<rosgraph_msgs::msg::Clock>("/clock", unav::QoS::reliable(1));
   // 100 deep (5 s of lockstep barriers, ~80 kB): a consumer stalled for a while (or dropped from
   // the lockstep) catches up on what its own reader history can hold.
-  odom_pub_ = node.create_publisher<nav_msgs::msg::Odometry>("ground_truth/odom", unav::QoS::reliable(100));
-  path_pub_ = node.create_publisher<nav_msgs::msg::Path>("ground_truth/path", unav::QoS::reliable(1));
+  odom_pub_ = node.create_publisher<nav_msgs::msg::Odometry>(topic("ground_truth/odom"), unav::QoS::reliable(100));
+  path_pub_ = node.create_publisher<nav_msgs::msg::Path>(topic("ground_truth/path"), unav::QoS::reliable(1));
   tf_pub_ = node.create_publisher<tf2_msgs::msg::TFMessage>("/tf", unav::QoS::reliable(100));
   tf_.transforms().resize(1);
-  thruster_pub_ = node.create_publisher<unav_msgs::msg::ThrusterState>("thrusters/state", unav::QoS::reliable());
-  if (sensors.imu.enabled) imu_pub_ = node.create_publisher<sensor_msgs::msg::Imu>("imu", unav::QoS::sensor_data());
+  thruster_pub_ = node.create_publisher<unav_msgs::msg::ThrusterState>(topic("thrusters/state"), unav::QoS::reliable());
+  if (sensors.imu.enabled) imu_pub_ = node.create_publisher<sensor_msgs::msg::Imu>(topic("imu"), unav::QoS::sensor_data());
   if (sensors.pressure.enabled) {
-    pressure_pub_ = node.create_publisher<sensor_msgs::msg::FluidPressure>("pressure", unav::QoS::sensor_data());
-    depth_pub_ = node.create_publisher<geometry_msgs::msg::PointStamped>("depth", unav::QoS::sensor_data());
+    pressure_pub_ = node.create_publisher<sensor_msgs::msg::FluidPressure>(topic("pressure"), unav::QoS::sensor_data());
+    depth_pub_ = node.create_publisher<geometry_msgs::msg::PointStamped>(topic("depth"), unav::QoS::sensor_data());
   }
-  if (sensors.dvl.enabled) dvl_pub_ = node.create_publisher<unav_msgs::msg::Dvl>("dvl", unav::QoS::sensor_data());
+  if (sensors.dvl.enabled) dvl_pub_ = node.create_publisher<unav_msgs::msg::Dvl>(topic("dvl"), unav::QoS::sensor_data());
   if (sensors.altimeter.enabled)
-    range_pub_ = node.create_publisher<sensor_msgs::msg::Range>("range", unav::QoS::sensor_data());
+    range_pub_ = node.create_publisher<sensor_msgs::msg::Range>(topic("range"), unav::QoS::sensor_data());
   if (sensors.magnetometer.enabled)
-    mag_pub_ = node.create_publisher<sensor_msgs::msg::MagneticField>("mag", unav::QoS::sensor_data());
+    mag_pub_ = node.create_publisher<sensor_msgs::msg::MagneticField>(topic("mag"), unav::QoS::sensor_data());
   if (sensors.gps.enabled)
-    gps_pub_ = node.create_publisher<sensor_msgs::msg::NavSatFix>("gps", unav::QoS::sensor_data());
+    gps_pub_ = node.create_publisher<sensor_msgs::msg::NavSatFix>(topic("gps"), unav::QoS::sensor_data());
   // Reliable: a fix comes once a second or less and a navigation filter must not miss one.
   if (sensors.usbl.enabled)
-    usbl_pub_ = node.create_publisher<unav_msgs::msg::UsblFix>("usbl/fix", unav::QoS::reliable());
+    usbl_pub_ = node.create_publisher<unav_msgs::msg::UsblFix>(topic("usbl/fix"), unav::QoS::reliable());
   if (sensors.modem.enabled) {
     const std::uint64_t seed = static_cast<std::uint64_t>(sensors.seed) * 0x9E3779B97F4A7C15ULL + 8;
     modem_ = std::make_unique<AcousticModem>(sensors.modem, seed);
     const unav::QoS qos = unav::QoS::reliable(100);
-    vehicle_rx_pub_ = node.create_publisher<unav_msgs::msg::AcousticPacket>("modem/rx", qos);
-    station_rx_pub_ = node.create_publisher<unav_msgs::msg::AcousticPacket>("/surface/modem/rx", qos);
+    vehicle_rx_pub_ = node.create_publisher<unav_msgs::msg::AcousticPacket>(topic("modem/rx"), qos);
+    station_rx_pub_ = node.create_publisher<unav_msgs::msg::AcousticPacket>(station + "rx", qos);
     vehicle_tx_sub_ = node.create_subscription<unav_msgs::msg::AcousticPacket>(
-        "modem/tx", qos,
+        topic("modem/tx"), qos,
         [this](const unav_msgs::msg::AcousticPacket& m) { queue_packet(AcousticModem::End::kVehicle, m); });
     station_tx_sub_ = node.create_subscription<unav_msgs::msg::AcousticPacket>(
-        "/surface/modem/tx", qos,
+        station + "tx", qos,
         [this](const unav_msgs::msg::AcousticPacket& m) { queue_packet(AcousticModem::End::kStation, m); });
   }
   odom_.header().frame_id(world_frame_);
@@ -63,6 +70,7 @@ VehiclePorts::VehiclePorts(unav::Node& node, const VehicleParams& vehicle, const
 }
 
 std::vector<eprosima::fastdds::dds::DataWriter*> VehiclePorts::state_writers() const {
+  if (!clock_pub_) return {odom_pub_->writer(), tf_pub_->writer()};
   return {odom_pub_->writer(), tf_pub_->writer(), clock_pub_->writer()};
 }
 
@@ -76,9 +84,11 @@ void VehiclePorts::fill_header(std_msgs::msg::dds_::Header_& h, double t, const 
 void VehiclePorts::publish_state(const Simulator& sim) {
   const double t = sim.time();
   const unav::Time stamp{std::llround(t * 1e9)};
-  clock_.clock().sec(stamp.sec());
-  clock_.clock().nanosec(stamp.nanosec());
-  clock_pub_->publish(clock_);
+  if (clock_pub_) {
+    clock_.clock().sec(stamp.sec());
+    clock_.clock().nanosec(stamp.nanosec());
+    clock_pub_->publish(clock_);
+  }
   const RigidBodyState& x = sim.state();
   fill_header(odom_.header(), t, world_frame_);
   odom_.pose().pose() = unav::to_msg(x.p_WB_W, x.q_WB);

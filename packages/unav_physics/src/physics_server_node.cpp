@@ -74,10 +74,25 @@ PhysicsServer::PhysicsServer(const unav::NodeOptions& options) : Node("physics_s
   barrier_ = std::make_unique<unav::lockstep::Barrier>(participants_, std::llround(0.5 * so.dt * 1e9));
 
   VehicleParams vehicle = scenario ? scenario_vehicle(*scenario) : load_vehicle(p.vehicle_config);
+  std::vector<VehicleParams> fleet_vehicles;
   if (scenario) {
     const unav::scene::World world = unav::scene::scenario_world(*scenario);
     apply_world_acoustics(world, &vehicle.sensors);  // the ports' modem too
     sim_ = build_simulator(*scenario, world, so, vehicle);
+    for (size_t i = 0; i < scenario->fleet.size(); ++i) {
+      const unav::scene::ScenarioFleetVehicle& f = scenario->fleet[i];
+      if ("/" + f.name == get_namespace())
+        throw unav::ParameterError("node '" + name() + "': " + p.scenario.file + ": fleet[" + std::to_string(i) +
+                                   "].name = " + f.name + ": is this node's namespace (the primary vehicle's)");
+      fleet_vehicles.push_back(scenario_vehicle(f.vehicle, "fleet[" + std::to_string(i) + "]"));
+      apply_world_acoustics(world, &fleet_vehicles.back().sensors);
+      FleetVehicle v;
+      v.name = f.name;
+      v.sim = build_simulator(*scenario, world, so, fleet_vehicles.back(), f.vehicle);
+      fleet_.push_back(std::move(v));
+      logger()->info("fleet vehicle '{}': {} at [{:.2f}, {:.2f}, {:.2f}] m", f.name, f.vehicle.model,
+                     f.vehicle.initial_position.x(), f.vehicle.initial_position.y(), f.vehicle.initial_position.z());
+    }
     logger()->info("scenario {} (seed {}): world {}, vehicle {}", p.scenario.file, scenario->seed, scenario->world,
                    scenario->vehicle.model);
   } else {
@@ -88,6 +103,19 @@ PhysicsServer::PhysicsServer(const unav::NodeOptions& options) : Node("physics_s
   ports_ = std::make_unique<VehiclePorts>(*this, vehicle, p.frames);
   command_sub_ = create_subscription<unav_msgs::msg::ThrusterCommand>(
       "thrusters/command", unav::QoS::reliable(), [this](const unav_msgs::msg::ThrusterCommand& m) { on_command(m); });
+  for (size_t i = 0; i < fleet_.size(); ++i) {
+    FleetVehicle& f = fleet_[i];
+    f.ports = std::make_unique<VehiclePorts>(*this, fleet_vehicles[i], p.frames, f.name);
+    f.command_sub = create_subscription<unav_msgs::msg::ThrusterCommand>(
+        "/" + f.name + "/thrusters/command", unav::QoS::reliable(),
+        [this, i](const unav_msgs::msg::ThrusterCommand& m) {
+          FleetVehicle& v = fleet_[i];
+          if (!apply_command(*v.sim, v.command_sub->topic_name(), m, &v.rejected_logged)) return;
+          v.last_command_ns = std::max(v.last_command_ns, unav::nanoseconds(m.header()));
+          last_input_ = v.name + " thruster command";
+          if (lockstep_ && barrier_t_ >= 0.0 && barrier_open()) run_steps();
+        });
+  }
   reset_sub_ = create_subscription<geometry_msgs::msg::Pose>(
       "sim/reset", unav::QoS::reliable(), [this](const geometry_msgs::msg::Pose& m) { on_reset(m); });
   if (vehicle.tether.enabled)  // the winch: the length paid out
@@ -125,7 +153,12 @@ int64_t PhysicsServer::barrier_ns() const { return std::llround(barrier_t_ * 1e9
 
 bool PhysicsServer::barrier_open() const {
   if (barrier_t_ < 0.0) return true;
-  return barrier_->open(barrier_ns()) && (!wait_for_command_ || barrier_->meets(last_command_ns_, barrier_ns()));
+  if (!barrier_->open(barrier_ns())) return false;
+  if (!wait_for_command_) return true;
+  if (!barrier_->meets(last_command_ns_, barrier_ns())) return false;
+  for (const auto& f : fleet_)  // every vehicle's controller answered this barrier
+    if (!barrier_->meets(f.last_command_ns, barrier_ns())) return false;
+  return true;
 }
 
 void PhysicsServer::run_steps() {
@@ -200,11 +233,18 @@ std::string PhysicsServer::missing_with_acks() const {
     missing += last_command_ns_ == INT64_MIN ? std::string(" (thruster command: none yet)")
                                              : fmt::format(" (thruster command: last stamped t = {:.3f} s)",
                                                            static_cast<double>(last_command_ns_) * 1e-9);
+  for (const auto& f : fleet_)
+    if (wait_for_command_ && !barrier_->meets(f.last_command_ns, barrier_ns()))
+      missing += f.last_command_ns == INT64_MIN
+                     ? fmt::format(" ({} thruster command: none yet)", f.name)
+                     : fmt::format(" ({} thruster command: last stamped t = {:.3f} s)", f.name,
+                                   static_cast<double>(f.last_command_ns) * 1e-9);
   return missing;
 }
 
 void PhysicsServer::step_once() {
   sim_->step();
+  for (auto& f : fleet_) f.sim->step();
   if (sim_->command_timed_out() && !timeout_logged_) {
     logger()->warn("no thruster command for {:.2f} s: thrust set to zero (failsafe)", sim_->options().command_timeout);
     timeout_logged_ = true;
@@ -250,9 +290,18 @@ void PhysicsServer::finish() {
   context().shutdown();
 }
 
-void PhysicsServer::publish_state() { ports_->publish_state(*sim_); }
-void PhysicsServer::publish_thruster_state() { ports_->publish_thruster_state(*sim_); }
-void PhysicsServer::publish_sensors() { ports_->publish_sensors(*sim_); }
+void PhysicsServer::publish_state() {
+  ports_->publish_state(*sim_);
+  for (auto& f : fleet_) f.ports->publish_state(*f.sim);
+}
+void PhysicsServer::publish_thruster_state() {
+  ports_->publish_thruster_state(*sim_);
+  for (auto& f : fleet_) f.ports->publish_thruster_state(*f.sim);
+}
+void PhysicsServer::publish_sensors() {
+  ports_->publish_sensors(*sim_);
+  for (auto& f : fleet_) f.ports->publish_sensors(*f.sim);
+}
 
 void PhysicsServer::build_from_params(const PhysicsServerParams& p, const SimulatorOptions& so,
                                       const VehicleParams& vehicle) {
@@ -282,27 +331,32 @@ void PhysicsServer::build_from_params(const PhysicsServerParams& p, const Simula
   sim_ = std::make_unique<Simulator>(vehicle, so, std::move(current), std::move(seabed), x0);
 }
 
-void PhysicsServer::on_command(const unav_msgs::msg::ThrusterCommand& msg) {
+bool PhysicsServer::apply_command(Simulator& sim, const std::string& topic, const unav_msgs::msg::ThrusterCommand& msg,
+                                  std::uint64_t* logged) {
   // A command answers a state already published: one stamped ahead of simulated time is garbage
   // (or an outsider's), and taken as is it would answer every lockstep barrier up to its stamp.
-  if (const double stamp = unav::seconds(msg.header()); stamp > sim_->time() + kMaxCommandLead) {
-    rejections_.reject(command_sub_->topic_name(),
-                       fmt::format("header.stamp = {:.3f} s is {:.3f} s after the simulated time {:.3f} s (more than "
-                                   "{} s ahead: a command answers a state that was published)",
-                                   stamp, stamp - sim_->time(), sim_->time(), kMaxCommandLead));
-    return;
+  if (const double stamp = unav::seconds(msg.header()); stamp > sim.time() + kMaxCommandLead) {
+    rejections_.reject(topic, fmt::format("header.stamp = {:.3f} s is {:.3f} s after the simulated time {:.3f} s (more "
+                                          "than {} s ahead: a command answers a state that was published)",
+                                          stamp, stamp - sim.time(), sim.time(), kMaxCommandLead));
+    return false;
   }
-  const CommandStatus status = sim_->set_command(sim_->time(), msg.u());
+  const CommandStatus status = sim.set_command(sim.time(), msg.u());
   if (status == CommandStatus::kRejectedWrongLength || status == CommandStatus::kRejectedNonFinite) {
-    const auto& st = sim_->command_stats();
+    const auto& st = sim.command_stats();
     const std::uint64_t rejected = st.rejected_wrong_length + st.rejected_non_finite;
-    if (rejected == 1 || rejected >= 2 * rejected_logged_) {  // log the 1st, 2nd, 4th, 8th ...
-      logger()->warn("thruster command rejected ({}): {} values for {} thrusters; {} rejected so far",
-                     to_string(status), msg.u().size(), sim_->thrusters().size(), rejected);
-      rejected_logged_ = rejected;
+    if (rejected == 1 || rejected >= 2 * *logged) {  // log the 1st, 2nd, 4th, 8th ...
+      logger()->warn("thruster command rejected ({}): {} values for {} thrusters; {} rejected so far on {}",
+                     to_string(status), msg.u().size(), sim.thrusters().size(), rejected, topic);
+      *logged = rejected;
     }
-    return;
+    return false;
   }
+  return true;
+}
+
+void PhysicsServer::on_command(const unav_msgs::msg::ThrusterCommand& msg) {
+  if (!apply_command(*sim_, command_sub_->topic_name(), msg, &rejected_logged_)) return;
   if (timeout_logged_) {
     logger()->info("thruster commands resumed");
     timeout_logged_ = false;

@@ -42,6 +42,11 @@
 //             the run goes on: `unav topic pub --once /lockstep/drop std_msgs/msg/String
 //             '{data: recorder}'`.
 // Failsafe: no command for command_timeout seconds of simulated time -> zero thrust, logged once.
+// Fleet: a scenario's `fleet` vehicles are stepped with the primary one, in the same world and
+// water, each with the ports above under /<name>/ (its own thrusters/command, ground_truth/odom,
+// sensors, ...), its body frame <name>/base_link_frd on /tf and its modem's station side on
+// /surface/<name>/modem/{tx,rx}; one /clock. With lockstep_wait_for_command, a barrier waits for
+// every vehicle's command stamped at it; sim/reset moves the primary vehicle only.
 // World: with `world` set, the world file's seabed (flat, relief, heightmap; the renderer's scene)
 // is the contact surface and the DVL/altimeter target, and its `current` is the water current.
 #pragma once
@@ -141,6 +146,9 @@ class PhysicsServer : public unav::Node {
   explicit PhysicsServer(const unav::NodeOptions& options);
 
   const Simulator& simulator() const { return *sim_; }
+  /// The scenario's fleet vehicles, in its order.
+  size_t fleet_size() const { return fleet_.size(); }
+  const Simulator& fleet_simulator(size_t i) const { return *fleet_.at(i).sim; }
   /// Runs simulation steps now (normally driven by the timer and by acks).
   void run_steps();
 
@@ -149,6 +157,10 @@ class PhysicsServer : public unav::Node {
   /// seabed_config/seabed_depth, current_config, initial_position/initial_rpy.
   void build_from_params(const PhysicsServerParams& p, const SimulatorOptions& so, const VehicleParams& vehicle);
   void on_command(const unav_msgs::msg::ThrusterCommand& msg);
+  /// A command to `sim` if it passes the checks (stamp, length, finite); rejections counted under
+  /// `topic`, the 1st, 2nd, 4th ... logged (`*logged`: the count last logged). True if applied.
+  bool apply_command(Simulator& sim, const std::string& topic, const unav_msgs::msg::ThrusterCommand& msg,
+                     std::uint64_t* logged);
   static constexpr double kMaxCommandLead = 1.0;  ///< s a command's stamp may be ahead of simulated time
   void on_ack(const unav_msgs::msg::LockstepAck& msg);
   void on_drop(const std::string& who);
@@ -194,6 +206,15 @@ class PhysicsServer : public unav::Node {
   std::uint64_t rejected_logged_ = 0;
 
   std::unique_ptr<VehiclePorts> ports_;
+  struct FleetVehicle {
+    std::string name;
+    std::unique_ptr<Simulator> sim;
+    std::unique_ptr<VehiclePorts> ports;
+    std::shared_ptr<unav::Subscription<unav_msgs::msg::ThrusterCommand>> command_sub;
+    std::uint64_t rejected_logged = 0;
+    int64_t last_command_ns = INT64_MIN;  ///< newest command stamp (lockstep_wait_for_command)
+  };
+  std::vector<FleetVehicle> fleet_;
   std::shared_ptr<unav::Subscription<unav_msgs::msg::ThrusterCommand>> command_sub_;
   std::shared_ptr<unav::Subscription<unav_msgs::msg::LockstepAck>> ack_sub_;
   std::shared_ptr<unav::Subscription<std_msgs::msg::String>> drop_sub_;

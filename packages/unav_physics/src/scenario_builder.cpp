@@ -11,15 +11,16 @@
 
 namespace unav::physics {
 
-VehicleParams scenario_vehicle(const unav::scene::Scenario& scenario) {
-  const std::string& file = scenario.vehicle.model;
-  if (scenario.vehicle.set.empty()) return load_vehicle(file);
-  std::string label = file + " (vehicle.set:";
-  for (const auto& o : scenario.vehicle.set) label += " " + o;
+VehicleParams scenario_vehicle(const unav::scene::Scenario& scenario) { return scenario_vehicle(scenario.vehicle, "vehicle"); }
+
+VehicleParams scenario_vehicle(const unav::scene::ScenarioVehicle& v, const std::string& key) {
+  const std::string& file = v.model;
+  if (v.set.empty()) return load_vehicle(file);
+  std::string label = file + " (" + key + ".set:";
+  for (const auto& o : v.set) label += " " + o;
   label += ")";
-  return parse_vehicle(
-      unav::scene::apply_scenario_overrides(unav::common::detail::ReadYamlFile(file), scenario.vehicle.set, label),
-      label);
+  return parse_vehicle(unav::scene::apply_scenario_overrides(unav::common::detail::ReadYamlFile(file), v.set, label),
+                       label);
 }
 
 void apply_world_acoustics(const unav::scene::World& world, SensorSuiteParams* sensors) {
@@ -41,10 +42,14 @@ std::unique_ptr<Seabed> seabed_from_world(const unav::scene::World& world) {
 }
 
 RigidBodyState scenario_initial_state(const unav::scene::Scenario& scenario) {
+  return scenario_initial_state(scenario.vehicle);
+}
+
+RigidBodyState scenario_initial_state(const unav::scene::ScenarioVehicle& v) {
   constexpr double kDeg = M_PI / 180.0;
   RigidBodyState x0;
-  x0.p_WB_W = scenario.vehicle.initial_position;
-  const Eigen::Vector3d rpy = scenario.vehicle.initial_rpy_deg * kDeg;
+  x0.p_WB_W = v.initial_position;
+  const Eigen::Vector3d rpy = v.initial_rpy_deg * kDeg;
   x0.q_WB = quaternion_from_rpy(rpy.x(), rpy.y(), rpy.z());
   return x0;
 }
@@ -66,12 +71,18 @@ std::unique_ptr<Simulator> build_simulator(const unav::scene::Scenario& scenario
 
 std::unique_ptr<Simulator> build_simulator(const unav::scene::Scenario& scenario, const unav::scene::World& world,
                                            const SimulatorOptions& options, const VehicleParams& params) {
+  return build_simulator(scenario, world, options, params, scenario.vehicle);
+}
+
+std::unique_ptr<Simulator> build_simulator(const unav::scene::Scenario& scenario, const unav::scene::World& world,
+                                           const SimulatorOptions& options, const VehicleParams& params,
+                                           const unav::scene::ScenarioVehicle& which) {
   VehicleParams vehicle = params;
   apply_world_acoustics(world, &vehicle.sensors);
   const std::string& current_file = scenario.current.empty() ? world.current_file : scenario.current;
   std::unique_ptr<CurrentModel> current = current_file.empty() ? nullptr : load_current(current_file);
   return std::make_unique<Simulator>(vehicle, options, std::move(current), seabed_from_world(world),
-                                     scenario_initial_state(scenario));
+                                     scenario_initial_state(which));
 }
 
 }  // namespace unav::physics

@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <fstream>
 #include <optional>
+#include <set>
 
 #include "physics_server_node.hpp"
 #include "unav_runtime/lockstep_ack.hpp"
@@ -516,4 +517,116 @@ TEST(PhysicsServer, ScenarioTetherIsPublishedAndPaidOut) {
   length_pub->publish(len);
   ASSERT_TRUE(h.spin_until([&] { return std::abs(server.simulator().tether()->length() - 20.0) < 1e-9; }, 20s));
   EXPECT_EQ(server.rejections().count("rt/rov/tether/length"), 1u);
+}
+
+// Several vehicles in one world (a scenario's fleet): the physics server steps each with the
+// primary one, each on its own ports (/<name>/...) and /tf frame (<name>/base_link_frd). A fleet
+// vehicle flies what is commanded on its own topic only, exactly as the in-process simulator
+// of the same scenario entry flies it (bit for bit: same builder, same commands, same steps);
+// the other vehicles do not move with it. Bad fleets are refused naming the file, key and rule.
+TEST(PhysicsServer, FleetVehiclesFlyOnTheirOwnTopics) {
+  const std::string world_path = write_world("fleet", "seabed: {depth_m: 30.0}\n");
+  const std::string dir = std::filesystem::path(world_path).parent_path().string();
+  const std::string model = std::string(UNAV_CONFIG_DIR) + "/vehicles/bluerov2_heavy.yaml";
+  std::ofstream(dir + "/fleet.yaml") << "name: pair\nworld: world.yaml\n"
+                                     << "vehicle: {model: " << model << ", initial_position: [0, 0, 5]}\n"
+                                     << "fleet:\n"
+                                     << "  - {name: rov2, model: " << model
+                                     << ", initial_position: [-5, 0, 5], initial_rpy_deg: [0, 0, 90]}\n"
+                                     << "  - {name: rov3, model: " << model << ", initial_position: [0, 8, 6]}\n";
+  Harness h({"-p", "scenario:=" + dir + "/fleet.yaml", "-p", "mode:=lockstep", "-p",
+             "lockstep_wait_for_command:=true", "-p", "lockstep_period:=0.05", "-p", "publish_rate:=20.0"});
+  PhysicsServer& server = *h.server;
+  ASSERT_EQ(server.fleet_size(), 2u);
+  std::vector<nav_msgs::msg::Odometry> rov2, rov3;
+  auto rov2_sub = h.probe->create_subscription<nav_msgs::msg::Odometry>(
+      "/rov2/ground_truth/odom", unav::QoS::reliable(100), [&](const nav_msgs::msg::Odometry& m) { rov2.push_back(m); });
+  auto rov3_sub = h.probe->create_subscription<nav_msgs::msg::Odometry>(
+      "/rov3/ground_truth/odom", unav::QoS::reliable(100), [&](const nav_msgs::msg::Odometry& m) { rov3.push_back(m); });
+  auto rov2_cmd = h.probe->create_publisher<unav_msgs::msg::ThrusterCommand>("/rov2/thrusters/command",
+                                                                           unav::QoS::reliable());
+  auto rov3_cmd = h.probe->create_publisher<unav_msgs::msg::ThrusterCommand>("/rov3/thrusters/command",
+                                                                           unav::QoS::reliable());
+  const std::vector<unav::testing::Link> links = {make_link(server, *rov2_sub), make_link(server, *rov3_sub),
+                                                  make_link(*rov2_cmd, server), make_link(*rov3_cmd, server)};
+  ASSERT_TRUE(unav::testing::wait_for_match({h.server_ctx.get(), h.test_ctx.get()}, links))
+      << unav::testing::describe(links);
+  const auto command = [](unav::Publisher<unav_msgs::msg::ThrusterCommand>& pub, double t,
+                          const std::vector<double>& u) {
+    unav_msgs::msg::ThrusterCommand c;
+    const unav::Time s{std::llround(t * 1e9)};
+    c.header().stamp().sec(s.sec());
+    c.header().stamp().nanosec(s.nanosec());
+    c.u(u);
+    pub.publish(c);
+  };
+
+  const unav::scene::Scenario sc = unav::scene::load_scenario(dir + "/fleet.yaml");
+  const unav::scene::World world = unav::scene::load_world(sc.world);
+  auto sim = unav::physics::build_simulator(sc, world, unav::physics::scenario_simulator_options(sc, 0.0),
+                                            unav::physics::scenario_vehicle(sc.fleet[0].vehicle, "fleet[0]"),
+                                            sc.fleet[0].vehicle);
+  const std::vector<double> hover(8, 0.0);
+  double answered = -1.0;
+  for (int k = 0; k <= 20; ++k) {  // 1 s, the primary commanded to do nothing
+    ASSERT_TRUE(h.spin_until(
+        [&] {
+          return !h.odoms.empty() && stamp_s(h.odoms.back().header()) > answered && !rov2.empty() &&
+                 stamp_s(rov2.back().header()) == stamp_s(h.odoms.back().header());
+        },
+        10s))
+        << "no odometry after barrier " << answered;
+    answered = stamp_s(h.odoms.back().header());
+    const auto& p = rov2.back().pose().pose().position();
+    ASSERT_EQ(p.x(), sim->state().p_WB_W.x()) << "barrier " << k;
+    ASSERT_EQ(p.y(), sim->state().p_WB_W.y()) << "barrier " << k;
+    ASSERT_EQ(p.z(), sim->state().p_WB_W.z()) << "barrier " << k;
+    // Every vehicle answers the barrier (each holds it: lockstep_wait_for_command); rov2 surges,
+    // heading east (yaw 90 deg), the others hover.
+    command(*rov3_cmd, answered, hover);
+    h.command(answered, hover);
+    if (k == 3) {  // the barrier holds for rov2, which has not answered yet
+      h.spin_until([] { return false; }, 100ms);
+      EXPECT_NEAR(server.simulator().time(), answered, 1e-9);
+    }
+    command(*rov2_cmd, answered, kSurge);
+    sim->set_command(sim->time(), kSurge);
+    for (int i = 0; i < 50; ++i) sim->step();
+  }
+  const auto& p2 = rov2.back().pose().pose().position();
+  EXPECT_GT(p2.y(), 0.05) << "rov2 surges east";
+  EXPECT_NEAR(p2.x(), -5.0, 0.02);
+  EXPECT_EQ(rov2.back().header().frame_id(), "world_ned");
+  EXPECT_EQ(rov2.back().child_frame_id(), "rov2/base_link_frd");
+  const auto& p1 = h.odoms.back().pose().pose().position();
+  EXPECT_NEAR(p1.x(), 0.0, 1e-3) << "the primary does not move with rov2";
+  EXPECT_NEAR(p1.y(), 0.0, 1e-3);
+  ASSERT_FALSE(rov3.empty());
+  EXPECT_NEAR(rov3.back().pose().pose().position().x(), 0.0, 1e-3);
+  EXPECT_NEAR(rov3.back().pose().pose().position().y(), 8.0, 1e-3);
+  // /tf: every vehicle's body frame, each in a message of its own.
+  std::set<std::string> children;
+  for (const auto& m : h.tfs) children.insert(m.transforms().at(0).child_frame_id());
+  EXPECT_EQ(children, (std::set<std::string>{"base_link_frd", "rov2/base_link_frd", "rov3/base_link_frd"}));
+  rov2_sub.reset();
+  rov3_sub.reset();
+  rov2_cmd.reset();
+  rov3_cmd.reset();
+
+  // Bad fleets: the file, the key and the rule.
+  const auto refused = [&](const std::string& fleet, const std::string& expect) {
+    std::ofstream(dir + "/bad.yaml") << "name: bad\nworld: world.yaml\nvehicle: {model: " << model << "}\nfleet:\n"
+                                     << fleet;
+    try {
+      unav::scene::load_scenario(dir + "/bad.yaml");
+      ADD_FAILURE() << "accepted: " << fleet;
+    } catch (const unav::ConfigError& e) {
+      EXPECT_NE(std::string(e.what()).find(expect), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find(dir + "/bad.yaml"), std::string::npos) << e.what();
+    }
+  };
+  refused("  - {name: rov2, model: " + model + "}\n  - {name: rov2, model: " + model + "}\n",
+          "fleet[1].name");  // twice the same namespace
+  refused("  - {name: 2rov, model: " + model + "}\n", "a letter, then letters, digits or _");
+  refused("  - {name: rov2, model: nowhere.yaml}\n", "fleet[0].model");
 }

@@ -1,7 +1,10 @@
 #include "unav_scene/scenario.hpp"
 
+#include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <filesystem>
+#include <set>
 
 #include "unav_common/errors.hpp"
 #include "unav_common/resources.hpp"
@@ -46,6 +49,20 @@ void resolve_scenario_paths(Scenario* s, const std::string& file, const std::str
     s->water = resolve(s->water, dir, config, file, "water");
   if (!s->current.empty()) s->current = resolve(s->current, dir, config, file, "current");
   s->vehicle.model = resolve(s->vehicle.model, dir, config, file, "vehicle.model");
+  std::set<std::string> names;
+  for (size_t i = 0; i < s->fleet.size(); ++i) {
+    auto& f = s->fleet[i];
+    const std::string key = "fleet[" + std::to_string(i) + "]";
+    const bool valid = !f.name.empty() && std::isalpha(static_cast<unsigned char>(f.name[0])) &&
+                       std::all_of(f.name.begin(), f.name.end(),
+                                   [](char c) { return std::isalnum(static_cast<unsigned char>(c)) || c == '_'; });
+    if (!valid)
+      throw unav::ConfigError(file, key + ".name", "\"" + f.name + "\"",
+                              "a namespace: a letter, then letters, digits or _");
+    if (!names.insert(f.name).second)
+      throw unav::ConfigError(file, key + ".name", f.name, "each fleet vehicle needs a namespace of its own");
+    f.vehicle.model = resolve(f.vehicle.model, dir, config, file, key + ".model");
+  }
   s->control.mpc = resolve(s->control.mpc, dir, config, file, "control.mpc");
   s->control.allocator = resolve(s->control.allocator, dir, config, file, "control.allocator");
   s->cameras.config = resolve(s->cameras.config, dir, config, file, "cameras.config");

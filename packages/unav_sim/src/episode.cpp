@@ -24,6 +24,10 @@ EpisodeSetup load_episode_setup(const scene::Scenario& scenario) {
   unav::common::Validate(s.scenario, "scenario");
   scene::resolve_scenario_paths(&s.scenario, "scenario", "");
   const scene::Scenario& sc = s.scenario;
+  if (!sc.fleet.empty())  // never fly a different run than the file describes
+    throw unav::ConfigError(sc.name, "fleet", sc.fleet[0].name + (sc.fleet.size() > 1 ? ", ..." : ""),
+                            "an in-process episode flies one vehicle: run a scenario with a fleet over DDS "
+                            "(the physics server steps every vehicle)");
   // The episode sends a command every control period; the failsafe would only mask a bug.
   s.plant = physics::scenario_vehicle(sc);
   s.simulator = physics::scenario_simulator_options(sc, 0.0);

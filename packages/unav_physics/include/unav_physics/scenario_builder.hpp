@@ -5,6 +5,7 @@
 #pragma once
 
 #include <memory>
+#include <string>
 
 #include "unav_physics/seabed.hpp"
 #include "unav_physics/simulator.hpp"
@@ -20,6 +21,8 @@ std::unique_ptr<Seabed> seabed_from_world(const unav::scene::World& world);
 
 /// The scenario's initial state: at vehicle.initial_position, vehicle.initial_rpy_deg, at rest.
 RigidBodyState scenario_initial_state(const unav::scene::Scenario& scenario);
+/// The same for one vehicle of the scenario (the primary or a fleet vehicle).
+RigidBodyState scenario_initial_state(const unav::scene::ScenarioVehicle& vehicle);
 
 /// physics.dt and physics.integrator; `command_timeout` as the caller runs (0 in-process).
 SimulatorOptions scenario_simulator_options(const unav::scene::Scenario& scenario, double command_timeout);
@@ -30,6 +33,8 @@ SimulatorOptions scenario_simulator_options(const unav::scene::Scenario& scenari
 /// The scenario's vehicle: its model file with vehicle.set applied (the same rules and errors as
 /// the file's keys; errors name the file and "vehicle.set"). Throws ConfigError.
 VehicleParams scenario_vehicle(const unav::scene::Scenario& scenario);
+/// The same for one vehicle of the scenario; `key` names it in errors ("vehicle", "fleet[1]").
+VehicleParams scenario_vehicle(const unav::scene::ScenarioVehicle& vehicle, const std::string& key);
 
 /// The sound speed of the world's water (Mackenzie at the transceiver's / station's depth) for
 /// the USBL and the acoustic modem that leave theirs at 0.
@@ -41,5 +46,10 @@ std::unique_ptr<Simulator> build_simulator(const unav::scene::Scenario& scenario
 /// no file read per episode).
 std::unique_ptr<Simulator> build_simulator(const unav::scene::Scenario& scenario, const unav::scene::World& world,
                                            const SimulatorOptions& options, const VehicleParams& params);
+/// The simulator of one of the scenario's vehicles (`which`: scenario.vehicle or a fleet
+/// entry's) in the same world and water.
+std::unique_ptr<Simulator> build_simulator(const unav::scene::Scenario& scenario, const unav::scene::World& world,
+                                           const SimulatorOptions& options, const VehicleParams& params,
+                                           const unav::scene::ScenarioVehicle& which);
 
 }  // namespace unav::physics

@@ -53,8 +53,11 @@ struct PortFrames {
 class VehiclePorts {
  public:
   /// Creates the publishers on `node` (names relative to its namespace; /clock and /tf absolute);
-  /// a sensor's topic only when the vehicle has it enabled.
-  VehiclePorts(unav::Node& node, const VehicleParams& vehicle, const PortFrames& frames);
+  /// a sensor's topic only when the vehicle has it enabled. A fleet vehicle (`fleet_name` given)
+  /// publishes under /<fleet_name>/ instead, its body frame is <fleet_name>/<body_frame>, its modem's
+  /// station side is /surface/<fleet_name>/modem/{tx,rx}, and it has no /clock (the primary's).
+  VehiclePorts(unav::Node& node, const VehicleParams& vehicle, const PortFrames& frames,
+               const std::string& fleet_name = "");
   /// /clock, ground_truth/odom (world_frame -> body_frame), /tf at the simulator's time.
   void publish_state(const Simulator& sim);
   void publish_thruster_state(const Simulator& sim);

@@ -47,6 +47,21 @@ struct ScenarioVehicle {
   }
 };
 
+/// One more vehicle in the same world (Scenario::fleet): its namespace and the vehicle fields.
+/// The physics server steps it beside the primary vehicle; its topics are /<name>/..., its body
+/// frame <name>/base_link_frd on /tf.
+struct ScenarioFleetVehicle {
+  std::string name;  ///< namespace of its topics and frames, e.g. "rov2"
+  ScenarioVehicle vehicle;
+
+  template <class Archive>
+  void Serialize(Archive* a) {
+    using unav::common::Field;
+    a->Visit(Field("name", &name).Doc("namespace of its topics and frames (e.g. rov2): letters, digits, _"));
+    vehicle.Serialize(a);
+  }
+};
+
 struct ScenarioPhysics {
   double dt = 0.001;
   std::string integrator = "velocity_verlet";
@@ -144,6 +159,7 @@ struct Scenario {
   std::string current;      ///< water current YAML replacing the world's; "" = the world's
   WorldGenerator generate;  ///< enabled: the world is generated over `world` (the base)
   ScenarioVehicle vehicle;
+  std::vector<ScenarioFleetVehicle> fleet;  ///< more vehicles in the world, each under its own namespace
   ScenarioPhysics physics;
   ScenarioControl control;
   ScenarioCameras cameras;
@@ -161,6 +177,7 @@ struct Scenario {
     a->Visit(Field("current", &current).Doc("water current YAML (config/water/currents/); empty = the world's"));
     a->Visit(Field("generate", &generate).Doc("a randomized pipe world over `world` (unav_scene/world_generator.hpp)"));
     a->Visit(Field("vehicle", &vehicle));
+    a->Visit(Field("fleet", &fleet).Doc("more vehicles in the same world: [{name, model, set, initial_position, ...}]"));
     a->Visit(Field("physics", &physics));
     a->Visit(Field("control", &control));
     a->Visit(Field("cameras", &cameras));
