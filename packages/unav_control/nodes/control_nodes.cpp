@@ -299,4 +299,45 @@ WaypointFollowerNode::WaypointFollowerNode(const unav::NodeOptions& options)
   logger()->info("{} waypoints", path.size());
 }
 
+StationKeeperNode::StationKeeperNode(const unav::NodeOptions& options) : Node("station_keeper", options) {
+  StationKeeperParams prm;
+  declare_params(&prm);
+  keeper_ = wrap_config([&] { return StationKeeper(prm.keeping); });
+  pub_ = create_publisher<geometry_msgs::msg::PoseStamped>("control/pose_setpoint", unav::QoS::reliable());
+  fix_sub_ = create_subscription<unav_msgs::msg::UsblFix>(
+      prm.leader_fix_topic, unav::QoS::reliable(100), [this](const unav_msgs::msg::UsblFix& f) {
+        if (!f.valid()) return;  // no reply: nothing to use
+        pending_.emplace_back(stamp_of(f.header()), unav::from_msg(f.position_world()));
+      });
+  odom_sub_ = create_subscription<nav_msgs::msg::Odometry>(
+      "ground_truth/odom", unav::QoS::reliable(), [this](const nav_msgs::msg::Odometry& m) {
+        if (const std::string why = unav::odometry_problem(m); !why.empty()) {
+          rejections_.reject(odom_sub_->topic_name(), why);
+          return;
+        }
+        const double t = stamp_of(m.header());
+        // Fixes stamped up to the previous odometry: they were published before it, so every run
+        // applies the same ones at the same state.
+        std::stable_sort(pending_.begin(), pending_.end(),
+                         [](const auto& a, const auto& b) { return a.first < b.first; });
+        size_t used = 0;
+        while (used < pending_.size() && pending_[used].first <= last_odom_t_) {
+          keeper_.AddFix(pending_[used].first, pending_[used].second);
+          ++used;
+        }
+        pending_.erase(pending_.begin(), pending_.begin() + static_cast<std::ptrdiff_t>(used));
+        last_odom_t_ = std::max(last_odom_t_, t);
+        if (!hold_) {
+          hold_ = PoseSetpoint{unav::from_msg(m.pose().pose().position()), unav::from_msg(m.pose().pose().orientation())};
+        }
+        const PoseSetpoint sp = keeper_.Setpoint().value_or(*hold_);
+        geometry_msgs::msg::PoseStamped out;
+        out.header().stamp() = m.header().stamp();
+        out.header().frame_id("world_ned");
+        out.pose() = unav::to_msg(sp.p_W, sp.q_WB);
+        pub_->publish(out);
+      });
+  logger()->info("station keeping {:.1f} m behind the leader of {}", prm.keeping.distance_m, prm.leader_fix_topic);
+}
+
 }  // namespace unav::control

@@ -36,6 +36,17 @@
 //   params: waypoints (flat [x, y, z, ...] NED, m; given, they win), pipeline_world (world.yaml:
 //           follow its first pipeline), scenario (its world is the pipeline_world),
 //           height_above_pipe (m), acceptance_radius (m)
+//
+// station_keeper
+//   sub  <leader_fix_topic>       unav_msgs/UsblFix: the leader's fixes (position_world; invalid
+//                                 ones and outliers beyond gate_m skipped)
+//   sub  ground_truth/odom        nav_msgs/Odometry: this vehicle's state, the setpoint's clock
+//   pub  control/pose_setpoint    geometry_msgs/PoseStamped, on every odometry: distance_m behind
+//                                 the leader along its course (StationKeeper), at its depth +
+//                                 depth_offset_m; before the first fix, the first pose received
+//   A fix is applied at the first odometry after the one it was stamped before (a full controller
+//   round trip later in lockstep): a run repeats exactly.
+//   params: leader_fix_topic, distance_m, depth_offset_m, alpha, beta, gate_m
 #pragma once
 
 #include <memory>
@@ -50,8 +61,10 @@
 #include "unav_common/config.hpp"
 #include "unav_control/allocator.hpp"
 #include "unav_control/mpc.hpp"
+#include "unav_control/station_keeping.hpp"
 #include "unav_control/waypoint_follower.hpp"
 #include "unav_msgs/msg/thruster_command.hpp"
+#include "unav_msgs/msg/usbl_fix.hpp"
 #include "unav_runtime/runtime.hpp"
 #include "unav_runtime/validation.hpp"
 #include "unav_scene/scenario.hpp"
@@ -101,6 +114,38 @@ struct WaypointFollowerParams {
     a->Visit(
         Field("height_above_pipe", &height_above_pipe).Range(0.0, 50.0).Unit("m").Doc("above the pipe's centre line"));
   }
+};
+
+/// station_keeper's parameters.
+struct StationKeeperParams {
+  std::string leader_fix_topic = "/rov/usbl/fix";
+  StationKeepingOptions keeping;
+  template <class Archive>
+  void Serialize(Archive* a) {
+    using unav::common::Field;
+    a->Visit(Field("leader_fix_topic", &leader_fix_topic).Doc("the leader's USBL fixes (unav_msgs/UsblFix)"));
+    a->Visit(Field("distance_m", &keeping.distance_m).Above(0.0).Max(1000.0).Unit("m").Doc("behind the leader"));
+    a->Visit(Field("depth_offset_m", &keeping.depth_offset_m).Range(-100.0, 100.0).Unit("m").Doc("below the leader"));
+    a->Visit(Field("alpha", &keeping.alpha).Above(0.0).Max(1.0).Doc("tracker position gain"));
+    a->Visit(Field("beta", &keeping.beta).Min(0.0).Below(2.0).Doc("tracker velocity gain"));
+    a->Visit(Field("gate_m", &keeping.gate_m).Above(0.0).Max(1000.0).Unit("m").Doc("outlier gate"));
+  }
+};
+
+class StationKeeperNode : public unav::Node {
+ public:
+  explicit StationKeeperNode(const unav::NodeOptions& options);
+  const StationKeeper& keeper() const { return keeper_; }
+
+ private:
+  StationKeeper keeper_;
+  std::vector<std::pair<double, Eigen::Vector3d>> pending_;  ///< fixes not applied yet (stamp, position)
+  double last_odom_t_ = -1.0;
+  std::optional<PoseSetpoint> hold_;  ///< before the first fix: the first pose received
+  unav::RejectionCounter rejections_{logger()};
+  std::shared_ptr<unav::Subscription<unav_msgs::msg::UsblFix>> fix_sub_;
+  std::shared_ptr<unav::Subscription<nav_msgs::msg::Odometry>> odom_sub_;
+  std::shared_ptr<unav::Publisher<geometry_msgs::msg::PoseStamped>> pub_;
 };
 
 class ControlAllocatorNode : public unav::Node {

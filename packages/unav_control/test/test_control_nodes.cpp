@@ -1,5 +1,6 @@
-// control_allocator over DDS: a wrench in gives the thruster command that produces it; a thruster
-// marked failed at run time gets zero and the wrench is still produced.
+// Control nodes over DDS: the allocator (a wrench in gives the thruster command that produces it;
+// a thruster marked failed at run time gets zero and the wrench is still produced), the MPC's
+// parameter layers, the station keeper.
 #include <gtest/gtest.h>
 
 #include <fstream>
@@ -98,4 +99,67 @@ TEST(MpcControllerNode, OneParameterSystemFileThenParamsFileThenCommandLine) {
     EXPECT_NE(std::string(e.what()).find("'-p horizon_steps:=0'"), std::string::npos) << e.what();
     EXPECT_NE(std::string(e.what()).find("horizon_steps = 0: must be in [1, 500]"), std::string::npos) << e.what();
   }
+}
+
+// station_keeper over DDS (in /rov2, following /rov's USBL fixes): before a fix it holds the
+// first pose it received; a fix is applied at the odometry after the one it was stamped before
+// (so lockstep runs repeat); then the setpoint is 5 m behind the leader along its course, stamped
+// with each odometry. Invalid fixes are not used.
+TEST(StationKeeperNode, SetpointFiveMetresBehindTheLeadersFixes) {
+  const unav::ContextOptions o = unav::testing::test_context_options();
+  const char* argv[] = {"station_keeper", "--ros-args", "-r", "__ns:=/rov2", "-p", "leader_fix_topic:=/rov/usbl/fix"};
+  unav::Context node_ctx(6, argv, o);
+  unav::control::StationKeeperNode node({&node_ctx});
+  unav::Context test_ctx(o);
+  unav::Node probe("probe", {&test_ctx});
+  auto fix_pub = probe.create_publisher<unav_msgs::msg::UsblFix>("/rov/usbl/fix", unav::QoS::reliable(100));
+  auto odom_pub = probe.create_publisher<nav_msgs::msg::Odometry>("/rov2/ground_truth/odom", unav::QoS::reliable());
+  std::vector<geometry_msgs::msg::PoseStamped> sps;
+  auto sub = probe.create_subscription<geometry_msgs::msg::PoseStamped>(
+      "/rov2/control/pose_setpoint", unav::QoS::reliable(),
+      [&](const geometry_msgs::msg::PoseStamped& m) { sps.push_back(m); });
+  const std::vector<unav::testing::Link> links = {make_link(*fix_pub, node), make_link(*odom_pub, node),
+                                                  make_link(node, *sub)};
+  ASSERT_TRUE(unav::testing::wait_for_match({&node_ctx, &test_ctx}, links)) << unav::testing::describe(links);
+  auto stamp = [](auto& header, double t) {
+    header.stamp().sec(static_cast<int32_t>(std::floor(t)));
+    header.stamp().nanosec(static_cast<uint32_t>(std::llround((t - std::floor(t)) * 1e9)));
+  };
+  auto odom = [&](double t) {  // the follower itself, somewhere behind
+    nav_msgs::msg::Odometry m;
+    stamp(m.header(), t);
+    m.pose().pose().position().x(-3.0);
+    m.pose().pose().position().z(8.0);
+    m.pose().pose().orientation().w(1.0);
+    const size_t before = sps.size();
+    odom_pub->publish(m);
+    EXPECT_TRUE(unav::testing::spin_until({&node_ctx, &test_ctx}, [&] { return sps.size() == before + 1; }));
+  };
+  auto fix = [&](double t, double x, bool valid = true) {
+    unav_msgs::msg::UsblFix f;
+    stamp(f.header(), t);
+    f.valid(valid);
+    f.position_world().x(x);
+    f.position_world().y(1.0);
+    f.position_world().z(7.5);
+    fix_pub->publish(f);
+  };
+  odom(0.0);
+  EXPECT_DOUBLE_EQ(sps.back().pose().position().x(), -3.0);  // holding its first pose
+  // The leader heads north at 0.5 m/s; fixes at 0.5 and 1.5 s (and an invalid one).
+  fix(0.5, 0.25);
+  fix(1.0, 99.0, false);
+  fix(1.5, 0.75);
+  unav::testing::spin_for({&node_ctx, &test_ctx}, 300ms);  // the fixes reach the node (reliable)
+  odom(1.0);  // the fix at 0.5 s is after the previous odometry (0 s): not yet
+  EXPECT_DOUBLE_EQ(sps.back().pose().position().x(), -3.0);
+  odom(2.0);  // now the fixes up to 1.0 s: the first only (one position, no course yet: north)
+  EXPECT_NEAR(sps.back().pose().position().x(), 0.25 - 5.0, 1e-9);
+  odom(3.0);  // up to 2.0 s: the second; the course is north, 5 m behind the last fix
+  EXPECT_NEAR(sps.back().pose().position().x(), 0.75 - 5.0, 1e-9);
+  EXPECT_NEAR(sps.back().pose().position().y(), 1.0, 1e-9);
+  EXPECT_NEAR(sps.back().pose().position().z(), 7.5, 1e-9);
+  EXPECT_EQ(sps.back().header().stamp().sec(), 3);
+  EXPECT_EQ(sps.back().header().frame_id(), "world_ned");
+  EXPECT_EQ(node.keeper().fixes_used(), 2u);
 }
