@@ -303,6 +303,7 @@ StationKeeperNode::StationKeeperNode(const unav::NodeOptions& options) : Node("s
   StationKeeperParams prm;
   declare_params(&prm);
   keeper_ = wrap_config([&] { return StationKeeper(prm.keeping); });
+  fix_delay_s_ = prm.fix_delay_s;
   pub_ = create_publisher<geometry_msgs::msg::PoseStamped>("control/pose_setpoint", unav::QoS::reliable());
   fix_sub_ = create_subscription<unav_msgs::msg::UsblFix>(
       prm.leader_fix_topic, unav::QoS::reliable(100), [this](const unav_msgs::msg::UsblFix& f) {
@@ -316,21 +317,21 @@ StationKeeperNode::StationKeeperNode(const unav::NodeOptions& options) : Node("s
           return;
         }
         const double t = stamp_of(m.header());
-        // Fixes stamped up to the previous odometry: they were published before it, so every run
-        // applies the same ones at the same state.
+        // Fixes stamped fix_delay_s before this state: published that much simulated time before
+        // it (in lockstep, two controller round trips ago), so every run has them by now and
+        // applies the same ones at the same state. The prediction to `t` makes up the delay.
         std::stable_sort(pending_.begin(), pending_.end(),
                          [](const auto& a, const auto& b) { return a.first < b.first; });
         size_t used = 0;
-        while (used < pending_.size() && pending_[used].first <= last_odom_t_) {
+        while (used < pending_.size() && pending_[used].first <= t - fix_delay_s_) {
           keeper_.AddFix(pending_[used].first, pending_[used].second);
           ++used;
         }
         pending_.erase(pending_.begin(), pending_.begin() + static_cast<std::ptrdiff_t>(used));
-        last_odom_t_ = std::max(last_odom_t_, t);
         if (!hold_) {
           hold_ = PoseSetpoint{unav::from_msg(m.pose().pose().position()), unav::from_msg(m.pose().pose().orientation())};
         }
-        const PoseSetpoint sp = keeper_.Setpoint().value_or(*hold_);
+        const PoseSetpoint sp = keeper_.Setpoint(t).value_or(*hold_);
         geometry_msgs::msg::PoseStamped out;
         out.header().stamp() = m.header().stamp();
         out.header().frame_id("world_ned");

@@ -44,9 +44,10 @@
 //   pub  control/pose_setpoint    geometry_msgs/PoseStamped, on every odometry: distance_m behind
 //                                 the leader along its course (StationKeeper), at its depth +
 //                                 depth_offset_m; before the first fix, the first pose received
-//   A fix is applied at the first odometry after the one it was stamped before (a full controller
-//   round trip later in lockstep): a run repeats exactly.
-//   params: leader_fix_topic, distance_m, depth_offset_m, alpha, beta, gate_m
+//   A fix is applied at the first odometry fix_delay_s (0.1 s: two lockstep barriers, two
+//   controller round trips) after its stamp, so a lockstep run repeats exactly; the setpoint
+//   predicts the leader to the odometry's time.
+//   params: leader_fix_topic, fix_delay_s, distance_m, depth_offset_m, alpha, beta, gate_m
 #pragma once
 
 #include <memory>
@@ -119,11 +120,16 @@ struct WaypointFollowerParams {
 /// station_keeper's parameters.
 struct StationKeeperParams {
   std::string leader_fix_topic = "/rov/usbl/fix";
+  double fix_delay_s = 0.1;
   StationKeepingOptions keeping;
   template <class Archive>
   void Serialize(Archive* a) {
     using unav::common::Field;
     a->Visit(Field("leader_fix_topic", &leader_fix_topic).Doc("the leader's USBL fixes (unav_msgs/UsblFix)"));
+    a->Visit(Field("fix_delay_s", &fix_delay_s)
+                 .Range(0.0, 10.0)
+                 .Unit("s")
+                 .Doc("a fix is used this long (simulated) after its stamp: lockstep runs repeat"));
     a->Visit(Field("distance_m", &keeping.distance_m).Above(0.0).Max(1000.0).Unit("m").Doc("behind the leader"));
     a->Visit(Field("depth_offset_m", &keeping.depth_offset_m).Range(-100.0, 100.0).Unit("m").Doc("below the leader"));
     a->Visit(Field("alpha", &keeping.alpha).Above(0.0).Max(1.0).Doc("tracker position gain"));
@@ -140,7 +146,7 @@ class StationKeeperNode : public unav::Node {
  private:
   StationKeeper keeper_;
   std::vector<std::pair<double, Eigen::Vector3d>> pending_;  ///< fixes not applied yet (stamp, position)
-  double last_odom_t_ = -1.0;
+  double fix_delay_s_ = 0.1;
   std::optional<PoseSetpoint> hold_;  ///< before the first fix: the first pose received
   unav::RejectionCounter rejections_{logger()};
   std::shared_ptr<unav::Subscription<unav_msgs::msg::UsblFix>> fix_sub_;

@@ -1,5 +1,6 @@
 #include "unav_control/station_keeping.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 #include <Eigen/Geometry>
@@ -21,6 +22,7 @@ bool StationKeepingOptions::IsValid(std::string* msg) const {
   if (reacquire_after < 1) return fail("reacquire_after must be >= 1");
   if (!(min_speed_mps >= 0.0 && std::isfinite(min_speed_mps))) return fail("min_speed_mps must be >= 0");
   if (!std::isfinite(initial_course_rad)) return fail("initial_course_rad must be finite");
+  if (!(max_prediction_s >= 0.0 && std::isfinite(max_prediction_s))) return fail("max_prediction_s must be >= 0");
   return true;
 }
 
@@ -85,11 +87,13 @@ bool StationKeeper::AddFix(double t, const Eigen::Vector3d& p_W) {
   return true;
 }
 
-std::optional<PoseSetpoint> StationKeeper::Setpoint() const {
+std::optional<PoseSetpoint> StationKeeper::Setpoint(std::optional<double> at) const {
   if (!tracking_) return std::nullopt;
+  const double ahead = at ? std::clamp(*at - t_, 0.0, o_.max_prediction_s) : 0.0;
+  const Eigen::Vector3d leader = x_ + v_ * ahead;
   PoseSetpoint s;
-  s.p_W = x_ - o_.distance_m * Eigen::Vector3d(std::cos(course_), std::sin(course_), 0.0);
-  s.p_W.z() = x_.z() + o_.depth_offset_m;
+  s.p_W = leader - o_.distance_m * Eigen::Vector3d(std::cos(course_), std::sin(course_), 0.0);
+  s.p_W.z() = leader.z() + o_.depth_offset_m;
   return PoseSetpoint::FromPositionYaw(s.p_W, course_);
 }
 

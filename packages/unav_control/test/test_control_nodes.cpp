@@ -102,9 +102,9 @@ TEST(MpcControllerNode, OneParameterSystemFileThenParamsFileThenCommandLine) {
 }
 
 // station_keeper over DDS (in /rov2, following /rov's USBL fixes): before a fix it holds the
-// first pose it received; a fix is applied at the odometry after the one it was stamped before
-// (so lockstep runs repeat); then the setpoint is 5 m behind the leader along its course, stamped
-// with each odometry. Invalid fixes are not used.
+// first pose it received; a fix is applied 0.1 s (fix_delay_s) after its stamp (so lockstep runs
+// repeat); then the setpoint is 5 m behind the leader along its course, the leader predicted to
+// the odometry's time, stamped with each odometry. Invalid fixes are not used.
 TEST(StationKeeperNode, SetpointFiveMetresBehindTheLeadersFixes) {
   const unav::ContextOptions o = unav::testing::test_context_options();
   const char* argv[] = {"station_keeper", "--ros-args", "-r", "__ns:=/rov2", "-p", "leader_fix_topic:=/rov/usbl/fix"};
@@ -151,15 +151,15 @@ TEST(StationKeeperNode, SetpointFiveMetresBehindTheLeadersFixes) {
   fix(1.0, 99.0, false);
   fix(1.5, 0.75);
   unav::testing::spin_for({&node_ctx, &test_ctx}, 300ms);  // the fixes reach the node (reliable)
-  odom(1.0);  // the fix at 0.5 s is after the previous odometry (0 s): not yet
+  odom(0.55);  // the fix at 0.5 s is used 0.1 s after its stamp (fix_delay_s): not yet
   EXPECT_DOUBLE_EQ(sps.back().pose().position().x(), -3.0);
-  odom(2.0);  // now the fixes up to 1.0 s: the first only (one position, no course yet: north)
+  odom(0.6);  // now: the first fix only (one position, no velocity yet: the course is north)
   EXPECT_NEAR(sps.back().pose().position().x(), 0.25 - 5.0, 1e-9);
-  odom(3.0);  // up to 2.0 s: the second; the course is north, 5 m behind the last fix
-  EXPECT_NEAR(sps.back().pose().position().x(), 0.75 - 5.0, 1e-9);
+  odom(1.6);  // the second; velocity 0.5 m/s north: 5 m behind the leader predicted to 1.6 s
+  EXPECT_NEAR(sps.back().pose().position().x(), 0.75 + 0.05 - 5.0, 1e-9);
   EXPECT_NEAR(sps.back().pose().position().y(), 1.0, 1e-9);
   EXPECT_NEAR(sps.back().pose().position().z(), 7.5, 1e-9);
-  EXPECT_EQ(sps.back().header().stamp().sec(), 3);
+  EXPECT_EQ(sps.back().header().stamp().sec(), 1);
   EXPECT_EQ(sps.back().header().frame_id(), "world_ned");
   EXPECT_EQ(node.keeper().fixes_used(), 2u);
 }

@@ -35,6 +35,10 @@ TEST(StationKeeping, HoldsDistanceBehindALeaderOnAStraightLineAndTurnsWithIt) {
   EXPECT_NEAR(s->p_W.z(), 8.0, 1e-9);
   EXPECT_NEAR(yaw_of(s->q_WB), 0.0, 1e-9);
   EXPECT_NEAR(k.leader_velocity().x(), 0.5, 1e-9);
+  // Between fixes, the leader predicted along its velocity (at most max_prediction_s = 2 s).
+  EXPECT_NEAR(k.Setpoint(40.5)->p_W.x(), 20.25 - 5.0, 1e-9);
+  EXPECT_NEAR(k.Setpoint(45.0)->p_W.x(), 21.0 - 5.0, 1e-9);
+  EXPECT_NEAR(k.Setpoint(39.0)->p_W.x(), 20.0 - 5.0, 1e-9);  // never behind the last fix
   // The leader turns east: the tracker settles (damping alpha / (2 sqrt(beta)) = 0.88 at the default gains, ~30
   // fixes); 60 s later the setpoint is 5 m west of it, heading east, within a centimetre.
   for (int i = 1; i <= 60; ++i) ASSERT_TRUE(k.AddFix(40 + i, Eigen::Vector3d(20.0, 2.0 + 0.5 * i, 8.0)));

@@ -26,6 +26,7 @@ struct StationKeepingOptions {
   int reacquire_after = 3;           ///< consecutive outliers that restart the track (the leader moved), >= 1
   double min_speed_mps = 0.05;       ///< the course follows the velocity above this speed
   double initial_course_rad = 0.0;   ///< the course until the leader first moves
+  double max_prediction_s = 2.0;     ///< Setpoint(at) predicts the leader at most this far, >= 0
   bool IsValid(std::string* msg) const;
 };
 
@@ -38,8 +39,10 @@ class StationKeeper {
   /// fix is not used: an outlier beyond the gate, a stamp before the last fix, NaN/Inf.
   bool AddFix(double t, const Eigen::Vector3d& p_W);
 
-  /// The follower's setpoint; nullopt before the first fix.
-  std::optional<PoseSetpoint> Setpoint() const;
+  /// The follower's setpoint; nullopt before the first fix. With `at` [s] after the last fix, the
+  /// leader is predicted to then along its tracked velocity (at most max_prediction_s ahead): the
+  /// fixes come a second apart and arrive late.
+  std::optional<PoseSetpoint> Setpoint(std::optional<double> at = std::nullopt) const;
 
   /// The tracked leader (position at the last fix, velocity), course [rad].
   const Eigen::Vector3d& leader_position() const { return x_; }
