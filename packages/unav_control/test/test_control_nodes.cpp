@@ -106,38 +106,32 @@ TEST(MpcControllerNode, OneParameterSystemFileThenParamsFileThenCommandLine) {
 // repeat); then the setpoint is 5 m behind the leader along its course, the leader predicted to
 // the odometry's time, stamped with each odometry. Invalid fixes are not used.
 TEST(StationKeeperNode, SetpointFiveMetresBehindTheLeadersFixes) {
-  const unav::ContextOptions o = unav::testing::test_context_options();
-  const char* argv[] = {"station_keeper", "--ros-args", "-r", "__ns:=/rov2", "-p", "leader_fix_topic:=/rov/usbl/fix"};
-  unav::Context node_ctx(6, argv, o);
-  unav::control::StationKeeperNode node({&node_ctx});
-  unav::Context test_ctx(o);
-  unav::Node probe("probe", {&test_ctx});
-  auto fix_pub = probe.create_publisher<unav_msgs::msg::UsblFix>("/rov/usbl/fix", unav::QoS::reliable(100));
-  auto odom_pub = probe.create_publisher<nav_msgs::msg::Odometry>("/rov2/ground_truth/odom", unav::QoS::reliable());
+  unav::testing::NodeUnderTest<unav::control::StationKeeperNode> t(
+      "station_keeper", {"--ros-args", "-r", "__ns:=/rov2", "-p", "leader_fix_topic:=/rov/usbl/fix"});
+  auto fix_pub = t.probe.create_publisher<unav_msgs::msg::UsblFix>("/rov/usbl/fix", unav::QoS::reliable(100));
+  auto odom_pub = t.probe.create_publisher<nav_msgs::msg::Odometry>("/rov2/ground_truth/odom", unav::QoS::reliable());
   std::vector<geometry_msgs::msg::PoseStamped> sps;
-  auto sub = probe.create_subscription<geometry_msgs::msg::PoseStamped>(
+  auto sub = t.probe.create_subscription<geometry_msgs::msg::PoseStamped>(
       "/rov2/control/pose_setpoint", unav::QoS::reliable(),
       [&](const geometry_msgs::msg::PoseStamped& m) { sps.push_back(m); });
-  const std::vector<unav::testing::Link> links = {make_link(*fix_pub, node), make_link(*odom_pub, node),
-                                                  make_link(node, *sub)};
-  ASSERT_TRUE(unav::testing::wait_for_match({&node_ctx, &test_ctx}, links)) << unav::testing::describe(links);
-  auto stamp = [](auto& header, double t) {
-    header.stamp().sec(static_cast<int32_t>(std::floor(t)));
-    header.stamp().nanosec(static_cast<uint32_t>(std::llround((t - std::floor(t)) * 1e9)));
+  ASSERT_TRUE(t.match({make_link(*fix_pub, *t.node), make_link(*odom_pub, *t.node), make_link(*t.node, *sub)}));
+  auto stamp = [](auto& header, double s) {
+    header.stamp().sec(static_cast<int32_t>(std::floor(s)));
+    header.stamp().nanosec(static_cast<uint32_t>(std::llround((s - std::floor(s)) * 1e9)));
   };
-  auto odom = [&](double t) {  // the follower itself, somewhere behind
+  auto odom = [&](double s) {  // the follower itself, somewhere behind
     nav_msgs::msg::Odometry m;
-    stamp(m.header(), t);
+    stamp(m.header(), s);
     m.pose().pose().position().x(-3.0);
     m.pose().pose().position().z(8.0);
     m.pose().pose().orientation().w(1.0);
     const size_t before = sps.size();
     odom_pub->publish(m);
-    EXPECT_TRUE(unav::testing::spin_until({&node_ctx, &test_ctx}, [&] { return sps.size() == before + 1; }));
+    EXPECT_TRUE(t.spin_until([&] { return sps.size() == before + 1; }));
   };
-  auto fix = [&](double t, double x, bool valid = true) {
+  auto fix = [&](double s, double x, bool valid = true) {
     unav_msgs::msg::UsblFix f;
-    stamp(f.header(), t);
+    stamp(f.header(), s);
     f.valid(valid);
     f.position_world().x(x);
     f.position_world().y(1.0);
@@ -150,7 +144,7 @@ TEST(StationKeeperNode, SetpointFiveMetresBehindTheLeadersFixes) {
   fix(0.5, 0.25);
   fix(1.0, 99.0, false);
   fix(1.5, 0.75);
-  unav::testing::spin_for({&node_ctx, &test_ctx}, 300ms);  // the fixes reach the node (reliable)
+  t.spin_for(300ms);  // the fixes reach the node (reliable)
   odom(0.55);  // the fix at 0.5 s is used 0.1 s after its stamp (fix_delay_s): not yet
   EXPECT_DOUBLE_EQ(sps.back().pose().position().x(), -3.0);
   odom(0.6);  // now: the first fix only (one position, no velocity yet: the course is north)
@@ -161,5 +155,5 @@ TEST(StationKeeperNode, SetpointFiveMetresBehindTheLeadersFixes) {
   EXPECT_NEAR(sps.back().pose().position().z(), 7.5, 1e-9);
   EXPECT_EQ(sps.back().header().stamp().sec(), 1);
   EXPECT_EQ(sps.back().header().frame_id(), "world_ned");
-  EXPECT_EQ(node.keeper().fixes_used(), 2u);
+  EXPECT_EQ(t.node->keeper().fixes_used(), 2u);
 }

@@ -19,38 +19,16 @@ using namespace std::chrono_literals;
 using unav::testing::make_link;
 
 namespace {
-// A trajectory_evaluator with `params` (name:=value each) in its own context, and a probe node
-// in another, on the same domain.
-class EvaluatorRun {
- public:
+// A trajectory_evaluator with `params` (name:=value each) and a probe node, each on a participant
+// of its own (the node test pattern, unav::testing::NodeUnderTest).
+struct EvaluatorRun : unav::testing::NodeUnderTest<unav::evaluation::TrajectoryEvaluator> {
   EvaluatorRun(const std::vector<std::string>& params, const unav::ContextOptions& o)
-      : args_(ros_args(params)),
-        argv_(pointers(args_)),
-        node_ctx(static_cast<int>(argv_.size()), argv_.data(), o),
-        node(std::make_unique<unav::evaluation::TrajectoryEvaluator>(unav::NodeOptions{&node_ctx})),
-        test_ctx(o),
-        probe("probe", {&test_ctx}) {}
-
- private:
-  static std::vector<std::string> ros_args(const std::vector<std::string>& params) {
-    std::vector<std::string> a{"trajectory_evaluator", "--ros-args"};
+      : NodeUnderTest("trajectory_evaluator", ros_params(params), o) {}
+  static std::vector<std::string> ros_params(const std::vector<std::string>& params) {
+    std::vector<std::string> a{"--ros-args"};
     for (const auto& p : params) a.insert(a.end(), {"-p", p});
     return a;
   }
-  static std::vector<const char*> pointers(const std::vector<std::string>& a) {
-    std::vector<const char*> out;
-    out.reserve(a.size());
-    for (const auto& s : a) out.push_back(s.c_str());
-    return out;
-  }
-  std::vector<std::string> args_;
-  std::vector<const char*> argv_;
-
- public:
-  unav::Context node_ctx;
-  std::unique_ptr<unav::evaluation::TrajectoryEvaluator> node;
-  unav::Context test_ctx;
-  unav::Node probe;
 };
 
 // Odometry stamped t [s] (whole nanoseconds) at `pose`.

@@ -25,6 +25,7 @@
 #pragma once
 
 #include <fcntl.h>
+#include <gtest/gtest.h>
 #include <sys/file.h>
 #include <unistd.h>
 
@@ -35,6 +36,7 @@
 #include <initializer_list>
 #include <optional>
 #include <stdexcept>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -192,6 +194,57 @@ inline std::string describe(const std::vector<Link>& links) {
          " reader(s), reader sees " + std::to_string(l.sub->publisher_count()) + " writer(s)\n";
   return s;
 }
+
+/// The node test pattern: the node under test on a participant of its own, started with `args`
+/// as on its command line (`{"--ros-args", "-p", "x:=1"}`), and a probe node on another, both in
+/// the test's domain (or `options`') and spun together from the test's thread:
+///   NodeUnderTest<StationKeeperNode> t("station_keeper", {"--ros-args", "-r", "__ns:=/rov2"});
+///   auto pub = t.probe.create_publisher<...>(...);
+///   ASSERT_TRUE(t.match({make_link(*pub, *t.node)}));
+///   ASSERT_TRUE(t.spin_until([&] { return got; }));
+///   t.node.reset();  // a node's shutdown (e.g. what it writes on exit), while the probe lives on
+template <class NodeT>
+class NodeUnderTest {
+ public:
+  NodeUnderTest(const std::string& executable, std::vector<std::string> args,
+                const ContextOptions& options = test_context_options())
+      : args_(with_executable(executable, std::move(args))),
+        argv_(pointers(args_)),
+        node_ctx(static_cast<int>(argv_.size()), argv_.data(), options),
+        node(std::make_unique<NodeT>(NodeOptions{&node_ctx})),
+        test_ctx(options),
+        probe("probe", {&test_ctx}) {}
+
+  /// Both sides of every link matched (see wait_for_match); the failure says which are not.
+  ::testing::AssertionResult match(const std::vector<Link>& links) {
+    if (wait_for_match({&node_ctx, &test_ctx}, links)) return ::testing::AssertionSuccess();
+    return ::testing::AssertionFailure() << describe(links);
+  }
+  bool spin_until(const std::function<bool()>& done, std::chrono::milliseconds timeout = std::chrono::seconds(20)) {
+    return testing::spin_until({&node_ctx, &test_ctx}, done, timeout);
+  }
+  void spin_for(std::chrono::milliseconds duration) { testing::spin_for({&node_ctx, &test_ctx}, duration); }
+
+ private:
+  static std::vector<std::string> with_executable(const std::string& exe, std::vector<std::string> args) {
+    args.insert(args.begin(), exe);
+    return args;
+  }
+  static std::vector<const char*> pointers(const std::vector<std::string>& args) {
+    std::vector<const char*> p;
+    p.reserve(args.size());
+    for (const auto& a : args) p.push_back(a.c_str());
+    return p;
+  }
+  std::vector<std::string> args_;
+  std::vector<const char*> argv_;
+
+ public:
+  Context node_ctx;
+  std::unique_ptr<NodeT> node;
+  Context test_ctx;
+  Node probe;
+};
 
 /// What a subscriber that joins after the node under test started receives on a latched topic
 /// (transient local: /tf_static, /robot_description): the first message, from a probe in a
