@@ -260,7 +260,13 @@ int run(const FoxgloveOptions& o) {
     for (auto& [id, t] : channels) {
       const bool want = now.count(id) && now.at(id);
       if (want && !t.sub) {
-        subscribe(id, t);
+        try {
+          subscribe(id, t);
+        } catch (const unav::ConfigError& e) {  // e.g. rmw_dds_common's types: the graph's own
+          std::cerr << "[WARN] [unav_foxglove]: '" << t.topic << "' withdrawn: " << e.what() << std::endl;
+          server->remove_channel(id);
+          continue;
+        }
         std::cout << "[INFO] [unav_foxglove]: forwarding '" << t.topic << "'" << (t.compressed ? " compressed" : "")
                   << std::endl;
       } else if (!want && t.sub) {
@@ -279,8 +285,15 @@ int run(const FoxgloveOptions& o) {
         continue;
       }
       if (!w.writer) {
-        w.writer = std::make_shared<RawPublisher>(g.context(), unav::to_dds_topic(w.topic), w.dds_type,
-                                                  unav::QoS::reliable());
+        try {
+          w.writer = std::make_shared<RawPublisher>(g.context(), unav::to_dds_topic(w.topic), w.dds_type,
+                                                    unav::QoS::reliable());
+        } catch (const unav::ConfigError& e) {
+          std::cerr << "[WARN] [unav_foxglove]: a client's '" << w.topic << "' not published: " << e.what()
+                    << std::endl;
+          it = writers.erase(it);
+          continue;
+        }
         for (const auto& s : w.pending) w.writer->publish(s);
         w.pending.clear();
       }

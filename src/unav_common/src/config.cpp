@@ -11,6 +11,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <limits>
+#include <set>
 #include <sstream>
 
 namespace unav::common {
@@ -125,8 +126,11 @@ class Reader final : public ConfigArchive {
 
   void CheckUnknown(const Frame& f) const {
     if (!f.node.IsMap()) return;
+    std::set<std::string> seen;
     for (const auto& kv : f.node) {
       const std::string key = kv.first.IsScalar() ? kv.first.Scalar() : Written(kv.first);
+      if (!seen.insert(key).second)  // yaml-cpp keeps both and finds the first: refuse the ambiguity
+        reporter_.Fail(ChildPath(f.path, key), Written(kv.second), "appears twice in the same mapping");
       if (std::find(f.declared.begin(), f.declared.end(), key) != f.declared.end()) continue;
       std::string allowed = JoinTexts(f.declared);
       reporter_.Fail(ChildPath(f.path, key), Written(kv.second),

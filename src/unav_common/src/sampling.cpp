@@ -6,6 +6,7 @@
 #include <functional>
 #include <limits>
 #include <map>
+#include <set>
 #include <utility>
 #include <variant>
 
@@ -69,6 +70,27 @@ struct Found {
   std::vector<Step> steps;
   YAML::Node node;
 };
+
+// A key twice in one mapping (yaml-cpp keeps both, and lookups find the first): refused by path.
+void CheckDuplicateKeys(const YAML::Node& n, std::vector<Step>* steps, const std::string& file) {
+  if (n.IsMap()) {
+    std::set<std::string> seen;
+    for (const auto& kv : n) {
+      const std::string key = kv.first.IsScalar() ? kv.first.Scalar() : Written(kv.first);
+      steps->push_back(key);
+      if (!seen.insert(key).second)
+        throw ConfigError(file, PathText(*steps), Written(kv.second), "appears twice in the same mapping");
+      CheckDuplicateKeys(kv.second, steps, file);
+      steps->pop_back();
+    }
+  } else if (n.IsSequence()) {
+    for (std::size_t i = 0; i < n.size(); ++i) {
+      steps->push_back(i);
+      CheckDuplicateKeys(n[i], steps, file);
+      steps->pop_back();
+    }
+  }
+}
 
 void Collect(const YAML::Node& n, std::vector<Step>* steps, std::vector<Found>* out) {
   if (IsDistribution(n)) {
@@ -399,6 +421,7 @@ YAML::Node CheckStochastic(const YAML::Node& spec, const std::string& file, Targ
   const YAML::Node tree = spec.IsDefined() && !spec.IsNull() ? YAML::Clone(spec) : YAML::Node(YAML::NodeType::Map);
   const auto rows = Rows(defaults);
   std::vector<Step> steps;
+  CheckDuplicateKeys(tree, &steps, file);
   if (!CheckRepeats(tree, &steps, rows, file)) {
     CheckExpanded(tree, file, rows, check);
     return tree;

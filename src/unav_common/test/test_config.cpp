@@ -216,6 +216,14 @@ TEST(Config, UnknownKeyNamesFileKeyAndAllowedKeys) {
   EXPECT_EQ(element.rule(), "unknown key; allowed keys: name, position, direction");
 }
 
+TEST(Config, AKeyTwiceInOneMappingIsRefused) {
+  const ConfigError e = LoadError("horizon_steps: 30\ngain: 1.0\nhorizon_steps: 40");
+  EXPECT_EQ(e.key(), "horizon_steps");
+  EXPECT_EQ(e.rule(), "appears twice in the same mapping");
+  const ConfigError nested = LoadError("current: {speed: 1, speed: 2}");
+  EXPECT_EQ(nested.key(), "current.speed");
+}
+
 TEST(Config, OutOfRangeNamesValueAndRule) {
   ConfigError e = LoadError("horizon_steps: -3");
   EXPECT_STREQ(e.what(), "config/mpc.yaml: horizon_steps = -3: must be in [1, 500]");

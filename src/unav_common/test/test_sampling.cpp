@@ -167,6 +167,19 @@ TEST(Sampling, AWholeFileThatIsADistributionIsRefused) {
   }
 }
 
+// A key twice in one mapping (yaml-cpp keeps both) is refused by path before anything is drawn;
+// a repeated key next to a list of distributions crashed the support check (fuzz_spec found it).
+TEST(Sampling, AKeyTwiceInOneMappingIsRefused) {
+  try {
+    Parse("sizes: [1, 2]\nsizes: [0.08, {uniform: [0.2, 0.6]}]");
+    FAIL() << "a duplicate key was accepted";
+  } catch (const unav::ConfigError& e) {
+    EXPECT_EQ(e.key(), "sizes") << e.what();
+    EXPECT_EQ(e.rule(), "appears twice in the same mapping") << e.what();
+    EXPECT_NE(std::string(e.what()).find("s.yaml"), std::string::npos) << e.what();
+  }
+}
+
 TEST(Sampling, BadRepeatsAreNamed) {
   const std::pair<const char*, const char*> cases[] = {
       {"sizes: {repeat: {count: 2}}",

@@ -6,6 +6,7 @@
 
 #include <cstdlib>
 #include <cstring>
+#include <typeinfo>
 #include <utility>
 
 #include <fastdds/rtps/transport/UDPv4TransportDescriptor.h>
@@ -321,8 +322,14 @@ fdds::Topic* Context::topic(const std::string& dds_topic, fdds::TopicDataType* t
                         it->second->get_type_name() + "', not '" + type_name + "'");
     return it->second;
   }
-  if (!participant_->find_type(type_name).empty()) {
-    // already registered: the new instance is not needed
+  if (const fdds::TypeSupport existing = participant_->find_type(type_name); !existing.empty()) {
+    // Already registered: the new instance is not needed, if it is the same kind of type support.
+    // A raw (any-type, bytes) one and a generated one cannot share a name in a participant: each
+    // would hand the other's samples to its own (de)serializer (memory garbage, not an error).
+    if (typeid(*existing.get()) != typeid(*owned))
+      throw ConfigError("topic '" + dds_topic + "': type '" + type_name +
+                        "' is already registered in this process by another type support (a generated type and "
+                        "raw bytes cannot share a type name in one participant)");
   } else {
     fdds::TypeSupport ts(owned.release());
     if (ts.register_type(participant_) != ReturnCode_t::RETCODE_OK)
