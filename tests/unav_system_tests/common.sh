@@ -12,3 +12,24 @@ trap 'unav_on_unexpected_exit $LINENO "$BASH_COMMAND"' ERR
 set +u; source "$ws/install/setup.bash"; set -u
 source "$(dirname "${BASH_SOURCE[0]}")/test_domain.sh"
 py="${UNAV_VENV:-$ws/.venv}/bin/python"
+
+# start_foxglove_bridge LOG: `unav foxglove` in the background on a random port, its output in LOG;
+# sets bridge_pid, url (ws://127.0.0.1:PORT) and client (Foxglove's own libraries:
+# src/unav_bag/test/foxglove/foxglove_client.mjs). Returns 1 (with the reason) when it did not start.
+start_foxglove_bridge() {
+  client="$ws/src/unav_bag/test/foxglove/foxglove_client.mjs"
+  if [ ! -d "$ws/src/unav_bag/test/foxglove/node_modules/@foxglove/ws-protocol" ]; then
+    echo "no node_modules/@foxglove/ws-protocol (scripts/install_deps.sh runs npm ci)"
+    return 1
+  fi
+  local port=$((20000 + RANDOM % 20000))
+  unav foxglove --port "$port" >"$1" 2>&1 &
+  bridge_pid=$!
+  url="ws://127.0.0.1:$port"
+  for _ in $(seq 1 100); do
+    grep -q "Foxglove WebSocket server on $url" "$1" && return 0
+    sleep 0.1
+  done
+  echo "the bridge did not start: $(tail -3 "$1")"
+  return 1
+}

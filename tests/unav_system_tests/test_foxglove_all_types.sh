@@ -15,21 +15,18 @@ make_bags="$ws/build/unav_bag/make_fixture_bags"
 "$make_bags" "$tmp/bags" >/dev/null || fail "make_fixture_bags"
 unav bag play --loop "$tmp/bags/all_types" >"$log" 2>&1 &
 play_pid=$!
-port=$((20000 + RANDOM % 20000))
-unav foxglove --port "$port" >"$blog" 2>&1 &
-bridge_pid=$!
+bridge_pid=""
 trap 'kill -INT $play_pid $bridge_pid 2>/dev/null || true; wait $play_pid $bridge_pid 2>/dev/null || true; rm -rf "$tmp"' EXIT
-for _ in $(seq 1 100); do grep -q "Foxglove WebSocket server on" "$blog" && break; sleep 0.1; done
+start_foxglove_bridge "$blog" || fail "no bridge (above)"
 # Wait until the bridge has advertised every topic of the bag (52 types), then decode for 5 s.
 want=$(( $(unav bag info "$tmp/bags/all_types" | grep -c "Topic: /all/") - 1 ))
 grep -q "'/all/rmw_dds_common/ParticipantEntitiesInfo' not played" "$log" || fail "the graph's own type was played raw"
-client="$ws/src/unav_bag/test/foxglove/foxglove_client.mjs"
 for _ in $(seq 1 60); do
-  n=$(timeout 30 node "$client" "ws://127.0.0.1:$port" channels 1 2>/dev/null | grep -c '"/all/' || true)
+  n=$(timeout 30 node "$client" "$url" channels 1 2>/dev/null | grep -c '"/all/' || true)
   [ "$n" -ge "$want" ] && break
 done
 [ "$n" -ge "$want" ] || fail "$n of $want topics advertised"
-timeout 60 node "$client" "ws://127.0.0.1:$port" all 5 >"$out" 2>>"$blog" \
+timeout 60 node "$client" "$url" all 5 >"$out" 2>>"$blog" \
   || fail "a schema or a message did not decode: $(tail -3 "$blog")"
 "$py" - "$out" "$want" <<'PY' || fail "decoded: $(head -c 800 "$out")"
 import json, sys

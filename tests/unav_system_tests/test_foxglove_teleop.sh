@@ -15,18 +15,11 @@
 source "$(dirname "$0")/common.sh"
 log=$(mktemp); blog=$(mktemp); out=$(mktemp); tmp=$(mktemp -d)
 fail() { echo "FAIL: $*"; echo "--- launch:"; tail -20 "$log"; echo "--- bridge:"; tail -20 "$blog"; exit 1; }
-client="$ws/src/unav_bag/test/foxglove/foxglove_client.mjs"
-[ -d "$ws/src/unav_bag/test/foxglove/node_modules/@foxglove/ws-protocol" ] \
-  || fail "no node_modules/@foxglove/ws-protocol (scripts/install_deps.sh runs npm ci)"
 unav launch "$ws/launch_scripts/teleop.launch.yaml" >"$log" 2>&1 &
 launch_pid=$!
-port=$((20000 + RANDOM % 20000))
-unav foxglove --port "$port" >"$blog" 2>&1 &
-bridge_pid=$!
+bridge_pid=""
 trap 'kill -INT $launch_pid $bridge_pid 2>/dev/null || true; wait $launch_pid $bridge_pid 2>/dev/null || true; rm -rf "$tmp"' EXIT
-for _ in $(seq 1 100); do grep -q "Foxglove WebSocket server on" "$blog" && break; sleep 0.1; done
-grep -q "ws://127.0.0.1:$port" "$blog" || fail "bridge did not start"
-url="ws://127.0.0.1:$port"
+start_foxglove_bridge "$blog" || fail "no bridge (above)"
 
 # 1. The layout's topics: wait until the last node's (the sonar's fan) is advertised.
 for _ in $(seq 1 60); do

@@ -310,34 +310,33 @@ StationKeeperNode::StationKeeperNode(const unav::NodeOptions& options) : Node("s
         if (!f.valid()) return;  // no reply: nothing to use
         pending_.emplace_back(stamp_of(f.header()), unav::from_msg(f.position_world()));
       });
-  odom_sub_ = create_subscription<nav_msgs::msg::Odometry>(
-      "ground_truth/odom", unav::QoS::reliable(), [this](const nav_msgs::msg::Odometry& m) {
-        if (const std::string why = unav::odometry_problem(m); !why.empty()) {
-          rejections_.reject(odom_sub_->topic_name(), why);
-          return;
-        }
-        const double t = stamp_of(m.header());
-        // Fixes stamped fix_delay_s before this state: published that much simulated time before
-        // it (in lockstep, two controller round trips ago), so every run has them by now and
-        // applies the same ones at the same state. The prediction to `t` makes up the delay.
-        std::stable_sort(pending_.begin(), pending_.end(),
-                         [](const auto& a, const auto& b) { return a.first < b.first; });
-        size_t used = 0;
-        while (used < pending_.size() && pending_[used].first <= t - fix_delay_s_) {
-          keeper_.AddFix(pending_[used].first, pending_[used].second);
-          ++used;
-        }
-        pending_.erase(pending_.begin(), pending_.begin() + static_cast<std::ptrdiff_t>(used));
-        if (!hold_) {
-          hold_ = PoseSetpoint{unav::from_msg(m.pose().pose().position()), unav::from_msg(m.pose().pose().orientation())};
-        }
-        const PoseSetpoint sp = keeper_.Setpoint(t).value_or(*hold_);
-        geometry_msgs::msg::PoseStamped out;
-        out.header().stamp() = m.header().stamp();
-        out.header().frame_id("world_ned");
-        out.pose() = unav::to_msg(sp.p_W, sp.q_WB);
-        pub_->publish(out);
-      });
+  odom_sub_ = create_subscription<
+      nav_msgs::msg::Odometry>("ground_truth/odom", unav::QoS::reliable(), [this](const nav_msgs::msg::Odometry& m) {
+    if (const std::string why = unav::odometry_problem(m); !why.empty()) {
+      rejections_.reject(odom_sub_->topic_name(), why);
+      return;
+    }
+    const double t = stamp_of(m.header());
+    // Fixes stamped fix_delay_s before this state: published that much simulated time before
+    // it (in lockstep, two controller round trips ago), so every run has them by now and
+    // applies the same ones at the same state. The prediction to `t` makes up the delay.
+    std::stable_sort(pending_.begin(), pending_.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+    size_t used = 0;
+    while (used < pending_.size() && pending_[used].first <= t - fix_delay_s_) {
+      keeper_.AddFix(pending_[used].first, pending_[used].second);
+      ++used;
+    }
+    pending_.erase(pending_.begin(), pending_.begin() + static_cast<std::ptrdiff_t>(used));
+    if (!hold_) {
+      hold_ = PoseSetpoint{unav::from_msg(m.pose().pose().position()), unav::from_msg(m.pose().pose().orientation())};
+    }
+    const PoseSetpoint sp = keeper_.Setpoint(t).value_or(*hold_);
+    geometry_msgs::msg::PoseStamped out;
+    out.header().stamp() = m.header().stamp();
+    out.header().frame_id("world_ned");
+    out.pose() = unav::to_msg(sp.p_W, sp.q_WB);
+    pub_->publish(out);
+  });
   logger()->info("station keeping {:.1f} m behind the leader of {}", prm.keeping.distance_m, prm.leader_fix_topic);
 }
 

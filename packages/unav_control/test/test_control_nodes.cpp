@@ -21,11 +21,13 @@ TEST(ControlAllocatorNode, WrenchInCommandOutAndRuntimeFailure) {
   unav::control::ControlAllocatorNode node({&node_ctx});
   unav::Context test_ctx(o);
   unav::Node probe("probe", {&test_ctx});
-  auto wrench_pub = probe.create_publisher<geometry_msgs::msg::WrenchStamped>("/rov/control/wrench_command", unav::QoS::reliable());
+  auto wrench_pub =
+      probe.create_publisher<geometry_msgs::msg::WrenchStamped>("/rov/control/wrench_command", unav::QoS::reliable());
   auto fail_pub = probe.create_publisher<std_msgs::msg::String>("/rov/thrusters/set_failed", unav::QoS::reliable());
   std::vector<unav_msgs::msg::ThrusterCommand> cmds;
   auto sub = probe.create_subscription<unav_msgs::msg::ThrusterCommand>(
-      "/rov/thrusters/command", unav::QoS::reliable(), [&](const unav_msgs::msg::ThrusterCommand& c) { cmds.push_back(c); });
+      "/rov/thrusters/command", unav::QoS::reliable(),
+      [&](const unav_msgs::msg::ThrusterCommand& c) { cmds.push_back(c); });
   auto spin_until = [&](const std::function<bool()>& done) {
     return unav::testing::spin_until({&node_ctx, &test_ctx}, done);
   };
@@ -39,8 +41,8 @@ TEST(ControlAllocatorNode, WrenchInCommandOutAndRuntimeFailure) {
   unav::control::Allocator ref = unav::control::make_allocator(cfg);
   geometry_msgs::msg::WrenchStamped w;
   w.header().stamp().sec(3);
-  w.wrench().force().x(20.0);   // N, surge
-  w.wrench().torque().z(2.0);   // N m, yaw
+  w.wrench().force().x(20.0);  // N, surge
+  w.wrench().torque().z(2.0);  // N m, yaw
   auto check = [&](const unav_msgs::msg::ThrusterCommand& c) {
     ASSERT_EQ(c.u().size(), 8u);
     unav::physics::ThrusterVector u(8);
@@ -77,8 +79,8 @@ TEST(MpcControllerNode, OneParameterSystemFileThenParamsFileThenCommandLine) {
   const std::string params = ::testing::TempDir() + "mpc_params.yaml";
   std::ofstream(params) << "mpc_controller:\n  ros__parameters:\n    dt: 0.04\n    position_weights: [1.0, 2.0, 3.0]\n";
   const std::string c = "config_file:=" + cfg_file;
-  const char* argv[] = {"mpc_controller", "--ros-args", "-p", c.c_str(), "--params-file", params.c_str(),
-                        "-p", "horizon_steps:=30"};
+  const char* argv[] = {"mpc_controller", "--ros-args",   "-p", c.c_str(),
+                        "--params-file",  params.c_str(), "-p", "horizon_steps:=30"};
   unav::Context ctx(8, argv, unav::testing::test_context_options());
   unav::control::MpcControllerNode node({&ctx});
   EXPECT_EQ(node.parameters().at("horizon_steps").as<int>(), 30);
@@ -86,7 +88,8 @@ TEST(MpcControllerNode, OneParameterSystemFileThenParamsFileThenCommandLine) {
   EXPECT_DOUBLE_EQ(node.parameters().at("position_weights")[2].as<double>(), 3.0);
   EXPECT_EQ(node.parameters().at("control_blocks").as<int>(), 5);  // from the file
   bool listed = false;
-  for (const auto& row : node.parameter_table()) listed = listed || (row.name == "horizon_steps" && row.rule == "[1, 500]");
+  for (const auto& row : node.parameter_table())
+    listed = listed || (row.name == "horizon_steps" && row.rule == "[1, 500]");
   EXPECT_TRUE(listed);
 
   // Out of range and unknown keys are errors naming the source, key, value and rule.
@@ -145,7 +148,7 @@ TEST(StationKeeperNode, SetpointFiveMetresBehindTheLeadersFixes) {
   fix(1.0, 99.0, false);
   fix(1.5, 0.75);
   t.spin_for(300ms);  // the fixes reach the node (reliable)
-  odom(0.55);  // the fix at 0.5 s is used 0.1 s after its stamp (fix_delay_s): not yet
+  odom(0.55);         // the fix at 0.5 s is used 0.1 s after its stamp (fix_delay_s): not yet
   EXPECT_DOUBLE_EQ(sps.back().pose().position().x(), -3.0);
   odom(0.6);  // now: the first fix only (one position, no velocity yet: the course is north)
   EXPECT_NEAR(sps.back().pose().position().x(), 0.25 - 5.0, 1e-9);

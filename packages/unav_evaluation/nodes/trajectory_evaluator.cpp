@@ -126,7 +126,8 @@ TrajectoryEvaluator::TrajectoryEvaluator(const unav::NodeOptions& options)
   // otherwise grow the node without bound) and read back once, to evaluate.
   spool_dir_ = output_dir_ + "/.spool_" + trajectory_name_ + "_" + std::to_string(::getpid());
   std::filesystem::create_directories(spool_dir_, ec);
-  if (ec) throw unav::ConfigError("output_dir '" + output_dir_ + "': cannot create " + spool_dir_ + ": " + ec.message());
+  if (ec)
+    throw unav::ConfigError("output_dir '" + output_dir_ + "': cannot create " + spool_dir_ + ": " + ec.message());
   ground_truth_ = TrajectorySpool(spool_dir_ + "/ground_truth.bin");
   auto spool_of = [this](const std::string& n) {
     std::string file = n;

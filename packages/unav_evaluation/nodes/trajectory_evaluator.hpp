@@ -129,7 +129,7 @@ class TrajectoryEvaluator : public unav::Node {
   RpeOptions rpe_;
   double max_diff_ = 0.02;
   bool written_ = false, combine_ = false;
-  std::string spool_dir_;        ///< output_dir_/.spool_<trajectory>_<pid>: the poses received so far
+  std::string spool_dir_;  ///< output_dir_/.spool_<trajectory>_<pid>: the poses received so far
   TrajectorySpool ground_truth_;
   Eigen::Isometry3d X_BE_ = Eigen::Isometry3d::Identity();  ///< estimated frame on the body
   std::string camera_frame_, body_frame_;                   ///< tf lookup of X_BE_ (camera_frame_ empty: not needed)

@@ -284,7 +284,7 @@ TEST(TrajectorySpool, GivesBackTheSamePosesBitForBit) {
   EXPECT_EQ(spool.size(), 5000u);
   EXPECT_EQ(spool.last_stamp(), in.stamps.back());
   const Trajectory out = spool.load();
-  EXPECT_EQ(std::filesystem::file_size(spool.path()), 5000u * 13u * sizeof(double));  // flushed by load()
+  EXPECT_EQ(std::filesystem::file_size(spool.path()), std::uintmax_t{5000} * 13 * sizeof(double));  // flushed by load()
   ASSERT_EQ(out.size(), in.size());
   for (size_t i = 0; i < in.size(); ++i) {
     ASSERT_EQ(out.stamps[i], in.stamps[i]) << i;

@@ -36,12 +36,14 @@ VehiclePorts::VehiclePorts(unav::Node& node, const VehicleParams& vehicle, const
   tf_pub_ = node.create_publisher<tf2_msgs::msg::TFMessage>("/tf", unav::QoS::reliable(100));
   tf_.transforms().resize(1);
   thruster_pub_ = node.create_publisher<unav_msgs::msg::ThrusterState>(topic("thrusters/state"), unav::QoS::reliable());
-  if (sensors.imu.enabled) imu_pub_ = node.create_publisher<sensor_msgs::msg::Imu>(topic("imu"), unav::QoS::sensor_data());
+  if (sensors.imu.enabled)
+    imu_pub_ = node.create_publisher<sensor_msgs::msg::Imu>(topic("imu"), unav::QoS::sensor_data());
   if (sensors.pressure.enabled) {
     pressure_pub_ = node.create_publisher<sensor_msgs::msg::FluidPressure>(topic("pressure"), unav::QoS::sensor_data());
     depth_pub_ = node.create_publisher<geometry_msgs::msg::PointStamped>(topic("depth"), unav::QoS::sensor_data());
   }
-  if (sensors.dvl.enabled) dvl_pub_ = node.create_publisher<unav_msgs::msg::Dvl>(topic("dvl"), unav::QoS::sensor_data());
+  if (sensors.dvl.enabled)
+    dvl_pub_ = node.create_publisher<unav_msgs::msg::Dvl>(topic("dvl"), unav::QoS::sensor_data());
   if (sensors.altimeter.enabled)
     range_pub_ = node.create_publisher<sensor_msgs::msg::Range>(topic("range"), unav::QoS::sensor_data());
   if (sensors.magnetometer.enabled)
@@ -96,7 +98,7 @@ void VehiclePorts::publish_state(const Simulator& sim) {
   odom_.twist().twist().angular() = unav::to_vector3_msg(x.w_WB_B);
   odom_pub_->publish(odom_);
   if (path_t_ < 0.0 || t >= path_t_ + kPathPeriod - 1e-9 || t < path_t_) {  // (1e-9: steps sum to 0.5 inexactly)
-    if (t < path_t_) path_.poses().clear();  // time went back: a new run
+    if (t < path_t_) path_.poses().clear();                                 // time went back: a new run
     path_t_ = t;
     auto& poses = path_.poses();
     if (poses.size() >= kPathPoses) poses.erase(poses.begin());

@@ -235,10 +235,9 @@ std::string PhysicsServer::missing_with_acks() const {
                                                            static_cast<double>(last_command_ns_) * 1e-9);
   for (const auto& f : fleet_)
     if (wait_for_command_ && !barrier_->meets(f.last_command_ns, barrier_ns()))
-      missing += f.last_command_ns == INT64_MIN
-                     ? fmt::format(" ({} thruster command: none yet)", f.name)
-                     : fmt::format(" ({} thruster command: last stamped t = {:.3f} s)", f.name,
-                                   static_cast<double>(f.last_command_ns) * 1e-9);
+      missing += f.last_command_ns == INT64_MIN ? fmt::format(" ({} thruster command: none yet)", f.name)
+                                                : fmt::format(" ({} thruster command: last stamped t = {:.3f} s)",
+                                                              f.name, static_cast<double>(f.last_command_ns) * 1e-9);
   return missing;
 }
 

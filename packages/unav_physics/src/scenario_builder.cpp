@@ -11,7 +11,9 @@
 
 namespace unav::physics {
 
-VehicleParams scenario_vehicle(const unav::scene::Scenario& scenario) { return scenario_vehicle(scenario.vehicle, "vehicle"); }
+VehicleParams scenario_vehicle(const unav::scene::Scenario& scenario) {
+  return scenario_vehicle(scenario.vehicle, "vehicle");
+}
 
 VehicleParams scenario_vehicle(const unav::scene::ScenarioVehicle& v, const std::string& key) {
   const std::string& file = v.model;

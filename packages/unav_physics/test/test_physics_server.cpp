@@ -165,8 +165,9 @@ TEST(PhysicsServer, LockstepHoldsEachBarrierUntilTheCommandArrives) {
   const auto& poses = paths.back().poses();
   for (std::size_t i = 0; i < poses.size(); ++i) EXPECT_NEAR(stamp_s(poses[i].header()), 0.5 * i, 1e-9);
   EXPECT_EQ(paths.back().header().frame_id(), "world_ned");
-  const auto at_1s = std::find_if(h.odoms.begin(), h.odoms.end(),
-                                  [](const nav_msgs::msg::Odometry& o) { return std::abs(stamp_s(o.header()) - 1.0) < 1e-9; });
+  const auto at_1s = std::find_if(h.odoms.begin(), h.odoms.end(), [](const nav_msgs::msg::Odometry& o) {
+    return std::abs(stamp_s(o.header()) - 1.0) < 1e-9;
+  });
   ASSERT_NE(at_1s, h.odoms.end());
   EXPECT_EQ(poses[2].pose().position().x(), at_1s->pose().pose().position().x());
   EXPECT_GT(poses[2].pose().position().x(), poses[0].pose().position().x());
@@ -534,19 +535,21 @@ TEST(PhysicsServer, FleetVehiclesFlyOnTheirOwnTopics) {
                                      << "  - {name: rov2, model: " << model
                                      << ", initial_position: [-5, 0, 5], initial_rpy_deg: [0, 0, 90]}\n"
                                      << "  - {name: rov3, model: " << model << ", initial_position: [0, 8, 6]}\n";
-  Harness h({"-p", "scenario:=" + dir + "/fleet.yaml", "-p", "mode:=lockstep", "-p",
-             "lockstep_wait_for_command:=true", "-p", "lockstep_period:=0.05", "-p", "publish_rate:=20.0"});
+  Harness h({"-p", "scenario:=" + dir + "/fleet.yaml", "-p", "mode:=lockstep", "-p", "lockstep_wait_for_command:=true",
+             "-p", "lockstep_period:=0.05", "-p", "publish_rate:=20.0"});
   PhysicsServer& server = *h.server;
   ASSERT_EQ(server.fleet_size(), 2u);
   std::vector<nav_msgs::msg::Odometry> rov2, rov3;
   auto rov2_sub = h.probe->create_subscription<nav_msgs::msg::Odometry>(
-      "/rov2/ground_truth/odom", unav::QoS::reliable(100), [&](const nav_msgs::msg::Odometry& m) { rov2.push_back(m); });
+      "/rov2/ground_truth/odom", unav::QoS::reliable(100),
+      [&](const nav_msgs::msg::Odometry& m) { rov2.push_back(m); });
   auto rov3_sub = h.probe->create_subscription<nav_msgs::msg::Odometry>(
-      "/rov3/ground_truth/odom", unav::QoS::reliable(100), [&](const nav_msgs::msg::Odometry& m) { rov3.push_back(m); });
-  auto rov2_cmd = h.probe->create_publisher<unav_msgs::msg::ThrusterCommand>("/rov2/thrusters/command",
-                                                                           unav::QoS::reliable());
-  auto rov3_cmd = h.probe->create_publisher<unav_msgs::msg::ThrusterCommand>("/rov3/thrusters/command",
-                                                                           unav::QoS::reliable());
+      "/rov3/ground_truth/odom", unav::QoS::reliable(100),
+      [&](const nav_msgs::msg::Odometry& m) { rov3.push_back(m); });
+  auto rov2_cmd =
+      h.probe->create_publisher<unav_msgs::msg::ThrusterCommand>("/rov2/thrusters/command", unav::QoS::reliable());
+  auto rov3_cmd =
+      h.probe->create_publisher<unav_msgs::msg::ThrusterCommand>("/rov3/thrusters/command", unav::QoS::reliable());
   const std::vector<unav::testing::Link> links = {make_link(server, *rov2_sub), make_link(server, *rov3_sub),
                                                   make_link(*rov2_cmd, server), make_link(*rov3_cmd, server)};
   ASSERT_TRUE(unav::testing::wait_for_match({h.server_ctx.get(), h.test_ctx.get()}, links))

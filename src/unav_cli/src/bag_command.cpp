@@ -292,8 +292,8 @@ int play(const PlayOptions& o) {
       if (latched) qos.durability = unav::QoS::Durability::kTransientLocal;
     }
     try {
-      pubs[i] = std::make_unique<RawPublisher>(g.context(), unav::to_dds_topic(t.name), unav::dds_type_from_ros(t.type),
-                                               qos);
+      pubs[i] =
+          std::make_unique<RawPublisher>(g.context(), unav::to_dds_topic(t.name), unav::dds_type_from_ros(t.type), qos);
     } catch (const unav::ConfigError& e) {  // e.g. rmw_dds_common's types: this process's graph uses them
       std::cerr << "[WARN] [unav_bag]: '" << t.name << "' not played: " << e.what() << std::endl;
     }

@@ -201,10 +201,9 @@ int run(const FoxgloveOptions& o) {
           sensor_msgs::msg::CompressedImage out;
           try {
             if (!decode_typed(raw.bytes, m)) throw std::invalid_argument("a sample that does not decode as an Image");
-            CompressedImageData c = compress_image(
-                ImageView{m.encoding(), m.width(), m.height(), m.step(), m.is_bigendian() != 0, m.data().data(),
-                          m.data().size()},
-                quality);
+            CompressedImageData c = compress_image(ImageView{m.encoding(), m.width(), m.height(), m.step(),
+                                                             m.is_bigendian() != 0, m.data().data(), m.data().size()},
+                                                   quality);
             out.format(std::move(c.format));
             out.data(std::move(c.data));
           } catch (const std::invalid_argument& e) {
@@ -242,14 +241,12 @@ int run(const FoxgloveOptions& o) {
     if (!clock && !clock_type.empty()) {
       FoxgloveServer& s = *server;
       const unav::QoS qos = g.matching_qos("/clock");
-      clock = std::make_shared<RawSubscription>(g.context(), unav::to_dds_topic("/clock"), clock_type, qos,
-                                                [&s](RawSample& raw) {
-                                                  rosgraph_msgs::msg::Clock c;
-                                                  if (!decode_typed(raw.bytes, c)) return;
-                                                  s.publish_time(static_cast<std::uint64_t>(c.clock().sec()) *
-                                                                     1000000000ull +
-                                                                 c.clock().nanosec());
-                                                });
+      clock = std::make_shared<RawSubscription>(
+          g.context(), unav::to_dds_topic("/clock"), clock_type, qos, [&s](RawSample& raw) {
+            rosgraph_msgs::msg::Clock c;
+            if (!decode_typed(raw.bytes, c)) return;
+            s.publish_time(static_cast<std::uint64_t>(c.clock().sec()) * 1000000000ull + c.clock().nanosec());
+          });
       clock->start(qos);
     }
     std::map<std::uint32_t, bool> now;
@@ -309,8 +306,8 @@ int run(const FoxgloveOptions& o) {
   for (auto& [id, t] : channels) t.sub.reset();
   clock.reset();
   std::cout << "[INFO] [unav_foxglove]: " << channels.size() << " channels advertised, " << server->sent()
-            << " messages sent, " << server->dropped() << " dropped (a client's queue was full), "
-            << server->received() << " received from clients" << std::endl;
+            << " messages sent, " << server->dropped() << " dropped (a client's queue was full), " << server->received()
+            << " received from clients" << std::endl;
   server.reset();  // its thread stops: no handler runs after this
   const std::lock_guard<std::mutex> lock(writers_mutex);
   writers.clear();

@@ -177,7 +177,8 @@ struct FoxgloveServer::Impl {
     std::uint32_t id = 0;
     std::memcpy(&id, frame.data() + 1, 4);
     const auto found = c.advertised.find(id);
-    if (found == c.advertised.end()) return status(h, 1, "message on channel " + std::to_string(id) + ", never advertised");
+    if (found == c.advertised.end())
+      return status(h, 1, "message on channel " + std::to_string(id) + ", never advertised");
     if (handlers.on_client_message)
       handlers.on_client_message(found->second, reinterpret_cast<const std::uint8_t*>(frame.data()) + 5,
                                  frame.size() - 5);

@@ -32,8 +32,8 @@ class FoxgloveServer {
     std::uint16_t port = 8765;  ///< 0: any free port (port() tells which)
     std::string name = "unav";
     std::size_t max_buffered_bytes = 32u << 20;  ///< per client; beyond it messages are dropped
-    bool client_publish = false;  ///< offer clientPublish (clients' advertise and message data)
-    bool time = false;            ///< offer time (publish_time sends the clock to every client)
+    bool client_publish = false;                 ///< offer clientPublish (clients' advertise and message data)
+    bool time = false;                           ///< offer time (publish_time sends the clock to every client)
   };
   struct Channel {
     std::string topic;
@@ -78,8 +78,8 @@ class FoxgloveServer {
   void publish_time(std::uint64_t time_ns);
 
   std::size_t clients() const;
-  std::uint64_t sent() const;     ///< binary message frames sent
-  std::uint64_t dropped() const;  ///< not sent: the client's queue was full
+  std::uint64_t sent() const;      ///< binary message frames sent
+  std::uint64_t dropped() const;   ///< not sent: the client's queue was full
   std::uint64_t received() const;  ///< client message frames handed to on_client_message
 
  private:

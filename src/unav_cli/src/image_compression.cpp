@@ -9,20 +9,27 @@ namespace unav::cli {
 namespace {
 
 struct Layout {
-  int cv_type;          // of one pixel
-  int to_bgr;           // cv::cvtColor code to the encoder's order, or -1
+  int cv_type;  // of one pixel
+  int to_bgr;   // cv::cvtColor code to the encoder's order, or -1
   bool sixteen_bit;
   const char* encoded;  // what the compressed pixels are, as compressed_image_transport names it
 };
 
 bool layout_of(const std::string& e, Layout* l) {
-  if (e == "rgb8") *l = {CV_8UC3, cv::COLOR_RGB2BGR, false, "bgr8"};
-  else if (e == "bgr8" || e == "8UC3") *l = {CV_8UC3, -1, false, "bgr8"};
-  else if (e == "rgba8") *l = {CV_8UC4, cv::COLOR_RGBA2BGR, false, "bgr8"};
-  else if (e == "bgra8") *l = {CV_8UC4, cv::COLOR_BGRA2BGR, false, "bgr8"};
-  else if (e == "mono8" || e == "8UC1") *l = {CV_8UC1, -1, false, "mono8"};
-  else if (e == "mono16" || e == "16UC1") *l = {CV_16UC1, -1, true, "mono16"};
-  else return false;
+  if (e == "rgb8")
+    *l = {CV_8UC3, cv::COLOR_RGB2BGR, false, "bgr8"};
+  else if (e == "bgr8" || e == "8UC3")
+    *l = {CV_8UC3, -1, false, "bgr8"};
+  else if (e == "rgba8")
+    *l = {CV_8UC4, cv::COLOR_RGBA2BGR, false, "bgr8"};
+  else if (e == "bgra8")
+    *l = {CV_8UC4, cv::COLOR_BGRA2BGR, false, "bgr8"};
+  else if (e == "mono8" || e == "8UC1")
+    *l = {CV_8UC1, -1, false, "mono8"};
+  else if (e == "mono16" || e == "16UC1")
+    *l = {CV_16UC1, -1, true, "mono16"};
+  else
+    return false;
   return true;
 }
 

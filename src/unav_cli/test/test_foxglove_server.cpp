@@ -256,7 +256,9 @@ TEST(FoxgloveServer, ClientsPublishOnChannelsTheyAdvertiseAndReceiveTheClock) {
 
   client.send({{"op", "advertise"},
                {"channels",
-                {{{"id", 3}, {"topic", "/rov/control/pose_setpoint"}, {"encoding", "cdr"},
+                {{{"id", 3},
+                  {"topic", "/rov/control/pose_setpoint"},
+                  {"encoding", "cdr"},
                   {"schemaName", "geometry_msgs/msg/PoseStamped"}},
                  {{"id", 4}, {"topic", "/x"}, {"encoding", "json"}, {"schemaName", "std_msgs/msg/String"}},
                  {{"id", 5}, {"topic", "/y"}, {"encoding", "cdr"}, {"schemaName", "no_such/msg/Type"}}}}});
@@ -264,8 +266,7 @@ TEST(FoxgloveServer, ClientsPublishOnChannelsTheyAdvertiseAndReceiveTheClock) {
   EXPECT_EQ(json_refused["level"], 2) << json_refused;
   EXPECT_NE(json_refused["message"].get<std::string>().find("encoding 'json' is not supported"), std::string::npos);
   const Json type_refused = client.next_text();
-  EXPECT_NE(type_refused["message"].get<std::string>().find("'/y' [no_such/msg/Type]: unknown type"),
-            std::string::npos)
+  EXPECT_NE(type_refused["message"].get<std::string>().find("'/y' [no_such/msg/Type]: unknown type"), std::string::npos)
       << type_refused;
   ASSERT_TRUE(wait_for([&] { return advertised.size() == 1; }));
   EXPECT_EQ(advertised[0].id, 3u);
@@ -296,7 +297,9 @@ TEST(FoxgloveServer, ClientsPublishOnChannelsTheyAdvertiseAndReceiveTheClock) {
   // A client that goes away unadvertises what it still had.
   client.send({{"op", "advertise"},
                {"channels",
-                {{{"id", 6}, {"topic", "/rov/thrusters/command"}, {"encoding", "cdr"},
+                {{{"id", 6},
+                  {"topic", "/rov/thrusters/command"},
+                  {"encoding", "cdr"},
                   {"schemaName", "unav_msgs/msg/ThrusterCommand"}}}}});
   ASSERT_TRUE(wait_for([&] { return advertised.size() == 2; }));
   client.close();
@@ -310,8 +313,9 @@ TEST(FoxgloveServer, RefusesPublishingWhenNotOffered) {
   ASSERT_EQ(client.wait_state(), 1);
   client.next_text();
   client.next_text();
-  client.send({{"op", "advertise"},
-               {"channels", {{{"id", 1}, {"topic", "/x"}, {"encoding", "cdr"}, {"schemaName", "std_msgs/msg/String"}}}}});
+  client.send(
+      {{"op", "advertise"},
+       {"channels", {{{"id", 1}, {"topic", "/x"}, {"encoding", "cdr"}, {"schemaName", "std_msgs/msg/String"}}}}});
   const Json st = client.next_text();
   EXPECT_EQ(st["op"], "status") << st;
   EXPECT_NE(st["message"].get<std::string>().find("unsupported op 'advertise'"), std::string::npos) << st;

@@ -23,7 +23,7 @@ std::vector<std::uint8_t> gradient_rgb8(int w, int h, int step) {
   std::vector<std::uint8_t> px(static_cast<std::size_t>(step) * h, 0xAB);  // padding bytes: junk
   for (int y = 0; y < h; ++y)
     for (int x = 0; x < w; ++x) {
-      std::uint8_t* p = &px[static_cast<std::size_t>(y) * step + 3 * x];
+      std::uint8_t* p = &px[static_cast<std::size_t>(y) * step + 3u * static_cast<std::size_t>(x)];
       const bool red = x < w / 2 && y < h / 2;
       p[0] = red ? 220 : static_cast<std::uint8_t>(x * 255 / w);
       p[1] = red ? 20 : static_cast<std::uint8_t>(y * 255 / h);
@@ -52,7 +52,8 @@ TEST(ImageCompression, JpegOfAnRgbImageDecodesToTheSameColours) {
   for (int y = 0; y < h; ++y)
     for (int x = 0; x < w; ++x)
       for (int ch = 0; ch < 3; ++ch)
-        sum += std::abs(bgr.at<cv::Vec3b>(y, x)[2 - ch] - px[static_cast<std::size_t>(y) * step + 3 * x + ch]);
+        sum += std::abs(bgr.at<cv::Vec3b>(y, x)[2 - ch] -
+                        px[static_cast<std::size_t>(y) * step + 3u * static_cast<std::size_t>(x) + ch]);
   EXPECT_LT(sum / (w * h * 3), 4.0);
   const cv::Vec3b red = bgr.at<cv::Vec3b>(h / 4, w / 4);  // deep inside the red quarter
   EXPECT_GT(red[2], 200);
@@ -61,7 +62,7 @@ TEST(ImageCompression, JpegOfAnRgbImageDecodesToTheSameColours) {
 
 TEST(ImageCompression, SixteenBitImagesArePngAndExact) {
   const int w = 20, h = 10;
-  std::vector<std::uint16_t> depth(w * h);
+  std::vector<std::uint16_t> depth(static_cast<std::size_t>(w) * h);
   for (int i = 0; i < w * h; ++i) depth[i] = static_cast<std::uint16_t>(1000 + 257 * i);
   const auto* bytes = reinterpret_cast<const std::uint8_t*>(depth.data());
   const auto c = compress_image(ImageView{"16UC1", w, h, 2 * w, false, bytes, depth.size() * 2}, 80);
@@ -71,10 +72,10 @@ TEST(ImageCompression, SixteenBitImagesArePngAndExact) {
   for (int i = 0; i < w * h; ++i) ASSERT_EQ(back.at<std::uint16_t>(i / w, i % w), depth[i]) << i;
 
   // Big-endian pixels are swapped to the value they mean.
-  std::vector<std::uint8_t> be(2 * w * h);
+  std::vector<std::uint8_t> be(2u * static_cast<std::size_t>(w) * h);
   for (int i = 0; i < w * h; ++i) {
-    be[2 * i] = static_cast<std::uint8_t>(depth[i] >> 8);
-    be[2 * i + 1] = static_cast<std::uint8_t>(depth[i] & 0xFF);
+    be[2u * static_cast<std::size_t>(i)] = static_cast<std::uint8_t>(depth[i] >> 8);
+    be[2u * static_cast<std::size_t>(i) + 1] = static_cast<std::uint8_t>(depth[i] & 0xFF);
   }
   const auto cb = compress_image(ImageView{"mono16", w, h, 2 * w, true, be.data(), be.size()}, 80);
   const cv::Mat back_be = cv::imdecode(cb.data, cv::IMREAD_UNCHANGED);

@@ -86,7 +86,11 @@ macro(unav_interface_package)
   # One fastddsgen run per IDL, each in a scratch folder of its own, and only that IDL's four
   # files are kept: fastddsgen also writes every #included IDL into the same flat folder, and
   # those copies can come out empty (their include guard is already defined), so a shared
-  # folder gives order-dependent, broken headers. Separate commands also build in parallel.
+  # folder gives order-dependent, broken headers. Separate commands also build in parallel, so
+  # each also gets a temporary folder of its own (-t): fastddsgen preprocesses every IDL it reads
+  # into <tmp>/<Name>.idl.cc, /tmp by default, and two runs reading the same include (Header.idl's
+  # run and Time.idl's) then race on /tmp/Time.idl.cc: one read it empty ("Time.idl:1:0: error:
+  # mismatched input '<EOF>'", a build that failed once in a parallel rebuild here).
   foreach(_base IN LISTS _uip_bases)
     get_filename_component(_name "${_base}" NAME)
     string(REPLACE "/" "_" _tag "${_base}")
@@ -95,8 +99,9 @@ macro(unav_interface_package)
       OUTPUT "${_uip_gen}/${_base}.h" "${_uip_gen}/${_base}.cxx"
              "${_uip_gen}/${_base}PubSubTypes.h" "${_uip_gen}/${_base}PubSubTypes.cxx"
       COMMAND ${CMAKE_COMMAND} -E rm -rf "${_scratch}"
-      COMMAND ${CMAKE_COMMAND} -E make_directory "${_scratch}"
-      COMMAND ${UNAV_FASTDDSGEN_COMMAND} -replace -cs ${_uip_include_args} -d "${_scratch}" "${_uip_root}/${_base}.idl"
+      COMMAND ${CMAKE_COMMAND} -E make_directory "${_scratch}/tmp"
+      COMMAND ${UNAV_FASTDDSGEN_COMMAND} -replace -cs ${_uip_include_args} -d "${_scratch}" -t "${_scratch}/tmp"
+              "${_uip_root}/${_base}.idl"
       COMMAND ${CMAKE_COMMAND} "-DSCRATCH=${_scratch}" "-DGEN=${_uip_gen}" "-DBASES=${_base}"
               -P "${_UNAV_CMAKE_DIR}/unav_copy_generated.cmake"
       DEPENDS ${_uip_abs} ${_uip_dep_idls}

@@ -71,25 +71,33 @@ struct Found {
   YAML::Node node;
 };
 
-// A key twice in one mapping (yaml-cpp keeps both, and lookups find the first): refused by path.
-void CheckDuplicateKeys(const YAML::Node& n, std::vector<Step>* steps, const std::string& file) {
+// Calls visit(child) for every entry of a mapping or element of a sequence, with its step (the
+// key, or the index) on `steps` meanwhile.
+template <class Visit>
+void ForEachChild(const YAML::Node& n, std::vector<Step>* steps, Visit&& visit) {
   if (n.IsMap()) {
-    std::set<std::string> seen;
     for (const auto& kv : n) {
-      const std::string key = kv.first.IsScalar() ? kv.first.Scalar() : Written(kv.first);
-      steps->push_back(key);
-      if (!seen.insert(key).second)
-        throw ConfigError(file, PathText(*steps), Written(kv.second), "appears twice in the same mapping");
-      CheckDuplicateKeys(kv.second, steps, file);
+      steps->push_back(kv.first.IsScalar() ? kv.first.Scalar() : Written(kv.first));
+      visit(kv.second);
       steps->pop_back();
     }
   } else if (n.IsSequence()) {
     for (std::size_t i = 0; i < n.size(); ++i) {
       steps->push_back(i);
-      CheckDuplicateKeys(n[i], steps, file);
+      visit(n[i]);
       steps->pop_back();
     }
   }
+}
+
+// A key twice in one mapping (yaml-cpp keeps both, and lookups find the first): refused by path.
+void CheckDuplicateKeys(const YAML::Node& n, std::vector<Step>* steps, const std::string& file) {
+  std::set<std::string> seen;
+  ForEachChild(n, steps, [&](const YAML::Node& child) {
+    if (n.IsMap() && !seen.insert(std::get<std::string>(steps->back())).second)
+      throw ConfigError(file, PathText(*steps), Written(child), "appears twice in the same mapping");
+    CheckDuplicateKeys(child, steps, file);
+  });
 }
 
 void Collect(const YAML::Node& n, std::vector<Step>* steps, std::vector<Found>* out) {
@@ -97,19 +105,7 @@ void Collect(const YAML::Node& n, std::vector<Step>* steps, std::vector<Found>* 
     out->push_back({*steps, n});
     return;
   }
-  if (n.IsMap()) {
-    for (const auto& kv : n) {
-      steps->push_back(kv.first.Scalar());
-      Collect(kv.second, steps, out);
-      steps->pop_back();
-    }
-  } else if (n.IsSequence()) {
-    for (std::size_t i = 0; i < n.size(); ++i) {
-      steps->push_back(i);
-      Collect(n[i], steps, out);
-      steps->pop_back();
-    }
-  }
+  ForEachChild(n, steps, [&](const YAML::Node& child) { Collect(child, steps, out); });
 }
 
 // Replaces the node at `steps` in `root` (a tree of its own, from YAML::Clone) by `value`.

@@ -1,11 +1,10 @@
 // The topics a simulated vehicle publishes (DDS adapter, node code): /clock, ground_truth/odom and
 // /tf of its state, ground_truth/path (its last 10 minutes, a pose every 0.5 s: the trajectory for
-// RViz and Foxglove; bounded, the full record is the recorders'), thrusters/state, and its sensors (imu, pressure + depth, dvl, range, mag, gps,
-// usbl/fix), and the acoustic modem link (modem/tx -> /surface/modem/rx, /surface/modem/tx ->
-// modem/rx, delivered in simulated time) and, with a tether, its pull (tether/wrench) and shape
-// (tether/path)
-// as their readings come. One set of ports for every node that owns a vehicle's simulator: the
-// physics server and the autopilot bridge publish alike, so every consumer runs beside either.
+// RViz and Foxglove; bounded, the full record is the recorders'), thrusters/state, and its sensors (imu, pressure +
+// depth, dvl, range, mag, gps, usbl/fix), and the acoustic modem link (modem/tx -> /surface/modem/rx, /surface/modem/tx
+// -> modem/rx, delivered in simulated time) and, with a tether, its pull (tether/wrench) and shape (tether/path) as
+// their readings come. One set of ports for every node that owns a vehicle's simulator: the physics server and the
+// autopilot bridge publish alike, so every consumer runs beside either.
 #pragma once
 
 #include <memory>
@@ -87,7 +86,7 @@ class VehiclePorts {
   std::shared_ptr<unav::Publisher<unav_msgs::msg::UsblFix>> usbl_pub_;
   std::shared_ptr<unav::Publisher<geometry_msgs::msg::WrenchStamped>> tether_wrench_pub_;
   std::shared_ptr<unav::Publisher<nav_msgs::msg::Path>> tether_path_pub_;
-  static constexpr double kPathPeriod = 0.5;      ///< [s] of simulated time between ground_truth/path poses
+  static constexpr double kPathPeriod = 0.5;       ///< [s] of simulated time between ground_truth/path poses
   static constexpr std::size_t kPathPoses = 1200;  ///< 10 minutes of them; older ones are dropped
   double path_t_ = -1.0;                           ///< time of the last path pose
   std::uint64_t tether_calls_ = 0;

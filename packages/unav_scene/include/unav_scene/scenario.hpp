@@ -177,7 +177,8 @@ struct Scenario {
     a->Visit(Field("current", &current).Doc("water current YAML (config/water/currents/); empty = the world's"));
     a->Visit(Field("generate", &generate).Doc("a randomized pipe world over `world` (unav_scene/world_generator.hpp)"));
     a->Visit(Field("vehicle", &vehicle));
-    a->Visit(Field("fleet", &fleet).Doc("more vehicles in the same world: [{name, model, set, initial_position, ...}]"));
+    a->Visit(
+        Field("fleet", &fleet).Doc("more vehicles in the same world: [{name, model, set, initial_position, ...}]"));
     a->Visit(Field("physics", &physics));
     a->Visit(Field("control", &control));
     a->Visit(Field("cameras", &cameras));
