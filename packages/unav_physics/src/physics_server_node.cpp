@@ -285,6 +285,8 @@ void PhysicsServer::finish() {
   }
   const eprosima::fastrtps::Duration_t wait(2, 0);
   for (auto* w : ports_->state_writers()) w->wait_for_acknowledgments(wait);
+  for (const auto& f : fleet_)  // every vehicle's last state reaches its readers
+    for (auto* w : f.ports->state_writers()) w->wait_for_acknowledgments(wait);
   finishing_ = false;
   context().shutdown();
 }
