@@ -47,26 +47,7 @@ bool StationKeeper::AddFix(double t, const Eigen::Vector3d& p_W) {
     return true;
   }
   const double dt = t - t_;
-  if (!have_velocity_ && dt > 0.0) {
-    // Two-point start: the velocity between the first two fixes (no lag on a steady leader).
-    if ((p_W - x_).norm() > o_.gate_m) {
-      ++rejected_;
-      if (++outliers_in_a_row_ >= o_.reacquire_after) {
-        tracking_ = false;
-        return AddFix(t, p_W);
-      }
-      return false;
-    }
-    have_velocity_ = true;
-    v_ = (p_W - x_) / dt;
-    x_ = p_W;
-    t_ = t;
-    if (v_.head<2>().norm() > o_.min_speed_mps) course_ = std::atan2(v_.y(), v_.x());
-    outliers_in_a_row_ = 0;
-    ++used_;
-    return true;
-  }
-  const Eigen::Vector3d predicted = x_ + v_ * dt;
+  const Eigen::Vector3d predicted = x_ + v_ * dt;  // v_ is zero until the second fix
   const Eigen::Vector3d r = p_W - predicted;
   if (r.norm() > o_.gate_m) {
     ++rejected_;
@@ -78,11 +59,17 @@ bool StationKeeper::AddFix(double t, const Eigen::Vector3d& p_W) {
     return false;
   }
   outliers_in_a_row_ = 0;
+  if (!have_velocity_ && dt > 0.0) {
+    // Two-point start: the velocity between the first two fixes (no lag on a steady leader).
+    have_velocity_ = true;
+    v_ = r / dt;
+    x_ = p_W;
+  } else {
+    x_ = predicted + o_.alpha * r;
+    if (dt > 0.0) v_ += (o_.beta / dt) * r;
+  }
   t_ = t;
-  x_ = predicted + o_.alpha * r;
-  if (dt > 0.0) v_ += (o_.beta / dt) * r;
-  const double speed = v_.head<2>().norm();
-  if (speed > o_.min_speed_mps) course_ = std::atan2(v_.y(), v_.x());
+  if (v_.head<2>().norm() > o_.min_speed_mps) course_ = std::atan2(v_.y(), v_.x());
   ++used_;
   return true;
 }
@@ -91,10 +78,9 @@ std::optional<PoseSetpoint> StationKeeper::Setpoint(std::optional<double> at) co
   if (!tracking_) return std::nullopt;
   const double ahead = at ? std::clamp(*at - t_, 0.0, o_.max_prediction_s) : 0.0;
   const Eigen::Vector3d leader = x_ + v_ * ahead;
-  PoseSetpoint s;
-  s.p_W = leader - o_.distance_m * Eigen::Vector3d(std::cos(course_), std::sin(course_), 0.0);
-  s.p_W.z() = leader.z() + o_.depth_offset_m;
-  return PoseSetpoint::FromPositionYaw(s.p_W, course_);
+  Eigen::Vector3d p = leader - o_.distance_m * Eigen::Vector3d(std::cos(course_), std::sin(course_), 0.0);
+  p.z() = leader.z() + o_.depth_offset_m;
+  return PoseSetpoint::FromPositionYaw(p, course_);
 }
 
 }  // namespace unav::control

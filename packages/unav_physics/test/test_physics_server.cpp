@@ -85,13 +85,15 @@ struct Harness {
   bool spin_until(const std::function<bool()>& done, std::chrono::milliseconds timeout) {
     return unav::testing::spin_until({server_ctx.get(), test_ctx.get()}, done, timeout);
   }
-  void command(double t, const std::vector<double>& u) {
+  void command(double t, const std::vector<double>& u) { command(*cmd_pub, t, u); }
+  /// A thruster command stamped t on `pub` (the primary's or a fleet vehicle's topic).
+  static void command(unav::Publisher<unav_msgs::msg::ThrusterCommand>& pub, double t, const std::vector<double>& u) {
     unav_msgs::msg::ThrusterCommand c;
     const unav::Time s{std::llround(t * 1e9)};
     c.header().stamp().sec(s.sec());
     c.header().stamp().nanosec(s.nanosec());
     c.u(u);
-    cmd_pub->publish(c);
+    pub.publish(c);
   }
 };
 
@@ -554,15 +556,6 @@ TEST(PhysicsServer, FleetVehiclesFlyOnTheirOwnTopics) {
                                                   make_link(*rov2_cmd, server), make_link(*rov3_cmd, server)};
   ASSERT_TRUE(unav::testing::wait_for_match({h.server_ctx.get(), h.test_ctx.get()}, links))
       << unav::testing::describe(links);
-  const auto command = [](unav::Publisher<unav_msgs::msg::ThrusterCommand>& pub, double t,
-                          const std::vector<double>& u) {
-    unav_msgs::msg::ThrusterCommand c;
-    const unav::Time s{std::llround(t * 1e9)};
-    c.header().stamp().sec(s.sec());
-    c.header().stamp().nanosec(s.nanosec());
-    c.u(u);
-    pub.publish(c);
-  };
 
   const unav::scene::Scenario sc = unav::scene::load_scenario(dir + "/fleet.yaml");
   const unav::scene::World world = unav::scene::load_world(sc.world);
@@ -586,13 +579,13 @@ TEST(PhysicsServer, FleetVehiclesFlyOnTheirOwnTopics) {
     ASSERT_EQ(p.z(), sim->state().p_WB_W.z()) << "barrier " << k;
     // Every vehicle answers the barrier (each holds it: lockstep_wait_for_command); rov2 surges,
     // heading east (yaw 90 deg), the others hover.
-    command(*rov3_cmd, answered, hover);
+    Harness::command(*rov3_cmd, answered, hover);
     h.command(answered, hover);
     if (k == 3) {  // the barrier holds for rov2, which has not answered yet
       h.spin_until([] { return false; }, 100ms);
       EXPECT_NEAR(server.simulator().time(), answered, 1e-9);
     }
-    command(*rov2_cmd, answered, kSurge);
+    Harness::command(*rov2_cmd, answered, kSurge);
     sim->set_command(sim->time(), kSurge);
     for (int i = 0; i < 50; ++i) sim->step();
   }

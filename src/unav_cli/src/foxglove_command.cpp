@@ -9,7 +9,6 @@
 #include <mutex>
 #include <set>
 #include <string>
-#include <tuple>
 #include <vector>
 
 #include <fastdds/rtps/common/SerializedPayload.h>
@@ -113,18 +112,18 @@ int run(const FoxgloveOptions& o) {
     wanted[channel] = want;
   };
   handlers.on_client_advertise = [&](const FoxgloveServer::ClientChannel& c) -> std::string {
-    // Foxglove names ROS 2 types either way: geometry_msgs/msg/Twist or geometry_msgs/Twist.
-    std::string type = c.schema_name;
-    if (std::count(type.begin(), type.end(), '/') == 1) type.insert(type.find('/'), "/msg");
+    // Foxglove names ROS 2 types either way (geometry_msgs/msg/Twist, geometry_msgs/Twist): the
+    // DDS name is the same for both.
+    const std::string dds_type = unav::dds_type_from_ros(c.schema_name);
     try {
       const std::lock_guard<std::mutex> lock(reg_mutex);
-      reg.load(type);
+      reg.load(dds_type);
     } catch (const std::exception& e) {
       return std::string("no IDL for this type here: ") + e.what();
     }
     ClientWriter w;
     w.topic = normalize_topic(c.topic);
-    w.dds_type = unav::dds_type_from_ros(type);
+    w.dds_type = dds_type;
     const std::lock_guard<std::mutex> lock(writers_mutex);
     writers[{c.client, c.id}] = std::move(w);
     std::cout << "[INFO] [unav_foxglove]: a client publishes '" << c.topic << "' [" << c.schema_name << "]"
