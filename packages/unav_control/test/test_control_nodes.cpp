@@ -13,14 +13,11 @@ using namespace std::chrono_literals;
 using unav::testing::make_link;
 
 TEST(ControlAllocatorNode, WrenchInCommandOutAndRuntimeFailure) {
-  const unav::ContextOptions o = unav::testing::test_context_options();
   const std::string cfg_file = std::string(UNAV_CONFIG_DIR) + "/controllers/allocator.yaml";
-  const std::string p = "config_file:=" + cfg_file;
-  const char* argv[] = {"control_allocator", "--ros-args", "-p", p.c_str()};
-  unav::Context node_ctx(4, argv, o);
-  unav::control::ControlAllocatorNode node({&node_ctx});
-  unav::Context test_ctx(o);
-  unav::Node probe("probe", {&test_ctx});
+  unav::testing::NodeUnderTest<unav::control::ControlAllocatorNode> fx(
+      "control_allocator", {"--ros-args", "-p", "config_file:=" + cfg_file});
+  unav::control::ControlAllocatorNode& node = *fx.node;
+  unav::Node& probe = fx.probe;
   auto wrench_pub =
       probe.create_publisher<geometry_msgs::msg::WrenchStamped>("/rov/control/wrench_command", unav::QoS::reliable());
   auto fail_pub = probe.create_publisher<std_msgs::msg::String>("/rov/thrusters/set_failed", unav::QoS::reliable());
@@ -28,14 +25,12 @@ TEST(ControlAllocatorNode, WrenchInCommandOutAndRuntimeFailure) {
   auto sub = probe.create_subscription<unav_msgs::msg::ThrusterCommand>(
       "/rov/thrusters/command", unav::QoS::reliable(),
       [&](const unav_msgs::msg::ThrusterCommand& c) { cmds.push_back(c); });
-  auto spin_until = [&](const std::function<bool()>& done) {
-    return unav::testing::spin_until({&node_ctx, &test_ctx}, done);
-  };
+  auto spin_until = [&](const std::function<bool()>& done) { return fx.spin_until(done); };
   // Both sides of every link matched before the first message (a reader that counts the writer
   // is not enough: the writer drops what it writes before it knows the reader).
   const std::vector<unav::testing::Link> links = {make_link(*wrench_pub, node), make_link(*fail_pub, node),
                                                   make_link(node, *sub)};
-  ASSERT_TRUE(unav::testing::wait_for_match({&node_ctx, &test_ctx}, links)) << unav::testing::describe(links);
+  ASSERT_TRUE(fx.match(links));
   // Reference allocator from the same config: the wrench a command produces.
   const auto cfg = unav::control::load_allocator_config(cfg_file, UNAV_CONFIG_DIR);
   unav::control::Allocator ref = unav::control::make_allocator(cfg);
@@ -66,7 +61,7 @@ TEST(ControlAllocatorNode, WrenchInCommandOutAndRuntimeFailure) {
   ref.SetThrusterFailed(2, true);
   ASSERT_TRUE(spin_until([&] {
     wrench_pub->publish(w);
-    unav::testing::spin_for({&node_ctx, &test_ctx}, 50ms);
+    fx.spin_for(50ms);
     return cmds.back().u()[2] == 0.0;
   }));
   check(cmds.back());  // the remaining seven thrusters still produce the wrench

@@ -37,25 +37,13 @@ TEST(DatasetRecorderNode, LockstepAcksWaitForEveryFrameAndAFrameSentAgainIsNotWr
   const std::string cams_path = ::testing::TempDir() + "recorder_node_cams.yaml";
   std::ofstream(cams_path) << "cameras:\n  - name: down\n    mount: {xyz_m: [0.1, 0, 0.2], rpy_deg: [0, -90, 0]}\n"
                               "    width: 8\n    height: 6\n    hfov_deg: 90\n";
-  const std::string p_out = "output_dir:=" + dir, p_cams = "cameras_config:=" + cams_path;
-  const char* argv[] = {"dataset_recorder",
-                        "--ros-args",
-                        "-p",
-                        p_out.c_str(),
-                        "-p",
-                        p_cams.c_str(),
-                        "-p",
-                        "camera:=down",
-                        "-p",
-                        "lockstep:=true",
-                        "-p",
-                        "image_period:=0.1"};
   std::vector<int64_t> acks;
   {
-    unav::Context node_ctx(12, argv, unav::testing::test_context_options());
-    auto node = std::make_unique<unav::datagen::DatasetRecorder>(unav::NodeOptions{&node_ctx});
-    unav::Context test_ctx(unav::testing::test_context_options());
-    unav::Node probe("probe", {&test_ctx});
+    unav::testing::NodeUnderTest<unav::datagen::DatasetRecorder> fx(
+        "dataset_recorder", {"--ros-args", "-p", "output_dir:=" + dir, "-p", "cameras_config:=" + cams_path, "-p",
+                             "camera:=down", "-p", "lockstep:=true", "-p", "image_period:=0.1"});
+    auto& node = fx.node;
+    unav::Node& probe = fx.probe;
     auto odom_pub = probe.create_publisher<nav_msgs::msg::Odometry>("/rov/ground_truth/odom", unav::QoS::reliable(100));
     auto rgb_pub =
         probe.create_publisher<sensor_msgs::msg::Image>("/rov/camera/down/image_raw", unav::QoS::reliable(5));
@@ -64,12 +52,10 @@ TEST(DatasetRecorderNode, LockstepAcksWaitForEveryFrameAndAFrameSentAgainIsNotWr
           EXPECT_EQ(a.participant(), "recorder");
           acks.push_back(unav::nanoseconds(a.header()));
         });
-    auto spin_until = [&](const std::function<bool()>& done) {
-      return unav::testing::spin_until({&node_ctx, &test_ctx}, done, 20s);
-    };
+    auto spin_until = [&](const std::function<bool()>& done) { return fx.spin_until(done, 20s); };
     const std::vector<unav::testing::Link> links = {make_link(*odom_pub, *node), make_link(*rgb_pub, *node),
                                                     make_link(*node, *ack_sub)};
-    ASSERT_TRUE(unav::testing::wait_for_match({&node_ctx, &test_ctx}, links)) << unav::testing::describe(links);
+    ASSERT_TRUE(fx.match(links));
     auto odom = [&](int64_t ms) {
       nav_msgs::msg::Odometry o;
       o.header().stamp() = unav::to_msg(unav::Time{ms * 1000000});

@@ -30,20 +30,11 @@ TEST(KltVoNode, TracksRenderedRgbdOverDdsKeepsABoundedPathAndAcksLockstep) {
   ro.marine_snow = false;
   unav::renderer::Renderer renderer(world, cams, ro);
 
-  const unav::ContextOptions o = unav::testing::test_context_options();
-  const std::string p_cams = "cameras_config:=" + cameras;
-  const char* argv[] = {"klt_vo", "--ros-args",     "-p", p_cams.c_str(),
-                        "-p",     "lockstep:=true", "-p", "path_max_poses:=8"};
-  unav::Context node_ctx(8, argv, o);
-  auto node = std::make_unique<unav::localization::KltVoNode>(unav::NodeOptions{&node_ctx});
-  unav::Context test_ctx(o);
-  unav::Node probe("probe", {&test_ctx});
-  EstimatorProbe io(probe, "klt_vo", "klt_vo_odom", "base_link_frd", /*with_depth=*/true);
-  auto spin = [&](std::chrono::milliseconds d, const std::function<bool()>& done) {
-    return unav::testing::spin_until({&node_ctx, &test_ctx}, done, d);
-  };
-  ASSERT_TRUE(unav::testing::wait_for_match({&node_ctx, &test_ctx}, io.links(*node)))
-      << unav::testing::describe(io.links(*node));
+  unav::testing::NodeUnderTest<unav::localization::KltVoNode> fx(
+      "klt_vo", {"--ros-args", "-p", "cameras_config:=" + cameras, "-p", "lockstep:=true", "-p", "path_max_poses:=8"});
+  EstimatorProbe io(fx.probe, "klt_vo", "klt_vo_odom", "base_link_frd", /*with_depth=*/true);
+  auto spin = [&](std::chrono::milliseconds d, const std::function<bool()>& done) { return fx.spin_until(done, d); };
+  ASSERT_TRUE(fx.match(io.links(*fx.node)));
 
   const int n = 40;
   std::map<int64_t, Eigen::Vector3d> truth;  // body position in world_ned

@@ -29,20 +29,13 @@ TEST(OrbSlamNode, TracksRenderedImagesOverDdsAndAcksLockstep) {
   ro.marine_snow = false;
   unav::renderer::Renderer renderer(world, cams, ro);
 
-  const unav::ContextOptions o = unav::testing::test_context_options();
-  const std::string p_voc = "vocabulary:=" + root + "/config/vocabulary/orb_vocabulary.bin";
-  const char* argv[] = {"orb_slam", "--ros-args", "-p", p_voc.c_str(), "-p", "lockstep:=true"};
-  unav::Context node_ctx(6, argv, o);
-  auto node = std::make_unique<unav::localization::OrbSlamNode>(unav::NodeOptions{&node_ctx});
-  unav::Context test_ctx(o);
-  unav::Node probe("probe", {&test_ctx});
-  EstimatorProbe io(probe, "orb_slam", "orb_slam_map", "down_optical", /*with_depth=*/false);
-  auto spin = [&](std::chrono::milliseconds d, const std::function<bool()>& done) {
-    return unav::testing::spin_until({&node_ctx, &test_ctx}, done, d);
-  };
+  unav::testing::NodeUnderTest<unav::localization::OrbSlamNode> fx(
+      "orb_slam",
+      {"--ros-args", "-p", "vocabulary:=" + root + "/config/vocabulary/orb_vocabulary.bin", "-p", "lockstep:=true"});
+  EstimatorProbe io(fx.probe, "orb_slam", "orb_slam_map", "down_optical", /*with_depth=*/false);
+  auto spin = [&](std::chrono::milliseconds d, const std::function<bool()>& done) { return fx.spin_until(done, d); };
   // Both sides of every link matched before the first image (see unav_runtime/testing.hpp).
-  ASSERT_TRUE(unav::testing::wait_for_match({&node_ctx, &test_ctx}, io.links(*node)))
-      << unav::testing::describe(io.links(*node));
+  ASSERT_TRUE(fx.match(io.links(*fx.node)));
 
   const int n = 50;
   std::map<int64_t, Eigen::Vector3d> truth;

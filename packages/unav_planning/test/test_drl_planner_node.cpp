@@ -49,12 +49,10 @@ nav_msgs::msg::Odometry odom(double t, double n, double e, double d) {
 }  // namespace
 
 TEST(DrlPlannerNode, OneSetpointPerOdometryDecisionsWaitForTheirImage) {
-  const unav::ContextOptions o = unav::testing::test_context_options();
-  const char* argv[] = {"drl_planner", "--ros-args", "-p", "policy:=classical", "-p", "step_period:=1.5"};
-  unav::Context node_ctx(6, argv, o);
-  unav::planning::DrlPlannerNode node({&node_ctx});
-  unav::Context test_ctx(o);
-  unav::Node probe("probe", {&test_ctx});
+  unav::testing::NodeUnderTest<unav::planning::DrlPlannerNode> fx(
+      "drl_planner", {"--ros-args", "-p", "policy:=classical", "-p", "step_period:=1.5"});
+  unav::planning::DrlPlannerNode& node = *fx.node;
+  unav::Node& probe = fx.probe;
   auto odom_pub = probe.create_publisher<nav_msgs::msg::Odometry>("/rov/ground_truth/odom", unav::QoS::reliable());
   auto img_pub = probe.create_publisher<sensor_msgs::msg::Image>("/rov/camera/down/image_raw", unav::QoS::reliable(5));
   std::vector<geometry_msgs::msg::PoseStamped> sp;
@@ -63,11 +61,9 @@ TEST(DrlPlannerNode, OneSetpointPerOdometryDecisionsWaitForTheirImage) {
       [&](const geometry_msgs::msg::PoseStamped& s) { sp.push_back(s); });
   const std::vector<unav::testing::Link> links = {make_link(*odom_pub, node), make_link(*img_pub, node),
                                                   make_link(node, *sub)};
-  ASSERT_TRUE(unav::testing::wait_for_match({&node_ctx, &test_ctx}, links)) << unav::testing::describe(links);
-  auto spin_until = [&](const std::function<bool()>& done) {
-    return unav::testing::spin_until({&node_ctx, &test_ctx}, done);
-  };
-  auto spin_a_bit = [&] { unav::testing::spin_for({&node_ctx, &test_ctx}, std::chrono::milliseconds(200)); };
+  ASSERT_TRUE(fx.match(links));
+  auto spin_until = [&](const std::function<bool()>& done) { return fx.spin_until(done); };
+  auto spin_a_bit = [&] { fx.spin_for(std::chrono::milliseconds(200)); };
 
   // t = 0: the odometry alone is not answered (its image is not there yet) ...
   odom_pub->publish(odom(0.0, 0.0, 0.0, 5.0));

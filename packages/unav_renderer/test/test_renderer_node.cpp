@@ -26,27 +26,12 @@ std::string small_cameras() {
 // The renderer node at 10 Hz (one small down camera, no noise; in lockstep unless told) and a
 // probe that sends it odometry and records its lockstep acks [s]; the tests add their own image
 // readers.
-struct LockstepRenderer {
-  explicit LockstepRenderer(const char* mode = "lockstep:=true") : mode_arg(mode) {}
-  const char* mode_arg;
-  std::string world_arg = std::string("world:=") + UNAV_REPO_ROOT + "/worlds/pipe_inspection/world.yaml";
-  std::string cams_arg = "cameras_config:=" + small_cameras();
-  std::vector<const char*> argv = {"underwater_renderer",
-                                   "--ros-args",
-                                   "-p",
-                                   world_arg.c_str(),
-                                   "-p",
-                                   cams_arg.c_str(),
-                                   "-p",
-                                   mode_arg,
-                                   "-p",
-                                   "rate:=10.0",
-                                   "-p",
-                                   "render.noise:=false"};
-  unav::Context node_ctx{static_cast<int>(argv.size()), argv.data(), unav::testing::test_context_options()};
-  unav::renderer::UnderwaterRendererNode node{{&node_ctx}};
-  unav::Context test_ctx{unav::testing::test_context_options()};
-  unav::Node probe{"probe", {&test_ctx}};
+struct LockstepRenderer : unav::testing::NodeUnderTest<unav::renderer::UnderwaterRendererNode> {
+  explicit LockstepRenderer(const char* mode = "lockstep:=true")
+      : NodeUnderTest("underwater_renderer",
+                      {"--ros-args", "-p", std::string("world:=") + UNAV_REPO_ROOT + "/worlds/pipe_inspection/world.yaml",
+                       "-p", "cameras_config:=" + small_cameras(), "-p", mode, "-p", "rate:=10.0", "-p",
+                       "render.noise:=false"}) {}
   std::shared_ptr<unav::Publisher<nav_msgs::msg::Odometry>> odom_pub =
       probe.create_publisher<nav_msgs::msg::Odometry>("/rov/ground_truth/odom", unav::QoS::reliable());
   std::vector<double> acks;
@@ -60,10 +45,6 @@ struct LockstepRenderer {
                                                                             std::vector<sensor_msgs::msg::Image>* out) {
     return probe.create_subscription<sensor_msgs::msg::Image>(
         topic, unav::QoS::reliable(), [out](const sensor_msgs::msg::Image& m) { out->push_back(m); });
-  }
-  bool spin_until(const std::function<bool()>& done) { return unav::testing::spin_until({&node_ctx, &test_ctx}, done); }
-  bool matched(const std::vector<unav::testing::Link>& links) {
-    return unav::testing::wait_for_match({&node_ctx, &test_ctx}, links);
   }
   // 2 m above the 10 m deep seabed, over the pipe's first point (north 0, east 0 of the world)
   // unless told another north.
@@ -92,10 +73,10 @@ TEST(UnderwaterRendererNode, PublishesImagesStampedWithThePoseTimeAndAcks) {
   // knows a reader is never sent to it. On a slow machine the acks of 1.5 and 1.55 (and their
   // images) were lost that way: "1 of 3" answers. With all links matched on both sides, reliable
   // delivery within the history depths (odometry 10, images 5, acks 100) loses nothing.
-  const std::vector<unav::testing::Link> links = {make_link(*r.odom_pub, r.node), make_link(r.node, *img_sub),
-                                                  make_link(r.node, *depth_sub), make_link(r.node, *seg_sub),
-                                                  make_link(r.node, *r.ack_sub)};
-  ASSERT_TRUE(r.matched(links)) << unav::testing::describe(links);
+  const std::vector<unav::testing::Link> links = {make_link(*r.odom_pub, *r.node), make_link(*r.node, *img_sub),
+                                                  make_link(*r.node, *depth_sub), make_link(*r.node, *seg_sub),
+                                                  make_link(*r.node, *r.ack_sub)};
+  ASSERT_TRUE(r.match(links));
   r.send(1.5);   // a frame is due (first odometry)
   r.send(1.55);  // not due at 10 Hz: ack only
   r.send(1.6);   // due
@@ -156,23 +137,23 @@ TEST(UnderwaterRendererNode, PublishesTheLastFrameAgainWhenTheLockstepRepeatsIts
   LockstepRenderer r;
   std::vector<sensor_msgs::msg::Image> early, late;
   auto early_sub = r.image_reader("/rov/camera/down/image_raw", &early);
-  std::vector<unav::testing::Link> links = {make_link(*r.odom_pub, r.node), make_link(r.node, *early_sub),
-                                            make_link(r.node, *r.ack_sub)};
-  ASSERT_TRUE(r.matched(links)) << unav::testing::describe(links);
+  std::vector<unav::testing::Link> links = {make_link(*r.odom_pub, *r.node), make_link(*r.node, *early_sub),
+                                            make_link(*r.node, *r.ack_sub)};
+  ASSERT_TRUE(r.match(links));
   r.send(0.0);
   ASSERT_TRUE(r.spin_until([&] { return r.acks.size() == 1 && early.size() == 1; }));
   // The consumer's reader matches only now.
   auto late_sub = r.image_reader("/rov/camera/down/image_raw", &late);
-  links.push_back(make_link(r.node, *late_sub));
-  ASSERT_TRUE(r.matched(links)) << unav::testing::describe(links);
+  links.push_back(make_link(*r.node, *late_sub));
+  ASSERT_TRUE(r.match(links));
   r.send(0.0);  // the held state, repeated
   ASSERT_TRUE(r.spin_until([&] { return r.acks.size() == 2 && late.size() == 1 && early.size() == 2; }))
       << r.acks.size() << " acks, " << late.size() << " late images, " << early.size() << " early images";
   EXPECT_EQ(unav::nanoseconds(late[0].header()), 0);
   EXPECT_EQ(late[0].data(), early[0].data());  // the same frame, not a new render (noise is off anyway)
   EXPECT_EQ(early[1].data(), early[0].data());
-  EXPECT_EQ(r.node.frames_published(), 1u);
-  EXPECT_EQ(r.node.frames_republished(), 1u);
+  EXPECT_EQ(r.node->frames_published(), 1u);
+  EXPECT_EQ(r.node->frames_republished(), 1u);
   // 0.05 s: no frame due at 10 Hz; its repeat publishes nothing either. 0.1: a new frame.
   r.send(0.05);
   r.send(0.05);
@@ -180,8 +161,8 @@ TEST(UnderwaterRendererNode, PublishesTheLastFrameAgainWhenTheLockstepRepeatsIts
   ASSERT_TRUE(r.spin_until([&] { return r.acks.size() == 5 && late.size() == 2; }));
   EXPECT_EQ(r.acks, (std::vector<double>{0.0, 0.0, 0.05, 0.05, 0.1}));
   EXPECT_EQ(unav::nanoseconds(late[1].header()), 100000000);
-  EXPECT_EQ(r.node.frames_published(), 2u);
-  EXPECT_EQ(r.node.frames_republished(), 1u);
+  EXPECT_EQ(r.node->frames_published(), 2u);
+  EXPECT_EQ(r.node->frames_republished(), 1u);
 }
 
 // Free-running, one camera on two workers: a frame due while the previous one still renders
@@ -190,18 +171,18 @@ TEST(UnderwaterRendererNode, PublishesTheLastFrameAgainWhenTheLockstepRepeatsIts
 // off; marine snow, caustics, shadows and materials on).
 TEST(UnderwaterRendererNode, FreeRunningRendersSuccessiveFramesAtOnceInOrder) {
   LockstepRenderer r("lockstep:=false");
-  EXPECT_EQ(r.node.max_frames_in_flight(), 2u);
+  EXPECT_EQ(r.node->max_frames_in_flight(), 2u);
   std::vector<sensor_msgs::msg::Image> images;
   auto img_sub = r.image_reader("/rov/camera/down/image_raw", &images);
-  const std::vector<unav::testing::Link> links = {make_link(*r.odom_pub, r.node), make_link(r.node, *img_sub)};
-  ASSERT_TRUE(r.matched(links)) << unav::testing::describe(links);
+  const std::vector<unav::testing::Link> links = {make_link(*r.odom_pub, *r.node), make_link(*r.node, *img_sub)};
+  ASSERT_TRUE(r.match(links));
   // Six instants due at 10 Hz, sent at once (within the odometry and image history depths of 10):
   // none may be dropped or reordered, however the renders overlap.
   const int n = 6;
   for (int k = 0; k < n; ++k) r.send(0.1 * k, 0.25 * k);
   ASSERT_TRUE(r.spin_until([&] { return images.size() == static_cast<size_t>(n); })) << images.size() << " images";
-  EXPECT_EQ(r.node.frames_published(), static_cast<std::uint64_t>(n));
-  EXPECT_LE(r.node.peak_frames_in_flight(), 2u);
+  EXPECT_EQ(r.node->frames_published(), static_cast<std::uint64_t>(n));
+  EXPECT_LE(r.node->peak_frames_in_flight(), 2u);
 
   unav::scene::World world =
       unav::scene::load_world(std::string(UNAV_REPO_ROOT) + "/worlds/pipe_inspection/world.yaml");
@@ -227,24 +208,21 @@ TEST(UnderwaterRendererNode, TakesItsPartOfAScenario) {
   std::ofstream(scenario) << "world: " << UNAV_REPO_ROOT << "/worlds/pipe_inspection/world.yaml\nwater: 3C\n"
                           << "cameras: {config: " << small_cameras() << ", names: [down], width: 40, height: 24}\n"
                           << "render: {noise: false, marine_snow: false}\n";
-  const std::string scenario_arg = "scenario:=" + scenario;
-  std::vector<const char*> argv = {"underwater_renderer", "--ros-args", "-p",
-                                   scenario_arg.c_str(),  "-p",         "lockstep:=true"};
-  unav::Context node_ctx{static_cast<int>(argv.size()), argv.data(), unav::testing::test_context_options()};
-  unav::renderer::UnderwaterRendererNode node{{&node_ctx}};
-  unav::Context test_ctx{unav::testing::test_context_options()};
-  unav::Node probe{"probe", {&test_ctx}};
+  unav::testing::NodeUnderTest<unav::renderer::UnderwaterRendererNode> fx(
+      "underwater_renderer", {"--ros-args", "-p", "scenario:=" + scenario, "-p", "lockstep:=true"});
+  unav::renderer::UnderwaterRendererNode& node = *fx.node;
+  unav::Node& probe = fx.probe;
   auto odom_pub = probe.create_publisher<nav_msgs::msg::Odometry>("/rov/ground_truth/odom", unav::QoS::reliable());
   std::vector<sensor_msgs::msg::Image> images;
   auto img_sub = probe.create_subscription<sensor_msgs::msg::Image>(
       "/rov/camera/down/image_raw", unav::QoS::reliable(),
       [&images](const sensor_msgs::msg::Image& m) { images.push_back(m); });
   const std::vector<unav::testing::Link> links = {make_link(*odom_pub, node), make_link(node, *img_sub)};
-  ASSERT_TRUE(unav::testing::wait_for_match({&node_ctx, &test_ctx}, links)) << unav::testing::describe(links);
+  ASSERT_TRUE(fx.match(links));
   nav_msgs::msg::Odometry o;
   o.pose().pose().position().z(8.0);
   odom_pub->publish(o);
-  ASSERT_TRUE(unav::testing::spin_until({&node_ctx, &test_ctx}, [&] { return !images.empty(); }));
+  ASSERT_TRUE(fx.spin_until([&] { return !images.empty(); }));
   EXPECT_EQ(images[0].width(), 40u);
   EXPECT_EQ(images[0].height(), 24u);
   EXPECT_EQ(images[0].data().size(), 40u * 24u * 3u);

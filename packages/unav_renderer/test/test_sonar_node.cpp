@@ -36,13 +36,11 @@ double stamp_s(const std_msgs::msg::Header& h) {
 
 TEST(SonarNode, PublishesStandardSonarMessagesAtTheirRatesAndAcks) {
   const std::string world = std::string("world:=") + UNAV_REPO_ROOT + "/worlds/pipe_inspection/world.yaml";
-  const std::string cfg = "sonars_config:=" + small_sonars();
-  const char* argv[] = {"sonar", "--ros-args",     "-p", world.c_str(),    "-p", cfg.c_str(),
-                        "-p",    "lockstep:=true", "-p", "fan_width:=128", "-p", "waterfall_lines:=20"};
-  unav::Context node_ctx(12, argv, unav::testing::test_context_options());
-  unav::renderer::SonarNode node({&node_ctx});
-  unav::Context test_ctx(unav::testing::test_context_options());
-  unav::Node probe("probe", {&test_ctx});
+  unav::testing::NodeUnderTest<unav::renderer::SonarNode> fx(
+      "sonar", {"--ros-args", "-p", world, "-p", "sonars_config:=" + small_sonars(), "-p", "lockstep:=true", "-p",
+                "fan_width:=128", "-p", "waterfall_lines:=20"});
+  unav::renderer::SonarNode& node = *fx.node;
+  unav::Node& probe = fx.probe;
   auto odom_pub = probe.create_publisher<nav_msgs::msg::Odometry>("/rov/ground_truth/odom", unav::QoS::reliable());
   std::vector<marine_acoustic_msgs::msg::ProjectedSonarImage> fls;
   std::vector<marine_acoustic_msgs::msg::RawSonarImage> raw;
@@ -66,7 +64,7 @@ TEST(SonarNode, PublishesStandardSonarMessagesAtTheirRatesAndAcks) {
   const std::vector<unav::testing::Link> links = {make_link(*odom_pub, node), make_link(node, *fls_sub),
                                                   make_link(node, *raw_sub),  make_link(node, *fan_sub),
                                                   make_link(node, *fall_sub), make_link(node, *ack_sub)};
-  ASSERT_TRUE(unav::testing::wait_for_match({&node_ctx, &test_ctx}, links)) << unav::testing::describe(links);
+  ASSERT_TRUE(fx.match(links));
   auto send = [&](double t) {
     nav_msgs::msg::Odometry o;
     const unav::Time s{std::llround(t * 1e9)};
@@ -77,8 +75,7 @@ TEST(SonarNode, PublishesStandardSonarMessagesAtTheirRatesAndAcks) {
   };
   // FLS at 10 Hz: pings at 1.0 and 1.1; side-scan at 20 Hz: 1.0, 1.05, 1.1.
   for (double t : {1.0, 1.05, 1.1}) send(t);
-  ASSERT_TRUE(unav::testing::spin_until(
-      {&node_ctx, &test_ctx},
+  ASSERT_TRUE(fx.spin_until(
       [&] { return acks.size() == 3 && fls.size() == 2 && raw.size() == 3 && fans.size() == 2 && falls.size() == 3; }))
       << acks.size() << " acks, " << fls.size() << " FLS, " << raw.size() << " side-scan";
   EXPECT_EQ(acks, (std::vector<double>{1.0, 1.05, 1.1}));
@@ -170,19 +167,17 @@ TEST(SonarNode, ProfilerPublishesAPointCloudAcrossTrack) {
          "    horizontal_aperture_deg: 90\n    vertical_aperture_deg: 3\n    min_range_m: 0.3\n"
          "    max_range_m: 12\n    ping_rate_hz: 10\n    mount: {xyz_m: [0, 0, 0.1], rpy_deg: [0, -90, 0]}\n";
   const std::string world = std::string("world:=") + UNAV_REPO_ROOT + "/worlds/pipe_inspection/world.yaml";
-  const std::string cfg = "sonars_config:=" + path;
-  const char* argv[] = {"sonar", "--ros-args", "-p", world.c_str(), "-p", cfg.c_str()};
-  unav::Context node_ctx(6, argv, unav::testing::test_context_options());
-  unav::renderer::SonarNode node({&node_ctx});
-  unav::Context test_ctx(unav::testing::test_context_options());
-  unav::Node probe("probe", {&test_ctx});
+  unav::testing::NodeUnderTest<unav::renderer::SonarNode> fx("sonar",
+                                                             {"--ros-args", "-p", world, "-p", "sonars_config:=" + path});
+  unav::renderer::SonarNode& node = *fx.node;
+  unav::Node& probe = fx.probe;
   auto odom_pub = probe.create_publisher<nav_msgs::msg::Odometry>("/rov/ground_truth/odom", unav::QoS::reliable());
   std::vector<sensor_msgs::msg::PointCloud2> clouds;
   auto sub = probe.create_subscription<sensor_msgs::msg::PointCloud2>(
       "/rov/sonar/prof/points", unav::QoS::reliable(),
       [&](const sensor_msgs::msg::PointCloud2& m) { clouds.push_back(m); });
   const std::vector<unav::testing::Link> links = {make_link(*odom_pub, node), make_link(node, *sub)};
-  ASSERT_TRUE(unav::testing::wait_for_match({&node_ctx, &test_ctx}, links)) << unav::testing::describe(links);
+  ASSERT_TRUE(fx.match(links));
   nav_msgs::msg::Odometry o;
   o.header().stamp().sec(1);
   o.pose().pose().position().x(3.0);
@@ -190,7 +185,7 @@ TEST(SonarNode, ProfilerPublishesAPointCloudAcrossTrack) {
   o.pose().pose().position().z(7.0);
   o.pose().pose().orientation().w(1.0);
   odom_pub->publish(o);
-  ASSERT_TRUE(unav::testing::spin_until({&node_ctx, &test_ctx}, [&] { return !clouds.empty(); }));
+  ASSERT_TRUE(fx.spin_until([&] { return !clouds.empty(); }));
   const auto& c = clouds[0];
   EXPECT_EQ(c.header().frame_id(), "prof_link");
   ASSERT_EQ(c.fields().size(), 4u);
