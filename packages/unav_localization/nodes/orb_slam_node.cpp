@@ -16,6 +16,13 @@
 //                                      body_frame; with the camera's mount (body_frame -> <camera>_optical
 //                                      on /tf_static) they scale each map to metres (monocular-inertial
 //                                      mode): the odometry and path are then metric
+//   sub  dvl                           unav_msgs/Dvl (dvl: true): the DVL's bottom velocity in body_frame
+//                                      (its frame_id); with the camera's mount it scales each map to
+//                                      metres and holds the scale through the bundle adjustments
+//                                      (DVL-aided mode; replaces the IMU's scaling when both are on)
+//                                      With imu or dvl on, odometry is published once the output is
+//                                      metric (the first scaling, ~2 s of keyframes); the path
+//                                      covers every tracked frame (the history is rescaled)
 //   pub  /lockstep/ack                 unav_msgs/LockstepAck (lockstep: true): after processing the
 //                                      image at t, acks up to t + image_period (just under the next
 //                                      image), so a lockstep simulation waits for the SLAM
@@ -32,6 +39,7 @@
 #include "sensor_msgs/msg/camera_info.hpp"
 #include "sensor_msgs/msg/image.hpp"
 #include "sensor_msgs/msg/imu.hpp"
+#include "unav_msgs/msg/dvl.hpp"
 #include "unav_common/config.hpp"
 #include "unav_common/resources.hpp"
 #include "unav_localization/mono_slam.hpp"
@@ -51,6 +59,10 @@ struct OrbSlamNodeParams {
   double image_period = 0.1;
   std::string frame_id = "orb_slam_map";
   bool imu = false;
+  bool dvl = false;
+  bool dvl_factors = true;
+  double dvl_factor_sigma_m = 0.01;
+  double dvl_factor_sigma_ratio = 0.03;
   std::string body_frame = "base_link_frd";
   // Our vehicle's IMU (config/vehicles/bluerov2_heavy.yaml): 0.002 rad/s and 0.02 m/s^2 per
   // sample at 200 Hz, i.e. these densities.
@@ -73,7 +85,18 @@ struct OrbSlamNodeParams {
         Field("image_period", &image_period).Range(1e-3, 10.0).Unit("s").Doc("camera frame period (lockstep acks)"));
     a->Visit(Field("frame_id", &frame_id).Doc("odometry frame"));
     a->Visit(Field("imu", &imu).Doc("monocular-inertial mode: the imu topic scales each map to metres"));
-    a->Visit(Field("body_frame", &body_frame).Doc("the IMU's frame, parent of the camera mount on /tf_static"));
+    a->Visit(Field("dvl", &dvl).Doc("DVL-aided mode: the dvl topic scales each map to metres and holds its scale"));
+    a->Visit(Field("dvl_factors", &dvl_factors)
+                 .Doc("DVL-aided: the DVL's displacements between keyframes constrain the bundle adjustments"));
+    a->Visit(Field("dvl_factor_sigma_m", &dvl_factor_sigma_m)
+                 .Range(1e-4, 10.0)
+                 .Unit("m")
+                 .Doc("DVL displacement factor: standard deviation (plus dvl_factor_sigma_ratio x the displacement)"));
+    a->Visit(Field("dvl_factor_sigma_ratio", &dvl_factor_sigma_ratio)
+                 .Range(0.0, 1.0)
+                 .Doc("DVL displacement factor: standard deviation per metre of displacement"));
+    a->Visit(Field("body_frame", &body_frame)
+                 .Doc("the IMU's and the DVL's frame, parent of the camera mount on /tf_static"));
     a->Visit(Field("imu_gyro_noise_density", &imu_gyro_noise_density)
                  .Range(1e-7, 1.0)
                  .Unit("rad/s/sqrt(Hz)")
@@ -97,6 +120,9 @@ class OrbSlamNode : public unav::Node {
     options_.orb.features = prm.features;
     options_.loop_closing = prm.loop_closing;
     options_.clahe_clip = prm.clahe_clip;
+    options_.dvl_factors = prm.dvl_factors;
+    options_.dvl_factor_sigma_m = prm.dvl_factor_sigma_m;
+    options_.dvl_factor_sigma_ratio = prm.dvl_factor_sigma_ratio;
     lockstep_ = prm.lockstep.enabled;
     ack_name_ = prm.lockstep.name;
     image_period_ = prm.image_period;
@@ -113,19 +139,26 @@ class OrbSlamNode : public unav::Node {
     } else {
       logger()->warn("no vocabulary: loop closing and relocalisation are off");
     }
+    want_imu_ = prm.imu;
+    want_dvl_ = prm.dvl;
     if (prm.imu) {
       imu_noise_.gyro_noise_density = prm.imu_gyro_noise_density;
       imu_noise_.accel_noise_density = prm.imu_accel_noise_density;
       imu_sub_ = create_subscription<sensor_msgs::msg::Imu>("imu", unav::QoS::sensor_data(),
                                                             [this](const sensor_msgs::msg::Imu& m) { on_imu(m); });
-      // The mount's owner (the renderer) publishes it latched; the mode starts when it is known.
+    }
+    if (prm.dvl)
+      dvl_sub_ = create_subscription<unav_msgs::msg::Dvl>("dvl", unav::QoS::sensor_data(),
+                                                          [this](const unav_msgs::msg::Dvl& m) { on_dvl(m); });
+    if (prm.imu || prm.dvl) {
+      // The mount's owner (the renderer) publishes it latched; the modes start when it is known.
       tf_static_ = std::make_unique<unav::StaticTransformListener>(*this);
       tf_static_->on_update([this, body = prm.body_frame] {
         if (X_BC_) return;
         if (const auto X = tf_static_->lookup(body, camera_ + "_optical")) {
           X_BC_ = *X;
-          logger()->info("monocular-inertial: camera mount {} -> {}_optical from /tf_static", body, camera_);
-          enable_inertial();
+          logger()->info("camera mount {} -> {}_optical from /tf_static", body, camera_);
+          enable_sensors();
         }
       });
     }
@@ -149,6 +182,11 @@ class OrbSlamNode : public unav::Node {
           "re-initialisations",
           st.frames, st.tracked_frames, st.lost_frames, st.keyframes, st.points, st.loops, st.relocalizations,
           st.reinitializations);
+      if (dvl_on_)
+        logger()->info(
+            "DVL-aided: {} map(s) scaled to metres, {} refinement(s), {} scaling(s) refused, {} displacement factors, "
+            "{} DVL readings rejected",
+            st.dvl_inits, st.dvl_refinements, st.dvl_rejections, st.dvl_factors, st.dvl_samples_rejected);
       if (inertial_on_)
         logger()->info(
             "monocular-inertial: {} map(s) scaled to metres, {} refinement(s), {} initialisation(s) refused, {} IMU "
@@ -173,17 +211,29 @@ class OrbSlamNode : public unav::Node {
       logger()->error("camera_info rejected: {}", e.what());
       return;
     }
-    enable_inertial();
+    enable_sensors();
     while (!pending_.empty()) {
       process(pending_.front());
       pending_.pop_front();
     }
   }
 
-  void enable_inertial() {
-    if (!slam_ || !X_BC_ || inertial_on_) return;
-    slam_->EnableInertial(*X_BC_, imu_noise_);
-    inertial_on_ = true;
+  void enable_sensors() {
+    if (!slam_ || !X_BC_) return;
+    if (want_imu_ && !inertial_on_) {
+      slam_->EnableInertial(*X_BC_, imu_noise_);
+      inertial_on_ = true;
+    }
+    if (want_dvl_ && !dvl_on_) {
+      slam_->EnableDvl(*X_BC_);  // the DVL reports in body_frame
+      dvl_on_ = true;
+    }
+  }
+
+  void on_dvl(const unav_msgs::msg::Dvl& m) {
+    if (!dvl_on_) return;  // before the camera and its mount are known
+    slam_->AddDvl(unav::Time::from_msg(m.header().stamp().sec(), m.header().stamp().nanosec()).seconds(),
+                  Eigen::Vector3d(m.velocity().x(), m.velocity().y(), m.velocity().z()), m.valid());
   }
 
   void on_imu(const sensor_msgs::msg::Imu& m) {
@@ -234,7 +284,9 @@ class OrbSlamNode : public unav::Node {
     } else if (s.state == SlamState::kTracking || s.state == SlamState::kRelocalized) {
       if (was_lost_) logger()->info("{} again at t = {:.3f}", to_string(s.state), t);
       was_lost_ = false;
-      publish_odometry(m.header(), s.T_wc);
+      // With the IMU or the DVL on, only metric poses: the first seconds' poses are in the first
+      // map's arbitrary units, a jump of ~1.5x at the scaling for anyone who navigates on them.
+      if (!(dvl_on_ || inertial_on_) || slam_->stats().metric) publish_odometry(m.header(), s.T_wc);
     }
     if (s.reinitialized) logger()->warn("re-initialising: a new map will continue from the last good pose");
     if (s.loop_closed)
@@ -299,10 +351,12 @@ class OrbSlamNode : public unav::Node {
   std::shared_ptr<unav::Subscription<sensor_msgs::msg::CameraInfo>> info_sub_;
   std::shared_ptr<unav::Subscription<sensor_msgs::msg::Image>> image_sub_;
   std::shared_ptr<unav::Subscription<sensor_msgs::msg::Imu>> imu_sub_;
+  std::shared_ptr<unav::Subscription<unav_msgs::msg::Dvl>> dvl_sub_;
   std::unique_ptr<unav::StaticTransformListener> tf_static_;
   std::optional<Eigen::Isometry3d> X_BC_;
   ImuNoise imu_noise_;
   bool inertial_on_ = false;
+  bool want_imu_ = false, want_dvl_ = false, dvl_on_ = false;
 };
 
 }  // namespace unav::localization

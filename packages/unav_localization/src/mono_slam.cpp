@@ -24,6 +24,14 @@ bool MonoSlamOptions::IsValid(std::string* msg) const {
   if (init_max_frames < 2) return fail("init_max_frames must be >= 2, got " + std::to_string(init_max_frames));
   if (!(inertial_init_window_s > 0.0 && inertial_init_window_s <= 60.0))
     return fail("inertial_init_window_s must be in (0, 60], got " + std::to_string(inertial_init_window_s));
+  if (!(dvl_init_window_s > 0.0 && dvl_init_window_s <= 60.0))
+    return fail("dvl_init_window_s must be in (0, 60], got " + std::to_string(dvl_init_window_s));
+  if (!(dvl_min_travel_m >= 0.0 && dvl_min_travel_m <= 100.0))
+    return fail("dvl_min_travel_m must be in [0, 100], got " + std::to_string(dvl_min_travel_m));
+  if (!(dvl_factor_sigma_m > 0.0 && dvl_factor_sigma_m <= 10.0))
+    return fail("dvl_factor_sigma_m must be in (0, 10], got " + std::to_string(dvl_factor_sigma_m));
+  if (!(dvl_factor_sigma_ratio >= 0.0 && dvl_factor_sigma_ratio <= 1.0))
+    return fail("dvl_factor_sigma_ratio must be in [0, 1], got " + std::to_string(dvl_factor_sigma_ratio));
   if (!(clahe_clip >= 0.0 && clahe_clip <= 40.0))
     return fail("clahe_clip must be in [0, 40], got " + std::to_string(clahe_clip));
   if (!(clahe_max_stddev > 0.0 && clahe_max_stddev <= 256.0))
@@ -102,9 +110,10 @@ auto MonoSlam::Impl::ResetForReinitialization() -> void {
     ++stats.maps;
   }
   map = std::make_unique<Map>();
-  inertial_stage = 0;
+  metric_stage = 0;
   map_sets_global_scale = false;
   inertial_rejection_said = false;
+  dvl_rejection_said = false;
   db = BowDatabase();
   traj.clear();
   initialized = false;
@@ -226,8 +235,8 @@ auto MonoSlam::Impl::Track(const cv::Mat& gray, double stamp) -> SlamFrameSummar
       cur.T_cw = map->kf(ref_kf).T_cw;
       has_velocity = false;
     }
-    if (inertial) {
-      const std::string said = TryInertialInit();
+    if (dvl_on || inertial) {
+      const std::string said = dvl_on ? TryDvlScale() : TryInertialInit();
       if (!said.empty()) s.message += (s.message.empty() ? "" : "; ") + said;
     }
     s.mapping_ms = Ms(t1);
@@ -296,6 +305,19 @@ void MonoSlam::AddImu(double stamp, const Eigen::Vector3d& gyro, const Eigen::Ve
   impl_->AddImu(stamp, gyro, accel);
 }
 
+void MonoSlam::EnableDvl(const Eigen::Isometry3d& T_dc) {
+  const Eigen::Matrix3d R = T_dc.linear();
+  if (!T_dc.matrix().allFinite() || (R.transpose() * R - Eigen::Matrix3d::Identity()).norm() > 1e-6 ||
+      R.determinant() < 0.0)
+    throw std::invalid_argument("MonoSlam::EnableDvl: T_dc must be a finite rigid transform");
+  impl_->dvl_on = true;
+  impl_->T_dc = T_dc;
+}
+
+void MonoSlam::AddDvl(double stamp, const Eigen::Vector3d& velocity, bool valid) {
+  impl_->AddDvl(stamp, velocity, valid);
+}
+
 SlamFrameSummary MonoSlam::Track(const cv::Mat& gray, double stamp) {
   try {
     return impl_->Track(gray, stamp);
@@ -330,6 +352,7 @@ SlamStats MonoSlam::stats() const {
   SlamStats s = impl_->stats;
   s.keyframes = impl_->map->GoodKeyFrames();
   s.points = impl_->map->GoodPoints();
+  s.metric = impl_->global_per_metric > 0.0;
   return s;
 }
 

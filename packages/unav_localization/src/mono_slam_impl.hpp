@@ -14,6 +14,7 @@
 #include <opencv2/calib3d.hpp>
 #include <opencv2/core/eigen.hpp>
 #include <opencv2/imgproc.hpp>
+#include <optional>
 #include <random>
 #include <set>
 #include <stdexcept>
@@ -27,6 +28,11 @@ namespace slam_internal {
 constexpr int kThHigh = 100;  // descriptor distance accepted when projection already constrains
 constexpr int kThLow = 50;    // descriptor distance accepted for matching by appearance only
 constexpr double kChi2Mono = 5.991;
+// A map's steps to metres (IMU or DVL): at 1, 2.5 and 7.5 x the window (ORB-SLAM3: 2, 5, 15 s),
+// over the most recent keyframes, 6 at least.
+constexpr double kMetricStageSpan[] = {1.0, 2.5, 7.5};
+constexpr std::size_t kMetricInitKeyframes = 60;
+constexpr std::size_t kMinMetricInitKeyframes = 6;
 using Clock = std::chrono::steady_clock;
 inline double Ms(Clock::time_point a) { return std::chrono::duration<double, std::milli>(Clock::now() - a).count(); }
 
@@ -115,8 +121,9 @@ struct MonoSlam::Impl {
   Eigen::Isometry3d T_bc = Eigen::Isometry3d::Identity();
   ImuNoise imu_noise;
   std::deque<ImuSample> imu;  ///< samples from the current map's first keyframe on (bounded)
-  /// 0: the current map is not in metres yet; 1, 2, 3: scaled once, refined once, twice.
-  int inertial_stage = 0;
+  /// 0: the current map is not in metres yet; 1, 2, 3: scaled once, refined once, twice (by the
+  /// IMU or the DVL).
+  int metric_stage = 0;
   bool map_sets_global_scale = false;    ///< the current map defined global_per_metric
   bool inertial_rejection_said = false;  ///< a rejected initialisation was reported for this map
   double global_per_metric = 0.0;        ///< global units per metre, once a map was scaled (0: not yet)
@@ -129,6 +136,33 @@ struct MonoSlam::Impl {
   std::string TryInertialInit();
   /// Multiplies every length of the current map and its tracking state by s.
   void ScaleMap(double s);
+  /// ScaleMap(s) as the current map's step to metres (the IMU's or the DVL's): keeps the global
+  /// frame's units (the first metric map defines them), advances metric_stage.
+  void ApplyMetricScale(double s);
+  /// The current map's good keyframes stamped at or after not_before, oldest first; the last
+  /// `count` of them (all when 0).
+  std::vector<const KeyFrame*> RecentKeyFrames(double not_before, std::size_t count) const;
+  // ------------------------------------------------------------------ DVL (mono_slam_dvl.cpp)
+  struct DvlSample {
+    double t;
+    Eigen::Vector3d v;  ///< velocity of the DVL's origin in its frame [m/s]
+    bool valid;
+  };
+  bool dvl_on = false;  ///< EnableDvl was called
+  Eigen::Isometry3d T_dc = Eigen::Isometry3d::Identity();
+  std::deque<DvlSample> dvl;  ///< recent readings (bounded)
+  bool dvl_rejection_said = false;
+  void AddDvl(double stamp, const Eigen::Vector3d& v, bool valid);
+  /// The DVL origin's displacement over [t0, t1] in the map frame [m]: the readings (linear
+  /// between them) rotated by the attitude slerped from R_wd0 to R_wd1; nullopt when the readings
+  /// do not cover the interval, a gap is longer than 0.5 s or one is invalid.
+  std::optional<Eigen::Vector3d> DvlDisplacement(double t0, double t1, const Eigen::Quaterniond& q_wd0,
+                                                 const Eigen::Quaterniond& q_wd1) const;
+  /// After a keyframe: scales the map to metres from the DVL (stages as TryInertialInit).
+  std::string TryDvlScale();
+  /// Displacement factors between consecutive keyframes of the current map (the last `count`
+  /// good ones; all when count is 0) where the DVL covers them; empty unless metric.
+  std::vector<BodyDisplacementFactor> DvlFactors(std::size_t count) const;
 
   // ---------------------------------------------------------------- features
   void ExtractFeatures(const cv::Mat& gray, const OrbExtractor& extractor, Frame* f);

@@ -8,11 +8,11 @@
 
 namespace unav::localization {
 
+using namespace slam_internal;  // NOLINT(google-build-using-namespace): the SLAM's own constants
+
 namespace {
 constexpr double kImuHistoryS = 60.0;       // samples kept at most (a map that never initialises)
 constexpr double kCoverSlackS = 0.02;       // a sample this close to an interval's end still covers it
-constexpr std::size_t kInitKeyframes = 60;  // the most recent keyframes an initialisation uses
-constexpr std::size_t kMinInitKeyframes = 6;
 }  // namespace
 
 auto MonoSlam::Impl::AddImu(double stamp, const Eigen::Vector3d& gyro, const Eigen::Vector3d& accel) -> void {
@@ -56,16 +56,38 @@ auto MonoSlam::Impl::ScaleMap(double s) -> void {
   for (double& d : recent_steps) d *= s;
 }
 
-auto MonoSlam::Impl::TryInertialInit() -> std::string {
-  constexpr double kStageSpan[] = {1.0, 2.5, 7.5};  // x the window: the initialisation, two refinements
-  if (imu.empty() || inertial_stage >= static_cast<int>(std::size(kStageSpan))) return "";
+auto MonoSlam::Impl::RecentKeyFrames(double not_before, std::size_t count) const -> std::vector<const KeyFrame*> {
   std::vector<const KeyFrame*> kfs;
   for (const auto& k : map->keyframes)
-    if (!k->bad && k->stamp >= imu.front().t - kCoverSlackS) kfs.push_back(k.get());
+    if (!k->bad && k->stamp >= not_before) kfs.push_back(k.get());
   std::sort(kfs.begin(), kfs.end(), [](const KeyFrame* a, const KeyFrame* b) { return a->stamp < b->stamp; });
-  if (kfs.size() > kInitKeyframes) kfs.erase(kfs.begin(), kfs.end() - static_cast<std::ptrdiff_t>(kInitKeyframes));
-  const double span = opt.inertial_init_window_s * kStageSpan[inertial_stage];
-  if (kfs.size() < kMinInitKeyframes || kfs.back()->stamp - kfs.front()->stamp < span) return "";
+  if (count > 0 && kfs.size() > count) kfs.erase(kfs.begin(), kfs.end() - static_cast<std::ptrdiff_t>(count));
+  return kfs;
+}
+
+auto MonoSlam::Impl::ApplyMetricScale(double s) -> void {
+  ScaleMap(s);
+  if (metric_stage == 0 && global_per_metric <= 0.0) {
+    // The first map in metres: the global frame becomes metric when it is the first map of the
+    // run; a later one keeps the global units the earlier maps were written in.
+    G.s = map_number == 0 ? 1.0 : G.s / s;
+    global_per_metric = G.s;
+    map_sets_global_scale = true;
+  } else if (map_sets_global_scale) {
+    if (map_number > 0) G.s /= s;  // a better estimate of the same global units per metre
+    global_per_metric = G.s;
+  } else {
+    G.s = global_per_metric;  // continues from the join at the earlier maps' scale
+  }
+  UpdateGoodPose();
+  ++metric_stage;
+}
+
+auto MonoSlam::Impl::TryInertialInit() -> std::string {
+  if (imu.empty() || metric_stage >= static_cast<int>(std::size(kMetricStageSpan))) return "";
+  const std::vector<const KeyFrame*> kfs = RecentKeyFrames(imu.front().t - kCoverSlackS, kMetricInitKeyframes);
+  const double span = opt.inertial_init_window_s * kMetricStageSpan[metric_stage];
+  if (kfs.size() < kMinMetricInitKeyframes || kfs.back()->stamp - kfs.front()->stamp < span) return "";
   std::vector<Eigen::Isometry3d> poses;
   std::vector<ImuPreintegration> pres;
   for (std::size_t k = 0; k < kfs.size(); ++k) {
@@ -80,22 +102,8 @@ auto MonoSlam::Impl::TryInertialInit() -> std::string {
     // Said once a map (it is tried again at every keyframe).
     return std::exchange(inertial_rejection_said, true) ? "" : "inertial initialisation not accepted: " + r.message;
   }
-  ScaleMap(r.scale);
-  if (inertial_stage == 0 && global_per_metric <= 0.0) {
-    // The first map in metres: the global frame becomes metric when it is the first map of the
-    // run; a later one keeps the global units the earlier maps were written in.
-    G.s = map_number == 0 ? 1.0 : G.s / r.scale;
-    global_per_metric = G.s;
-    map_sets_global_scale = true;
-  } else if (map_sets_global_scale) {
-    if (map_number > 0) G.s /= r.scale;  // a better estimate of the same global units per metre
-    global_per_metric = G.s;
-  } else {
-    G.s = global_per_metric;  // continues from the join at the earlier maps' scale
-  }
-  UpdateGoodPose();
-  ++(inertial_stage == 0 ? stats.inertial_inits : stats.inertial_refinements);
-  ++inertial_stage;
+  ++(metric_stage == 0 ? stats.inertial_inits : stats.inertial_refinements);
+  ApplyMetricScale(r.scale);
   stats.inertial_scale = r.scale;
   const Eigen::Vector3d z_cam = kfs.front()->T_cw.linear().transpose().col(2);
   stats.inertial_gravity_deg = std::acos(std::clamp(r.gravity_w.normalized().dot(z_cam), -1.0, 1.0)) * 180.0 / M_PI;
@@ -103,7 +111,7 @@ auto MonoSlam::Impl::TryInertialInit() -> std::string {
   std::snprintf(buf, sizeof(buf),
                 "inertial %s over %zu keyframes (%.1f s): %.4f m per map unit, gravity %.1f deg from the "
                 "first camera's axis, gyro bias (%.4f, %.4f, %.4f) rad/s",
-                inertial_stage == 1 ? "initialisation" : "refinement", kfs.size(),
+                metric_stage == 1 ? "initialisation" : "refinement", kfs.size(),
                 kfs.back()->stamp - kfs.front()->stamp, r.scale, stats.inertial_gravity_deg, r.bias.gyro.x(),
                 r.bias.gyro.y(), r.bias.gyro.z());
   return buf;

@@ -132,9 +132,35 @@ int OptimizePose(const PinholeCamera& cam, std::vector<PoseObservation>* obs, Ei
 
 namespace {
 
+// A displacement factor beyond this many sigmas (chi-square 3 dof, 99 %: 11.34) weighs linearly:
+// an interval the DVL and the map disagree on (the keyframes' attitude off in a fast turn) pulls,
+// but cannot tear the local map away from its points.
+constexpr double kDisplacementHuber = 3.368;
+
+// p_j - p_i - d over sigma, p = T_cw^-1 o_c = R_cw^T (o_c - t_cw) (pose parameters: aa(R_cw), t_cw).
+struct BodyDisplacementError {
+  explicit BodyDisplacementError(const BodyDisplacementFactor& f) : factor(f) {}
+  template <typename T>
+  void BodyOrigin(const T* pose, T* p) const {
+    const T d[3] = {T(factor.o_c.x()) - pose[3], T(factor.o_c.y()) - pose[4], T(factor.o_c.z()) - pose[5]};
+    const T aa_inv[3] = {-pose[0], -pose[1], -pose[2]};
+    ceres::AngleAxisRotatePoint(aa_inv, d, p);
+  }
+  template <typename T>
+  bool operator()(const T* pose_i, const T* pose_j, T* r) const {
+    T pi[3], pj[3];
+    BodyOrigin(pose_i, pi);
+    BodyOrigin(pose_j, pj);
+    for (int k = 0; k < 3; ++k) r[k] = (pj[k] - pi[k] - T(factor.d_w[k])) / T(factor.sigma);
+    return true;
+  }
+  BodyDisplacementFactor factor;
+};
+
 BundleAdjustmentSummary RunBundleAdjustment(Map* map, const PinholeCamera& cam, const std::vector<double>& level_sigma2,
                                             const std::vector<int>& local_kfs, const std::vector<int>& fixed_kfs,
-                                            const std::vector<int>& pts, int iterations) {
+                                            const std::vector<int>& pts, int iterations,
+                                            const std::vector<BodyDisplacementFactor>& displacements) {
   const auto t0 = std::chrono::steady_clock::now();
   BundleAdjustmentSummary s;
   std::map<int, std::array<double, 6>> poses;
@@ -172,6 +198,15 @@ BundleAdjustmentSummary RunBundleAdjustment(Map* map, const PinholeCamera& cam, 
           cam, kf.f.un[static_cast<size_t>(o.feature)], 1.0 / std::sqrt(level_sigma2[static_cast<size_t>(level)])));
       problem.AddResidualBlock(cost, new ceres::HuberLoss(std::sqrt(kChi2Mono)), poses[o.kf].data(), X[o.point].data());
     }
+    for (const auto& f : displacements) {
+      const auto i = poses.find(f.kf_i), j = poses.find(f.kf_j);
+      if (i == poses.end() || j == poses.end() || (fixed.count(f.kf_i) && fixed.count(f.kf_j))) continue;
+      if (!problem.HasParameterBlock(i->second.data()) || !problem.HasParameterBlock(j->second.data())) continue;
+      problem.AddResidualBlock(
+          new ceres::AutoDiffCostFunction<BodyDisplacementError, 3, 6, 6>(new BodyDisplacementError(f)),
+          new ceres::HuberLoss(kDisplacementHuber),
+          i->second.data(), j->second.data());
+    }
     for (auto& [k, p] : poses)
       if (problem.HasParameterBlock(p.data()) && fixed.count(k)) problem.SetParameterBlockConstant(p.data());
     s.residuals = problem.NumResidualBlocks();
@@ -199,7 +234,7 @@ BundleAdjustmentSummary RunBundleAdjustment(Map* map, const PinholeCamera& cam, 
 
 BundleAdjustmentSummary LocalBundleAdjustment(Map* map, const PinholeCamera& cam,
                                               const std::vector<double>& level_sigma2, int kf_id, int max_local,
-                                              int iterations) {
+                                              int iterations, const std::vector<BodyDisplacementFactor>& displacements) {
   std::vector<int> local{kf_id};
   for (int k : map->kf(kf_id).BestCovisible(static_cast<size_t>(std::max(0, max_local - 1))))
     if (!map->kf(k).bad) local.push_back(k);
@@ -220,11 +255,12 @@ BundleAdjustmentSummary LocalBundleAdjustment(Map* map, const PinholeCamera& cam
     else
       opt.push_back(k);
   }
-  return RunBundleAdjustment(map, cam, level_sigma2, opt, fixed, pts, iterations);
+  return RunBundleAdjustment(map, cam, level_sigma2, opt, fixed, pts, iterations, displacements);
 }
 
 BundleAdjustmentSummary GlobalBundleAdjustment(Map* map, const PinholeCamera& cam,
-                                               const std::vector<double>& level_sigma2, int iterations) {
+                                               const std::vector<double>& level_sigma2, int iterations,
+                                               const std::vector<BodyDisplacementFactor>& displacements) {
   std::vector<int> opt, fixed, pts;
   for (const auto& k : map->keyframes) {
     if (k->bad) continue;
@@ -235,7 +271,7 @@ BundleAdjustmentSummary GlobalBundleAdjustment(Map* map, const PinholeCamera& ca
   }
   for (const auto& p : map->points)
     if (!p->bad && p->obs.size() >= 2) pts.push_back(p->id);
-  return RunBundleAdjustment(map, cam, level_sigma2, opt, fixed, pts, iterations);
+  return RunBundleAdjustment(map, cam, level_sigma2, opt, fixed, pts, iterations, displacements);
 }
 
 namespace {

@@ -81,6 +81,17 @@ struct MonoSlamOptions {
   /// With an IMU (MonoSlam::EnableInertial): each map is scaled to metres by an inertial-only
   /// initialisation once its keyframes span this long [s] (ORB-SLAM3: 2 s), at least 6 of them.
   double inertial_init_window_s = 2.0;
+  /// With a DVL (MonoSlam::EnableDvl): each map is scaled to metres from the DVL's bottom velocity
+  /// integrated between keyframes once they span this long [s] (refined at 2.5x and 7.5x it) and
+  /// the vehicle has moved dvl_min_travel_m; it replaces the IMU's scaling when both are on.
+  double dvl_init_window_s = 2.0;
+  double dvl_min_travel_m = 0.5;
+  /// Once a map is metric, the DVL's displacement between consecutive keyframes is a factor of
+  /// the local (and the loop's global) bundle adjustment, so the scale does not drift; its
+  /// standard deviation: dvl_factor_sigma_m + dvl_factor_sigma_ratio x the displacement.
+  bool dvl_factors = true;
+  double dvl_factor_sigma_m = 0.01;
+  double dvl_factor_sigma_ratio = 0.03;
   bool IsValid(std::string* msg) const;
 };
 
@@ -110,6 +121,15 @@ struct SlamStats {
   double inertial_scale = 0.0;        ///< the last scaling: metres per map unit before it (0: none)
   double inertial_gravity_deg = 0.0;  ///< its gravity's angle from the first keyframe's camera z axis
   int imu_samples_rejected = 0;       ///< non-finite or out of time order
+  int dvl_inits = 0;                  ///< maps scaled to metres by the DVL
+  int dvl_refinements = 0;            ///< scales refined over a longer span (2 a map at most)
+  int dvl_rejections = 0;             ///< scalings refused (too little travel, inconsistent)
+  double dvl_scale = 0.0;             ///< the last DVL scaling: metres per map unit before it (0: none)
+  int dvl_samples_rejected = 0;       ///< non-finite or out of time order
+  long dvl_factors = 0;               ///< displacement factors handed to bundle adjustments
+  /// The output is in metres: a map was scaled by the IMU or the DVL (later maps continue in its
+  /// units). Before that, poses are in the first map's units (median depth 1).
+  bool metric = false;
 };
 
 class MonoSlam {
@@ -133,6 +153,16 @@ class MonoSlam {
   /// images' clock, in time order; samples up to the next image's stamp should come before it.
   /// Non-finite or out-of-order samples are dropped and counted. Never throws.
   void AddImu(double stamp, const Eigen::Vector3d& gyro, const Eigen::Vector3d& accel);
+  /// DVL-aided mode: the DVL's bottom-relative velocity (the velocity of the DVL frame's origin
+  /// in its own axes) scales every map to metres (options.dvl_init_window_s) and, once metric,
+  /// constrains the bundle adjustments with the displacement between keyframes
+  /// (options.dvl_factors), so the trajectory comes out metric and keeps its scale. T_dc: the
+  /// camera in the DVL's frame (metric). Throws std::invalid_argument on a non-rigid T_dc.
+  void EnableDvl(const Eigen::Isometry3d& T_dc);
+  /// One DVL reading at stamp [s] on the images' clock, in time order; valid false (no bottom
+  /// lock) interrupts the integration there. Non-finite or out-of-order readings are dropped and
+  /// counted. Never throws.
+  void AddDvl(double stamp, const Eigen::Vector3d& velocity, bool valid);
 
   struct StampedPose {
     double stamp;

@@ -28,16 +28,29 @@ struct BundleAdjustmentSummary {
   double seconds = 0.0;
 };
 
+/// A metric displacement of the vehicle's body between two keyframes, measured by another sensor
+/// (the DVL's bottom velocity integrated over the keyframes' interval, rotated into the map by the
+/// keyframes' attitude): a factor of the bundle adjustment on the body origin's positions,
+/// p_j - p_i = d_w, p = T_wc * o_c, whitened by sigma [m] (isotropic). Added only where both
+/// keyframes take part in the adjustment; the map must be in metres.
+struct BodyDisplacementFactor {
+  int kf_i = -1, kf_j = -1;
+  Eigen::Vector3d o_c = Eigen::Vector3d::Zero();  ///< the body origin in the camera frame
+  Eigen::Vector3d d_w = Eigen::Vector3d::Zero();  ///< p_j - p_i in the map frame [m]
+  double sigma = 1.0;
+};
+
 /// Local BA around keyframe `kf_id`: it and its covisible keyframes (up to max_local) are
 /// optimised with every point they see; other keyframes that see those points stay fixed, and so
 /// does keyframe 0 (gauge). Outlier observations are erased from the map afterwards.
 BundleAdjustmentSummary LocalBundleAdjustment(Map* map, const PinholeCamera& cam,
                                               const std::vector<double>& level_sigma2, int kf_id, int max_local,
-                                              int iterations);
+                                              int iterations, const std::vector<BodyDisplacementFactor>& displacements = {});
 
 /// All keyframes and points, keyframe 0 fixed.
 BundleAdjustmentSummary GlobalBundleAdjustment(Map* map, const PinholeCamera& cam,
-                                               const std::vector<double>& level_sigma2, int iterations);
+                                               const std::vector<double>& level_sigma2, int iterations,
+                                               const std::vector<BodyDisplacementFactor>& displacements = {});
 
 struct Sim3Match {
   Eigen::Vector3d X1_c1, X2_c2;  ///< the matched points in their keyframes' camera frames
