@@ -61,8 +61,6 @@ struct OrbSlamNodeParams {
   bool imu = false;
   bool dvl = false;
   bool dvl_factors = true;
-  double dvl_factor_sigma_m = 0.01;
-  double dvl_factor_sigma_ratio = 0.03;
   std::string body_frame = "base_link_frd";
   // Our vehicle's IMU (config/vehicles/bluerov2_heavy.yaml): 0.002 rad/s and 0.02 m/s^2 per
   // sample at 200 Hz, i.e. these densities.
@@ -88,13 +86,6 @@ struct OrbSlamNodeParams {
     a->Visit(Field("dvl", &dvl).Doc("DVL-aided mode: the dvl topic scales each map to metres and holds its scale"));
     a->Visit(Field("dvl_factors", &dvl_factors)
                  .Doc("DVL-aided: the DVL's displacements between keyframes constrain the bundle adjustments"));
-    a->Visit(Field("dvl_factor_sigma_m", &dvl_factor_sigma_m)
-                 .Range(1e-4, 10.0)
-                 .Unit("m")
-                 .Doc("DVL displacement factor: standard deviation (plus dvl_factor_sigma_ratio x the displacement)"));
-    a->Visit(Field("dvl_factor_sigma_ratio", &dvl_factor_sigma_ratio)
-                 .Range(0.0, 1.0)
-                 .Doc("DVL displacement factor: standard deviation per metre of displacement"));
     a->Visit(Field("body_frame", &body_frame)
                  .Doc("the IMU's and the DVL's frame, parent of the camera mount on /tf_static"));
     a->Visit(Field("imu_gyro_noise_density", &imu_gyro_noise_density)
@@ -121,8 +112,6 @@ class OrbSlamNode : public unav::Node {
     options_.loop_closing = prm.loop_closing;
     options_.clahe_clip = prm.clahe_clip;
     options_.dvl_factors = prm.dvl_factors;
-    options_.dvl_factor_sigma_m = prm.dvl_factor_sigma_m;
-    options_.dvl_factor_sigma_ratio = prm.dvl_factor_sigma_ratio;
     lockstep_ = prm.lockstep.enabled;
     ack_name_ = prm.lockstep.name;
     image_period_ = prm.image_period;
