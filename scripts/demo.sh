@@ -20,7 +20,7 @@ echo "demo: pipe inspection, ${SIM_SECONDS} s of simulated time, DDS domain $ROS
 # APE figures are the same on every run and machine (else one that subscribes late on a cold start
 # misses the first frames: seen on a fresh clone, klt_vo's track began at t = 0.7 s).
 unav launch launch_scripts/pipe_inspection.launch.yaml output_dir:="$OUT/dataset" duration:="$SIM_SECONDS" \
-  lockstep_participants:="[renderer, recorder, klt_vo, orb_slam]" vo_lockstep:=true slam_lockstep:=true slam_dvl:=true \
+  lockstep_participants:="[renderer, recorder, klt_vo, orb_slam]" vo_lockstep:=true slam_lockstep:=true slam_dvl:=true slam_imu:=true \
   > "$OUT/launch.log" 2>&1 &
 launch_pid=$!
 trap 'kill -INT $launch_pid 2>/dev/null || true' EXIT

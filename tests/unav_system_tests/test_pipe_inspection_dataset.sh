@@ -24,7 +24,7 @@ export UNAV_FASTDDS_LOG=warning
 # of 34 frames, APE 0.14 m).
 # The SLAM DVL-aided (the physics server's /rov/dvl and the camera mount on /tf_static): its map
 # is scaled to metres after 2 s of keyframes, so its odometry is evaluated without a scale fit too.
-unav launch "$ws/launch_scripts/pipe_inspection.launch.yaml" output_dir:="$out/ds" slam_lockstep:=true slam_dvl:=true \
+unav launch "$ws/launch_scripts/pipe_inspection.launch.yaml" output_dir:="$out/ds" slam_lockstep:=true slam_dvl:=true slam_imu:=true \
   lockstep_participants:="[renderer, recorder, orb_slam]" >"$log" 2>&1 &
 launch_pid=$!
 trap 'kill -INT $launch_pid 2>/dev/null || true; wait $launch_pid 2>/dev/null || true' EXIT

@@ -19,7 +19,8 @@
 //   sub  dvl                           unav_msgs/Dvl (dvl: true): the DVL's bottom velocity in body_frame
 //                                      (its frame_id); with the camera's mount it scales each map to
 //                                      metres and holds the scale through the bundle adjustments
-//                                      (DVL-aided mode; replaces the IMU's scaling when both are on)
+//                                      (DVL-aided mode; replaces the IMU's scaling when both are on, the
+//                                      gyroscope's rotations between keyframes still constrain the map)
 //                                      With imu or dvl on, odometry is published once the output is
 //                                      metric (the first scaling, ~2 s of keyframes); the path
 //                                      covers every tracked frame (the history is rescaled)
@@ -178,9 +179,10 @@ class OrbSlamNode : public unav::Node {
             st.dvl_inits, st.dvl_refinements, st.dvl_rejections, st.dvl_factors, st.dvl_samples_rejected);
       if (inertial_on_)
         logger()->info(
-            "monocular-inertial: {} map(s) scaled to metres, {} refinement(s), {} initialisation(s) refused, {} IMU "
-            "samples rejected",
-            st.inertial_inits, st.inertial_refinements, st.inertial_rejections, st.imu_samples_rejected);
+            "inertial: {} map(s) scaled to metres by the IMU, {} refinement(s), {} initialisation(s) refused, {} "
+            "gyroscope rotation factors, {} IMU samples rejected",
+            st.inertial_inits, st.inertial_refinements, st.inertial_rejections, st.gyro_factors,
+            st.imu_samples_rejected);
     }
   }
 

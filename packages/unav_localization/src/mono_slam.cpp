@@ -30,6 +30,10 @@ bool MonoSlamOptions::IsValid(std::string* msg) const {
     return fail("dvl_min_travel_m must be in [0, 100], got " + std::to_string(dvl_min_travel_m));
   if (!(dvl_factor_sigma_m > 0.0 && dvl_factor_sigma_m <= 10.0))
     return fail("dvl_factor_sigma_m must be in (0, 10], got " + std::to_string(dvl_factor_sigma_m));
+  if (!(gyro_factor_sigma_rad > 0.0 && gyro_factor_sigma_rad <= 1.0))
+    return fail("gyro_factor_sigma_rad must be in (0, 1], got " + std::to_string(gyro_factor_sigma_rad));
+  if (!(gyro_bias_sigma >= 0.0 && gyro_bias_sigma <= 1.0))
+    return fail("gyro_bias_sigma must be in [0, 1], got " + std::to_string(gyro_bias_sigma));
   if (!(dvl_factor_sigma_ratio >= 0.0 && dvl_factor_sigma_ratio <= 1.0))
     return fail("dvl_factor_sigma_ratio must be in [0, 1], got " + std::to_string(dvl_factor_sigma_ratio));
   if (!(clahe_clip >= 0.0 && clahe_clip <= 40.0))

@@ -163,6 +163,16 @@ struct MonoSlam::Impl {
   /// Displacement factors between consecutive keyframes of the current map (the last `count`
   /// good ones; all when count is 0) where the DVL covers them; empty unless metric.
   std::vector<BodyDisplacementFactor> DvlFactors(std::size_t count) const;
+  /// Gyroscope rotation factors between consecutive keyframes (the last `count` good ones; all
+  /// when 0) where the IMU covers them (options.gyro_factors, inertial on); scale-free.
+  std::vector<RelativeRotationFactor> GyroFactors(std::size_t count) const;
+  /// Both, for a bundle adjustment over the last `count` keyframes; counted in stats.
+  BundleFactors AidingFactors(std::size_t count) {
+    BundleFactors f{DvlFactors(count), GyroFactors(count)};
+    stats.dvl_factors += static_cast<long>(f.displacements.size());
+    stats.gyro_factors += static_cast<long>(f.rotations.size());
+    return f;
+  }
 
   // ---------------------------------------------------------------- features
   void ExtractFeatures(const cv::Mat& gray, const OrbExtractor& extractor, Frame* f);

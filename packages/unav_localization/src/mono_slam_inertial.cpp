@@ -117,4 +117,24 @@ auto MonoSlam::Impl::TryInertialInit() -> std::string {
   return buf;
 }
 
+auto MonoSlam::Impl::GyroFactors(std::size_t count) const -> std::vector<RelativeRotationFactor> {
+  std::vector<RelativeRotationFactor> out;
+  if (!inertial || !opt.gyro_factors || imu.empty()) return out;
+  const std::vector<const KeyFrame*> kfs = RecentKeyFrames(imu.front().t - kCoverSlackS, count);
+  const Eigen::Matrix3d R_cb = T_bc.linear().transpose();
+  for (std::size_t k = 1; k < kfs.size(); ++k) {
+    const ImuPreintegration pre = PreintegrateImu(kfs[k - 1]->stamp, kfs[k]->stamp);
+    if (pre.dt() <= 0.0) continue;  // not covered (yet)
+    RelativeRotationFactor f;
+    f.kf_i = kfs[k - 1]->id;
+    f.kf_j = kfs[k]->id;
+    f.R_cb = R_cb;
+    f.dR_b = pre.delta_R();
+    f.sigma = std::sqrt(pre.covariance().topLeftCorner<3, 3>().trace() / 3.0) + opt.gyro_factor_sigma_rad +
+              opt.gyro_bias_sigma * pre.dt();
+    out.push_back(f);
+  }
+  return out;
+}
+
 }  // namespace unav::localization

@@ -166,12 +166,9 @@ auto MonoSlam::Impl::InsertKeyFrame() -> void {
   CullRecentPoints(kid);
   CreateNewMapPoints(kid);
   SearchInNeighbors(kid);
-  if (map->keyframes.size() > 2) {
-    const auto displacements = DvlFactors(static_cast<std::size_t>(4 * opt.local_ba_keyframes));
-    stats.dvl_factors += static_cast<long>(displacements.size());
+  if (map->keyframes.size() > 2)
     LocalBundleAdjustment(map.get(), cam, sigma2, kid, opt.local_ba_keyframes, opt.local_ba_iterations,
-                          displacements);
-  }
+                          AidingFactors(static_cast<std::size_t>(4 * opt.local_ba_keyframes)));
 }
 
 }  // namespace unav::localization

@@ -132,7 +132,7 @@ int OptimizePose(const PinholeCamera& cam, std::vector<PoseObservation>* obs, Ei
 
 namespace {
 
-// A displacement factor beyond this many sigmas (chi-square 3 dof, 99 %: 11.34) weighs linearly:
+// A displacement or rotation factor beyond this many sigmas (chi-square 3 dof, 99 %: 11.34) weighs linearly:
 // an interval the DVL and the map disagree on (the keyframes' attitude off in a fast turn) pulls,
 // but cannot tear the local map away from its points.
 constexpr double kDisplacementHuber = 3.368;
@@ -157,10 +157,51 @@ struct BodyDisplacementError {
   BodyDisplacementFactor factor;
 };
 
+// Log(dR_b^T R_bi^T R_bj) over sigma; R_bi^T R_bj = R_bc R_cw_i R_cw_j^T R_cb (pose parameters:
+// aa(R_cw), t_cw).
+struct RelativeRotationError {
+  explicit RelativeRotationError(const RelativeRotationFactor& f) : factor(f) {
+    // The constant ends of the product: A = dR_b^T R_bc, B = R_cb.
+    const Eigen::Matrix3d A = f.dR_b.transpose() * f.R_cb.transpose();
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 3; ++c) {
+        a[r][c] = A(r, c);
+        b[r][c] = f.R_cb(r, c);
+      }
+  }
+  template <typename T>
+  bool operator()(const T* pose_i, const T* pose_j, T* r) const {
+    T Ri[9], Rj[9];  // column-major R_cw
+    ceres::AngleAxisToRotationMatrix(pose_i, Ri);
+    ceres::AngleAxisToRotationMatrix(pose_j, Rj);
+    T M[3][3], N[3][3], E[9];
+    for (int x = 0; x < 3; ++x)  // M = R_cw_i R_cw_j^T
+      for (int y = 0; y < 3; ++y) {
+        M[x][y] = T(0);
+        for (int k = 0; k < 3; ++k) M[x][y] += Ri[k * 3 + x] * Rj[k * 3 + y];
+      }
+    for (int x = 0; x < 3; ++x)  // N = M B
+      for (int y = 0; y < 3; ++y) {
+        N[x][y] = T(0);
+        for (int k = 0; k < 3; ++k) N[x][y] += M[x][k] * T(b[k][y]);
+      }
+    for (int x = 0; x < 3; ++x)  // E = A N (column-major for ceres)
+      for (int y = 0; y < 3; ++y) {
+        E[y * 3 + x] = T(0);
+        for (int k = 0; k < 3; ++k) E[y * 3 + x] += T(a[x][k]) * N[k][y];
+      }
+    ceres::RotationMatrixToAngleAxis(E, r);
+    for (int k = 0; k < 3; ++k) r[k] /= T(factor.sigma);
+    return true;
+  }
+  RelativeRotationFactor factor;
+  double a[3][3], b[3][3];
+};
+
 BundleAdjustmentSummary RunBundleAdjustment(Map* map, const PinholeCamera& cam, const std::vector<double>& level_sigma2,
                                             const std::vector<int>& local_kfs, const std::vector<int>& fixed_kfs,
                                             const std::vector<int>& pts, int iterations,
-                                            const std::vector<BodyDisplacementFactor>& displacements) {
+                                            const BundleFactors& factors) {
   const auto t0 = std::chrono::steady_clock::now();
   BundleAdjustmentSummary s;
   std::map<int, std::array<double, 6>> poses;
@@ -198,15 +239,24 @@ BundleAdjustmentSummary RunBundleAdjustment(Map* map, const PinholeCamera& cam, 
           cam, kf.f.un[static_cast<size_t>(o.feature)], 1.0 / std::sqrt(level_sigma2[static_cast<size_t>(level)])));
       problem.AddResidualBlock(cost, new ceres::HuberLoss(std::sqrt(kChi2Mono)), poses[o.kf].data(), X[o.point].data());
     }
-    for (const auto& f : displacements) {
-      const auto i = poses.find(f.kf_i), j = poses.find(f.kf_j);
-      if (i == poses.end() || j == poses.end() || (fixed.count(f.kf_i) && fixed.count(f.kf_j))) continue;
-      if (!problem.HasParameterBlock(i->second.data()) || !problem.HasParameterBlock(j->second.data())) continue;
-      problem.AddResidualBlock(
-          new ceres::AutoDiffCostFunction<BodyDisplacementError, 3, 6, 6>(new BodyDisplacementError(f)),
-          new ceres::HuberLoss(kDisplacementHuber),
-          i->second.data(), j->second.data());
-    }
+    // Both keyframes in the problem (through their points), not both fixed.
+    auto blocks = [&](int kf_i, int kf_j) -> std::pair<double*, double*> {
+      const auto i = poses.find(kf_i), j = poses.find(kf_j);
+      if (i == poses.end() || j == poses.end() || (fixed.count(kf_i) && fixed.count(kf_j))) return {nullptr, nullptr};
+      if (!problem.HasParameterBlock(i->second.data()) || !problem.HasParameterBlock(j->second.data()))
+        return {nullptr, nullptr};
+      return {i->second.data(), j->second.data()};
+    };
+    for (const auto& f : factors.displacements)
+      if (const auto [pi, pj] = blocks(f.kf_i, f.kf_j); pi != nullptr)
+        problem.AddResidualBlock(
+            new ceres::AutoDiffCostFunction<BodyDisplacementError, 3, 6, 6>(new BodyDisplacementError(f)),
+            new ceres::HuberLoss(kDisplacementHuber), pi, pj);
+    for (const auto& f : factors.rotations)
+      if (const auto [pi, pj] = blocks(f.kf_i, f.kf_j); pi != nullptr)
+        problem.AddResidualBlock(
+            new ceres::AutoDiffCostFunction<RelativeRotationError, 3, 6, 6>(new RelativeRotationError(f)),
+            new ceres::HuberLoss(kDisplacementHuber), pi, pj);
     for (auto& [k, p] : poses)
       if (problem.HasParameterBlock(p.data()) && fixed.count(k)) problem.SetParameterBlockConstant(p.data());
     s.residuals = problem.NumResidualBlocks();
@@ -234,7 +284,7 @@ BundleAdjustmentSummary RunBundleAdjustment(Map* map, const PinholeCamera& cam, 
 
 BundleAdjustmentSummary LocalBundleAdjustment(Map* map, const PinholeCamera& cam,
                                               const std::vector<double>& level_sigma2, int kf_id, int max_local,
-                                              int iterations, const std::vector<BodyDisplacementFactor>& displacements) {
+                                              int iterations, const BundleFactors& factors) {
   std::vector<int> local{kf_id};
   for (int k : map->kf(kf_id).BestCovisible(static_cast<size_t>(std::max(0, max_local - 1))))
     if (!map->kf(k).bad) local.push_back(k);
@@ -255,12 +305,12 @@ BundleAdjustmentSummary LocalBundleAdjustment(Map* map, const PinholeCamera& cam
     else
       opt.push_back(k);
   }
-  return RunBundleAdjustment(map, cam, level_sigma2, opt, fixed, pts, iterations, displacements);
+  return RunBundleAdjustment(map, cam, level_sigma2, opt, fixed, pts, iterations, factors);
 }
 
 BundleAdjustmentSummary GlobalBundleAdjustment(Map* map, const PinholeCamera& cam,
                                                const std::vector<double>& level_sigma2, int iterations,
-                                               const std::vector<BodyDisplacementFactor>& displacements) {
+                                               const BundleFactors& factors) {
   std::vector<int> opt, fixed, pts;
   for (const auto& k : map->keyframes) {
     if (k->bad) continue;
@@ -271,7 +321,7 @@ BundleAdjustmentSummary GlobalBundleAdjustment(Map* map, const PinholeCamera& ca
   }
   for (const auto& p : map->points)
     if (!p->bad && p->obs.size() >= 2) pts.push_back(p->id);
-  return RunBundleAdjustment(map, cam, level_sigma2, opt, fixed, pts, iterations, displacements);
+  return RunBundleAdjustment(map, cam, level_sigma2, opt, fixed, pts, iterations, factors);
 }
 
 namespace {

@@ -613,11 +613,14 @@ TEST(MonoSlam, DvlAidedModeGivesAMetricTrajectoryThatKeepsItsScale) {
   const Eigen::Vector3d r_d(-0.25, 0.0, 0.1);  // the DVL's origin in the body (= camera) frame
   Eigen::Isometry3d T_dc = Eigen::Isometry3d::Identity();
   T_dc.translation() = -r_d;  // the camera in the DVL frame (same axes)
-  auto fly = [&](bool factors, double* scale, double* se3_ape) {
+  const Eigen::Vector3d g(0.0, 0.0, 9.81);
+  auto fly = [&](bool factors, double* scale, double* se3_ape, bool gyro = false) {
     ul::MonoSlamOptions o;
     o.dvl_factors = factors;
     ul::MonoSlam slam(Pinhole(run.K), {}, o, nullptr);
     slam.EnableDvl(T_dc);
+    if (gyro) slam.EnableInertial(Eigen::Isometry3d::Identity(), ul::ImuNoise{});
+    double t_imu = 0.0;
     std::mt19937 rng(7);
     std::normal_distribution<double> noise(0.0, 0.01);
     for (size_t k = 0; k < run.gray.size(); ++k) {
@@ -627,18 +630,33 @@ TEST(MonoSlam, DvlAidedModeGivesAMetricTrajectoryThatKeepsItsScale) {
           Rot(0, 0, WeaveFlight::Yaw(t)).transpose() * WeaveFlight::V(t) + w_B.cross(r_d) +
           Eigen::Vector3d(noise(rng), noise(rng), noise(rng));
       slam.AddDvl(t, v_D, true);
+      for (; gyro && t_imu <= t + 1e-9; t_imu += 0.005) {  // the inertial test's ideal 200 Hz IMU
+        const double tm = t_imu + 0.0025;
+        slam.AddImu(t_imu, Eigen::Vector3d(0.0, 0.0, WeaveFlight::YawRate(tm)),
+                    Rot(0, 0, WeaveFlight::Yaw(tm)).transpose() * (WeaveFlight::A(tm) - g));
+      }
       slam.Track(run.gray[k], t);
     }
     MetricFit(slam, run, scale, se3_ape);
     return slam.stats();
   };
-  double scale_f = 0, ape_f = 0, scale_nf = 0, ape_nf = 0;
+  double scale_f = 0, ape_f = 0, scale_nf = 0, ape_nf = 0, scale_g = 0, ape_g = 0;
   const auto st_f = fly(true, &scale_f, &ape_f);
   fly(false, &scale_nf, &ape_nf);
+  const auto st_g = fly(true, &scale_g, &ape_g, /*gyro=*/true);
   std::printf(
       "weave, DVL: %d scaling(s), %d refinement(s), last %.4f m per unit; with factors Sim(3) scale %.4f, SE(3) APE "
-      "%.4f m; scaling only: scale %.4f, APE %.4f m\n",
-      st_f.dvl_inits, st_f.dvl_refinements, st_f.dvl_scale, scale_f, ape_f, scale_nf, ape_nf);
+      "%.4f m; scaling only: scale %.4f, APE %.4f m; with the gyroscope too (%ld rotation factors): scale %.4f, APE "
+      "%.4f m\n",
+      st_f.dvl_inits, st_f.dvl_refinements, st_f.dvl_scale, scale_f, ape_f, scale_nf, ape_nf, st_g.gyro_factors,
+      scale_g, ape_g);
+  // With the IMU on too, the DVL still scales (the IMU's initialisation does not run) and the
+  // gyroscope adds rotation factors.
+  EXPECT_EQ(st_g.dvl_inits, 1);
+  EXPECT_EQ(st_g.inertial_inits, 0);
+  EXPECT_GT(st_g.gyro_factors, 0);
+  EXPECT_NEAR(scale_g, 1.0, 0.02);
+  EXPECT_LT(ape_g, 0.03);
   EXPECT_EQ(st_f.dvl_inits, 1);
   EXPECT_EQ(st_f.dvl_rejections, 0);
   EXPECT_EQ(st_f.dvl_samples_rejected, 0);

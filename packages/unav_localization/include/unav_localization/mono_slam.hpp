@@ -92,6 +92,13 @@ struct MonoSlamOptions {
   bool dvl_factors = true;
   double dvl_factor_sigma_m = 0.01;
   double dvl_factor_sigma_ratio = 0.03;
+  /// With an IMU: the gyroscope's rotation between consecutive keyframes (preintegrated, bias
+  /// taken as zero) is a factor of the bundle adjustments, in any map (rotation has no scale);
+  /// its standard deviation: the preintegration's + gyro_factor_sigma_rad + gyro_bias_sigma x the
+  /// interval (an unknown bias).
+  bool gyro_factors = true;
+  double gyro_factor_sigma_rad = 0.002;
+  double gyro_bias_sigma = 0.001;  ///< rad/s
   bool IsValid(std::string* msg) const;
 };
 
@@ -127,6 +134,7 @@ struct SlamStats {
   double dvl_scale = 0.0;             ///< the last DVL scaling: metres per map unit before it (0: none)
   int dvl_samples_rejected = 0;       ///< non-finite or out of time order
   long dvl_factors = 0;               ///< displacement factors handed to bundle adjustments
+  long gyro_factors = 0;              ///< gyroscope rotation factors handed to bundle adjustments
   /// The output is in metres: a map was scaled by the IMU or the DVL (later maps continue in its
   /// units). Before that, poses are in the first map's units (median depth 1).
   bool metric = false;

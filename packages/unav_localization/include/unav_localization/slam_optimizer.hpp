@@ -40,17 +40,33 @@ struct BodyDisplacementFactor {
   double sigma = 1.0;
 };
 
+/// The body's rotation between two keyframes measured by the gyroscope (its preintegrated delta):
+/// a factor on the keyframes' attitudes, Log(dR_b^T R_bi^T R_bj) = 0 with R_b = R_wc R_cb,
+/// whitened by sigma [rad] (isotropic). Scale-free: it holds in any map.
+struct RelativeRotationFactor {
+  int kf_i = -1, kf_j = -1;
+  Eigen::Matrix3d R_cb = Eigen::Matrix3d::Identity();  ///< the body's axes in the camera frame
+  Eigen::Matrix3d dR_b = Eigen::Matrix3d::Identity();  ///< R_bi^T R_bj measured
+  double sigma = 1.0;
+};
+
+/// What other sensors add to a bundle adjustment (only where both keyframes take part).
+struct BundleFactors {
+  std::vector<BodyDisplacementFactor> displacements;
+  std::vector<RelativeRotationFactor> rotations;
+};
+
 /// Local BA around keyframe `kf_id`: it and its covisible keyframes (up to max_local) are
 /// optimised with every point they see; other keyframes that see those points stay fixed, and so
 /// does keyframe 0 (gauge). Outlier observations are erased from the map afterwards.
 BundleAdjustmentSummary LocalBundleAdjustment(Map* map, const PinholeCamera& cam,
                                               const std::vector<double>& level_sigma2, int kf_id, int max_local,
-                                              int iterations, const std::vector<BodyDisplacementFactor>& displacements = {});
+                                              int iterations, const BundleFactors& factors = {});
 
 /// All keyframes and points, keyframe 0 fixed.
 BundleAdjustmentSummary GlobalBundleAdjustment(Map* map, const PinholeCamera& cam,
                                                const std::vector<double>& level_sigma2, int iterations,
-                                               const std::vector<BodyDisplacementFactor>& displacements = {});
+                                               const BundleFactors& factors = {});
 
 struct Sim3Match {
   Eigen::Vector3d X1_c1, X2_c2;  ///< the matched points in their keyframes' camera frames
