@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # One short run of the visual-localisation benchmark (launch_scripts/vslam_run.launch.yaml):
 # physics (lockstep, waiting for the renderer and the ORB SLAM) + controller + renderer (down
-# camera 640 x 480) + orb_slam + klt_vo (monocular) + evaluator, 15 s of simulated time along the
+# camera 640 x 480) + orb_slam + orb_slam_aided (DVL + IMU) + klt_vo (monocular) + evaluator, 15 s of simulated time along the
 # linear pipeline. The run must end by itself and leave the Table II files, with the SLAM's
 # Sim(3)-aligned APE under 5 cm (seen: ~5 mm) and the KLT VO's under 15 cm.
 source "$(dirname "$0")/common.sh"
@@ -20,11 +20,16 @@ grep -q "orb_slam.*loops" "$log" || fail "orb_slam printed no summary"
 python3 - "$out/eval/results.json" <<'PY' || fail "results out of bounds: $(cat "$out/eval/results.md")"
 import json, sys
 rows = {r["algorithm"]: r for r in json.load(open(sys.argv[1]))}
-slam, klt = rows["orb_slam"], rows["klt_vo"]
+slam, aided, klt = rows["orb_slam"], rows["orb_slam_aided"], rows["klt_vo"]
 print("orb_slam APE %.4f m (%d poses), klt_vo APE %.4f m (%d poses)" % (slam["ape_m"]["rmse"], slam["poses"], klt["ape_m"]["rmse"], klt["poses"]))
 assert slam["trajectory"] == "linear"
 assert slam["poses"] >= 120, slam["poses"]      # 150 frames, a few before initialisation
 assert slam["ape_m"]["rmse"] < 0.05
+# The SLAM aided by the DVL and the IMU: the same map in metres (seen: scale 1.003, APE 2 mm).
+print("orb_slam_aided APE %.4f m (%d poses), Sim(3) scale %.4f" % (aided["ape_m"]["rmse"], aided["poses"], aided["scale"]))
+assert aided["poses"] >= 120, aided["poses"]
+assert aided["ape_m"]["rmse"] < 0.05
+assert abs(aided["scale"] - 1.0) < 0.05, aided["scale"]
 assert klt["poses"] >= 100
 assert klt["ape_m"]["rmse"] < 0.15
 PY
