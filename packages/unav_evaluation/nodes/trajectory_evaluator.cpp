@@ -144,7 +144,7 @@ TrajectoryEvaluator::TrajectoryEvaluator(const unav::NodeOptions& options)
         [this, n](const nav_msgs::msg::Odometry& m) { check(append(estimates_.at(n), m), n); }));
     path_subs_.push_back(create_subscription<nav_msgs::msg::Path>(
         "localization/" + n + "/path", unav::QoS::reliable(2),
-        [this, n](const nav_msgs::msg::Path& m) { paths_[n] = from_path(m); }));
+        [this, n](const nav_msgs::msg::Path& m) { paths_[n].update(from_path(m)); }));
   }
   for (std::string in : prm.inputs) {
     // NAME=KIND:SOURCE[@FRAME]
@@ -253,15 +253,11 @@ std::vector<AlgorithmResult> TrajectoryEvaluator::write_outputs() {
   write_tum(prefix + "ground_truth.tum", truth);
   std::vector<std::pair<std::string, Trajectory>> aligned;
   for (auto& [name, spool] : estimates_) {
-    // The latest whole path (corrected history), then the odometry after its end.
+    // The corrected history from the paths (each stamp as the latest path had it; a path may
+    // hold only the latest poses), the odometry before and after it.
     const Trajectory odom = spool.load();
-    Trajectory traj = odom;
     const auto p = paths_.find(name);
-    if (p != paths_.end() && !p->second.empty()) {
-      traj = p->second;
-      for (size_t i = 0; i < odom.size(); ++i)
-        if (odom.stamps[i] > traj.stamps.back()) traj.push_back(odom.stamps[i], odom.poses[i]);
-    }
+    const Trajectory traj = p != paths_.end() ? p->second.over(odom) : odom;
     if (traj.empty()) {
       logger()->warn("estimator '{}' published nothing", name);
       continue;

@@ -6,9 +6,10 @@
 //   sub  ground_truth/odom                 nav_msgs/Odometry
 //   sub  localization/<algo>/odom          nav_msgs/Odometry, one per name in `estimates`
 //   sub  /tf_static                        tf2_msgs/TFMessage (latched): camera mounts
-//   sub  localization/<algo>/path          nav_msgs/Path: when an estimator publishes its whole
-//                                          (corrected) trajectory, the latest path is evaluated,
-//                                          followed by the odometry stamped after its end
+//   sub  localization/<algo>/path          nav_msgs/Path: when an estimator publishes its
+//                                          (corrected) trajectory, whole or its latest poses, each
+//                                          stamp is evaluated as the latest path had it, with the
+//                                          odometry stamped before and after (PathHistory)
 //   sub  any estimator's output, one per entry of `inputs` ("NAME=KIND:SOURCE"):
 //          NAME=odom:TOPIC                 nav_msgs/Odometry (e.g. an ORB-SLAM3 wrapper's odometry)
 //          NAME=pose:TOPIC                 geometry_msgs/PoseStamped
@@ -136,7 +137,7 @@ class TrajectoryEvaluator : public unav::Node {
   bool have_mount_ = true;                                  ///< false until the camera mount is known
   std::unique_ptr<unav::StaticTransformListener> tf_static_;
   std::map<std::string, TrajectorySpool> estimates_;
-  std::map<std::string, Trajectory> paths_;  ///< the latest whole path of each estimator (replaced)
+  std::map<std::string, PathHistory> paths_;  ///< each estimator's corrected history from its paths
   std::vector<std::shared_ptr<unav::Subscription<nav_msgs::msg::Odometry>>> subs_;
   std::vector<std::shared_ptr<unav::Subscription<nav_msgs::msg::Path>>> path_subs_;
   std::vector<std::shared_ptr<unav::Subscription<geometry_msgs::msg::PoseStamped>>> pose_subs_;

@@ -279,4 +279,21 @@ void TrajectorySpool::remove() {
   last_stamp_ = 0.0;
 }
 
+void PathHistory::update(const Trajectory& path) {
+  for (size_t i = 0; i < path.size(); ++i)
+    poses_[std::llround(path.stamps[i] * 1e9)] = {path.stamps[i], path.poses[i]};
+}
+
+Trajectory PathHistory::over(const Trajectory& odometry) const {
+  if (poses_.empty()) return odometry;
+  const double first = poses_.begin()->second.first, last = poses_.rbegin()->second.first;
+  Trajectory t;
+  for (size_t i = 0; i < odometry.size() && odometry.stamps[i] < first; ++i)
+    t.push_back(odometry.stamps[i], odometry.poses[i]);
+  for (const auto& [ns, p] : poses_) t.push_back(p.first, p.second);
+  for (size_t i = 0; i < odometry.size(); ++i)
+    if (odometry.stamps[i] > last) t.push_back(odometry.stamps[i], odometry.poses[i]);
+  return t;
+}
+
 }  // namespace unav::evaluation

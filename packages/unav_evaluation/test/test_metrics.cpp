@@ -265,6 +265,33 @@ TEST(Timing, AssociationOfTwentyThousandPosesIsFast) {
 // A spooled trajectory gives back exactly what went in (bit for bit: the evaluation's numbers do
 // not depend on whether poses were spooled), holds nothing in memory but its count and last stamp,
 // and its file is the record until removed.
+// A SLAM's bounded path: each path holds only its latest poses, corrected. Every stamp keeps the
+// pose the latest path gave it; odometry fills in before the first path's start and after the
+// last path's end.
+TEST(PathHistory, EveryStampKeepsItsLatestCorrectionAndOdometryFillsTheEnds) {
+  auto pose = [](double x) {
+    Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
+    X.translation().x() = x;
+    return X;
+  };
+  Trajectory odom;  // stamps 0.0 .. 0.9, x = 1 * stamp
+  for (int k = 0; k < 10; ++k) odom.push_back(0.1 * k, pose(0.1 * k));
+  unav::evaluation::PathHistory h;
+  EXPECT_EQ(h.over(odom).size(), 10u);  // no path: the odometry
+  Trajectory p1, p2;  // the first path: 0.2 .. 0.5 at x = 2 stamp; the next (bounded): 0.4 .. 0.7 at 3 stamp
+  for (int k = 2; k <= 5; ++k) p1.push_back(0.1 * k, pose(0.2 * k));
+  for (int k = 4; k <= 7; ++k) p2.push_back(0.1 * k, pose(0.3 * k));
+  h.update(p1);
+  h.update(p2);
+  const Trajectory t = h.over(odom);
+  ASSERT_EQ(t.size(), 10u);
+  const double want[] = {0.0, 0.1, 0.4, 0.6, 1.2, 1.5, 1.8, 2.1, 0.8, 0.9};
+  for (int k = 0; k < 10; ++k) {
+    EXPECT_NEAR(t.stamps[static_cast<size_t>(k)], 0.1 * k, 1e-12);
+    EXPECT_NEAR(t.poses[static_cast<size_t>(k)].translation().x(), want[k], 1e-12) << "stamp " << 0.1 * k;
+  }
+}
+
 TEST(TrajectorySpool, GivesBackTheSamePosesBitForBit) {
   unav::common::TempDir dir("spool");
   TrajectorySpool spool(dir.path() + "/gt.bin");

@@ -9,9 +9,10 @@
 //                                      tracked frames only. Without metric scale the camera's lever
 //                                      arm on the body cannot be applied, so the camera is reported
 //                                      (evaluate against ground truth moved to the camera frame)
-//   pub  localization/orb_slam/path    nav_msgs/Path: every tracked frame so far (camera poses), as
-//                                      corrected by bundle adjustment and loop closing; after each
-//                                      keyframe
+//   pub  localization/orb_slam/path    nav_msgs/Path: the latest path_max_poses tracked frames (camera
+//                                      poses; 0: every one), as corrected by bundle adjustment and loop
+//                                      closing; after each keyframe (bounded: an hour at 10 Hz would be
+//                                      36000 poses, 2.3 MB a message; the evaluator keeps the history)
 //   sub  imu                           sensor_msgs/Imu (imu: true): angular rate and specific force in
 //                                      body_frame; with the camera's mount (body_frame -> <camera>_optical
 //                                      on /tf_static) they scale each map to metres (monocular-inertial
@@ -59,6 +60,7 @@ struct OrbSlamNodeParams {
   unav::lockstep::ParticipantParams lockstep{"orb_slam"};
   double image_period = 0.1;
   std::string frame_id = "orb_slam_map";
+  int64_t path_max_poses = 3000;
   bool imu = false;
   bool dvl = false;
   bool dvl_factors = true;
@@ -83,6 +85,9 @@ struct OrbSlamNodeParams {
     a->Visit(
         Field("image_period", &image_period).Range(1e-3, 10.0).Unit("s").Doc("camera frame period (lockstep acks)"));
     a->Visit(Field("frame_id", &frame_id).Doc("odometry frame"));
+    a->Visit(Field("path_max_poses", &path_max_poses)
+                 .Min(0.0)
+                 .Doc("poses in each published path, the latest (corrected); 0 = the whole trajectory"));
     a->Visit(Field("imu", &imu).Doc("monocular-inertial mode: the imu topic scales each map to metres"));
     a->Visit(Field("dvl", &dvl).Doc("DVL-aided mode: the dvl topic scales each map to metres and holds its scale"));
     a->Visit(Field("dvl_factors", &dvl_factors)
@@ -113,6 +118,7 @@ class OrbSlamNode : public unav::Node {
     options_.loop_closing = prm.loop_closing;
     options_.clahe_clip = prm.clahe_clip;
     options_.dvl_factors = prm.dvl_factors;
+    path_max_poses_ = static_cast<std::size_t>(prm.path_max_poses);
     lockstep_ = prm.lockstep.enabled;
     ack_name_ = prm.lockstep.name;
     image_period_ = prm.image_period;
@@ -312,7 +318,7 @@ class OrbSlamNode : public unav::Node {
     nav_msgs::msg::Path path;
     path.header().stamp() = h.stamp();
     path.header().frame_id(frame_id_);
-    for (const auto& p : slam_->Trajectory()) {
+    for (const auto& p : slam_->Trajectory(path_max_poses_)) {
       geometry_msgs::msg::dds_::PoseStamped_ ps;
       const unav::Time t = unav::Time{static_cast<int64_t>(std::llround((p.stamp) * 1e9))};
       ps.header().stamp().sec(t.sec());
@@ -348,6 +354,7 @@ class OrbSlamNode : public unav::Node {
   ImuNoise imu_noise_;
   bool inertial_on_ = false;
   bool want_imu_ = false, want_dvl_ = false, dvl_on_ = false;
+  std::size_t path_max_poses_ = 3000;
 };
 
 }  // namespace unav::localization

@@ -92,9 +92,10 @@ auto MonoSlam::Impl::ToGlobal(const Eigen::Isometry3d& T_wc) const -> Eigen::Iso
   return out;
 }
 
-auto MonoSlam::Impl::CurrentTrajectory() const -> std::vector<StampedPose> {
+auto MonoSlam::Impl::CurrentTrajectory(std::size_t from) const -> std::vector<StampedPose> {
   std::vector<StampedPose> out;
-  for (const auto& e : traj) {
+  for (std::size_t i = from; i < traj.size(); ++i) {
+    const TrajEntry& e = traj[i];
     const Eigen::Isometry3d T_cw = e.T_cr * map->kf(e.ref_kf).T_cw;
     out.push_back({e.stamp, ToGlobal(T_cw.inverse()), map_number});
   }
@@ -337,6 +338,22 @@ std::vector<MonoSlam::StampedPose> MonoSlam::Trajectory() const {
   std::vector<StampedPose> out = impl_->frozen;
   if (impl_->initialized) {
     const auto t = impl_->CurrentTrajectory();
+    out.insert(out.end(), t.begin(), t.end());
+  }
+  std::stable_sort(out.begin(), out.end(),
+                   [](const StampedPose& a, const StampedPose& b) { return a.stamp < b.stamp; });
+  return out;
+}
+
+std::vector<MonoSlam::StampedPose> MonoSlam::Trajectory(std::size_t last) const {
+  if (last == 0) return Trajectory();
+  const Impl& m = *impl_;
+  // Earlier maps' frames precede the current map's (each map starts where the last was lost).
+  const std::size_t current = m.initialized ? std::min(last, m.traj.size()) : 0;
+  const std::size_t earlier = std::min(last - current, m.frozen.size());
+  std::vector<StampedPose> out(m.frozen.end() - static_cast<std::ptrdiff_t>(earlier), m.frozen.end());
+  if (current > 0) {
+    const auto t = m.CurrentTrajectory(m.traj.size() - current);
     out.insert(out.end(), t.begin(), t.end());
   }
   std::stable_sort(out.begin(), out.end(),

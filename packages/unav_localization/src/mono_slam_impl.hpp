@@ -275,7 +275,8 @@ struct MonoSlam::Impl {
   // ----------------------------------------------------------------- bookkeeping
   Eigen::Isometry3d ToGlobal(const Eigen::Isometry3d& T_wc) const;
 
-  std::vector<StampedPose> CurrentTrajectory() const;
+  /// The current map's tracked frames from traj[from] on, in the global frame.
+  std::vector<StampedPose> CurrentTrajectory(std::size_t from = 0) const;
 
   void ResetForReinitialization();
 

@@ -306,6 +306,15 @@ TEST(MonoSlam, StraightRunOverTheSeabedWithKnownMotion) {
   EXPECT_GE(n, 85u);
   // Bound: 1% of the distance, twice the 0.5% typical of ORB-SLAM on such a run; seen: see log.
   EXPECT_LT(ape, 0.01 * path);
+  // The bounded trajectory (what the node publishes as its path) is the whole one's tail, exactly.
+  const auto all = slam.Trajectory(), tail = slam.Trajectory(10);
+  ASSERT_EQ(tail.size(), 10u);
+  for (size_t i = 0; i < tail.size(); ++i) {
+    const auto& w = all[all.size() - tail.size() + i];
+    EXPECT_EQ(tail[i].stamp, w.stamp);
+    EXPECT_TRUE(tail[i].T_wc.isApprox(w.T_wc, 0.0)) << i;
+  }
+  EXPECT_EQ(slam.Trajectory(100000).size(), all.size());
 }
 
 // Forward motion, as a vehicle flies along a pipe with its front camera (or a car drives), 1.5 m

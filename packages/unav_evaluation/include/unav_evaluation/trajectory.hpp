@@ -1,7 +1,9 @@
 // Trajectories in TUM format and their time association, as the evo tool reads and pairs them.
 #pragma once
 
+#include <cstdint>
 #include <fstream>
+#include <map>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -56,6 +58,21 @@ class TrajectorySpool {
   std::ofstream out_;
   size_t size_ = 0;
   double last_stamp_ = 0.0;
+};
+
+/// An estimator's corrected history from the paths it publishes (a SLAM republishes its
+/// trajectory after bundle adjustment and loop closing, perhaps only its latest poses: a bounded
+/// path): every stamp keeps the pose of the latest path that held it. over(odometry) is the whole
+/// run: the odometry before the history's first stamp, the history, the odometry after its last.
+class PathHistory {
+ public:
+  void update(const Trajectory& path);
+  bool empty() const { return poses_.empty(); }
+  size_t size() const { return poses_.size(); }
+  Trajectory over(const Trajectory& odometry) const;
+
+ private:
+  std::map<int64_t, std::pair<double, Eigen::Isometry3d>> poses_;  ///< by stamp [ns]
 };
 
 /// Reads `timestamp tx ty tz qx qy qz qw` lines ('#' comments and blank lines skipped; commas

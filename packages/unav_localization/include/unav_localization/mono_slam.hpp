@@ -180,6 +180,8 @@ class MonoSlam {
   /// Every tracked frame's pose, expressed through its reference keyframe, so loop corrections
   /// and bundle adjustment move the whole history. Frames before initialisation are absent.
   std::vector<StampedPose> Trajectory() const;
+  /// The last `last` poses of Trajectory() (all when 0), computed for those only: O(last).
+  std::vector<StampedPose> Trajectory(std::size_t last) const;
   std::vector<StampedPose> KeyFrameTrajectory() const;
   SlamStats stats() const;
   const Map& map() const;
