@@ -192,6 +192,7 @@ std::string format_state_json(const FdmState& s) {
 JsonBackend::JsonBackend(const unav::scene::Scenario& scenario, const unav::scene::World& world, MotorMap map,
                          const std::string& map_file)
     : scenario_(scenario), world_(world), map_(std::move(map)), vehicle_(physics::scenario_vehicle(scenario_)) {
+  physics::require_fixed_usbl(vehicle_, scenario_.name, "the ArduPilot JSON backend");
   // The world's sound speed for the USBL and the modem, here as well as in the simulator: the
   // bridge's ports carry the modem's packets from this vehicle (as the physics server does).
   physics::apply_world_acoustics(world_, &vehicle_.sensors);

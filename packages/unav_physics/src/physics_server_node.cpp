@@ -95,6 +95,29 @@ PhysicsServer::PhysicsServer(const unav::NodeOptions& options) : Node("physics_s
     }
     logger()->info("scenario {} (seed {}): world {}, vehicle {}", p.scenario.file, scenario->seed, scenario->world,
                    scenario->vehicle.model);
+    // Carried USBL transceivers: each names the vehicle that carries it (this node's namespace
+    // for the primary vehicle, a fleet name).
+    const std::string primary = get_namespace().substr(get_namespace().rfind('/') + 1);
+    auto by_name = [&](const std::string& n) -> const Simulator* {
+      if (n == primary) return sim_.get();
+      for (const auto& f : fleet_)
+        if (f.name == n) return f.sim.get();
+      return nullptr;
+    };
+    auto carry = [&](Simulator* tracked, const UsblParams& u, const std::string& key, const std::string& who) {
+      if (!u.enabled || u.transceiver_vehicle.empty()) return;
+      const Simulator* carrier = by_name(u.transceiver_vehicle);
+      if (carrier == nullptr || carrier == tracked)
+        throw unav::ParameterError("node '" + name() + "': " + p.scenario.file + ": " + key +
+                                   ".sensors.usbl.transceiver_vehicle = " + u.transceiver_vehicle + ": " +
+                                   (carrier == nullptr ? "no such vehicle (the primary is '" + primary + "')"
+                                                       : "a vehicle cannot carry its own transponder's transceiver"));
+      usbl_carriers_.emplace_back(tracked, carrier);
+      logger()->info("{}'s USBL transceiver is carried by {}", who, u.transceiver_vehicle);
+    };
+    carry(sim_.get(), vehicle.sensors.usbl, "vehicle", primary);
+    for (size_t i = 0; i < fleet_.size(); ++i)
+      carry(fleet_[i].sim.get(), fleet_vehicles[i].sensors.usbl, "fleet[" + std::to_string(i) + "]", fleet_[i].name);
   } else {
     build_from_params(p, so, vehicle);
   }
@@ -242,6 +265,8 @@ std::string PhysicsServer::missing_with_acks() const {
 }
 
 void PhysicsServer::step_once() {
+  // Carried USBL transceivers where their carriers are at the step's start (before any moves).
+  for (auto& [tracked, carrier] : usbl_carriers_) tracked->set_usbl_carrier_pose(carrier->pose());
   sim_->step();
   for (auto& f : fleet_) f.sim->step();
   if (sim_->command_timed_out() && !timeout_logged_) {

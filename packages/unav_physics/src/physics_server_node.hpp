@@ -215,6 +215,8 @@ class PhysicsServer : public unav::Node {
     int64_t last_command_ns = INT64_MIN;  ///< newest command stamp (lockstep_wait_for_command)
   };
   std::vector<FleetVehicle> fleet_;
+  /// USBL transceivers carried by another vehicle: (tracked vehicle, carrier), set each step.
+  std::vector<std::pair<Simulator*, const Simulator*>> usbl_carriers_;
   std::shared_ptr<unav::Subscription<unav_msgs::msg::ThrusterCommand>> command_sub_;
   std::shared_ptr<unav::Subscription<unav_msgs::msg::LockstepAck>> ack_sub_;
   std::shared_ptr<unav::Subscription<std_msgs::msg::String>> drop_sub_;

@@ -87,4 +87,12 @@ std::unique_ptr<Simulator> build_simulator(const unav::scene::Scenario& scenario
                                      scenario_initial_state(which));
 }
 
+void require_fixed_usbl(const VehicleParams& vehicle, const std::string& file, const std::string& path) {
+  const UsblParams& u = vehicle.sensors.usbl;
+  if (u.enabled && !u.transceiver_vehicle.empty())
+    throw unav::ConfigError(file, "vehicle.sensors.usbl.transceiver_vehicle", u.transceiver_vehicle,
+                            path + " steps one vehicle: a transceiver carried by another needs the physics server "
+                                   "with both in its scenario (fleet)");
+}
+
 }  // namespace unav::physics

@@ -16,23 +16,49 @@ Usbl::Usbl(const UsblParams& params, std::uint64_t seed) : p_(params), gen_(seed
   R_WX_ = (Eigen::AngleAxisd(rpy.z(), Eigen::Vector3d::UnitZ()) * Eigen::AngleAxisd(rpy.y(), Eigen::Vector3d::UnitY()) *
            Eigen::AngleAxisd(rpy.x(), Eigen::Vector3d::UnitX()))
               .toRotationMatrix();
+  R_BX_ = R_WX_;
+  x_W_ = p_.transceiver_position;  // a carried one's until set_carrier_pose()
+}
+
+void Usbl::set_carrier_pose(const Eigen::Isometry3d& X_WB) {
+  if (!carried()) return;
+  x_W_ = X_WB * p_.transceiver_position;
+  R_WX_ = X_WB.linear() * R_BX_;
+  carrier_set_ = true;
 }
 
 bool Usbl::step(double t, const Eigen::Vector3d& p_W) {
   if (!p_.enabled) return false;
+  if (carried() && !carrier_set_) return false;  // not before the carrier is known (no interrogation)
   const double c = p_.sound_speed_mps;
-  const Eigen::Vector3d& x = p_.transceiver_position;
+  const Eigen::Vector3d& x = x_W_;
   const double timeout = 2.0 * p_.max_range_m / c + p_.turnaround_s;
   bool out = false;
-  if ((phase_ == Phase::kInbound || phase_ == Phase::kTimeout) && t >= t_reply_ - 1e-12) {
+  if (((phase_ == Phase::kInbound && !carried()) || phase_ == Phase::kTimeout) && t >= t_reply_ - 1e-12) {
     finish();
     out = true;
+  } else if (phase_ == Phase::kInbound && carried()) {
+    // Carried: the reply's front has travelled c (t - t1 - turnaround) from p1; it reaches the
+    // moving transceiver at the gap's zero, interpolated within the step.
+    const double gap = c * (t - t1_ - p_.turnaround_s) - (x - p1_).norm();
+    if (gap >= 0.0) {
+      const double f = gap > prev_gap_ ? -prev_gap_ / (gap - prev_gap_) : 1.0;
+      t_reply_ = prev_t_ + f * (t - prev_t_);
+      x2_ = prev_x_ + f * (x - prev_x_);
+      finish();
+      out = true;
+    } else {
+      prev_t_ = t;
+      prev_gap_ = gap;
+      prev_x_ = x;
+    }
   }
   if (phase_ == Phase::kIdle) {
     if (t >= next_ping_ - 1e-9) {  // interrogate (in the step the last reply came, if due)
       t0_ = t;
       prev_t_ = t;
       prev_p_ = p_W;
+      x0_ = x;
       const double r0 = (p_W - x).norm();
       prev_gap_ = -r0;
       const double share = std::min(1.0, r0 / p_.max_range_m);
@@ -44,7 +70,7 @@ bool Usbl::step(double t, const Eigen::Vector3d& p_W) {
   if (phase_ != Phase::kOutbound) return out;
   // The ping's front has travelled c (t - t0); it reaches the transponder when that covers the
   // distance: the gap's zero, interpolated within the step.
-  const double gap = c * (t - t0_) - (p_W - x).norm();
+  const double gap = c * (t - t0_) - (p_W - x0_).norm();
   if (gap >= 0.0) {
     const double f = gap > prev_gap_ ? -prev_gap_ / (gap - prev_gap_) : 1.0;
     const double t1 = prev_t_ + f * (t - prev_t_);
@@ -52,6 +78,12 @@ bool Usbl::step(double t, const Eigen::Vector3d& p_W) {
     if (drop_ || c * (t1 - t0_) > p_.max_range_m) {
       phase_ = Phase::kTimeout;
       t_reply_ = t0_ + timeout;
+    } else if (carried()) {
+      phase_ = Phase::kInbound;  // solved step by step (the transceiver moves)
+      t1_ = t1;
+      prev_t_ = t;
+      prev_x_ = x;
+      prev_gap_ = c * (t - t1_ - p_.turnaround_s) - (x - p1_).norm();
     } else {
       phase_ = Phase::kInbound;
       t_reply_ = t1 + p_.turnaround_s + (p1_ - x).norm() / c;
@@ -81,7 +113,7 @@ void Usbl::finish() {
   const double u_outlier = uniform_(gen_), u_error = uniform_(gen_);
   if (!replied) return;
 
-  const Eigen::Vector3d& x = p_.transceiver_position;
+  const Eigen::Vector3d& x = carried() ? x2_ : x_W_;  // where the reply was received
   const double c_assumed = p_.assumed_sound_speed_mps > 0.0 ? p_.assumed_sound_speed_mps : p_.sound_speed_mps;
   reading_.truth_p_W = p1_;
   reading_.truth_range_m = (p1_ - x).norm();

@@ -393,6 +393,54 @@ TEST(PhysicsServer, UsblFixesTheVehicleAfterTheAcousticRoundTrip) {
   for (int i = 0; i < 3; ++i) EXPECT_GT(f.position_covariance()[static_cast<std::size_t>(4 * i)], 0.0);
 }
 
+// A USBL transceiver carried by another vehicle of the fleet: rov2 (20 m behind, facing east)
+// carries the transceiver that tracks the primary's transponder (the primary's vehicle.set names
+// rov2 as its carrier). The fix on /rov/usbl/fix is the primary in rov2's transceiver axes: ahead
+// of a vehicle facing east, 20 m north of it, is to its left (azimuth -90 deg), at the range
+// between them. A carrier that is not a vehicle of the scenario is refused, naming the key.
+TEST(PhysicsServer, UsblCarriedByAnotherVehicleFixesTheTransponderInItsAxes) {
+  const std::string world_path = write_world("usbl_pair", "seabed: {depth_m: 30.0}\n");
+  const std::string dir = std::filesystem::path(world_path).parent_path().string();
+  const std::string model = std::string(UNAV_CONFIG_DIR) + "/vehicles/bluerov2_heavy.yaml";
+  const std::string quiet =
+      "sensors.usbl.enabled=true, sensors.usbl.range_stddev_m=0, sensors.usbl.angle_stddev_deg=0, "
+      "sensors.usbl.outlier_probability=0, sensors.usbl.dropout_at_max_range=0";
+  auto write = [&](const std::string& file, const std::string& carrier) {
+    std::ofstream(dir + "/" + file) << "name: usbl_pair\nworld: world.yaml\n"
+                                    << "vehicle: {model: " << model << ", initial_position: [0, 0, 5], set: ["
+                                    << quiet << ", sensors.usbl.transceiver_vehicle=" << carrier << "]}\n"
+                                    << "fleet:\n  - {name: rov2, model: " << model
+                                    << ", initial_position: [-20, 0, 5], initial_rpy_deg: [0, 0, 90]}\n";
+    return dir + "/" + file;
+  };
+  ServerProbe h({"-p", "scenario:=" + write("usbl_pair.yaml", "rov2")});
+  PhysicsServer& server = *h.server;
+  std::vector<unav_msgs::msg::UsblFix> fixes;
+  auto sub = h.probe->create_subscription<unav_msgs::msg::UsblFix>(
+      "/rov/usbl/fix", unav::QoS::reliable(), [&](const unav_msgs::msg::UsblFix& m) { fixes.push_back(m); });
+  ASSERT_TRUE(h.match({make_link(server, *sub)}));
+  ASSERT_TRUE(h.spin_until([&] { return !fixes.empty() && fixes.back().valid(); }, 20s)) << "no valid USBL fix";
+  const auto& f = fixes.back();
+  // The vehicles drift apart little without thrust (both held near their starts).
+  EXPECT_NEAR(f.range(), 20.0, 0.5);
+  EXPECT_NEAR(f.azimuth(), -M_PI / 2, 0.05);
+  EXPECT_NEAR(f.position().y(), -20.0, 0.5);  // transceiver axes: y right, the primary to the left
+  const Eigen::Vector3d world(f.position_world().x(), f.position_world().y(), f.position_world().z());
+  const Eigen::Vector3d truth = server.simulator().state().p_WB_W + Eigen::Vector3d(-0.1, 0.0, -0.15);
+  EXPECT_NEAR((world - truth).norm(), 0.0, 0.5);
+
+  const std::string bad = write("usbl_bad.yaml", "rov9");
+  try {
+    ServerProbe b({"-p", "scenario:=" + bad});
+    FAIL() << "a carrier that is no vehicle accepted";
+  } catch (const std::exception& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("usbl_bad.yaml"), std::string::npos) << what;
+    EXPECT_NE(what.find("transceiver_vehicle = rov9"), std::string::npos) << what;
+    EXPECT_NE(what.find("no such vehicle"), std::string::npos) << what;
+  }
+}
+
 // The acoustic modem link on the wire: 4 bytes handed to the surface station's modem arrive on
 // the vehicle's after the travel (~4 m at 1500 m/s) plus 0.32 s on the air at 100 bit/s.
 TEST(PhysicsServer, ModemCarriesBytesFromTheSurfaceToTheVehicle) {

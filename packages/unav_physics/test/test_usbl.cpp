@@ -8,6 +8,7 @@
 #include <functional>
 #include <vector>
 
+#include "unav_physics/scenario_builder.hpp"
 #include "unav_physics/sensors.hpp"
 
 using unav::physics::Usbl;
@@ -84,6 +85,71 @@ TEST(Usbl, MovingTransponderIsFixedWhereThePingReachedIt) {
 
 // The transceiver's sound-speed setting scales every range (a 1450 m/s setting in 1500 m/s water
 // reads 3.3 % short); its axes turn the angles: a transceiver yawed 90 deg sees north on its left.
+// A transceiver carried by another vehicle (a follower tracking its leader): the carrier moves
+// at 3 m/s north and yaws 90 deg right, its transceiver mounted 0.5 m below its origin; the
+// transponder is still 300 m east. The ping leaves where the transceiver was at t0 (x0), reaches
+// the transponder at t1 (c t1 = |p - x0|), the reply reaches the moving transceiver at t2
+// (c (t2 - t1 - turnaround) = |p - x(t2)|, solved step by step), and the transceiver measures the
+// two-way range (|p - x0| + |p - x2|) / 2 and the direction p - x2 in its axes at reception.
+TEST(Usbl, CarriedTransceiverMeasuresFromWhereItIsWhenTheReplyArrives) {
+  UsblParams p = quiet();
+  p.transceiver_vehicle = "leader";
+  p.transceiver_position = Eigen::Vector3d(0.0, 0.0, 0.5);  // on the carrier, FRD
+  const Eigen::Vector3d target(0.0, 300.0, 10.0), v(3.0, 0.0, 0.0);
+  const Eigen::Matrix3d R_WB = Eigen::AngleAxisd(M_PI / 2, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  auto carrier = [&](double t) {
+    Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
+    X.linear() = R_WB;
+    X.translation() = Eigen::Vector3d(0.0, 0.0, 2.0) + v * t;
+    return X;
+  };
+  Usbl usbl(p, 1);
+  EXPECT_FALSE(usbl.step(0.0, target));  // no carrier pose yet: no interrogation
+  std::vector<UsblReading> r;
+  for (long k = 0; k <= 1500; ++k) {
+    const double t = 1e-3 * static_cast<double>(k);
+    usbl.set_carrier_pose(carrier(t));
+    if (usbl.step(t, target)) r.push_back(usbl.reading());
+  }
+  ASSERT_GE(r.size(), 1u);
+  const UsblReading& f = r[0];
+  ASSERT_TRUE(f.valid);
+  const Eigen::Vector3d x0 = carrier(0.0) * p.transceiver_position;
+  const double t1 = (target - x0).norm() / 1500.0;
+  // t2 by fixed-point iteration (the carrier's speed << c).
+  double t2 = t1;
+  for (int i = 0; i < 50; ++i) t2 = t1 + 0.1 + (target - carrier(t2) * p.transceiver_position).norm() / 1500.0;
+  const Eigen::Vector3d x2 = carrier(t2) * p.transceiver_position;
+  // The carrier moves linearly: the step interpolation is exact to rounding.
+  EXPECT_NEAR(f.stamp, t2, 1e-9);
+  EXPECT_NEAR(f.range_m, 0.5 * ((target - x0).norm() + (target - x2).norm()), 1e-6);
+  const Eigen::Vector3d d_X = R_WB.transpose() * (target - x2);  // the mount has the carrier's axes
+  EXPECT_NEAR(f.azimuth_rad, std::atan2(d_X.y(), d_X.x()), 1e-9);
+  EXPECT_NEAR(f.azimuth_rad, 0.0, 0.02);  // yawed 90 deg right the carrier faces east: the target is ahead
+  // The world fix lies along the true direction from the transceiver at reception, off by the
+  // two-way range's motion term (|p - x0| - |p - x2|) / 2 (~0.9 mm here: the carrier moves
+  // across the line of sight).
+  EXPECT_NEAR((f.p_W - x2).normalized().dot((target - x2).normalized()), 1.0, 1e-12);
+  EXPECT_NEAR((f.p_W - target).norm(), std::abs(f.range_m - (target - x2).norm()), 1e-6);
+  EXPECT_LT((f.p_W - target).norm(), 0.01);
+}
+
+TEST(Usbl, OneVehicleRunPathsRefuseACarriedTransceiver) {
+  unav::physics::VehicleParams v;
+  v.sensors.usbl.enabled = true;
+  EXPECT_NO_THROW(unav::physics::require_fixed_usbl(v, "s.yaml", "an in-process episode"));
+  v.sensors.usbl.transceiver_vehicle = "leader";
+  try {
+    unav::physics::require_fixed_usbl(v, "s.yaml", "an in-process episode");
+    FAIL() << "a carried transceiver accepted";
+  } catch (const std::exception& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("s.yaml"), std::string::npos) << what;
+    EXPECT_NE(what.find("transceiver_vehicle"), std::string::npos) << what;
+    EXPECT_NE(what.find("leader"), std::string::npos) << what;
+  }
+}
+
 TEST(Usbl, SoundSpeedSettingScalesRangesAndTheMountTurnsAngles) {
   UsblParams p = quiet();
   p.assumed_sound_speed_mps = 1450.0;

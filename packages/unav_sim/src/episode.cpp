@@ -30,6 +30,7 @@ EpisodeSetup load_episode_setup(const scene::Scenario& scenario) {
                             "(the physics server steps every vehicle)");
   // The episode sends a command every control period; the failsafe would only mask a bug.
   s.plant = physics::scenario_vehicle(sc);
+  physics::require_fixed_usbl(s.plant, sc.name, "an in-process episode");
   s.simulator = physics::scenario_simulator_options(sc, 0.0);
   s.mpc = control::load_mpc_config(sc.control.mpc);
   s.mpc.options.max_solve_time_ms = 0.0;  // iterations only: episodes repeat exactly

@@ -36,6 +36,11 @@ VehicleParams scenario_vehicle(const unav::scene::Scenario& scenario);
 /// The same for one vehicle of the scenario; `key` names it in errors ("vehicle", "fleet[1]").
 VehicleParams scenario_vehicle(const unav::scene::ScenarioVehicle& vehicle, const std::string& key);
 
+/// A run path that steps one vehicle (`path`, e.g. "an in-process episode") cannot move a USBL
+/// transceiver carried by another: throws ConfigError naming `file` and
+/// vehicle.sensors.usbl.transceiver_vehicle when the vehicle's USBL names a carrier.
+void require_fixed_usbl(const VehicleParams& vehicle, const std::string& file, const std::string& path);
+
 /// The sound speed of the world's water (Mackenzie at the transceiver's / station's depth) for
 /// the USBL and the acoustic modem that leave theirs at 0.
 void apply_world_acoustics(const unav::scene::World& world, SensorSuiteParams* sensors);

@@ -229,6 +229,8 @@ class SensorSuite {
   /// seabed may be null (no seabed: DVL and altimeter invalid).
   void update(double t, const RigidBodyState& x, const Vector6d& nu_dot, const Seabed* seabed);
   const SensorReadings& readings() const { return readings_; }
+  /// The carrier's pose of a carried USBL transceiver (UsblParams::transceiver_vehicle).
+  void set_usbl_carrier_pose(const Eigen::Isometry3d& X_WB) { usbl_.set_carrier_pose(X_WB); }
   /// True when update(t, ...) will sample the IMU (the only sensor that needs nu_dot).
   bool imu_due(double t) const { return s_imu_.due(t); }
   const SensorSuiteParams& params() const { return params_; }

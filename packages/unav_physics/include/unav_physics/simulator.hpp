@@ -93,6 +93,16 @@ class Simulator {
   double time() const { return static_cast<double>(steps_) * options_.dt; }  ///< s
   std::uint64_t steps() const { return steps_; }
   const RigidBodyState& state() const { return x_; }
+  /// The body pose in the world (NED).
+  Eigen::Isometry3d pose() const {
+    Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
+    X.linear() = x_.q_WB.toRotationMatrix();
+    X.translation() = x_.p_WB_W;
+    return X;
+  }
+  /// Where the vehicle that carries this vehicle's USBL transceiver is (sensors.usbl.
+  /// transceiver_vehicle), before each step (the physics server, which steps both).
+  void set_usbl_carrier_pose(const Eigen::Isometry3d& X_WB) { sensors_.set_usbl_carrier_pose(X_WB); }
   /// nu_dot = [v_dot; w_dot] (body axes) at the current state and inputs (computed on demand).
   const Vector6d& acceleration() const;
   const SensorReadings& sensors() const { return sensors_.readings(); }

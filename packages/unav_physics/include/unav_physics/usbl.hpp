@@ -11,11 +11,18 @@
 //     scales every range), angles + Gaussian noise, with multipath outliers (range off by up to
 //     outlier_range_m) and dropouts whose probability grows as (range / max_range)^2; beyond
 //     max_range_m no reply comes: the interrogation times out (a fix with valid = false).
+// The transceiver may instead be carried by another vehicle (transceiver_vehicle: a vehicle of
+// the scenario, e.g. a follower tracking its leader's transponder): transceiver_position and
+// transceiver_rpy_deg are then its mount in that vehicle's body (FRD), set_carrier_pose() gives
+// the carrier's pose every physics step, the ping leaves from where the transceiver was at t0,
+// the reply is received where it is when the reply reaches it (solved each step, interpolated),
+// and the direction of arrival is measured in its axes then.
 // Deterministic under the seed. DDS-free; the physics server publishes the fixes (usbl/fix).
 #pragma once
 
 #include <cstdint>
 #include <random>
+#include <string>
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
@@ -27,8 +34,11 @@ namespace unav::physics {
 struct UsblParams {
   bool enabled = false;
   double rate_hz = 1.0;  ///< interrogations per second at most (the next one waits for the reply)
-  Eigen::Vector3d transceiver_position{0.0, 0.0, 1.0};  ///< world NED [m] (1 m under a vessel)
-  Eigen::Vector3d transceiver_rpy_deg{0.0, 0.0, 0.0};   ///< its axes in the world (x fwd, y right, z down)
+  /// "" = fixed in the world; else the vehicle carrying the transceiver (the physics server's
+  /// namespace name for its primary vehicle, a fleet entry's name)
+  std::string transceiver_vehicle;
+  Eigen::Vector3d transceiver_position{0.0, 0.0, 1.0};  ///< world NED [m] (1 m under a vessel); or on the carrier, FRD
+  Eigen::Vector3d transceiver_rpy_deg{0.0, 0.0, 0.0};   ///< its axes in the world (x fwd, y right, z down) or carrier
   Eigen::Vector3d transponder_xyz_m{0.0, 0.0, -0.2};    ///< on the vehicle, body FRD [m]
   double sound_speed_mps = 0.0;                         ///< the water's; 0 = the world's water (1500 without one)
   double assumed_sound_speed_mps = 0.0;                 ///< the transceiver's setting; 0 = the water's
@@ -44,6 +54,8 @@ struct UsblParams {
   void Serialize(Archive* a) {
     using unav::common::Field;
     a->Visit(Field("enabled", &enabled).Doc("interrogate the vehicle's transponder"));
+    a->Visit(Field("transceiver_vehicle", &transceiver_vehicle)
+                 .Doc("the vehicle carrying the transceiver (its mount: transceiver_position/rpy); empty = fixed"));
     a->Visit(Field("rate", &rate_hz).Above(0.0).Max(50.0).Unit("Hz").Doc("interrogations per second at most"));
     a->Visit(Field("transceiver_position", &transceiver_position).Range(-1e5, 1e5).Unit("m").Doc("world NED"));
     a->Visit(Field("transceiver_rpy_deg", &transceiver_rpy_deg).Range(-360.0, 360.0).Unit("deg").Doc("its axes"));
@@ -75,7 +87,7 @@ struct UsblReading {
   double azimuth_rad = 0.0;                             ///< atan2(y, x) of the reply's arrival, transceiver axes
   double elevation_rad = 0.0;                           ///< asin(z / r): > 0 below the transceiver's x-y plane
   Eigen::Vector3d p_X = Eigen::Vector3d::Zero();        ///< the fix in transceiver axes
-  Eigen::Vector3d p_W = Eigen::Vector3d::Zero();        ///< the fix in the world (NED)
+  Eigen::Vector3d p_W = Eigen::Vector3d::Zero();        ///< the fix in the world (NED; the carrier's true pose)
   Eigen::Vector3d truth_p_W = Eigen::Vector3d::Zero();  ///< the transponder when the ping reached it
   double truth_range_m = 0.0;                           ///< |truth_p_W - transceiver|
   bool outlier = false;                                 ///< a multipath reply (ground truth)
@@ -92,6 +104,11 @@ class Usbl {
   Usbl(const UsblParams& params, std::uint64_t seed);
   /// Advances to time t with the transponder at p_W. Returns true when a new reading is out.
   bool step(double t, const Eigen::Vector3d& p_W);
+  /// A carried transceiver (params.transceiver_vehicle): the carrier's body pose in the world now,
+  /// before each step() (no interrogation before the first). Ignored for a fixed transceiver. Run
+  /// paths with one vehicle refuse a carried transceiver (physics::require_fixed_usbl).
+  void set_carrier_pose(const Eigen::Isometry3d& X_WB);
+  bool carried() const { return !p_.transceiver_vehicle.empty(); }
   const UsblReading& reading() const { return reading_; }
   const UsblParams& params() const { return p_; }
 
@@ -99,7 +116,13 @@ class Usbl {
   enum class Phase { kIdle, kOutbound, kInbound, kTimeout };
   void finish();
   UsblParams p_;
-  Eigen::Matrix3d R_WX_ = Eigen::Matrix3d::Identity();
+  Eigen::Matrix3d R_WX_ = Eigen::Matrix3d::Identity();  ///< the transceiver's axes now
+  Eigen::Vector3d x_W_ = Eigen::Vector3d::Zero();       ///< the transceiver now
+  Eigen::Matrix3d R_BX_ = Eigen::Matrix3d::Identity();  ///< carried: its mount
+  Eigen::Vector3d x0_ = Eigen::Vector3d::Zero();        ///< where the ping left
+  Eigen::Vector3d x2_ = Eigen::Vector3d::Zero(), prev_x_ = Eigen::Vector3d::Zero();  ///< carried: reception
+  double t1_ = 0.0;
+  bool carrier_set_ = false;
   std::mt19937_64 gen_;
   std::normal_distribution<double> normal_{0.0, 1.0};
   std::uniform_real_distribution<double> uniform_{0.0, 1.0};
