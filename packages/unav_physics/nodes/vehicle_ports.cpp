@@ -21,7 +21,13 @@ VehiclePorts::VehiclePorts(unav::Node& node, const VehicleParams& vehicle, const
   const auto topic = [&](const std::string& relative) {
     return fleet_name.empty() ? relative : "/" + fleet_name + "/" + relative;
   };
-  const std::string station = fleet_name.empty() ? "/surface/modem/" : "/surface/" + fleet_name + "/modem/";
+  const std::string ns = node.get_namespace();
+  const std::string own_name = fleet_name.empty() ? ns.substr(ns.rfind('/') + 1) : fleet_name;
+  const std::string station =
+      !sensors.modem.station_vehicle.empty() ? "/" + sensors.modem.station_vehicle + "/modem/" + own_name + "/"
+      : fleet_name.empty()                   ? "/surface/modem/"
+                                             : "/surface/" + fleet_name + "/modem/";
+  station_topics_ = station;
   if (vehicle.tether.enabled) {
     tether_wrench_pub_ =
         node.create_publisher<geometry_msgs::msg::WrenchStamped>(topic("tether/wrench"), unav::QoS::sensor_data());
@@ -164,7 +170,7 @@ void VehiclePorts::publish_tether(const Simulator& sim) {
 
 void VehiclePorts::queue_packet(AcousticModem::End from, const unav_msgs::msg::AcousticPacket& m) {
   const auto r = modem_->send(modem_t_, from, m.data());
-  const char* end = from == AcousticModem::End::kVehicle ? "modem/tx" : "/surface/modem/tx";
+  const std::string end = from == AcousticModem::End::kVehicle ? std::string("modem/tx") : station_topics_ + "tx";
   if (r == AcousticModem::Send::kTooLong)
     log_->warn("{}: a {}-byte packet refused (max_packet_bytes {})", end, m.data().size(),
                modem_->params().max_packet_bytes);
@@ -176,6 +182,7 @@ void VehiclePorts::carry_packets(const Simulator& sim) {
   const RigidBodyState& x = sim.state();
   modem_t_ = sim.time();
   arrivals_.clear();
+  if (modem_carrier_ != nullptr) modem_->set_station_position(modem_carrier_->pose() * modem_->params().station_position);
   modem_->step(modem_t_, x.p_WB_W + x.q_WB * modem_->params().modem_xyz_m, &arrivals_);
   for (const auto& pk : arrivals_) {
     const bool to_vehicle = pk.to == AcousticModem::End::kVehicle;

@@ -10,6 +10,7 @@ constexpr double kDefaultSoundSpeed = 1500.0;  // m/s, without a world's water
 
 AcousticModem::AcousticModem(const AcousticModemParams& params, std::uint64_t seed) : p_(params), gen_(seed) {
   if (!(p_.sound_speed_mps > 0.0)) p_.sound_speed_mps = kDefaultSoundSpeed;
+  station_W_ = p_.station_position;  // a carried station's until set_station_position()
 }
 
 AcousticModem::Send AcousticModem::send(double t, End from, std::vector<std::uint8_t> data) {
@@ -35,7 +36,7 @@ int AcousticModem::step(double t, const Eigen::Vector3d& p_W, std::vector<Packet
       const double start = std::max(q->free_at, pk.sent);
       const double duration = 8.0 * static_cast<double>(pk.data.size()) / p_.bit_rate_bps;
       q->free_at = start + duration;
-      pk.range_m = (p_W - p_.station_position).norm();
+      pk.range_m = (p_W - station_W_).norm();
       pk.arrival = start + pk.range_m / p_.sound_speed_mps + duration;
       const double share = std::min(1.0, pk.range_m / p_.max_range_m);
       const bool drop = uniform_(gen_) < p_.loss_at_max_range * share * share;  // drawn for every packet

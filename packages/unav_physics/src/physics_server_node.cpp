@@ -95,8 +95,8 @@ PhysicsServer::PhysicsServer(const unav::NodeOptions& options) : Node("physics_s
     }
     logger()->info("scenario {} (seed {}): world {}, vehicle {}", p.scenario.file, scenario->seed, scenario->world,
                    scenario->vehicle.model);
-    // Carried USBL transceivers: each names the vehicle that carries it (this node's namespace
-    // for the primary vehicle, a fleet name).
+    // Carried USBL transceivers and modem station ends: each names the vehicle that carries it
+    // (this node's namespace for the primary vehicle, a fleet name).
     const std::string primary = get_namespace().substr(get_namespace().rfind('/') + 1);
     auto by_name = [&](const std::string& n) -> const Simulator* {
       if (n == primary) return sim_.get();
@@ -104,20 +104,29 @@ PhysicsServer::PhysicsServer(const unav::NodeOptions& options) : Node("physics_s
         if (f.name == n) return f.sim.get();
       return nullptr;
     };
-    auto carry = [&](Simulator* tracked, const UsblParams& u, const std::string& key, const std::string& who) {
-      if (!u.enabled || u.transceiver_vehicle.empty()) return;
-      const Simulator* carrier = by_name(u.transceiver_vehicle);
-      if (carrier == nullptr || carrier == tracked)
-        throw unav::ParameterError("node '" + name() + "': " + p.scenario.file + ": " + key +
-                                   ".sensors.usbl.transceiver_vehicle = " + u.transceiver_vehicle + ": " +
+    auto carrier_of = [&](const Simulator* own, const std::string& carrier_name, const std::string& key,
+                          const std::string& field, const std::string& who, const char* what) -> const Simulator* {
+      const Simulator* carrier = by_name(carrier_name);
+      if (carrier == nullptr || carrier == own)
+        throw unav::ParameterError("node '" + name() + "': " + p.scenario.file + ": " + key + ".sensors." + field +
+                                   " = " + carrier_name + ": " +
                                    (carrier == nullptr ? "no such vehicle (the primary is '" + primary + "')"
-                                                       : "a vehicle cannot carry its own transponder's transceiver"));
-      usbl_carriers_.emplace_back(tracked, carrier);
-      logger()->info("{}'s USBL transceiver is carried by {}", who, u.transceiver_vehicle);
+                                                       : "a vehicle cannot carry both ends"));
+      logger()->info("{}'s {} is carried by {}", who, what, carrier_name);
+      return carrier;
     };
-    carry(sim_.get(), vehicle.sensors.usbl, "vehicle", primary);
-    for (size_t i = 0; i < fleet_.size(); ++i)
-      carry(fleet_[i].sim.get(), fleet_vehicles[i].sensors.usbl, "fleet[" + std::to_string(i) + "]", fleet_[i].name);
+    for (size_t i = 0; i <= fleet_.size(); ++i) {  // 0: the primary, then the fleet
+      Simulator* own = i == 0 ? sim_.get() : fleet_[i - 1].sim.get();
+      const SensorSuiteParams& s = i == 0 ? vehicle.sensors : fleet_vehicles[i - 1].sensors;
+      const std::string key = i == 0 ? "vehicle" : "fleet[" + std::to_string(i - 1) + "]";
+      const std::string who = i == 0 ? primary : fleet_[i - 1].name;
+      if (s.usbl.enabled && !s.usbl.transceiver_vehicle.empty())
+        usbl_carriers_.emplace_back(own, carrier_of(own, s.usbl.transceiver_vehicle, key, "usbl.transceiver_vehicle",
+                                                    who, "USBL transceiver"));
+      if (s.modem.enabled && !s.modem.station_vehicle.empty())
+        modem_carriers_.emplace_back(
+            i, carrier_of(own, s.modem.station_vehicle, key, "modem.station_vehicle", who, "modem's other end"));
+    }
   } else {
     build_from_params(p, so, vehicle);
   }
@@ -139,6 +148,7 @@ PhysicsServer::PhysicsServer(const unav::NodeOptions& options) : Node("physics_s
           if (lockstep_ && barrier_t_ >= 0.0 && barrier_open()) run_steps();
         });
   }
+  for (const auto& [i, carrier] : modem_carriers_) (i == 0 ? *ports_ : *fleet_[i - 1].ports).set_modem_station_carrier(carrier);
   reset_sub_ = create_subscription<geometry_msgs::msg::Pose>(
       "sim/reset", unav::QoS::reliable(), [this](const geometry_msgs::msg::Pose& m) { on_reset(m); });
   if (vehicle.tether.enabled)  // the winch: the length paid out

@@ -217,6 +217,8 @@ class PhysicsServer : public unav::Node {
   std::vector<FleetVehicle> fleet_;
   /// USBL transceivers carried by another vehicle: (tracked vehicle, carrier), set each step.
   std::vector<std::pair<Simulator*, const Simulator*>> usbl_carriers_;
+  /// Modem station ends carried by another vehicle: (0 = primary, i + 1 = fleet[i]; the carrier).
+  std::vector<std::pair<std::size_t, const Simulator*>> modem_carriers_;
   std::shared_ptr<unav::Subscription<unav_msgs::msg::ThrusterCommand>> command_sub_;
   std::shared_ptr<unav::Subscription<unav_msgs::msg::LockstepAck>> ack_sub_;
   std::shared_ptr<unav::Subscription<std_msgs::msg::String>> drop_sub_;

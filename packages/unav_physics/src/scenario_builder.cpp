@@ -89,10 +89,13 @@ std::unique_ptr<Simulator> build_simulator(const unav::scene::Scenario& scenario
 
 void require_fixed_usbl(const VehicleParams& vehicle, const std::string& file, const std::string& path) {
   const UsblParams& u = vehicle.sensors.usbl;
+  const std::string rule =
+      path + " steps one vehicle: an end carried by another needs the physics server with both in its scenario (fleet)";
   if (u.enabled && !u.transceiver_vehicle.empty())
-    throw unav::ConfigError(file, "vehicle.sensors.usbl.transceiver_vehicle", u.transceiver_vehicle,
-                            path + " steps one vehicle: a transceiver carried by another needs the physics server "
-                                   "with both in its scenario (fleet)");
+    throw unav::ConfigError(file, "vehicle.sensors.usbl.transceiver_vehicle", u.transceiver_vehicle, rule);
+  const AcousticModemParams& m = vehicle.sensors.modem;
+  if (m.enabled && !m.station_vehicle.empty())
+    throw unav::ConfigError(file, "vehicle.sensors.modem.station_vehicle", m.station_vehicle, rule);
 }
 
 }  // namespace unav::physics

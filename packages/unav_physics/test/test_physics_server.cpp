@@ -393,18 +393,21 @@ TEST(PhysicsServer, UsblFixesTheVehicleAfterTheAcousticRoundTrip) {
   for (int i = 0; i < 3; ++i) EXPECT_GT(f.position_covariance()[static_cast<std::size_t>(4 * i)], 0.0);
 }
 
-// A USBL transceiver carried by another vehicle of the fleet: rov2 (20 m behind, facing east)
-// carries the transceiver that tracks the primary's transponder (the primary's vehicle.set names
-// rov2 as its carrier). The fix on /rov/usbl/fix is the primary in rov2's transceiver axes: ahead
-// of a vehicle facing east, 20 m north of it, is to its left (azimuth -90 deg), at the range
-// between them. A carrier that is not a vehicle of the scenario is refused, naming the key.
-TEST(PhysicsServer, UsblCarriedByAnotherVehicleFixesTheTransponderInItsAxes) {
+// A USBL transceiver and a modem carried by another vehicle of the fleet: rov2 (20 m behind,
+// facing east) carries the transceiver that tracks the primary's transponder and the other end of
+// the primary's modem (the primary's vehicle.set names rov2 as their carrier). The fix on
+// /rov/usbl/fix is the primary in rov2's transceiver axes: ahead of a vehicle facing east, 20 m
+// north of it, is to its left (azimuth -90 deg), at the range between them; bytes rov2 sends on
+// /rov2/modem/rov/tx arrive on /rov/modem/rx after ~20 m of travel. A carrier that is not a
+// vehicle of the scenario is refused, naming the key.
+TEST(PhysicsServer, UsblAndModemCarriedByAnotherVehicle) {
   const std::string world_path = write_world("usbl_pair", "seabed: {depth_m: 30.0}\n");
   const std::string dir = std::filesystem::path(world_path).parent_path().string();
   const std::string model = std::string(UNAV_CONFIG_DIR) + "/vehicles/bluerov2_heavy.yaml";
   const std::string quiet =
       "sensors.usbl.enabled=true, sensors.usbl.range_stddev_m=0, sensors.usbl.angle_stddev_deg=0, "
-      "sensors.usbl.outlier_probability=0, sensors.usbl.dropout_at_max_range=0";
+      "sensors.usbl.outlier_probability=0, sensors.usbl.dropout_at_max_range=0, sensors.modem.enabled=true, "
+      "sensors.modem.loss_at_max_range=0, sensors.modem.station_vehicle=rov2";
   auto write = [&](const std::string& file, const std::string& carrier) {
     std::ofstream(dir + "/" + file) << "name: usbl_pair\nworld: world.yaml\n"
                                     << "vehicle: {model: " << model << ", initial_position: [0, 0, 5], set: ["
@@ -418,7 +421,15 @@ TEST(PhysicsServer, UsblCarriedByAnotherVehicleFixesTheTransponderInItsAxes) {
   std::vector<unav_msgs::msg::UsblFix> fixes;
   auto sub = h.probe->create_subscription<unav_msgs::msg::UsblFix>(
       "/rov/usbl/fix", unav::QoS::reliable(), [&](const unav_msgs::msg::UsblFix& m) { fixes.push_back(m); });
-  ASSERT_TRUE(h.match({make_link(server, *sub)}));
+  std::vector<unav_msgs::msg::AcousticPacket> got;
+  const unav::QoS qos = unav::QoS::reliable(100);
+  auto rx = h.probe->create_subscription<unav_msgs::msg::AcousticPacket>(
+      "/rov/modem/rx", qos, [&](const unav_msgs::msg::AcousticPacket& m) { got.push_back(m); });
+  auto tx = h.probe->create_publisher<unav_msgs::msg::AcousticPacket>("/rov2/modem/rov/tx", qos);
+  ASSERT_TRUE(h.match({make_link(server, *sub), make_link(server, *rx), make_link(*tx, server)}));
+  unav_msgs::msg::AcousticPacket packet;
+  packet.data({1, 2, 3});
+  tx->publish(packet);
   ASSERT_TRUE(h.spin_until([&] { return !fixes.empty() && fixes.back().valid(); }, 20s)) << "no valid USBL fix";
   const auto& f = fixes.back();
   // The vehicles drift apart little without thrust (both held near their starts).
@@ -428,6 +439,11 @@ TEST(PhysicsServer, UsblCarriedByAnotherVehicleFixesTheTransponderInItsAxes) {
   const Eigen::Vector3d world(f.position_world().x(), f.position_world().y(), f.position_world().z());
   const Eigen::Vector3d truth = server.simulator().state().p_WB_W + Eigen::Vector3d(-0.1, 0.0, -0.15);
   EXPECT_NEAR((world - truth).norm(), 0.0, 0.5);
+  ASSERT_TRUE(h.spin_until([&] { return !got.empty(); }, 20s)) << "no packet from rov2's modem";
+  EXPECT_EQ(got[0].data(), (std::vector<std::uint8_t>{1, 2, 3}));
+  // Modems at (-0.1, 0, -0.15) on each, 20 m apart along north (rov2 yawed: its modem 0.1 m west).
+  EXPECT_NEAR(got[0].range(), 20.0, 0.5);
+  EXPECT_NEAR(got[0].travel_time(), got[0].range() / 1500.0 + 24.0 / 100.0, 0.0011);  // 3 bytes at 100 bit/s
 
   const std::string bad = write("usbl_bad.yaml", "rov9");
   try {

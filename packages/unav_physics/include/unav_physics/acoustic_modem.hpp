@@ -5,6 +5,9 @@
 // packet is lost with probability loss_at_max_range (range / max_range_m)^2, and always beyond
 // max_range_m. The travel time is the range at emission over the sound speed (the receiver's
 // motion during the travel changes it by v / c: 0.07 % at 1 m/s). Deterministic under the seed.
+// The station end may be another vehicle's modem (station_vehicle: a vehicle of the scenario; the
+// station_position is then its mount on that vehicle, body FRD, and set_station_position() moves
+// it): a link between two vehicles.
 // DDS-free; the physics server carries the packets (modem/tx -> /surface/modem/rx and back).
 #pragma once
 
@@ -22,7 +25,10 @@ namespace unav::physics {
 struct AcousticModemParams {
   bool enabled = false;
   double bit_rate_bps = 100.0;                      ///< SeaTrac-class links: ~100 bit/s; broadband modems: kbit/s
-  Eigen::Vector3d station_position{0.0, 0.0, 1.0};  ///< world NED [m]
+  /// "" = the station is fixed in the world; else the vehicle carrying the other end (the physics
+  /// server's namespace name for its primary, a fleet name)
+  std::string station_vehicle;
+  Eigen::Vector3d station_position{0.0, 0.0, 1.0};  ///< world NED [m]; or on station_vehicle, FRD
   Eigen::Vector3d modem_xyz_m{-0.1, 0.0, -0.15};    ///< on the vehicle, body FRD [m]
   double sound_speed_mps = 0.0;                     ///< 0 = the world's water (1500 without one)
   double max_range_m = 1000.0;
@@ -34,6 +40,8 @@ struct AcousticModemParams {
   void Serialize(Archive* a) {
     using unav::common::Field;
     a->Visit(Field("enabled", &enabled).Doc("carry packets between the vehicle and the station"));
+    a->Visit(Field("station_vehicle", &station_vehicle)
+                 .Doc("the vehicle carrying the other end (its mount: station_position); empty = fixed"));
     a->Visit(Field("bit_rate_bps", &bit_rate_bps).Above(0.0).Max(1e6).Unit("bit/s"));
     a->Visit(Field("station_position", &station_position).Range(-1e5, 1e5).Unit("m").Doc("world NED"));
     a->Visit(Field("modem_xyz_m", &modem_xyz_m).Range(-10.0, 10.0).Unit("m").Doc("on the vehicle, FRD"));
@@ -65,6 +73,8 @@ class AcousticModem {
   /// arrival order, to *out; returns how many were lost since the last call (ground truth).
   int step(double t, const Eigen::Vector3d& p_W, std::vector<Packet>* out);
   const AcousticModemParams& params() const { return p_; }
+  /// Where the station end is now (a carried one: its carrier's pose applied to its mount).
+  void set_station_position(const Eigen::Vector3d& p_W) { station_W_ = p_W; }
 
  private:
   struct Queue {
@@ -76,6 +86,7 @@ class AcousticModem {
   std::uniform_real_distribution<double> uniform_{0.0, 1.0};
   Queue vehicle_, station_;
   std::vector<Packet> in_flight_;
+  Eigen::Vector3d station_W_ = Eigen::Vector3d::Zero();
 };
 
 }  // namespace unav::physics

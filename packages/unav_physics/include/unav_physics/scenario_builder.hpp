@@ -37,8 +37,8 @@ VehicleParams scenario_vehicle(const unav::scene::Scenario& scenario);
 VehicleParams scenario_vehicle(const unav::scene::ScenarioVehicle& vehicle, const std::string& key);
 
 /// A run path that steps one vehicle (`path`, e.g. "an in-process episode") cannot move a USBL
-/// transceiver carried by another: throws ConfigError naming `file` and
-/// vehicle.sensors.usbl.transceiver_vehicle when the vehicle's USBL names a carrier.
+/// transceiver or a modem's other end carried by another: throws ConfigError naming `file` and
+/// vehicle.sensors.usbl.transceiver_vehicle / modem.station_vehicle when one names a carrier.
 void require_fixed_usbl(const VehicleParams& vehicle, const std::string& file, const std::string& path);
 
 /// The sound speed of the world's water (Mackenzie at the transceiver's / station's depth) for

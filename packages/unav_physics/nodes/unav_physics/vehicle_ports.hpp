@@ -54,7 +54,9 @@ class VehiclePorts {
   /// Creates the publishers on `node` (names relative to its namespace; /clock and /tf absolute);
   /// a sensor's topic only when the vehicle has it enabled. A fleet vehicle (`fleet_name` given)
   /// publishes under /<fleet_name>/ instead, its body frame is <fleet_name>/<body_frame>, its modem's
-  /// station side is /surface/<fleet_name>/modem/{tx,rx}, and it has no /clock (the primary's).
+  /// station side is /surface/<fleet_name>/modem/{tx,rx}, and it has no /clock (the primary's). A
+  /// modem whose station end another vehicle carries has that end at /<carrier>/modem/<name>/{tx,rx}
+  /// (name: fleet_name, or the node's namespace's for the primary).
   VehiclePorts(unav::Node& node, const VehicleParams& vehicle, const PortFrames& frames,
                const std::string& fleet_name = "");
   /// /clock, ground_truth/odom (world_frame -> body_frame), /tf at the simulator's time.
@@ -62,6 +64,9 @@ class VehiclePorts {
   void publish_thruster_state(const Simulator& sim);
   /// The readings that are new since the last call.
   void publish_sensors(const Simulator& sim);
+  /// The vehicle carrying this vehicle's modem's station end (sensors.modem.station_vehicle); its
+  /// pose places that end at every step. Null: the station is fixed in the world.
+  void set_modem_station_carrier(const Simulator* carrier) { modem_carrier_ = carrier; }
   /// The writers of publish_state() (to wait for their acknowledgments before exit).
   std::vector<eprosima::fastdds::dds::DataWriter*> state_writers() const;
 
@@ -71,6 +76,8 @@ class VehiclePorts {
   std::string world_frame_, body_frame_;
   std::uint64_t last_seq_[7] = {0, 0, 0, 0, 0, 0, 0};
   UsblParams usbl_;
+  const Simulator* modem_carrier_ = nullptr;
+  std::string station_topics_;  ///< the station end's topic prefix (its tx and rx)
   std::shared_ptr<unav::Publisher<rosgraph_msgs::msg::Clock>> clock_pub_;
   std::shared_ptr<unav::Publisher<nav_msgs::msg::Odometry>> odom_pub_;
   std::shared_ptr<unav::Publisher<nav_msgs::msg::Path>> path_pub_;
