@@ -2,6 +2,8 @@
 // public API; the stages live in mono_slam_*.cpp.
 #include "mono_slam_impl.hpp"
 
+#include <cstdio>
+
 namespace unav::localization {
 
 using namespace slam_internal;  // NOLINT(google-build-using-namespace)
@@ -24,18 +26,24 @@ bool MonoSlamOptions::IsValid(std::string* msg) const {
   if (init_max_frames < 2) return fail("init_max_frames must be >= 2, got " + std::to_string(init_max_frames));
   if (!(inertial_init_window_s > 0.0 && inertial_init_window_s <= 60.0))
     return fail("inertial_init_window_s must be in (0, 60], got " + std::to_string(inertial_init_window_s));
-  if (!(dvl_init_window_s > 0.0 && dvl_init_window_s <= 60.0))
-    return fail("dvl_init_window_s must be in (0, 60], got " + std::to_string(dvl_init_window_s));
-  if (!(dvl_min_travel_m >= 0.0 && dvl_min_travel_m <= 100.0))
-    return fail("dvl_min_travel_m must be in [0, 100], got " + std::to_string(dvl_min_travel_m));
-  if (!(dvl_factor_sigma_m > 0.0 && dvl_factor_sigma_m <= 10.0))
-    return fail("dvl_factor_sigma_m must be in (0, 10], got " + std::to_string(dvl_factor_sigma_m));
-  if (!(gyro_factor_sigma_rad > 0.0 && gyro_factor_sigma_rad <= 1.0))
-    return fail("gyro_factor_sigma_rad must be in (0, 1], got " + std::to_string(gyro_factor_sigma_rad));
-  if (!(gyro_bias_sigma >= 0.0 && gyro_bias_sigma <= 1.0))
-    return fail("gyro_bias_sigma must be in [0, 1], got " + std::to_string(gyro_bias_sigma));
-  if (!(dvl_factor_sigma_ratio >= 0.0 && dvl_factor_sigma_ratio <= 1.0))
-    return fail("dvl_factor_sigma_ratio must be in [0, 1], got " + std::to_string(dvl_factor_sigma_ratio));
+  // The aiding sensors' settings: {name, value, lower bound, lower bound open, upper bound}.
+  struct Bound {
+    const char* name;
+    double value, lo;
+    bool lo_open;
+    double hi;
+  };
+  for (const Bound& b : {Bound{"dvl_init_window_s", dvl_init_window_s, 0.0, true, 60.0},
+                         Bound{"dvl_min_travel_m", dvl_min_travel_m, 0.0, false, 100.0},
+                         Bound{"dvl_factor_sigma_m", dvl_factor_sigma_m, 0.0, true, 10.0},
+                         Bound{"dvl_factor_sigma_ratio", dvl_factor_sigma_ratio, 0.0, false, 1.0},
+                         Bound{"gyro_factor_sigma_rad", gyro_factor_sigma_rad, 0.0, true, 1.0},
+                         Bound{"gyro_bias_sigma", gyro_bias_sigma, 0.0, false, 1.0}}) {
+    if ((b.lo_open ? b.value > b.lo : b.value >= b.lo) && b.value <= b.hi) continue;  // NaN fails both
+    char range[64];
+    std::snprintf(range, sizeof(range), "%s%g, %g]", b.lo_open ? "(" : "[", b.lo, b.hi);
+    return fail(std::string(b.name) + " must be in " + range + ", got " + std::to_string(b.value));
+  }
   if (!(clahe_clip >= 0.0 && clahe_clip <= 40.0))
     return fail("clahe_clip must be in [0, 40], got " + std::to_string(clahe_clip));
   if (!(clahe_max_stddev > 0.0 && clahe_max_stddev <= 256.0))

@@ -40,8 +40,7 @@ struct AcousticModemParams {
   void Serialize(Archive* a) {
     using unav::common::Field;
     a->Visit(Field("enabled", &enabled).Doc("carry packets between the vehicle and the station"));
-    a->Visit(Field("station_vehicle", &station_vehicle)
-                 .Doc("the vehicle carrying the other end (its mount: station_position); empty = fixed"));
+    a->Visit(Field("station_vehicle", &station_vehicle).Doc("carrier of the other end; empty = fixed"));
     a->Visit(Field("bit_rate_bps", &bit_rate_bps).Above(0.0).Max(1e6).Unit("bit/s"));
     a->Visit(Field("station_position", &station_position).Range(-1e5, 1e5).Unit("m").Doc("world NED"));
     a->Visit(Field("modem_xyz_m", &modem_xyz_m).Range(-10.0, 10.0).Unit("m").Doc("on the vehicle, FRD"));

@@ -54,8 +54,7 @@ struct UsblParams {
   void Serialize(Archive* a) {
     using unav::common::Field;
     a->Visit(Field("enabled", &enabled).Doc("interrogate the vehicle's transponder"));
-    a->Visit(Field("transceiver_vehicle", &transceiver_vehicle)
-                 .Doc("the vehicle carrying the transceiver (its mount: transceiver_position/rpy); empty = fixed"));
+    a->Visit(Field("transceiver_vehicle", &transceiver_vehicle).Doc("carrier of the transceiver; empty = fixed"));
     a->Visit(Field("rate", &rate_hz).Above(0.0).Max(50.0).Unit("Hz").Doc("interrogations per second at most"));
     a->Visit(Field("transceiver_position", &transceiver_position).Range(-1e5, 1e5).Unit("m").Doc("world NED"));
     a->Visit(Field("transceiver_rpy_deg", &transceiver_rpy_deg).Range(-360.0, 360.0).Unit("deg").Doc("its axes"));
