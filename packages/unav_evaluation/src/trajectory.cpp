@@ -280,8 +280,7 @@ void TrajectorySpool::remove() {
 }
 
 void PathHistory::update(const Trajectory& path) {
-  for (size_t i = 0; i < path.size(); ++i)
-    poses_[std::llround(path.stamps[i] * 1e9)] = {path.stamps[i], path.poses[i]};
+  for (size_t i = 0; i < path.size(); ++i) poses_[std::llround(path.stamps[i] * 1e9)] = {path.stamps[i], path.poses[i]};
 }
 
 Trajectory PathHistory::over(const Trajectory& odometry) const {

@@ -99,7 +99,8 @@ auto MonoSlam::Impl::TryDvlScale() -> std::string {
   ApplyMetricScale(s);
   stats.dvl_scale = s;
   char buf[200];
-  std::snprintf(buf, sizeof(buf), "DVL %s over %zu keyframe pairs (%.1f s, %.2f m): %.4f m per map unit, %.1f %% residual",
+  std::snprintf(buf, sizeof(buf),
+                "DVL %s over %zu keyframe pairs (%.1f s, %.2f m): %.4f m per map unit, %.1f %% residual",
                 metric_stage == 1 ? "scaling" : "refinement", pairs.size(), kfs.back()->stamp - kfs.front()->stamp,
                 travel, s, 100.0 * residual);
   return buf;
@@ -113,8 +114,8 @@ auto MonoSlam::Impl::DvlFactors(std::size_t count) const -> std::vector<BodyDisp
   const Eigen::Matrix3d R_cd = T_dc.linear().transpose();
   for (std::size_t k = 1; k < kfs.size(); ++k) {
     const Eigen::Matrix3d Ri = kfs[k - 1]->T_cw.linear().transpose(), Rj = kfs[k]->T_cw.linear().transpose();
-    const auto d = DvlDisplacement(kfs[k - 1]->stamp, kfs[k]->stamp, Eigen::Quaterniond(Ri * R_cd),
-                                   Eigen::Quaterniond(Rj * R_cd));
+    const auto d =
+        DvlDisplacement(kfs[k - 1]->stamp, kfs[k]->stamp, Eigen::Quaterniond(Ri * R_cd), Eigen::Quaterniond(Rj * R_cd));
     if (!d) continue;
     BodyDisplacementFactor f;
     f.kf_i = kfs[k - 1]->id;

@@ -11,8 +11,8 @@ namespace unav::localization {
 using namespace slam_internal;  // NOLINT(google-build-using-namespace): the SLAM's own constants
 
 namespace {
-constexpr double kImuHistoryS = 60.0;       // samples kept at most (a map that never initialises)
-constexpr double kCoverSlackS = 0.02;       // a sample this close to an interval's end still covers it
+constexpr double kImuHistoryS = 60.0;  // samples kept at most (a map that never initialises)
+constexpr double kCoverSlackS = 0.02;  // a sample this close to an interval's end still covers it
 }  // namespace
 
 auto MonoSlam::Impl::AddImu(double stamp, const Eigen::Vector3d& gyro, const Eigen::Vector3d& accel) -> void {
@@ -111,9 +111,8 @@ auto MonoSlam::Impl::TryInertialInit() -> std::string {
   std::snprintf(buf, sizeof(buf),
                 "inertial %s over %zu keyframes (%.1f s): %.4f m per map unit, gravity %.1f deg from the "
                 "first camera's axis, gyro bias (%.4f, %.4f, %.4f) rad/s",
-                metric_stage == 1 ? "initialisation" : "refinement", kfs.size(),
-                kfs.back()->stamp - kfs.front()->stamp, r.scale, stats.inertial_gravity_deg, r.bias.gyro.x(),
-                r.bias.gyro.y(), r.bias.gyro.z());
+                metric_stage == 1 ? "initialisation" : "refinement", kfs.size(), kfs.back()->stamp - kfs.front()->stamp,
+                r.scale, stats.inertial_gravity_deg, r.bias.gyro.x(), r.bias.gyro.y(), r.bias.gyro.z());
   return buf;
 }
 

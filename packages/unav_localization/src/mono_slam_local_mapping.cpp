@@ -168,7 +168,7 @@ auto MonoSlam::Impl::InsertKeyFrame() -> void {
   SearchInNeighbors(kid);
   if (map->keyframes.size() > 2)
     LocalBundleAdjustment(map.get(), cam, sigma2, kid, opt.local_ba_keyframes, opt.local_ba_iterations,
-                          AidingFactors(static_cast<std::size_t>(4 * opt.local_ba_keyframes)));
+                          AidingFactors(4 * static_cast<std::size_t>(opt.local_ba_keyframes)));
 }
 
 }  // namespace unav::localization

@@ -238,7 +238,8 @@ auto MonoSlam::Impl::CorrectLoop(int kid, const LoopCandidate& lc) -> void {
   }
   for (auto& p : map->points)
     if (!p->bad) map->UpdatePoint(p->id, scales);
-  if (opt.global_ba_after_loop) GlobalBundleAdjustment(map.get(), cam, sigma2, opt.global_ba_iterations, AidingFactors(0));
+  if (opt.global_ba_after_loop)
+    GlobalBundleAdjustment(map.get(), cam, sigma2, opt.global_ba_iterations, AidingFactors(0));
   ++stats.loops;
 }
 

@@ -200,8 +200,7 @@ struct RelativeRotationError {
 
 BundleAdjustmentSummary RunBundleAdjustment(Map* map, const PinholeCamera& cam, const std::vector<double>& level_sigma2,
                                             const std::vector<int>& local_kfs, const std::vector<int>& fixed_kfs,
-                                            const std::vector<int>& pts, int iterations,
-                                            const BundleFactors& factors) {
+                                            const std::vector<int>& pts, int iterations, const BundleFactors& factors) {
   const auto t0 = std::chrono::steady_clock::now();
   BundleAdjustmentSummary s;
   std::map<int, std::array<double, 6>> poses;

@@ -635,9 +635,8 @@ TEST(MonoSlam, DvlAidedModeGivesAMetricTrajectoryThatKeepsItsScale) {
     for (size_t k = 0; k < run.gray.size(); ++k) {
       const double t = run.stamps[k];
       const Eigen::Vector3d w_B(0.0, 0.0, WeaveFlight::YawRate(t));
-      const Eigen::Vector3d v_D =
-          Rot(0, 0, WeaveFlight::Yaw(t)).transpose() * WeaveFlight::V(t) + w_B.cross(r_d) +
-          Eigen::Vector3d(noise(rng), noise(rng), noise(rng));
+      const Eigen::Vector3d v_D = Rot(0, 0, WeaveFlight::Yaw(t)).transpose() * WeaveFlight::V(t) + w_B.cross(r_d) +
+                                  Eigen::Vector3d(noise(rng), noise(rng), noise(rng));
       slam.AddDvl(t, v_D, true);
       for (; gyro && t_imu <= t + 1e-9; t_imu += 0.005) {  // the inertial test's ideal 200 Hz IMU
         const double tm = t_imu + 0.0025;
@@ -686,9 +685,9 @@ TEST(MonoSlam, DvlInputIsChecked) {
   EXPECT_THROW(slam.EnableDvl(skewed), std::invalid_argument);
   slam.EnableDvl(Eigen::Isometry3d::Identity());
   slam.AddDvl(1.0, Eigen::Vector3d(0.5, 0, 0), true);
-  slam.AddDvl(0.5, Eigen::Vector3d(0.5, 0, 0), true);    // out of order
-  slam.AddDvl(2.0, Eigen::Vector3d(NAN, 0, 0), true);    // not finite
-  slam.AddDvl(2.1, Eigen::Vector3d(NAN, 0, 0), false);   // no bottom lock: kept (it breaks the integration)
+  slam.AddDvl(0.5, Eigen::Vector3d(0.5, 0, 0), true);   // out of order
+  slam.AddDvl(2.0, Eigen::Vector3d(NAN, 0, 0), true);   // not finite
+  slam.AddDvl(2.1, Eigen::Vector3d(NAN, 0, 0), false);  // no bottom lock: kept (it breaks the integration)
   EXPECT_EQ(slam.stats().dvl_samples_rejected, 2);
   ul::MonoSlamOptions o;
   o.dvl_factor_sigma_m = 0.0;

@@ -23,10 +23,10 @@ VehiclePorts::VehiclePorts(unav::Node& node, const VehicleParams& vehicle, const
   };
   const std::string ns = node.get_namespace();
   const std::string own_name = fleet_name.empty() ? ns.substr(ns.rfind('/') + 1) : fleet_name;
-  const std::string station =
-      !sensors.modem.station_vehicle.empty() ? "/" + sensors.modem.station_vehicle + "/modem/" + own_name + "/"
-      : fleet_name.empty()                   ? "/surface/modem/"
-                                             : "/surface/" + fleet_name + "/modem/";
+  const std::string station = !sensors.modem.station_vehicle.empty()
+                                  ? "/" + sensors.modem.station_vehicle + "/modem/" + own_name + "/"
+                              : fleet_name.empty() ? "/surface/modem/"
+                                                   : "/surface/" + fleet_name + "/modem/";
   station_topics_ = station;
   if (vehicle.tether.enabled) {
     tether_wrench_pub_ =
@@ -182,7 +182,8 @@ void VehiclePorts::carry_packets(const Simulator& sim) {
   const RigidBodyState& x = sim.state();
   modem_t_ = sim.time();
   arrivals_.clear();
-  if (modem_carrier_ != nullptr) modem_->set_station_position(modem_carrier_->pose() * modem_->params().station_position);
+  if (modem_carrier_ != nullptr)
+    modem_->set_station_position(modem_carrier_->pose() * modem_->params().station_position);
   modem_->step(modem_t_, x.p_WB_W + x.q_WB * modem_->params().modem_xyz_m, &arrivals_);
   for (const auto& pk : arrivals_) {
     const bool to_vehicle = pk.to == AcousticModem::End::kVehicle;

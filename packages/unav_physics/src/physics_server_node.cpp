@@ -121,8 +121,8 @@ PhysicsServer::PhysicsServer(const unav::NodeOptions& options) : Node("physics_s
       const std::string key = i == 0 ? "vehicle" : "fleet[" + std::to_string(i - 1) + "]";
       const std::string who = i == 0 ? primary : fleet_[i - 1].name;
       if (s.usbl.enabled && !s.usbl.transceiver_vehicle.empty())
-        usbl_carriers_.emplace_back(own, carrier_of(own, s.usbl.transceiver_vehicle, key, "usbl.transceiver_vehicle",
-                                                    who, "USBL transceiver"));
+        usbl_carriers_.emplace_back(
+            own, carrier_of(own, s.usbl.transceiver_vehicle, key, "usbl.transceiver_vehicle", who, "USBL transceiver"));
       if (s.modem.enabled && !s.modem.station_vehicle.empty())
         modem_carriers_.emplace_back(
             i, carrier_of(own, s.modem.station_vehicle, key, "modem.station_vehicle", who, "modem's other end"));
@@ -148,7 +148,8 @@ PhysicsServer::PhysicsServer(const unav::NodeOptions& options) : Node("physics_s
           if (lockstep_ && barrier_t_ >= 0.0 && barrier_open()) run_steps();
         });
   }
-  for (const auto& [i, carrier] : modem_carriers_) (i == 0 ? *ports_ : *fleet_[i - 1].ports).set_modem_station_carrier(carrier);
+  for (const auto& [i, carrier] : modem_carriers_)
+    (i == 0 ? *ports_ : *fleet_[i - 1].ports).set_modem_station_carrier(carrier);
   reset_sub_ = create_subscription<geometry_msgs::msg::Pose>(
       "sim/reset", unav::QoS::reliable(), [this](const geometry_msgs::msg::Pose& m) { on_reset(m); });
   if (vehicle.tether.enabled)  // the winch: the length paid out

@@ -410,8 +410,8 @@ TEST(PhysicsServer, UsblAndModemCarriedByAnotherVehicle) {
       "sensors.modem.loss_at_max_range=0, sensors.modem.station_vehicle=rov2";
   auto write = [&](const std::string& file, const std::string& carrier) {
     std::ofstream(dir + "/" + file) << "name: usbl_pair\nworld: world.yaml\n"
-                                    << "vehicle: {model: " << model << ", initial_position: [0, 0, 5], set: ["
-                                    << quiet << ", sensors.usbl.transceiver_vehicle=" << carrier << "]}\n"
+                                    << "vehicle: {model: " << model << ", initial_position: [0, 0, 5], set: [" << quiet
+                                    << ", sensors.usbl.transceiver_vehicle=" << carrier << "]}\n"
                                     << "fleet:\n  - {name: rov2, model: " << model
                                     << ", initial_position: [-20, 0, 5], initial_rpy_deg: [0, 0, 90]}\n";
     return dir + "/" + file;

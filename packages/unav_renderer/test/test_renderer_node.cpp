@@ -28,10 +28,10 @@ std::string small_cameras() {
 // readers.
 struct LockstepRenderer : unav::testing::NodeUnderTest<unav::renderer::UnderwaterRendererNode> {
   explicit LockstepRenderer(const char* mode = "lockstep:=true")
-      : NodeUnderTest("underwater_renderer",
-                      {"--ros-args", "-p", std::string("world:=") + UNAV_REPO_ROOT + "/worlds/pipe_inspection/world.yaml",
-                       "-p", "cameras_config:=" + small_cameras(), "-p", mode, "-p", "rate:=10.0", "-p",
-                       "render.noise:=false"}) {}
+      : NodeUnderTest(
+            "underwater_renderer",
+            {"--ros-args", "-p", std::string("world:=") + UNAV_REPO_ROOT + "/worlds/pipe_inspection/world.yaml", "-p",
+             "cameras_config:=" + small_cameras(), "-p", mode, "-p", "rate:=10.0", "-p", "render.noise:=false"}) {}
   std::shared_ptr<unav::Publisher<nav_msgs::msg::Odometry>> odom_pub =
       probe.create_publisher<nav_msgs::msg::Odometry>("/rov/ground_truth/odom", unav::QoS::reliable());
   std::vector<double> acks;

@@ -75,9 +75,10 @@ TEST(SonarNode, PublishesStandardSonarMessagesAtTheirRatesAndAcks) {
   };
   // FLS at 10 Hz: pings at 1.0 and 1.1; side-scan at 20 Hz: 1.0, 1.05, 1.1.
   for (double t : {1.0, 1.05, 1.1}) send(t);
-  ASSERT_TRUE(fx.spin_until(
-      [&] { return acks.size() == 3 && fls.size() == 2 && raw.size() == 3 && fans.size() == 2 && falls.size() == 3; }))
-      << acks.size() << " acks, " << fls.size() << " FLS, " << raw.size() << " side-scan";
+  ASSERT_TRUE(fx.spin_until([&] {
+    return acks.size() == 3 && fls.size() == 2 && raw.size() == 3 && fans.size() == 2 && falls.size() == 3;
+  })) << acks.size()
+      << " acks, " << fls.size() << " FLS, " << raw.size() << " side-scan";
   EXPECT_EQ(acks, (std::vector<double>{1.0, 1.05, 1.1}));
   const unav::scene::SonarModel m = unav::scene::load_sonar(small_sonars(), "fls");
   // ProjectedSonarImage: geometry field for field from the config.
@@ -167,8 +168,8 @@ TEST(SonarNode, ProfilerPublishesAPointCloudAcrossTrack) {
          "    horizontal_aperture_deg: 90\n    vertical_aperture_deg: 3\n    min_range_m: 0.3\n"
          "    max_range_m: 12\n    ping_rate_hz: 10\n    mount: {xyz_m: [0, 0, 0.1], rpy_deg: [0, -90, 0]}\n";
   const std::string world = std::string("world:=") + UNAV_REPO_ROOT + "/worlds/pipe_inspection/world.yaml";
-  unav::testing::NodeUnderTest<unav::renderer::SonarNode> fx("sonar",
-                                                             {"--ros-args", "-p", world, "-p", "sonars_config:=" + path});
+  unav::testing::NodeUnderTest<unav::renderer::SonarNode> fx(
+      "sonar", {"--ros-args", "-p", world, "-p", "sonars_config:=" + path});
   unav::renderer::SonarNode& node = *fx.node;
   unav::Node& probe = fx.probe;
   auto odom_pub = probe.create_publisher<nav_msgs::msg::Odometry>("/rov/ground_truth/odom", unav::QoS::reliable());

@@ -24,7 +24,7 @@ namespace unav::physics {
 
 struct AcousticModemParams {
   bool enabled = false;
-  double bit_rate_bps = 100.0;                      ///< SeaTrac-class links: ~100 bit/s; broadband modems: kbit/s
+  double bit_rate_bps = 100.0;  ///< SeaTrac-class links: ~100 bit/s; broadband modems: kbit/s
   /// "" = the station is fixed in the world; else the vehicle carrying the other end (the physics
   /// server's namespace name for its primary, a fleet name)
   std::string station_vehicle;

@@ -115,10 +115,10 @@ class Usbl {
   enum class Phase { kIdle, kOutbound, kInbound, kTimeout };
   void finish();
   UsblParams p_;
-  Eigen::Matrix3d R_WX_ = Eigen::Matrix3d::Identity();  ///< the transceiver's axes now
-  Eigen::Vector3d x_W_ = Eigen::Vector3d::Zero();       ///< the transceiver now
-  Eigen::Matrix3d R_BX_ = Eigen::Matrix3d::Identity();  ///< carried: its mount
-  Eigen::Vector3d x0_ = Eigen::Vector3d::Zero();        ///< where the ping left
+  Eigen::Matrix3d R_WX_ = Eigen::Matrix3d::Identity();                               ///< the transceiver's axes now
+  Eigen::Vector3d x_W_ = Eigen::Vector3d::Zero();                                    ///< the transceiver now
+  Eigen::Matrix3d R_BX_ = Eigen::Matrix3d::Identity();                               ///< carried: its mount
+  Eigen::Vector3d x0_ = Eigen::Vector3d::Zero();                                     ///< where the ping left
   Eigen::Vector3d x2_ = Eigen::Vector3d::Zero(), prev_x_ = Eigen::Vector3d::Zero();  ///< carried: reception
   double t1_ = 0.0;
   bool carrier_set_ = false;
