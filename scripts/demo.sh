@@ -34,9 +34,9 @@ grep -h "path finished\|max_sim_time reached" "$OUT/launch.log" | sed 's/^\[[^]]
 echo "demo: finished: $frames frames of the down camera with depth, segmentation, ground truth and IMU"
 echo "demo: outputs in $OUT:"
 echo "  dataset/ (TUM RGB-D layout: rgb/ depth/ segmentation/ rgb.txt depth.txt groundtruth.txt imu.txt camera.yaml)"
-echo "  dataset/evaluation/ (KLT RGB-D VO (SE(3)) and monocular ORB SLAM (Sim(3)) vs ground truth: results.md/csv/json, TUM files, top_view.png)"
+echo "  dataset/evaluation/ (KLT RGB-D VO (SE(3)) and the ORB SLAM aided by the DVL and the IMU, Sim(3) and without a scale fit (orb_slam_se3), vs ground truth: results.md/csv/json, TUM files, top_view.png)"
 echo "  launch.log (all node output), topics.txt (the ROS 2 topics that were live)"
-if [ -f "$OUT/dataset/evaluation/results.md" ]; then head -4 "$OUT/dataset/evaluation/results.md"; fi
+if [ -f "$OUT/dataset/evaluation/results.md" ]; then grep "^|" "$OUT/dataset/evaluation/results.md"; fi
 
 # Second part: DRL pipe following (the paper's section V-B): the shipped policy flies the pipe from
 # the down camera over DDS; the evaluator scores the cross-track error. About 15 s; DEMO_DRL=0 skips it.

@@ -137,15 +137,19 @@ class OrbSlamNode : public unav::Node {
     }
     want_imu_ = prm.imu;
     want_dvl_ = prm.dvl;
+    // The sensors' writers are best effort (sensor_data); the reader keeps every sample of a
+    // lockstep burst (the physics steps 0.1 s at once: 20 IMU samples) while an image is tracked.
+    unav::QoS burst = unav::QoS::sensor_data();
+    burst.depth = 1000;
     if (prm.imu) {
       imu_noise_.gyro_noise_density = prm.imu_gyro_noise_density;
       imu_noise_.accel_noise_density = prm.imu_accel_noise_density;
-      imu_sub_ = create_subscription<sensor_msgs::msg::Imu>("imu", unav::QoS::sensor_data(),
+      imu_sub_ = create_subscription<sensor_msgs::msg::Imu>("imu", burst,
                                                             [this](const sensor_msgs::msg::Imu& m) { on_imu(m); });
     }
     if (prm.dvl)
-      dvl_sub_ = create_subscription<unav_msgs::msg::Dvl>("dvl", unav::QoS::sensor_data(),
-                                                          [this](const unav_msgs::msg::Dvl& m) { on_dvl(m); });
+      dvl_sub_ =
+          create_subscription<unav_msgs::msg::Dvl>("dvl", burst, [this](const unav_msgs::msg::Dvl& m) { on_dvl(m); });
     if (prm.imu || prm.dvl) {
       // The mount's owner (the renderer) publishes it latched; the modes start when it is known.
       tf_static_ = std::make_unique<unav::StaticTransformListener>(*this);
@@ -155,6 +159,7 @@ class OrbSlamNode : public unav::Node {
           X_BC_ = *X;
           logger()->info("camera mount {} -> {}_optical from /tf_static", body, camera_);
           enable_sensors();
+          flush_pending();
         }
       });
     }
@@ -209,6 +214,15 @@ class OrbSlamNode : public unav::Node {
       return;
     }
     enable_sensors();
+    flush_pending();
+  }
+
+  // The camera, and the mount when the IMU or the DVL is wanted: images wait until both are known
+  // (a lockstep simulation waits for their acks), so every run feeds the same samples from the
+  // same first image on.
+  bool ready() const { return slam_ && (!(want_imu_ || want_dvl_) || X_BC_); }
+  void flush_pending() {
+    if (!ready()) return;
     while (!pending_.empty()) {
       process(pending_.front());
       pending_.pop_front();
@@ -220,21 +234,33 @@ class OrbSlamNode : public unav::Node {
     if (want_imu_ && !inertial_on_) {
       slam_->EnableInertial(*X_BC_, imu_noise_);
       inertial_on_ = true;
+      for (const auto& m : imu_waiting_) on_imu(m);
+      imu_waiting_.clear();
     }
     if (want_dvl_ && !dvl_on_) {
       slam_->EnableDvl(*X_BC_);  // the DVL reports in body_frame
       dvl_on_ = true;
+      for (const auto& m : dvl_waiting_) on_dvl(m);
+      dvl_waiting_.clear();
     }
   }
 
   void on_dvl(const unav_msgs::msg::Dvl& m) {
-    if (!dvl_on_) return;  // before the camera and its mount are known
+    if (!dvl_on_) {  // before the camera and its mount are known: kept (the last minute at most)
+      dvl_waiting_.push_back(m);
+      if (dvl_waiting_.size() > 600) dvl_waiting_.pop_front();
+      return;
+    }
     slam_->AddDvl(unav::Time::from_msg(m.header().stamp().sec(), m.header().stamp().nanosec()).seconds(),
                   Eigen::Vector3d(m.velocity().x(), m.velocity().y(), m.velocity().z()), m.valid());
   }
 
   void on_imu(const sensor_msgs::msg::Imu& m) {
-    if (!inertial_on_) return;  // before the camera and its mount are known
+    if (!inertial_on_) {  // before the camera and its mount are known: kept (the last minute at most)
+      imu_waiting_.push_back(m);
+      if (imu_waiting_.size() > 12000) imu_waiting_.pop_front();
+      return;
+    }
     const double t = unav::Time::from_msg(m.header().stamp().sec(), m.header().stamp().nanosec()).seconds();
     slam_->AddImu(
         t, Eigen::Vector3d(m.angular_velocity().x(), m.angular_velocity().y(), m.angular_velocity().z()),
@@ -249,7 +275,7 @@ class OrbSlamNode : public unav::Node {
       return;
     }
     received_ns_ = t_ns;
-    if (!slam_) {
+    if (!ready()) {
       pending_.push_back(m);
       if (pending_.size() > 100) pending_.pop_front();
       return;
@@ -338,6 +364,8 @@ class OrbSlamNode : public unav::Node {
   std::shared_ptr<const BowVocabulary> vocabulary_;
   std::unique_ptr<MonoSlam> slam_;
   std::deque<sensor_msgs::msg::Image> pending_;
+  std::deque<sensor_msgs::msg::Imu> imu_waiting_;
+  std::deque<unav_msgs::msg::Dvl> dvl_waiting_;
   bool lockstep_ = false, was_lost_ = false;
   std::string ack_name_, frame_id_, camera_;
   double image_period_ = 0.1;

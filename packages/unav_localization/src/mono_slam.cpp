@@ -145,6 +145,7 @@ auto MonoSlam::Impl::ResetForReinitialization() -> void {
 auto MonoSlam::Impl::Track(const cv::Mat& gray, double stamp) -> SlamFrameSummary {
   const auto t0 = Clock::now();
   SlamFrameSummary s;
+  if (std::isfinite(stamp)) AdmitSensorData(stamp);
   if (gray.empty() || gray.type() != CV_8UC1 || gray.cols != cam.width || gray.rows != cam.height ||
       !std::isfinite(stamp)) {
     s.message = "expected a CV_8UC1 image of " + std::to_string(cam.width) + "x" + std::to_string(cam.height) +

@@ -17,7 +17,6 @@ namespace unav::localization {
 using namespace slam_internal;  // NOLINT(google-build-using-namespace): the SLAM's own constants
 
 namespace {
-constexpr double kDvlHistoryS = 120.0;  // readings kept at most
 constexpr double kMaxGapS = 0.5;        // a longer gap between readings: not covered
 // A scaling whose pairs disagree by more than this (RMS of s a - y over RMS of y) is refused:
 // a wrong attitude, a track on moving things, or a DVL that lost the bottom.
@@ -27,11 +26,18 @@ constexpr std::size_t kMinPairs = 5;
 
 auto MonoSlam::Impl::AddDvl(double stamp, const Eigen::Vector3d& v, bool valid) -> void {
   if (!dvl_on) return;
-  if (!std::isfinite(stamp) || (valid && !v.allFinite()) || (!dvl.empty() && stamp <= dvl.back().t)) {
+  const double last = !dvl_pending.empty() ? dvl_pending.back().t : !dvl.empty() ? dvl.back().t : -INFINITY;
+  if (!std::isfinite(stamp) || (valid && !v.allFinite()) || stamp <= last) {
     ++stats.dvl_samples_rejected;
     return;
   }
-  dvl.push_back({stamp, valid ? v : Eigen::Vector3d::Zero(), valid});
+  dvl_pending.push_back({stamp, valid ? v : Eigen::Vector3d::Zero(), valid});
+}
+
+auto MonoSlam::Impl::AdmitSensorData(double stamp) -> void {
+  for (; !imu_pending.empty() && imu_pending.front().t < stamp; imu_pending.pop_front()) imu.push_back(imu_pending.front());
+  for (; !dvl_pending.empty() && dvl_pending.front().t < stamp; dvl_pending.pop_front()) dvl.push_back(dvl_pending.front());
+  while (!imu.empty() && imu.front().t < stamp - kImuHistoryS) imu.pop_front();
   while (!dvl.empty() && dvl.front().t < stamp - kDvlHistoryS) dvl.pop_front();
 }
 

@@ -33,6 +33,8 @@ constexpr double kChi2Mono = 5.991;
 constexpr double kMetricStageSpan[] = {1.0, 2.5, 7.5};
 constexpr std::size_t kMetricInitKeyframes = 60;
 constexpr std::size_t kMinMetricInitKeyframes = 6;
+constexpr double kImuHistoryS = 60.0;   // IMU samples kept at most (a map that never initialises)
+constexpr double kDvlHistoryS = 120.0;  // DVL readings kept at most
 using Clock = std::chrono::steady_clock;
 inline double Ms(Clock::time_point a) { return std::chrono::duration<double, std::milli>(Clock::now() - a).count(); }
 
@@ -121,6 +123,10 @@ struct MonoSlam::Impl {
   Eigen::Isometry3d T_bc = Eigen::Isometry3d::Identity();
   ImuNoise imu_noise;
   std::deque<ImuSample> imu;  ///< samples from the current map's first keyframe on (bounded)
+  /// Samples not used yet: a frame at t admits those stamped before t only, so what the SLAM uses
+  /// never depends on whether a sensor's sample stamped t arrived before or after the image (two
+  /// DDS topics: either order; lockstep runs repeat exactly).
+  std::deque<ImuSample> imu_pending;
   /// 0: the current map is not in metres yet; 1, 2, 3: scaled once, refined once, twice (by the
   /// IMU or the DVL).
   int metric_stage = 0;
@@ -151,6 +157,9 @@ struct MonoSlam::Impl {
   bool dvl_on = false;  ///< EnableDvl was called
   Eigen::Isometry3d T_dc = Eigen::Isometry3d::Identity();
   std::deque<DvlSample> dvl;  ///< recent readings (bounded)
+  std::deque<DvlSample> dvl_pending;  ///< not used yet (as imu_pending)
+  /// Before a frame at `stamp`: the pending IMU and DVL samples stamped before it join the used ones.
+  void AdmitSensorData(double stamp);
   bool dvl_rejection_said = false;
   void AddDvl(double stamp, const Eigen::Vector3d& v, bool valid);
   /// The DVL origin's displacement over [t0, t1] in the map frame [m]: the readings (linear

@@ -11,18 +11,17 @@ namespace unav::localization {
 using namespace slam_internal;  // NOLINT(google-build-using-namespace): the SLAM's own constants
 
 namespace {
-constexpr double kImuHistoryS = 60.0;  // samples kept at most (a map that never initialises)
 constexpr double kCoverSlackS = 0.02;  // a sample this close to an interval's end still covers it
 }  // namespace
 
 auto MonoSlam::Impl::AddImu(double stamp, const Eigen::Vector3d& gyro, const Eigen::Vector3d& accel) -> void {
   if (!inertial) return;
-  if (!std::isfinite(stamp) || !gyro.allFinite() || !accel.allFinite() || (!imu.empty() && stamp <= imu.back().t)) {
+  const double last = !imu_pending.empty() ? imu_pending.back().t : !imu.empty() ? imu.back().t : -INFINITY;
+  if (!std::isfinite(stamp) || !gyro.allFinite() || !accel.allFinite() || stamp <= last) {
     ++stats.imu_samples_rejected;
     return;
   }
-  imu.push_back({stamp, gyro, accel});
-  while (!imu.empty() && imu.front().t < stamp - kImuHistoryS) imu.pop_front();
+  imu_pending.push_back({stamp, gyro, accel});
 }
 
 auto MonoSlam::Impl::PreintegrateImu(double t0, double t1) const -> ImuPreintegration {

@@ -158,8 +158,10 @@ class MonoSlam {
   /// camera in the IMU's body frame (metric). Throws std::invalid_argument on a non-rigid T_bc.
   void EnableInertial(const Eigen::Isometry3d& T_bc, const ImuNoise& noise);
   /// One IMU sample (angular rate [rad/s], specific force [m/s^2], body frame) at stamp [s], on the
-  /// images' clock, in time order; samples up to the next image's stamp should come before it.
-  /// Non-finite or out-of-order samples are dropped and counted. Never throws.
+  /// images' clock, in time order. An image at t uses the samples stamped before t only (one
+  /// stamped t is used from the next image on), so the result does not depend on whether it
+  /// arrived before or after the image. Non-finite or out-of-order samples are dropped and
+  /// counted. Never throws.
   void AddImu(double stamp, const Eigen::Vector3d& gyro, const Eigen::Vector3d& accel);
   /// DVL-aided mode: the DVL's bottom-relative velocity (the velocity of the DVL frame's origin
   /// in its own axes) scales every map to metres (options.dvl_init_window_s) and, once metric,
@@ -168,7 +170,8 @@ class MonoSlam {
   /// camera in the DVL's frame (metric). Throws std::invalid_argument on a non-rigid T_dc.
   void EnableDvl(const Eigen::Isometry3d& T_dc);
   /// One DVL reading at stamp [s] on the images' clock, in time order; valid false (no bottom
-  /// lock) interrupts the integration there. Non-finite or out-of-order readings are dropped and
+  /// lock) interrupts the integration there; used as the IMU's (before the image's stamp only).
+  /// Non-finite or out-of-order readings are dropped and
   /// counted. Never throws.
   void AddDvl(double stamp, const Eigen::Vector3d& velocity, bool valid);
 
