@@ -17,7 +17,7 @@ namespace unav::localization {
 using namespace slam_internal;  // NOLINT(google-build-using-namespace): the SLAM's own constants
 
 namespace {
-constexpr double kMaxGapS = 0.5;        // a longer gap between readings: not covered
+constexpr double kMaxGapS = 0.5;  // a longer gap between readings: not covered
 // A scaling whose pairs disagree by more than this (RMS of s a - y over RMS of y) is refused:
 // a wrong attitude, a track on moving things, or a DVL that lost the bottom.
 constexpr double kMaxScaleResidual = 0.3;
@@ -35,8 +35,10 @@ auto MonoSlam::Impl::AddDvl(double stamp, const Eigen::Vector3d& v, bool valid) 
 }
 
 auto MonoSlam::Impl::AdmitSensorData(double stamp) -> void {
-  for (; !imu_pending.empty() && imu_pending.front().t < stamp; imu_pending.pop_front()) imu.push_back(imu_pending.front());
-  for (; !dvl_pending.empty() && dvl_pending.front().t < stamp; dvl_pending.pop_front()) dvl.push_back(dvl_pending.front());
+  for (; !imu_pending.empty() && imu_pending.front().t < stamp; imu_pending.pop_front())
+    imu.push_back(imu_pending.front());
+  for (; !dvl_pending.empty() && dvl_pending.front().t < stamp; dvl_pending.pop_front())
+    dvl.push_back(dvl_pending.front());
   while (!imu.empty() && imu.front().t < stamp - kImuHistoryS) imu.pop_front();
   while (!dvl.empty() && dvl.front().t < stamp - kDvlHistoryS) dvl.pop_front();
 }

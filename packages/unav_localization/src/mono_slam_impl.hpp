@@ -156,7 +156,7 @@ struct MonoSlam::Impl {
   };
   bool dvl_on = false;  ///< EnableDvl was called
   Eigen::Isometry3d T_dc = Eigen::Isometry3d::Identity();
-  std::deque<DvlSample> dvl;  ///< recent readings (bounded)
+  std::deque<DvlSample> dvl;          ///< recent readings (bounded)
   std::deque<DvlSample> dvl_pending;  ///< not used yet (as imu_pending)
   /// Before a frame at `stamp`: the pending IMU and DVL samples stamped before it join the used ones.
   void AdmitSensorData(double stamp);
