@@ -276,6 +276,11 @@ class OrbSlamNode : public unav::Node {
     }
     received_ns_ = t_ns;
     if (!ready()) {
+      if (slam_ && !mount_wait_said_) {  // the camera is known: only the mount is missing
+        logger()->warn("imu/dvl mode: images wait for the camera mount {}_optical on /tf_static (is the renderer up?)",
+                       camera_);
+        mount_wait_said_ = true;
+      }
       pending_.push_back(m);
       if (pending_.size() > 100) pending_.pop_front();
       return;
@@ -366,6 +371,7 @@ class OrbSlamNode : public unav::Node {
   std::deque<sensor_msgs::msg::Image> pending_;
   std::deque<sensor_msgs::msg::Imu> imu_waiting_;
   std::deque<unav_msgs::msg::Dvl> dvl_waiting_;
+  bool mount_wait_said_ = false;
   bool lockstep_ = false, was_lost_ = false;
   std::string ack_name_, frame_id_, camera_;
   double image_period_ = 0.1;
