@@ -69,7 +69,7 @@ print("orb_slam: %d poses of %d frames, APE %.4f m (Sim(3), scale %.3f), %.4f m 
       % (slam["poses"], frames, slam["ape_m"]["rmse"], slam["scale"], metric["ape_m"]["rmse"], vo["ape_m"]["rmse"]))
 assert slam["alignment"] == "sim3" and vo["alignment"] == "se3" and metric["alignment"] == "se3"
 # DVL-aided, the odometry starts once the map is metric (2 s of keyframes after initialisation).
-assert slam["poses"] >= frames - 25, "orb_slam initialised late or lost frames"
+assert slam["poses"] >= frames - 30, "orb_slam initialised late or lost frames"  # seen: 20-21 missing
 assert slam["ape_m"]["rmse"] < 0.1
 # Metric: without the DVL the first map's median depth (~1.4 m) is 1 unit, a Sim(3) scale of
 # ~1.5 and metres of SE(3) error over the run; scaled at 2 s the SE(3) error stays decimetric.
