@@ -314,7 +314,7 @@ class OrbSlamNode : public unav::Node {
       was_lost_ = false;
       // With the IMU or the DVL on, only metric poses: the first seconds' poses are in the first
       // map's arbitrary units, a jump of ~1.5x at the scaling for anyone who navigates on them.
-      if (!(dvl_on_ || inertial_on_) || slam_->stats().metric) publish_odometry(m.header(), s.T_wc);
+      if (!(dvl_on_ || inertial_on_) || slam_->metric()) publish_odometry(m.header(), s.T_wc);
     }
     if (s.reinitialized) logger()->warn("re-initialising: a new map will continue from the last good pose");
     if (s.loop_closed)

@@ -382,9 +382,11 @@ SlamStats MonoSlam::stats() const {
   SlamStats s = impl_->stats;
   s.keyframes = impl_->map->GoodKeyFrames();
   s.points = impl_->map->GoodPoints();
-  s.metric = impl_->global_per_metric > 0.0;
+  s.metric = metric();
   return s;
 }
+
+bool MonoSlam::metric() const { return impl_->global_per_metric > 0.0; }
 
 const Map& MonoSlam::map() const { return *impl_->map; }
 

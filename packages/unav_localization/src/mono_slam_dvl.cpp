@@ -50,8 +50,8 @@ auto MonoSlam::Impl::DvlDisplacement(double t0, double t1, const Eigen::Quaterni
   auto first = std::upper_bound(dvl.begin(), dvl.end(), t0, [](double t, const DvlSample& m) { return t < m.t; });
   --first;  // dvl.front().t <= t0: exists
   auto last = std::lower_bound(first, dvl.end(), t1, [](const DvlSample& m, double t) { return m.t < t; });
-  const auto v_w = [&](const DvlSample& m, double t) {
-    const double a = std::clamp((t - t0) / (t1 - t0), 0.0, 1.0);
+  const auto v_w = [&](const DvlSample& m) {
+    const double a = std::clamp((m.t - t0) / (t1 - t0), 0.0, 1.0);
     return Eigen::Vector3d(q_wd0.slerp(a, q_wd1) * m.v);
   };
   Eigen::Vector3d d = Eigen::Vector3d::Zero();
@@ -62,11 +62,24 @@ auto MonoSlam::Impl::DvlDisplacement(double t0, double t1, const Eigen::Quaterni
     const double a = std::max(k->t, t0), b = std::min(n->t, t1);
     if (b <= a) continue;
     const double span = n->t - k->t;
-    const Eigen::Vector3d va = v_w(*k, k->t) + (v_w(*n, n->t) - v_w(*k, k->t)) * ((a - k->t) / span);
-    const Eigen::Vector3d vb = v_w(*k, k->t) + (v_w(*n, n->t) - v_w(*k, k->t)) * ((b - k->t) / span);
+    const Eigen::Vector3d vk = v_w(*k), dv = v_w(*n) - vk;  // each reading rotated once
+    const Eigen::Vector3d va = vk + dv * ((a - k->t) / span);
+    const Eigen::Vector3d vb = vk + dv * ((b - k->t) / span);
     d += 0.5 * (va + vb) * (b - a);
   }
   return d;
+}
+
+auto MonoSlam::Impl::DvlSteps(const std::vector<const KeyFrame*>& kfs) const -> std::vector<DvlStep> {
+  const Eigen::Matrix3d R_cd = T_dc.linear().transpose();
+  std::vector<DvlStep> out;
+  for (std::size_t k = 1; k < kfs.size(); ++k) {
+    const Eigen::Isometry3d Ti = kfs[k - 1]->T_cw.inverse(), Tj = kfs[k]->T_cw.inverse();
+    const auto d = DvlDisplacement(kfs[k - 1]->stamp, kfs[k]->stamp, Eigen::Quaterniond(Ti.linear() * R_cd),
+                                   Eigen::Quaterniond(Tj.linear() * R_cd));
+    if (d) out.push_back({kfs[k - 1]->id, kfs[k]->id, Ti, Tj, *d});
+  }
+  return out;
 }
 
 auto MonoSlam::Impl::TryDvlScale() -> std::string {
@@ -75,21 +88,16 @@ auto MonoSlam::Impl::TryDvlScale() -> std::string {
   const double span = opt.dvl_init_window_s * kMetricStageSpan[metric_stage];
   if (kfs.size() < kMinMetricInitKeyframes || kfs.back()->stamp - kfs.front()->stamp < span) return "";
   const Eigen::Vector3d o_c = T_dc.inverse().translation();
-  const Eigen::Matrix3d R_cd = T_dc.linear().transpose();
   double aa = 0.0, ay = 0.0, yy = 0.0, travel = 0.0;
   std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>> pairs;  // (a, y)
-  for (std::size_t k = 1; k < kfs.size(); ++k) {
-    const Eigen::Isometry3d Ti = kfs[k - 1]->T_cw.inverse(), Tj = kfs[k]->T_cw.inverse();
-    const auto d = DvlDisplacement(kfs[k - 1]->stamp, kfs[k]->stamp, Eigen::Quaterniond(Ti.linear() * R_cd),
-                                   Eigen::Quaterniond(Tj.linear() * R_cd));
-    if (!d) continue;
-    const Eigen::Vector3d a = Tj.translation() - Ti.translation();
-    const Eigen::Vector3d y = *d - (Tj.linear() - Ti.linear()) * o_c;
+  for (const DvlStep& st : DvlSteps(kfs)) {
+    const Eigen::Vector3d a = st.T_wc_j.translation() - st.T_wc_i.translation();
+    const Eigen::Vector3d y = st.d_w - (st.T_wc_j.linear() - st.T_wc_i.linear()) * o_c;
     pairs.emplace_back(a, y);
     aa += a.squaredNorm();
     ay += a.dot(y);
     yy += y.squaredNorm();
-    travel += d->norm();
+    travel += st.d_w.norm();
   }
   if (pairs.size() < kMinPairs || travel < opt.dvl_min_travel_m) return "";  // not yet: wait for motion
   const double s = aa > 0.0 ? ay / aa : 0.0;
@@ -117,20 +125,14 @@ auto MonoSlam::Impl::TryDvlScale() -> std::string {
 auto MonoSlam::Impl::DvlFactors(std::size_t count) const -> std::vector<BodyDisplacementFactor> {
   std::vector<BodyDisplacementFactor> out;
   if (!dvl_on || !opt.dvl_factors || metric_stage == 0 || dvl.empty()) return out;
-  const std::vector<const KeyFrame*> kfs = RecentKeyFrames(dvl.front().t, count);
   const Eigen::Vector3d o_c = T_dc.inverse().translation();
-  const Eigen::Matrix3d R_cd = T_dc.linear().transpose();
-  for (std::size_t k = 1; k < kfs.size(); ++k) {
-    const Eigen::Matrix3d Ri = kfs[k - 1]->T_cw.linear().transpose(), Rj = kfs[k]->T_cw.linear().transpose();
-    const auto d =
-        DvlDisplacement(kfs[k - 1]->stamp, kfs[k]->stamp, Eigen::Quaterniond(Ri * R_cd), Eigen::Quaterniond(Rj * R_cd));
-    if (!d) continue;
+  for (const DvlStep& st : DvlSteps(RecentKeyFrames(dvl.front().t, count))) {
     BodyDisplacementFactor f;
-    f.kf_i = kfs[k - 1]->id;
-    f.kf_j = kfs[k]->id;
+    f.kf_i = st.kf_i;
+    f.kf_j = st.kf_j;
     f.o_c = o_c;
-    f.d_w = *d;
-    f.sigma = opt.dvl_factor_sigma_m + opt.dvl_factor_sigma_ratio * d->norm();
+    f.d_w = st.d_w;
+    f.sigma = opt.dvl_factor_sigma_m + opt.dvl_factor_sigma_ratio * st.d_w.norm();
     out.push_back(f);
   }
   return out;

@@ -167,6 +167,13 @@ struct MonoSlam::Impl {
   /// do not cover the interval, a gap is longer than 0.5 s or one is invalid.
   std::optional<Eigen::Vector3d> DvlDisplacement(double t0, double t1, const Eigen::Quaterniond& q_wd0,
                                                  const Eigen::Quaterniond& q_wd1) const;
+  /// Consecutive keyframes of `kfs` the DVL covers: their camera poses and the DVL displacement.
+  struct DvlStep {
+    int kf_i, kf_j;
+    Eigen::Isometry3d T_wc_i, T_wc_j;
+    Eigen::Vector3d d_w;
+  };
+  std::vector<DvlStep> DvlSteps(const std::vector<const KeyFrame*>& kfs) const;
   /// After a keyframe: scales the map to metres from the DVL (stages as TryInertialInit).
   std::string TryDvlScale();
   /// Displacement factors between consecutive keyframes of the current map (the last `count`

@@ -187,6 +187,8 @@ class MonoSlam {
   std::vector<StampedPose> Trajectory(std::size_t last) const;
   std::vector<StampedPose> KeyFrameTrajectory() const;
   SlamStats stats() const;
+  /// stats().metric without counting the map (for every frame).
+  bool metric() const;
   const Map& map() const;
 
  private:
