@@ -28,6 +28,12 @@
 #ifndef MOTION
 #define MOTION 0      // motion blur over the exposure
 #endif
+#ifndef DEFOCUS
+#define DEFOCUS 0     // depth of field: a disc of 16 taps per pixel of geometry
+#endif
+#ifndef CHROMA
+#define CHROMA 0      // lateral chromatic aberration (REMAP only: red and blue resampled)
+#endif
 #ifndef PIXELS
 #define PIXELS 0      // 0 every pixel; 1 those with geometry, 2 the water only (the pass is drawn
 #endif                // twice, split by a depth test against the scene's depth buffer)
@@ -55,7 +61,10 @@ uniform float u_blur_px_per_m;
 uniform sampler2D u_inscatter; // RGBA32F, low resolution: lamp light scattered into the ray
 uniform sampler2D u_inscatter_water;  // the same times the water pixels' weight w, and w (bilinear)
 uniform float u_march_max_m;
-uniform float u_gain;
+uniform vec3 u_gain;           // exposure x white balance, per channel of the linear signal
+uniform vec2 u_coc;            // defocus: blur diameter [px] = x |y - 1 / z_C| (y = 1 / focus distance)
+uniform vec2 u_disc[16];       // defocus taps in the unit disc (centred)
+uniform vec2 u_chroma;         // lateral colour: red and blue sampled at the principal point + these x the offset
 uniform float u_noise_std;
 uniform float u_shot;          // shot noise: variance u_shot * I (linear signal)
 uniform float u_vignetting;    // share of the cos^4 falloff
@@ -127,6 +136,15 @@ void main() {
   bool hit = seg > 0.5;
   float z = texture(u_depth, tc).x;
   vec3 I = textureLod(u_color, (src + 0.5) / vec2(u_size), 0.0).rgb;   // clamps to the edge outside
+#if CHROMA
+  // Lateral colour: the lens images red larger by 1 + k (blue smaller by 1 - k) about the principal
+  // point, so this pixel's red is the radiance 1 / (1 + k) as far out.
+  {
+    vec2 q = src - u_K.zw;
+    I.r = textureLod(u_color, (u_K.zw + u_chroma.x * q + 0.5) / vec2(u_size), 0.0).r;
+    I.b = textureLod(u_color, (u_K.zw + u_chroma.y * q + 0.5) / vec2(u_size), 0.0).b;
+  }
+#endif
 #else
   vec2 src = vec2(pix);
   vec2 uv = (src + 0.5) / vec2(u_size);
@@ -147,21 +165,43 @@ void main() {
 #endif
   float range = hit ? z * raylen : 1.0e6;
 
-#if MOTION
+#if MOTION || DEFOCUS
   // Motion blur: the point seen here (water: far away, so rotation only) was at
   // P0 = P + w x P + v when the shutter opened; its image moved by g = here - there during the
   // exposure, so this pixel gathers the sharp frame along +g (a box filter over the exposure).
-  // Depth and segmentation stay those of the stamp.
+  // Defocus: the pixel gathers the disc of its own blur diameter (thin lens, from its depth; the
+  // taps on water are left out, so an object's edge does not darken; a gather, so a sharp
+  // foreground bleeds onto a blurred background behind it). Both: each tap of the disc moved along
+  // the smear. Depth and segmentation stay those of the stamp's sharp frame.
   {
+    vec2 g = vec2(0.0);
+    bool moved = false;
+#if MOTION
     vec3 P = ray * (hit ? z : 1.0e3);
     vec3 P0 = P + cross(u_motion_w, P) + u_motion_v;
     if (P0.z > 1e-3) {
-      vec2 g = src - (u_K.xy * P0.xy / P0.z + u_K.zw);
+      g = src - (u_K.xy * P0.xy / P0.z + u_K.zw);
+      moved = true;
+    }
+#endif
+    float r = 0.0;
+#if DEFOCUS
+    if (hit) r = min(0.5 * u_coc.x * abs(u_coc.y - 1.0 / max(z, 1e-4)), 32.0);
+#endif
+    if (r > 0.5 || moved) {
       int n = int(clamp(ceil(length(g)), 1.0, 32.0));
+      if (r > 0.5) n = max(n, 16);
       vec3 acc = vec3(0.0);
-      for (int k = 0; k < n; ++k)
-        acc += textureLod(u_color, (src + ((float(k) + 0.5) / float(n)) * g + 0.5) / vec2(u_size), 0.0).rgb;
-      D = acc / float(n);
+      float wsum = 0.0;
+      for (int k = 0; k < n; ++k) {
+        vec2 o = ((float(k) + 0.5) / float(n)) * g;
+        if (r > 0.5) o += r * u_disc[k & 15];
+        vec4 s = textureLod(u_color, (src + o + 0.5) / vec2(u_size), 0.0);
+        float w = (r > 0.5 && s.a < 0.5) ? 0.0 : 1.0;
+        acc += w * s.rgb;
+        wsum += w;
+      }
+      if (wsum > 0.0) D = acc / wsum;
     }
   }
 #endif

@@ -19,6 +19,21 @@ GLuint pcg_seed(std::uint32_t v) {
   return (word >> 22u) ^ word;
 }
 
+// The defocus disc's 16 taps (kPostFS's u_disc): a Vogel spiral over the unit disc (equal areas,
+// golden-angle turns), shifted so that their mean is the pixel (no shift of a blurred image).
+const std::array<Eigen::Vector2f, 16> kDefocusTaps = [] {
+  std::array<Eigen::Vector2f, 16> taps;
+  Eigen::Vector2f mean = Eigen::Vector2f::Zero();
+  for (std::size_t k = 0; k < taps.size(); ++k) {
+    const double r = std::sqrt((static_cast<double>(k) + 0.5) / static_cast<double>(taps.size()));
+    const double a = 2.399963229728653 * static_cast<double>(k);  // pi (3 - sqrt 5)
+    taps[k] = Eigen::Vector2f(static_cast<float>(r * std::cos(a)), static_cast<float>(r * std::sin(a)));
+    mean += taps[k];
+  }
+  for (auto& t : taps) t -= mean / static_cast<float>(taps.size());
+  return taps;
+}();
+
 // Largest upward component (-z in world_ned) of the unit view rays of a pinhole camera with
 // rotation R_WC: 1 when the zenith is in view, else the maximum along the image border (sampled
 // every few pixels; the function is smooth there).
@@ -67,7 +82,7 @@ void Renderer::Impl::blur_levels(const Targets& t) {
 // pixels: 0 every pixel, 1 those with geometry, 2 the water (see PIXELS in kPostFS).
 Program& Renderer::Impl::post_program(const PostFeatures& features, int pixels) {
   static constexpr std::array<const char*, kPostFeatures> kNames = {
-      "REMAP", "FWD", "INSCATTER", "VIGNETTING", "SHOT", "READ_NOISE", "SNELL", "MOTION", "RADIANCE"};
+      "REMAP", "FWD", "INSCATTER", "VIGNETTING", "SHOT", "READ_NOISE", "SNELL", "MOTION", "RADIANCE", "DEFOCUS", "CHROMA"};
   unsigned key = 0;
   for (std::size_t i = 0; i < features.size(); ++i) key |= (features[i] ? 1u : 0u) << i;
   key |= static_cast<unsigned>(pixels) << features.size();
@@ -95,12 +110,13 @@ void Renderer::Impl::post_pass(const Targets& t, const FrameSetup& f, const Came
   const bool window =
       options.snell_window && f.cam_W.z() > 0.0 && max_up_component(c, f.X_WC.linear()) > critical_up - 1e-3;
   const bool remap = t.lin_fbo != 0;
-  // REMAP, FWD, INSCATTER, VIGNETTING, SHOT, READ_NOISE, SNELL, MOTION, RADIANCE (kPostFS). With a
-  // remap, the sensor's stage (vignetting, noise) runs there, per output pixel.
+  // REMAP, FWD, INSCATTER, VIGNETTING, SHOT, READ_NOISE, SNELL, MOTION, RADIANCE, DEFOCUS, CHROMA
+  // (kPostFS). With a remap, the sensor's stage (vignetting, noise) and the lateral colour run
+  // there, per output pixel (a camera with lateral colour always has one: targets_for()).
   const bool vignetting = c.vignetting > 0.0;
   const PostFeatures features{false,          options.forward_scatter, do_inscatter, vignetting && !remap,
                               shot && !remap, read_noise && !remap,    window,       motion,
-                              remap};
+                              remap,          c.lens.defocus(),        false};
   glBindFramebuffer(GL_FRAMEBUFFER, remap ? t.lin_fbo : t.post_fbo);
   glViewport(0, 0, t.width, t.height);  // the internal size (the output's without a remap)
   // Geometry and water apart: the water's pixels (depth still at its clear value 1) skip the
@@ -111,6 +127,7 @@ void Renderer::Impl::post_pass(const Targets& t, const FrameSetup& f, const Came
   PostFeatures geometry = features, water_only = features;
   geometry[6] = false;      // no Snell's window
   water_only[1] = false;    // no forward scatter
+  water_only[9] = false;    // no defocus (the water's pixels have no depth)
   glDepthFunc(GL_GREATER);  // the triangle lies at depth 1: passes where the scene drew
   post_draw(post_program(geometry, 1), t, t.scene_color, f, c, seq, march_max_m, false, motion, v_C, w_C);
   glDepthFunc(GL_EQUAL);  // where it did not
@@ -121,7 +138,8 @@ void Renderer::Impl::post_pass(const Targets& t, const FrameSetup& f, const Came
   if (remap) {  // each output pixel resamples the radiance through the distortion map, + the sensor
     glBindFramebuffer(GL_FRAMEBUFFER, t.post_fbo);
     glViewport(0, 0, t.out_width, t.out_height);
-    const PostFeatures sensor{true, false, false, vignetting, shot, read_noise, false, false, false};
+    const PostFeatures sensor{true,  false, false, vignetting, shot, read_noise, false, false,
+                              false, false, c.lens.lateral_chromatic != 0.0};
     post_draw(post_program(sensor), t, t.lin_tex, f, c, seq, march_max_m, false, false, v_C, w_C);
   }
 }
@@ -172,13 +190,21 @@ void Renderer::Impl::post_draw(Program& post, const Targets& t, GLuint color, co
   glUniformMatrix3fv(post["u_R_WC"], 1, GL_FALSE, R_WC.data());
   glUniform1f(post["u_fwd_per_m"], static_cast<float>(water.forward_scatter_per_m));
   glUniform1f(post["u_blur_px_per_m"], static_cast<float>(water.forward_blur_rad_per_m * c.fx));
+  // The downwelling irradiance at the camera: the auto exposure's and the auto white balance's meter.
+  const Eigen::Vector3d Ed_cam =
+      (world.sun.surface_irradiance.array() * (-water.K_d.array() * std::max(0.0, f.cam_W.z())).exp()).matrix();
   double gain = c.exposure;
-  if (options.auto_exposure) {
-    const Eigen::Vector3d Ed =
-        (world.sun.surface_irradiance.array() * (-water.K_d.array() * std::max(0.0, f.cam_W.z())).exp()).matrix();
-    gain *= std::clamp(0.45 / std::max(luminance(Ed), 1e-6), 0.25, 5.0);
+  if (options.auto_exposure) gain *= std::clamp(0.45 / std::max(luminance(Ed_cam), 1e-6), 0.25, 5.0);
+  set3(post["u_gain"], gain * c.white_balance.gains_for(Ed_cam));
+  if (c.lens.defocus()) {
+    // Blur diameter [px] = fx A |1 / z_f - 1 / z| (CameraLens::blur_diameter_px).
+    glUniform2f(post["u_coc"], static_cast<float>(c.fx * 1e-3 * c.lens.focal_length_mm / c.lens.f_number),
+                static_cast<float>(1.0 / c.lens.focus_distance_m));
+    glUniform2fv(post["u_disc"], static_cast<GLsizei>(kDefocusTaps.size()), kDefocusTaps.front().data());
   }
-  glUniform1f(post["u_gain"], static_cast<float>(gain));
+  if (c.lens.lateral_chromatic != 0.0)
+    glUniform2f(post["u_chroma"], static_cast<float>(1.0 / (1.0 + c.lens.lateral_chromatic)),
+                static_cast<float>(1.0 / (1.0 - c.lens.lateral_chromatic)));
   glUniform1f(post["u_noise_std"], options.noise ? static_cast<float>(c.noise_stddev) : 0.0f);
   glUniform1f(post["u_shot"], options.noise ? static_cast<float>(c.shot_noise) : 0.0f);
   glUniform1f(post["u_vignetting"], static_cast<float>(c.vignetting));

@@ -3,6 +3,8 @@
 #include "renderer_impl.hpp"
 
 #include <cstring>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include "pixel_ops.hpp"
 
@@ -29,6 +31,17 @@ void detail::split_rgba(const std::uint8_t* rgba, std::size_t px, std::uint8_t* 
     rgb[3 * i + 2] = rgba[4 * i + 2];
     alpha[i] = rgba[4 * i + 3];
   }
+}
+
+void detail::jpeg_roundtrip(std::uint8_t* rgb, int width, int height, int quality) {
+  cv::Mat image(height, width, CV_8UC3, rgb), bgr;
+  cv::cvtColor(image, bgr, cv::COLOR_RGB2BGR);  // libjpeg's YCbCr weights take OpenCV's BGR order
+  std::vector<std::uint8_t> bytes;
+  if (!cv::imencode(".jpg", bgr, bytes, {cv::IMWRITE_JPEG_QUALITY, quality}))
+    throw GlError("JPEG encoding of the camera image failed");
+  const cv::Mat decoded = cv::imdecode(bytes, cv::IMREAD_COLOR);
+  if (decoded.rows != height || decoded.cols != width) throw GlError("JPEG decoding of the camera image failed");
+  cv::cvtColor(decoded, image, cv::COLOR_BGR2RGB);  // into rgb: `image` wraps it
 }
 
 void Renderer::Impl::start_readback(Slot& s, const Targets& t) {
@@ -92,6 +105,7 @@ Frame Renderer::Impl::finish_readback(Slot& s) {
   if (!rgba) throw GlError("glMapBufferRange failed for the colour readback");
   detail::split_rgba(rgba, px, f.rgb.data(), f.seg.data());
   glUnmapBuffer(GL_PIXEL_PACK_BUFFER);
+  if (s.jpeg_quality > 0) detail::jpeg_roundtrip(f.rgb.data(), f.width, f.height, s.jpeg_quality);
   glBindBuffer(GL_PIXEL_PACK_BUFFER, s.pbo_depth);
   const auto* dz = static_cast<const float*>(
       glMapBufferRange(GL_PIXEL_PACK_BUFFER, 0, static_cast<GLsizeiptr>(px * 4), GL_MAP_READ_BIT));

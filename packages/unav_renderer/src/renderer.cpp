@@ -206,6 +206,7 @@ void Renderer::submit(const Pose& X_WB, const std::string& camera, double stamp_
   s.meta.K = t.seen.K();
   s.meta.D = t.seen.distortion;
   s.meta.X_WC = X_WB * c.X_BC;
+  s.jpeg_quality = c.jpeg_quality;
   I.start_readback(s, t);
   I.in_flight.push_back(idx);
   I.timings.render_ms = ms_since(t0);

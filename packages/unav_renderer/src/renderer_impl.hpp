@@ -227,7 +227,7 @@ struct Targets {
 
 // The post program's compiled-in features, in kPostFS's order: REMAP, FWD, INSCATTER, VIGNETTING,
 // SHOT, READ_NOISE, SNELL, MOTION, RADIANCE.
-constexpr std::size_t kPostFeatures = 9;
+constexpr std::size_t kPostFeatures = 11;
 using PostFeatures = std::array<bool, kPostFeatures>;
 
 // RenderOptions::gpu_timers: timestamps at a frame's start, after each of its five passes and
@@ -241,6 +241,7 @@ struct Slot {
   std::size_t capacity_px = 0;
   GLsync fence = nullptr;
   Frame meta;  // everything but the pixels
+  int jpeg_quality = 0;  // the camera's: compressed after the readback when > 0
 };
 
 // A sampler object with these filters and this wrap mode in s and t.

@@ -44,7 +44,8 @@ Targets& Renderer::Impl::targets_for(const CameraModel& c) {
   // refracted by the port, then projected into that pinhole.
   t.seen = c.water_equivalent();  // a least-squares fit behind a port: once per camera
   const double magnification = t.seen.fx / c.fx;
-  if (c.has_distortion() || c.port.refracts()) {
+  // Lateral colour resamples red and blue in the remap (a pinhole's map is the identity).
+  if (c.has_distortion() || c.port.refracts() || c.lens.lateral_chromatic != 0.0) {
     // For every output (distorted) pixel, the undistorted pixel it sees.
     std::vector<cv::Point2f> src(static_cast<std::size_t>(c.width) * c.height);
     for (int v = 0; v < c.height; ++v)
@@ -69,6 +70,10 @@ Targets& Renderer::Impl::targets_for(const CameraModel& c) {
       over_x = std::max({over_x, -p.x, p.x - (c.width - 1)});
       over_y = std::max({over_y, -p.y, p.y - (c.height - 1)});
     }
+    // The lateral colour reads red and blue up to |k| x the radius farther out.
+    const float chroma_px = static_cast<float>(std::abs(c.lens.lateral_chromatic) * std::hypot(c.width, c.height));
+    over_x += chroma_px;
+    over_y += chroma_px;
     t.margin_x = internal_margin(over_x, c.width);
     t.margin_y = internal_margin(over_y, c.height);
     for (auto& p : dst) p += cv::Point2f(static_cast<float>(t.margin_x), static_cast<float>(t.margin_y));

@@ -1,6 +1,7 @@
 #include "unav_scene/camera.hpp"
 
 #include <Eigen/Dense>
+#include <algorithm>
 #include <cmath>
 
 #include "unav_common/config.hpp"
@@ -108,6 +109,22 @@ CameraModel CameraModel::from_hfov(const std::string& name, int width, int heigh
   return c;
 }
 
+double CameraLens::blur_diameter_px(double z_m, double fx_px) const {
+  if (!defocus() || !(z_m > 0.0)) return 0.0;
+  const double aperture = 1e-3 * focal_length_mm / f_number;
+  return fx_px * aperture * std::abs(1.0 / focus_distance_m - 1.0 / z_m);
+}
+
+Eigen::Vector3d CameraWhiteBalance::gains_for(const Eigen::Vector3d& E_d) const {
+  if (mode == "manual") return gains;
+  if (mode != "auto") return Eigen::Vector3d::Ones();
+  Eigen::Vector3d g;
+  for (int i = 0; i < 3; ++i)
+    g[i] = std::clamp(E_d[1] / std::max(E_d[i], 1e-30), 1.0 / max_gain, max_gain);
+  g[1] = 1.0;
+  return g;
+}
+
 void CameraModel::validate(const std::string& where) const {
   const std::string pre = where + ": camera '" + name + "': ";
   if (width <= 0 || height <= 0 || width > 8192 || height > 8192)
@@ -124,6 +141,18 @@ void CameraModel::validate(const std::string& where) const {
   if (!(vignetting >= 0.0 && vignetting <= 1.0)) throw ConfigError(pre + "vignetting must be in [0, 1]");
   if (!(exposure_time_s >= 0.0 && exposure_time_s <= 1.0))
     throw ConfigError(pre + "exposure_time_s must be in [0, 1] s");
+  if (!(lens.f_number >= 0.0 && lens.f_number <= 64.0)) throw ConfigError(pre + "lens.f_number must be in [0, 64]");
+  if (lens.defocus() && !(lens.focal_length_mm > 0.0 && lens.focus_distance_m > 1e-3 * lens.focal_length_mm))
+    throw ConfigError(pre + "lens: need focal_length_mm > 0 and focus_distance_m beyond the focal length");
+  if (!(std::abs(lens.lateral_chromatic) <= 0.05)) throw ConfigError(pre + "lens.lateral_chromatic must be in [-0.05, 0.05]");
+  if (white_balance.mode != "off" && white_balance.mode != "manual" && white_balance.mode != "auto")
+    throw ConfigError(pre + "white_balance.mode must be one of off, manual, auto (got '" + white_balance.mode + "')");
+  if (!(white_balance.gains.minCoeff() > 0.0 && white_balance.gains.maxCoeff() <= 64.0))
+    throw ConfigError(pre + "white_balance.gains must be in (0, 64]");
+  if (!(white_balance.max_gain >= 1.0 && white_balance.max_gain <= 64.0))
+    throw ConfigError(pre + "white_balance.max_gain must be in [1, 64]");
+  if (jpeg_quality < 0 || jpeg_quality > 100)
+    throw ConfigError(pre + "jpeg_quality must be in 0..100 (0: no compression), got " + std::to_string(jpeg_quality));
   if (!(port.water_index >= 1.0 && port.water_index <= 2.0))
     throw ConfigError(pre + "port.water_index must be in [1, 2]");
   if (!(port.air_index >= 1.0 && port.air_index <= 2.0)) throw ConfigError(pre + "port.air_index must be in [1, 2]");
@@ -212,6 +241,9 @@ struct CameraSpec {
   double vignetting = 0.0;
   double exposure_time_s = 0.0;
   PortSpec port;
+  CameraLens lens;
+  CameraWhiteBalance white_balance;
+  int jpeg_quality = 0;
   double near_m = 0.05, far_m = 200.0;
   template <class Archive>
   void Serialize(Archive* a) {
@@ -234,6 +266,9 @@ struct CameraSpec {
                  .Unit("s")
                  .Doc("exposure ending at the stamp: motion blur from the vehicle's velocity; 0 = none"));
     a->Visit(Field("port", &port).Doc("housing port (flat / dome); K and distortion are in air"));
+    a->Visit(Field("lens", &lens).Doc("depth of field and lateral colour"));
+    a->Visit(Field("white_balance", &white_balance).Doc("white balance: off, manual gains or auto"));
+    a->Visit(Field("jpeg_quality", &jpeg_quality).Range(0, 100).Doc("JPEG compression of the image; 0 = none"));
     a->Visit(Field("near_m", &near_m).Above(0.0).Unit("m").Doc("near clip plane"));
     a->Visit(Field("far_m", &far_m).Above(0.0).Unit("m").Doc("far clip plane"));
   }
@@ -291,6 +326,9 @@ CameraModel make_camera(const CameraSpec& s, const std::string& file, const std:
   if (cam.port.type == CameraPort::Type::kDome && !(std::abs(cam.port.dome_offset_m) < cam.port.dome_radius_m))
     throw ConfigError(file, key + ".port.dome_offset_m", std::to_string(cam.port.dome_offset_m),
                       "must be inside the dome (|offset| < dome_radius_m)");
+  cam.lens = s.lens;
+  cam.white_balance = s.white_balance;
+  cam.jpeg_quality = s.jpeg_quality;
   cam.near_m = s.near_m;
   cam.far_m = s.far_m;
   cam.validate(file);

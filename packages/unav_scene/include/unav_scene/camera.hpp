@@ -5,9 +5,60 @@
 #include <string>
 #include <vector>
 
+#include "unav_common/config.hpp"
 #include "unav_scene/frames.hpp"
 
 namespace unav::scene {
+
+/// The lens beyond the pinhole: depth of field of a thin lens and lateral chromatic aberration.
+/// Distances are those of the water side (behind a flat port the paraxial image of a point at z
+/// lies at z / n and the water-side focal length is n times the in-air one: the blur is the same).
+struct CameraLens {
+  double f_number = 0.0;           ///< 0 = a pinhole: everything in focus
+  double focal_length_mm = 4.0;    ///< physical focal length: with f_number, the aperture diameter
+  double focus_distance_m = 2.0;   ///< distance of the sharp plane along the optical axis
+  double lateral_chromatic = 0.0;  ///< the red image magnified by 1 + k, the blue by 1 - k (green: 1)
+
+  bool defocus() const { return f_number > 0.0; }
+  /// Diameter [px] of the blur disc (circle of confusion) of a point at depth z_m (along the optical
+  /// axis) for a camera of calibrated focal length fx_px (lens-to-sensor distance over the pixel
+  /// pitch, with the lens focused at focus_distance_m): fx_px A |1 / z_f - 1 / z|, A = f / N the
+  /// aperture; 0 without defocus.
+  double blur_diameter_px(double z_m, double fx_px) const;
+
+  template <class Archive>
+  void Serialize(Archive* a) {
+    using common::Field;
+    a->Visit(Field("f_number", &f_number).Range(0.0, 64.0).Doc("aperture f/N; 0 = pinhole (no depth of field)"));
+    a->Visit(Field("focal_length_mm", &focal_length_mm).Above(0.0).Max(1000.0).Unit("mm").Doc("physical focal length"));
+    a->Visit(Field("focus_distance_m", &focus_distance_m).Above(0.0).Unit("m").Doc("sharp plane, along the axis"));
+    a->Visit(Field("lateral_chromatic", &lateral_chromatic)
+                 .Range(-0.05, 0.05)
+                 .Doc("lateral colour: red magnified 1 + k, blue 1 - k, about the principal point"));
+  }
+};
+
+/// White balance: per-channel gains on the linear signal before the encoding, as a camera applies
+/// them to its raw RGB. manual: `gains`; auto: re-metered every frame for the ambient light at the
+/// camera's depth (what a pilot's white slate at that depth gives: the downwelling irradiance's
+/// colour made grey, green kept), each gain within [1 / max_gain, max_gain]; off: none.
+struct CameraWhiteBalance {
+  std::string mode = "off";
+  Eigen::Vector3d gains{1.0, 1.0, 1.0};
+  double max_gain = 8.0;
+
+  /// The gains for downwelling irradiance E_d (RGB) at the camera: `gains` (manual), green / E_d
+  /// clamped (auto), ones (off).
+  Eigen::Vector3d gains_for(const Eigen::Vector3d& E_d) const;
+
+  template <class Archive>
+  void Serialize(Archive* a) {
+    using common::Field;
+    a->Visit(Field("mode", &mode).OneOf({"off", "manual", "auto"}).Doc("white balance of the linear signal"));
+    a->Visit(Field("gains", &gains).Above(0.0).Max(64.0).Doc("manual: R G B gains"));
+    a->Visit(Field("max_gain", &max_gain).Min(1.0).Max(64.0).Doc("auto: gains within [1 / max, max]"));
+  }
+};
 
 /// The housing port a camera looks through (REFERENCE: flat ports magnify by n_water / n_air
 /// and add pincushion distortion; a dome centred on the entrance pupil changes nothing).
@@ -55,6 +106,11 @@ struct CameraModel {
   /// over it (the renderer smears the image along each pixel's motion); 0 = none.
   double exposure_time_s = 0.0;
   CameraPort port;  ///< K and distortion are the in-air camera's; the port refracts its rays
+  CameraLens lens;
+  CameraWhiteBalance white_balance;
+  /// JPEG compression of the 8-bit image (quality 1..100, as a camera streaming MJPEG or a dataset
+  /// stored as JPEG: 8 x 8 block artefacts, chroma subsampling); 0 = none.
+  int jpeg_quality = 0;
   double near_m = 0.05, far_m = 200.0;
 
   Eigen::Matrix3d K() const;
