@@ -63,7 +63,7 @@ uniform sampler2D u_inscatter_water;  // the same times the water pixels' weight
 uniform float u_march_max_m;
 uniform vec3 u_gain;           // exposure x white balance, per channel of the linear signal
 uniform vec2 u_coc;            // defocus: blur diameter [px] = x |y - 1 / z_C| (y = 1 / focus distance)
-uniform vec2 u_disc[16];       // defocus taps in the unit disc (centred)
+uniform vec2 u_disc[24];       // defocus taps in the unit disc (centred): 16 for r >= 2 px, then 8 for smaller discs
 uniform vec2 u_chroma;         // lateral colour: red and blue sampled at the principal point + these x the offset
 uniform float u_noise_std;
 uniform float u_shot;          // shot noise: variance u_shot * I (linear signal)
@@ -169,7 +169,8 @@ void main() {
   // Motion blur: the point seen here (water: far away, so rotation only) was at
   // P0 = P + w x P + v when the shutter opened; its image moved by g = here - there during the
   // exposure, so this pixel gathers the sharp frame along +g (a box filter over the exposure).
-  // Defocus: the pixel gathers the disc of its own blur diameter (thin lens, from its depth; the
+  // Defocus: the pixel gathers the disc of its own blur diameter (thin lens, from its depth; 8 taps
+  // below a 2 px radius, 16 above; the
   // taps on water are left out, so an object's edge does not darken; a gather, so a sharp
   // foreground bleeds onto a blurred background behind it). Both: each tap of the disc moved along
   // the smear. Depth and segmentation stay those of the stamp's sharp frame.
@@ -188,16 +189,38 @@ void main() {
 #if DEFOCUS
     if (hit) r = min(0.5 * u_coc.x * abs(u_coc.y - 1.0 / max(z, 1e-4)), 32.0);
 #endif
-    if (r > 0.5 || moved) {
+    vec2 px_uv = 1.0 / vec2(u_size);
+    if (r > 0.5 && !moved) {
+      // The disc alone (the common case): fixed trip counts, nearest texels (a bilinear half-float
+      // fetch is four texel conversions on llvmpipe), the taps on water weighted 0.
+      vec3 acc = vec3(0.0);
+      float wsum = 0.0;
+      if (r >= 2.0) {
+        for (int k = 0; k < 16; ++k) {
+          vec4 s = texture(u_color_px, (src + r * u_disc[k] + 0.5) * px_uv);
+          float w = step(0.5, s.a);
+          acc += w * s.rgb;
+          wsum += w;
+        }
+      } else {
+        for (int k = 16; k < 24; ++k) {
+          vec4 s = texture(u_color_px, (src + r * u_disc[k] + 0.5) * px_uv);
+          float w = step(0.5, s.a);
+          acc += w * s.rgb;
+          wsum += w;
+        }
+      }
+      if (wsum > 0.0) D = acc / wsum;
+    } else if (moved) {
+      // The smear (bilinear), each tap also moved over the disc when there is one.
       int n = int(clamp(ceil(length(g)), 1.0, 32.0));
       if (r > 0.5) n = max(n, 16);
       vec3 acc = vec3(0.0);
       float wsum = 0.0;
       for (int k = 0; k < n; ++k) {
-        vec2 o = ((float(k) + 0.5) / float(n)) * g;
-        if (r > 0.5) o += r * u_disc[k & 15];
-        vec4 s = textureLod(u_color, (src + o + 0.5) / vec2(u_size), 0.0);
-        float w = (r > 0.5 && s.a < 0.5) ? 0.0 : 1.0;
+        vec2 o = ((float(k) + 0.5) / float(n)) * g + (r > 0.5 ? r * u_disc[k & 15] : vec2(0.0));
+        vec4 s = textureLod(u_color, (src + o + 0.5) * px_uv, 0.0);
+        float w = r > 0.5 ? step(0.5, s.a) : 1.0;
         acc += w * s.rgb;
         wsum += w;
       }

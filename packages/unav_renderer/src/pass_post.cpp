@@ -19,18 +19,23 @@ GLuint pcg_seed(std::uint32_t v) {
   return (word >> 22u) ^ word;
 }
 
-// The defocus disc's 16 taps (kPostFS's u_disc): a Vogel spiral over the unit disc (equal areas,
-// golden-angle turns), shifted so that their mean is the pixel (no shift of a blurred image).
-const std::array<Eigen::Vector2f, 16> kDefocusTaps = [] {
-  std::array<Eigen::Vector2f, 16> taps;
-  Eigen::Vector2f mean = Eigen::Vector2f::Zero();
-  for (std::size_t k = 0; k < taps.size(); ++k) {
-    const double r = std::sqrt((static_cast<double>(k) + 0.5) / static_cast<double>(taps.size()));
-    const double a = 2.399963229728653 * static_cast<double>(k);  // pi (3 - sqrt 5)
-    taps[k] = Eigen::Vector2f(static_cast<float>(r * std::cos(a)), static_cast<float>(r * std::sin(a)));
-    mean += taps[k];
-  }
-  for (auto& t : taps) t -= mean / static_cast<float>(taps.size());
+// The defocus disc's taps (kPostFS's u_disc): 16 for radii of 2 px and more, then 8 for smaller
+// discs, each set a Vogel spiral over the unit disc (equal areas, golden-angle turns) shifted so
+// that its mean is the pixel (no shift of a blurred image).
+const std::array<Eigen::Vector2f, 24> kDefocusTaps = [] {
+  std::array<Eigen::Vector2f, 24> taps;
+  auto spiral = [&](std::size_t first, std::size_t n) {
+    Eigen::Vector2f mean = Eigen::Vector2f::Zero();
+    for (std::size_t k = 0; k < n; ++k) {
+      const double r = std::sqrt((static_cast<double>(k) + 0.5) / static_cast<double>(n));
+      const double a = 2.399963229728653 * static_cast<double>(k);  // pi (3 - sqrt 5)
+      taps[first + k] = Eigen::Vector2f(static_cast<float>(r * std::cos(a)), static_cast<float>(r * std::sin(a)));
+      mean += taps[first + k];
+    }
+    for (std::size_t k = 0; k < n; ++k) taps[first + k] -= mean / static_cast<float>(n);
+  };
+  spiral(0, 16);
+  spiral(16, 8);
   return taps;
 }();
 

@@ -158,3 +158,40 @@ TEST(CameraPort, YamlKeysAndBadValues) {
                       "    port: {type: porthole}\n";
   EXPECT_THROW(load_cameras(p.string()), ConfigError);
 }
+
+TEST(CameraPipeline, YamlKeysAndBadValues) {
+  // The camera after the water: lens, white balance and JPEG keys read as written; a bad value
+  // named by file, key path and value.
+  const fs::path p = fs::temp_directory_path() / "unav_pipeline_cams.yaml";
+  const std::string head = "cameras:\n  - name: front\n    width: 64\n    height: 48\n    hfov_deg: 60\n";
+  std::ofstream(p) << head
+                   << "    lens: {f_number: 2.8, focal_length_mm: 6, focus_distance_m: 1.5, lateral_chromatic: 0.002}\n"
+                      "    white_balance: {mode: manual, gains: [1.8, 1.0, 0.7]}\n    jpeg_quality: 80\n";
+  const CameraModel c = load_cameras(p.string())[0];
+  EXPECT_DOUBLE_EQ(c.lens.f_number, 2.8);
+  EXPECT_DOUBLE_EQ(c.lens.focal_length_mm, 6.0);
+  EXPECT_DOUBLE_EQ(c.lens.focus_distance_m, 1.5);
+  EXPECT_DOUBLE_EQ(c.lens.lateral_chromatic, 0.002);
+  EXPECT_EQ(c.white_balance.mode, "manual");
+  EXPECT_TRUE(c.white_balance.gains.isApprox(Eigen::Vector3d(1.8, 1.0, 0.7)));
+  EXPECT_EQ(c.jpeg_quality, 80);
+  EXPECT_TRUE(c.white_balance.gains_for(Eigen::Vector3d(0.1, 0.5, 0.6)).isApprox(c.white_balance.gains));
+  const std::vector<std::pair<std::string, std::string>> bad = {
+      {"    lens: {f_number: -1}\n", "lens.f_number"},
+      {"    lens: {lateral_chromatic: 0.2}\n", "lens.lateral_chromatic"},
+      {"    white_balance: {mode: daylight}\n", "white_balance.mode"},
+      {"    white_balance: {gains: [1.0, .nan, 1.0]}\n", "white_balance.gains"},
+      {"    jpeg_quality: 101\n", "jpeg_quality"},
+  };
+  for (const auto& [yaml, key] : bad) {
+    std::ofstream(p) << head << yaml;
+    try {
+      load_cameras(p.string());
+      ADD_FAILURE() << "accepted: " << yaml;
+    } catch (const ConfigError& e) {
+      const std::string what = e.what();
+      EXPECT_NE(what.find("unav_pipeline_cams.yaml"), std::string::npos) << what;
+      EXPECT_NE(what.find(key), std::string::npos) << what;
+    }
+  }
+}
