@@ -91,7 +91,6 @@ class DatasetRecorder : public unav::Node {
     declare_params(&prm);
     const std::string& out = prm.output_dir;
     camera_ = prm.camera;
-    using unav::scene::SegClass;
     manifest_.format = prm.format;
     manifest_.camera = camera_;
     manifest_.parent_frame = prm.body_frame;
@@ -105,11 +104,7 @@ class DatasetRecorder : public unav::Node {
         manifest_.source["scenario_set_" + std::to_string(i)] = prm.scenario.overrides[i];
     }
     if (!prm.world.empty()) manifest_.source["world"] = prm.world;
-    manifest_.labels = {{static_cast<int>(SegClass::kWater), "water"},
-                        {static_cast<int>(SegClass::kSeabed), "seabed"},
-                        {static_cast<int>(SegClass::kPipeline), "pipeline"},
-                        {static_cast<int>(SegClass::kRock), "rock"},
-                        {static_cast<int>(SegClass::kOther), "other"}};
+    manifest_.labels = unav::scene::seg_class_labels();
     try {
       writer_ = make_sequence_writer(prm.format, out);
     } catch (const DatasetError& e) {

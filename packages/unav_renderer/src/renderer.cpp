@@ -263,6 +263,22 @@ void Renderer::set_options(const RenderOptions& options) {
   impl_->options.texture_size = tex;
   impl_->options.readback_slots = slots;
 }
+void Renderer::set_object_pose(const std::string& name, const Pose& X_WO) {
+  Impl& I = *impl_;
+  const auto it = I.movable.find(name);
+  if (it == I.movable.end()) {
+    std::string names;
+    for (const auto& [n, parts] : I.movable) names += (names.empty() ? "" : ", ") + n;
+    throw ConfigError("Renderer::set_object_pose", "name", name,
+                      "no movable object of that name in world '" + I.world.name + "' (movable: " +
+                          (names.empty() ? "none" : names) + ")");
+  }
+  if (!X_WO.matrix().allFinite())
+    throw ConfigError("Renderer::set_object_pose", name, "non-finite pose", "the pose must be finite");
+  I.ctx->make_current();
+  I.move_object(it->second, X_WO);
+}
+
 const RenderOptions& Renderer::options() const { return impl_->options; }
 const World& Renderer::world() const { return impl_->world; }
 const CameraModel& Renderer::camera(const std::string& name) const { return impl_->cam(name); }

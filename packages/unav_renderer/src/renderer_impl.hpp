@@ -49,6 +49,7 @@ struct Chunk {
   GLsizei first = 0, count = 0;  // in indices
   Eigen::Vector3f lo = Eigen::Vector3f::Zero(), hi = Eigen::Vector3f::Zero();
   bool sun_free = false;  ///< terrain that nothing can shadow from the sun (mark_sun_free())
+  bool sun_free_static = false;  ///< the same for the scene without its movable objects
   /// Terrain wholly under another terrain mesh (index; -1 none): the far seabed under the patch,
   /// which nobody standing over the patch can see (build_caster_boxes()).
   long under = -1;
@@ -437,6 +438,30 @@ struct Renderer::Impl {
   /// without it in the map.
   bool casts_nothing(std::size_t mi, const Chunk& ch, const Eigen::Vector3f& L, const Eigen::Vector3f& eye) const;
   void mark_sun_free();
+  /// Movable objects (Object::movable, Renderer::set_object_pose): by object name, its meshes
+  /// (the parts of a mesh file) with their vertices in the object's frame, indices in chunk order.
+  struct MovablePart {
+    std::size_t mesh = 0;
+    MeshData local;
+    MeshData world;  ///< at the pose set last (caster boxes)
+  };
+  std::map<std::string, std::vector<MovablePart>> movable;
+  std::vector<bool> mesh_movable;  ///< by mesh
+  std::array<Eigen::Vector3f, 3> sun_frame;  ///< across the sunlight (u, v) and along it (s): mark_sun_free()
+  float sun_pad = 0.0f;                      ///< the casters' growth for the sun map's PCF
+  /// A box's extent along the sun frame's axes, and its shallowest and deepest z.
+  struct SunExtent {
+    std::array<std::pair<float, float>, 3> along;
+    float top_z, bottom_z;
+  };
+  SunExtent sun_extent(const Eigen::Vector3f& lo, const Eigen::Vector3f& hi) const;
+  bool may_shade(const SunExtent& caster, const SunExtent& receiver) const;
+  void move_object(std::vector<MovablePart>& parts, const Pose& X_WO);
+  /// Caster boxes of a non-terrain mesh: its triangles binned into 0.5 m cells.
+  void add_object_casters(std::size_t mi, const MeshData& mesh);
+  /// Terrain chunks' (and tiles') sun_free: the static result of mark_sun_free() and no movable
+  /// object's caster box in the way.
+  void refresh_sun_free();
   /// True when a chunk or caster box `under` a terrain mesh (index, -1 none) lies under it and `eye` stands over that
   /// mesh (inside its footprint, above its shallowest point): every line from the eye to the chunk crosses the mesh
   /// first (a height field over the whole rectangle), so nothing of it can be seen from there.

@@ -1,5 +1,6 @@
 #include "unav_renderer/renderer_pool.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <deque>
 #include <future>
@@ -103,6 +104,19 @@ bool RendererPool::ready() const {
 }
 int RendererPool::workers() const { return static_cast<int>(impl_->workers.size()); }
 void RendererPool::set_next_sequence(std::uint64_t sequence) { impl_->sequence = sequence; }
+void RendererPool::set_object_pose(const std::string& name, const Pose& X_WO) {
+  // Checked here, so that the workers' queued moves cannot fail (their world is this one).
+  const World& world = impl_->workers.front()->renderer->world();
+  const bool known = std::any_of(world.objects.begin(), world.objects.end(),
+                                 [&](const Object& o) { return o.movable && o.name == name; });
+  if (!known)
+    throw ConfigError("RendererPool::set_object_pose", "name", name,
+                      "no movable object of that name in world '" + world.name + "'");
+  if (!X_WO.matrix().allFinite())
+    throw ConfigError("RendererPool::set_object_pose", name, "non-finite pose", "the pose must be finite");
+  for (auto& w : impl_->workers)  // queued before the frames submitted after this call
+    w->gl.post([r = w->renderer.get(), name, X_WO] { r->set_object_pose(name, X_WO); });
+}
 const CameraModel& RendererPool::camera(const std::string& name) const {
   return impl_->workers.front()->renderer->camera(name);
 }

@@ -65,6 +65,11 @@ GLuint Renderer::Impl::image_texture(const std::shared_ptr<const TextureImage>& 
 
 void Renderer::Impl::upload_scene(const SceneGeometry& geo) {
   triangles = geo.triangle_count();
+  movable.clear();
+  mesh_movable.assign(geo.meshes.size(), false);
+  std::map<std::string, std::string> movable_mesh_names;  // "object:<name>" -> name
+  for (const Object& o : world.objects)
+    if (o.movable) movable_mesh_names["object:" + o.name] = o.name;
   {  // Sediment is the seabed's own sand: its texture's mean (linear) times its albedo.
     const auto px = detail::make_texture(world.seabed.material.texture, 64).rgba;
     Eigen::Vector3d sum = Eigen::Vector3d::Zero();
@@ -148,19 +153,27 @@ void Renderer::Impl::upload_scene(const SceneGeometry& geo) {
                  indices.data(), GL_STATIC_DRAW);
     g.index_count = static_cast<GLsizei>(indices.size());
     glBindVertexArray(0);
+    if (const auto it = movable_mesh_names.find(sm.name); it != movable_mesh_names.end()) {
+      const Object& o = *std::find_if(world.objects.begin(), world.objects.end(),
+                                      [&](const Object& x) { return x.name == it->second; });
+      MovablePart part;
+      part.mesh = meshes.size();
+      part.world = sm.mesh;
+      part.world.indices = indices;  // chunk order: the chunks' index ranges
+      part.local = part.world;
+      part.local.transform(o.X_WO.inverse());  // the scale stays in: the vertices as the object holds them
+      movable[o.name].push_back(std::move(part));
+      mesh_movable[meshes.size()] = true;
+    }
     meshes.push_back(g);
   }
   build_caster_boxes(geo);
   mark_sun_free();
   for (GpuMesh& m : meshes) {
     bool mixed = false;               // a tile partly under another terrain mesh
-    for (TerrainTile& t : m.tiles) {  // sun-free and under another mesh when all its chunks are
-      t.box.sun_free = true;
+    for (TerrainTile& t : m.tiles) {  // under another mesh when all its chunks are
       t.box.under = t.chunk_begin < t.chunk_end ? m.chunks[t.chunk_begin].under : -1;
-      for (std::size_t c = t.chunk_begin; c < t.chunk_end; ++c) {
-        t.box.sun_free = t.box.sun_free && m.chunks[c].sun_free;
-        mixed = mixed || m.chunks[c].under != t.box.under;
-      }
+      for (std::size_t c = t.chunk_begin; c < t.chunk_end; ++c) mixed = mixed || m.chunks[c].under != t.box.under;
     }
     // Terrain partly under other terrain (the far seabed, whose part under the patch occlusion
     // culling leaves out chunk by chunk): drawn by chunks, without levels of detail.
@@ -211,22 +224,60 @@ void Renderer::Impl::build_caster_boxes(const SceneGeometry& geo) {
       }
       continue;
     }
-    const MeshData& mesh = geo.meshes[mi].mesh;
-    std::map<std::pair<long, long>, std::size_t> cell_box;
-    for (std::size_t t = 0; t < mesh.triangle_count(); ++t) {
-      const auto p = triangle_corners(mesh, t);
-      const Eigen::Vector3f c = (p[0] + p[1] + p[2]) / 3.0f;
-      const std::pair<long, long> key{std::lround(std::floor(c.x() / kCasterCellM)),
-                                      std::lround(std::floor(c.y() / kCasterCellM))};
-      auto [it, fresh] = cell_box.try_emplace(key, caster_boxes.size());
-      if (fresh) caster_boxes.push_back({mi, p[0], p[0]});
-      CasterBox& box = caster_boxes[it->second];
-      for (const auto& q : p) {
-        box.lo = box.lo.cwiseMin(q);
-        box.hi = box.hi.cwiseMax(q);
-      }
+    add_object_casters(mi, geo.meshes[mi].mesh);
+  }
+}
+
+void Renderer::Impl::add_object_casters(std::size_t mi, const MeshData& mesh) {
+  std::map<std::pair<long, long>, std::size_t> cell_box;
+  for (std::size_t t = 0; t < mesh.triangle_count(); ++t) {
+    const auto p = triangle_corners(mesh, t);
+    const Eigen::Vector3f c = (p[0] + p[1] + p[2]) / 3.0f;
+    const std::pair<long, long> key{std::lround(std::floor(c.x() / kCasterCellM)),
+                                    std::lround(std::floor(c.y() / kCasterCellM))};
+    auto [it, fresh] = cell_box.try_emplace(key, caster_boxes.size());
+    if (fresh) caster_boxes.push_back({mi, p[0], p[0]});
+    CasterBox& box = caster_boxes[it->second];
+    for (const auto& q : p) {
+      box.lo = box.lo.cwiseMin(q);
+      box.hi = box.hi.cwiseMax(q);
     }
   }
+}
+
+// A movable object to X_WO: its parts' vertices and normals re-uploaded, their chunks' boxes and
+// caster boxes remade, the terrain's sun-free marks refreshed.
+void Renderer::Impl::move_object(std::vector<MovablePart>& parts, const Pose& X_WO) {
+  for (MovablePart& part : parts) {
+    part.world.positions = part.local.positions;
+    part.world.normals = part.local.normals;
+    part.world.transform(X_WO);
+    GpuMesh& g = meshes[part.mesh];
+    glBindBuffer(GL_ARRAY_BUFFER, g.vbo[0]);
+    glBufferSubData(GL_ARRAY_BUFFER, 0, static_cast<GLsizeiptr>(part.world.positions.size() * sizeof(float)),
+                    part.world.positions.data());
+    glBindBuffer(GL_ARRAY_BUFFER, g.vbo[1]);
+    glBufferSubData(GL_ARRAY_BUFFER, 0, static_cast<GLsizeiptr>(part.world.normals.size() * sizeof(float)),
+                    part.world.normals.data());
+    for (Chunk& ch : g.chunks) {
+      ch.lo = Eigen::Vector3f::Constant(1e30f);
+      ch.hi = Eigen::Vector3f::Constant(-1e30f);
+      for (GLsizei i = ch.first; i < ch.first + ch.count; ++i) {
+        const std::size_t v = 3 * static_cast<std::size_t>(part.world.indices[static_cast<std::size_t>(i)]);
+        const Eigen::Vector3f q(part.world.positions[v], part.world.positions[v + 1], part.world.positions[v + 2]);
+        ch.lo = ch.lo.cwiseMin(q);
+        ch.hi = ch.hi.cwiseMax(q);
+      }
+    }
+    caster_boxes.erase(std::remove_if(caster_boxes.begin(), caster_boxes.end(),
+                                      [&](const CasterBox& c) { return c.mesh == part.mesh; }),
+                       caster_boxes.end());
+    add_object_casters(part.mesh, part.world);
+  }
+  glBindBuffer(GL_ARRAY_BUFFER, 0);
+  refresh_sun_free();
+  sun_vp_cached.clear();  // the sun's map holds the object where it was
+  check_gl("moving an object");
 }
 
 bool Renderer::Impl::casts_nothing(std::size_t mi, const Chunk& ch, const Eigen::Vector3f& L,
@@ -260,30 +311,56 @@ void Renderer::Impl::mark_sun_free() {
   const Eigen::Vector3f a = std::abs(s.x()) < 0.9f ? Eigen::Vector3f::UnitX() : Eigen::Vector3f::UnitY();
   const Eigen::Vector3f u = (a - s * a.dot(s)).normalized(), v = s.cross(u);
   const float tan_elevation = s.z() > 1e-6f ? s.z() / std::hypot(s.x(), s.y()) : 0.0f;  // inf overhead
+  sun_frame = {u, v, s};
+  sun_pad = pad;
   // Each caster's extent along u, v (across the sunlight) and s (along it), once.
-  using Interval = std::pair<float, float>;
-  std::vector<std::array<Interval, 3>> seen;
+  std::vector<SunExtent> seen;
   seen.reserve(caster_boxes.size());
-  for (const CasterBox& c : caster_boxes)
-    seen.push_back({box_interval(c.lo, c.hi, u), box_interval(c.lo, c.hi, v), box_interval(c.lo, c.hi, s)});
+  for (const CasterBox& c : caster_boxes) seen.push_back(sun_extent(c.lo, c.hi));
   for (std::size_t mi = 0; mi < meshes.size(); ++mi) {
     GpuMesh& m = meshes[mi];
-    for (Chunk& r : m.chunks) r.sun_free = false;
+    for (Chunk& r : m.chunks) r.sun_free = r.sun_free_static = false;
     if (!m.terrain || !(m.tan_slope < tan_elevation)) continue;
     for (Chunk& r : m.chunks) {
-      const auto ru = box_interval(r.lo, r.hi, u), rv = box_interval(r.lo, r.hi, v), rs = box_interval(r.lo, r.hi, s);
+      const SunExtent re = sun_extent(r.lo, r.hi);
       bool blocked = false;
-      for (std::size_t ci = 0; ci < caster_boxes.size(); ++ci) {
-        const CasterBox& c = caster_boxes[ci];
-        if (c.mesh == mi) continue;
-        const auto& [cu, cv, cs] = seen[ci];
-        if (cu.first <= ru.second + pad && ru.first <= cu.second + pad && cv.first <= rv.second + pad &&
-            rv.first <= cv.second + pad && cs.first < rs.second + pad && c.lo.z() - pad <= r.hi.z()) {
-          blocked = true;
-          break;
-        }
-      }
-      r.sun_free = !blocked;
+      for (std::size_t ci = 0; ci < caster_boxes.size() && !blocked; ++ci)
+        blocked = caster_boxes[ci].mesh != mi && !mesh_movable[caster_boxes[ci].mesh] && may_shade(seen[ci], re);
+      r.sun_free_static = !blocked;
+    }
+  }
+  refresh_sun_free();
+}
+
+Renderer::Impl::SunExtent Renderer::Impl::sun_extent(const Eigen::Vector3f& lo, const Eigen::Vector3f& hi) const {
+  const auto& [u, v, s] = sun_frame;
+  return {{box_interval(lo, hi, u), box_interval(lo, hi, v), box_interval(lo, hi, s)}, lo.z(), hi.z()};
+}
+
+// Caster c can stand between the sun and receiver r: their extents across the sunlight overlap,
+// c lies up-sun of some of r and reaches above r's deepest point (all grown by the PCF's pad).
+bool Renderer::Impl::may_shade(const SunExtent& c, const SunExtent& r) const {
+  const float pad = sun_pad;
+  const auto &cu = c.along[0], &cv = c.along[1], &cs = c.along[2];
+  const auto &ru = r.along[0], &rv = r.along[1], &rs = r.along[2];
+  return cu.first <= ru.second + pad && ru.first <= cu.second + pad && cv.first <= rv.second + pad &&
+         rv.first <= cv.second + pad && cs.first < rs.second + pad && c.top_z - pad <= r.bottom_z;
+}
+
+void Renderer::Impl::refresh_sun_free() {
+  std::vector<SunExtent> moving;  // the movable objects' caster boxes
+  for (const CasterBox& c : caster_boxes)
+    if (mesh_movable[c.mesh]) moving.push_back(sun_extent(c.lo, c.hi));
+  for (GpuMesh& m : meshes) {
+    for (Chunk& r : m.chunks) {
+      r.sun_free = r.sun_free_static;
+      if (!r.sun_free || moving.empty()) continue;
+      const SunExtent re = sun_extent(r.lo, r.hi);
+      for (const SunExtent& c : moving) r.sun_free = r.sun_free && !may_shade(c, re);
+    }
+    for (TerrainTile& t : m.tiles) {  // sun-free when all its chunks are
+      t.box.sun_free = true;
+      for (std::size_t c = t.chunk_begin; c < t.chunk_end; ++c) t.box.sun_free = t.box.sun_free && m.chunks[c].sun_free;
     }
   }
 }

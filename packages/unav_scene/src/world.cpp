@@ -74,10 +74,18 @@ double acoustic_reflectivity_db(SegClass seg_class) {
       return -17.0;
     case SegClass::kWater:
       return -80.0;
+    case SegClass::kVehicle:
+      return -10.0;  // a hard frame, thrusters and housings: a bright target
     case SegClass::kOther:
       break;
   }
   return -20.0;
+}
+
+std::vector<std::pair<int, std::string>> seg_class_labels() {
+  return {{static_cast<int>(SegClass::kWater), "water"},       {static_cast<int>(SegClass::kSeabed), "seabed"},
+          {static_cast<int>(SegClass::kPipeline), "pipeline"}, {static_cast<int>(SegClass::kRock), "rock"},
+          {static_cast<int>(SegClass::kOther), "other"},       {static_cast<int>(SegClass::kVehicle), "vehicle"}};
 }
 
 double Seabed::depth_at(double n_m, double e_m) const {
@@ -247,7 +255,8 @@ SegClass parse_class(const YamlCtx& c, const std::string& key, const std::string
   if (s == "pipeline") return SegClass::kPipeline;
   if (s == "rock") return SegClass::kRock;
   if (s == "other") return SegClass::kOther;
-  c.fail(key, "unknown class '" + s + "' (valid: seabed, pipeline, rock, other)");
+  if (s == "vehicle") return SegClass::kVehicle;
+  c.fail(key, "unknown class '" + s + "' (valid: seabed, pipeline, rock, other, vehicle)");
 }
 
 }  // namespace

@@ -380,7 +380,7 @@ SampleResult generate_sample(const unav::datagen::RandomizationSpec& spec, std::
                {"world", "world/scenario.yaml"},
                {"base_world", fs::path(s.base_world).filename().string()},
                {"generator", "unav datagen (in-process episode)"}};
-  mi.labels = {{0, "water"}, {1, "seabed"}, {2, "pipeline"}, {3, "rock"}, {4, "other"}};
+  mi.labels = scene::seg_class_labels();
   YAML::Emitter e;
   e.SetDoublePrecision(17);
   e << unav::common::ToYaml(s);

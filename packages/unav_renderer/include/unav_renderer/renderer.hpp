@@ -207,6 +207,10 @@ class Renderer {
   void set_water(const WaterModel& water);
   const WaterModel& water() const;
   void set_options(const RenderOptions& options);  ///< egl/texture fields are ignored
+  /// Moves the world's movable object `name` (Object::movable: another vehicle of the fleet) to
+  /// X_WO for the frames submitted from now on (its shadows too). Throws ConfigError naming the
+  /// object when the world has no movable object of that name, or X_WO is not finite.
+  void set_object_pose(const std::string& name, const Pose& X_WO);
   const RenderOptions& options() const;
 
   const World& world() const;

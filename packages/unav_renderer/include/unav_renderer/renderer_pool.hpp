@@ -52,6 +52,9 @@ class RendererPool {
   int workers() const;
   /// The sequence number of the next submit() (the noise's frame index), as Renderer's.
   void set_next_sequence(std::uint64_t sequence);
+  /// Renderer::set_object_pose on every worker, for the frames submitted from now on. Throws
+  /// ConfigError (as Renderer's) on the calling thread.
+  void set_object_pose(const std::string& name, const Pose& X_WO);
   /// The first worker's renderer info (GL renderer string, cameras): all workers are alike.
   const CameraModel& camera(const std::string& name) const;
   std::string gl_renderer() const;

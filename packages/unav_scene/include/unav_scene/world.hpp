@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <limits>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "unav_scene/frames.hpp"
@@ -15,7 +16,10 @@
 namespace unav::scene {
 
 /// Segmentation class ids written to the segmentation image.
-enum class SegClass : std::uint8_t { kWater = 0, kSeabed = 1, kPipeline = 2, kRock = 3, kOther = 4 };
+enum class SegClass : std::uint8_t { kWater = 0, kSeabed = 1, kPipeline = 2, kRock = 3, kOther = 4, kVehicle = 5 };
+
+/// Every class's id and name (datasets' label tables): water, seabed, pipeline, rock, other, vehicle.
+std::vector<std::pair<int, std::string>> seg_class_labels();
 
 /// Surface appearance. `texture` is a procedural texture name: none, sand, rock, pipe_coating,
 /// checker. Albedo multiplies the texture (linear RGB, 0..1).
@@ -113,6 +117,10 @@ struct Object {
   Eigen::Vector3d scale{1, 1, 1};
   SegClass seg_class = SegClass::kOther;
   Material material{"none", {0.5, 0.5, 0.5}, 1.0};
+  /// Moved while rendering (Renderer::set_object_pose: another vehicle of the fleet); X_WO is
+  /// where it starts. Its texture is laid out in its own frame only for mesh UVs (a triplanar
+  /// texture would slide over it: give it a plain material).
+  bool movable = false;
 };
 
 struct Sun {
