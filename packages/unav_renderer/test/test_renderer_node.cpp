@@ -227,3 +227,60 @@ TEST(UnderwaterRendererNode, TakesItsPartOfAScenario) {
   EXPECT_EQ(images[0].height(), 24u);
   EXPECT_EQ(images[0].data().size(), 40u * 24u * 3u);
 }
+
+TEST(UnderwaterRendererNode, DrawsTheOtherVehiclesWhereTheyAre) {
+  // A scenario with a fleet vehicle (rov2): the primary's renderer (/rov) draws it as a box of
+  // class vehicle at its ground-truth pose. In lockstep a frame waits for rov2's state of the same
+  // stamp: the frame at 0.1 s, whose odometry comes first, shows rov2 where its 0.1 s state puts it
+  // (1 m under the down camera: the image's centre), not where its 0 s state had it (out of view).
+  const std::string scenario = ::testing::TempDir() + "renderer_fleet_scenario.yaml";
+  std::ofstream(scenario) << "world: " << UNAV_REPO_ROOT << "/worlds/pipe_inspection/world.yaml\n"
+                          << "cameras: {config: " << small_cameras() << ", names: [down]}\n"
+                          << "render: {noise: false, marine_snow: false}\n"
+                          << "fleet: [{name: rov2, initial_position: [40.0, 40.0, 9.0]}]\n";
+  unav::testing::NodeUnderTest<unav::renderer::UnderwaterRendererNode> fx(
+      "underwater_renderer", {"--ros-args", "-p", "scenario:=" + scenario, "-p", "lockstep:=true"});
+  unav::renderer::UnderwaterRendererNode& node = *fx.node;
+  unav::Node& probe = fx.probe;
+  auto odom_pub = probe.create_publisher<nav_msgs::msg::Odometry>("/rov/ground_truth/odom", unav::QoS::reliable());
+  auto other_pub = probe.create_publisher<nav_msgs::msg::Odometry>("/rov2/ground_truth/odom", unav::QoS::reliable());
+  std::vector<sensor_msgs::msg::Image> seg;
+  auto seg_sub = probe.create_subscription<sensor_msgs::msg::Image>(
+      "/rov/camera/down/segmentation/image_raw", unav::QoS::reliable(),
+      [&seg](const sensor_msgs::msg::Image& m) { seg.push_back(m); });
+  const auto own_link = make_link(*odom_pub, node);
+  ASSERT_TRUE(fx.match({own_link, make_link(*other_pub, node), make_link(node, *seg_sub)}));
+  auto state = [](double t, double north, double depth) {
+    nav_msgs::msg::Odometry o;
+    const unav::Time s{std::llround(t * 1e9)};
+    o.header().stamp().sec(s.sec());
+    o.header().stamp().nanosec(s.nanosec());
+    o.pose().pose().position().x(north);
+    o.pose().pose().position().z(depth);
+    return o;
+  };
+  auto vehicle_pixels = [](const sensor_msgs::msg::Image& m) {
+    int n = 0;
+    for (auto v : m.data()) n += v == static_cast<std::uint8_t>(unav::scene::SegClass::kVehicle) ? 1 : 0;
+    return n;
+  };
+  auto centre = [](const sensor_msgs::msg::Image& m) { return m.data()[(m.height() / 2) * m.step() + m.width() / 2]; };
+  other_pub->publish(state(0.0, 40.0, 9.0));  // rov2 out of view
+  ASSERT_TRUE(fx.spin_until([&] { return node.fleet_states() == 1; }));
+  odom_pub->publish(state(0.0, 0.0, 8.0));
+  ASSERT_TRUE(fx.spin_until([&] { return seg.size() == 1; }));
+  EXPECT_EQ(vehicle_pixels(seg[0]), 0);
+  odom_pub->publish(state(0.1, 0.0, 8.0));  // ours first: the frame waits for rov2's 0.1 s state
+  ASSERT_TRUE(fx.spin_until([&] { return unav::testing::delivered(own_link); }));  // the node took it
+  fx.spin_for(50ms);  // (and would have published by now: a frame of 80 x 48 takes a few ms)
+  EXPECT_EQ(seg.size(), 1u) << "a frame went out before the other vehicle's state of its stamp";
+  other_pub->publish(state(0.1, 0.0, 9.0));  // 1 m under the camera
+  ASSERT_TRUE(fx.spin_until([&] { return seg.size() == 2; }));
+  const int n = vehicle_pixels(seg[1]);
+  std::printf("rov2 1 m under the down camera: %d vehicle pixels, centre class %d\n", n, centre(seg[1]));
+  EXPECT_EQ(centre(seg[1]), static_cast<std::uint8_t>(unav::scene::SegClass::kVehicle));
+  // Its top face (0.457 x 0.575 m at 0.873 m) covers ~(0.457 x 0.575) / (2 x 0.873)^2 of the 90 x 62
+  // deg view's 80 x 48 px (a 2 x 1.2 m footprint there): ~10 % = ~400 px; its sides add a little.
+  EXPECT_GT(n, 200);
+  EXPECT_LT(n, 1200);
+}
