@@ -67,9 +67,9 @@ void Renderer::Impl::upload_scene(const SceneGeometry& geo) {
   triangles = geo.triangle_count();
   movable.clear();
   mesh_movable.assign(geo.meshes.size(), false);
-  std::map<std::string, std::string> movable_mesh_names;  // "object:<name>" -> name
-  for (const Object& o : world.objects)
-    if (o.movable) movable_mesh_names["object:" + o.name] = o.name;
+  std::map<std::size_t, std::pair<std::string, MeshData>> movable_local;  // by mesh: object name, local mesh
+  for (auto& [name, parts] : movable_meshes(world, geo))
+    for (MovableMesh& m : parts) movable_local[m.mesh] = {name, std::move(m.local)};
   {  // Sediment is the seabed's own sand: its texture's mean (linear) times its albedo.
     const auto px = detail::make_texture(world.seabed.material.texture, 64).rgba;
     Eigen::Vector3d sum = Eigen::Vector3d::Zero();
@@ -153,16 +153,13 @@ void Renderer::Impl::upload_scene(const SceneGeometry& geo) {
                  indices.data(), GL_STATIC_DRAW);
     g.index_count = static_cast<GLsizei>(indices.size());
     glBindVertexArray(0);
-    if (const auto it = movable_mesh_names.find(sm.name); it != movable_mesh_names.end()) {
-      const Object& o = *std::find_if(world.objects.begin(), world.objects.end(),
-                                      [&](const Object& x) { return x.name == it->second; });
+    if (auto it = movable_local.find(meshes.size()); it != movable_local.end()) {
       MovablePart part;
       part.mesh = meshes.size();
+      part.local = std::move(it->second.second);
       part.world = sm.mesh;
       part.world.indices = indices;  // chunk order: the chunks' index ranges
-      part.local = part.world;
-      part.local.transform(o.X_WO.inverse());  // the scale stays in: the vertices as the object holds them
-      movable[o.name].push_back(std::move(part));
+      movable[it->second.first].push_back(std::move(part));
       mesh_movable[meshes.size()] = true;
     }
     meshes.push_back(g);

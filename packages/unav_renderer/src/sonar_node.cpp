@@ -1,5 +1,6 @@
 #include "sonar_node.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <optional>
@@ -50,8 +51,10 @@ SonarNode::SonarNode(const unav::NodeOptions& options) : Node("sonar", options, 
   prm.sonars_config = unav::common::resource_or_empty("config/sensors/bluerov2_sonars.yaml");
   declare_params(&prm);
   std::optional<World> scenario_world;
+  std::optional<unav::scene::Scenario> scenario;
   if (prm.scenario.given()) {  // the sonar's part of the scenario
-    const unav::scene::Scenario sc = prm.scenario.load();
+    scenario = prm.scenario.load();
+    const unav::scene::Scenario& sc = *scenario;
     scenario_world = unav::scene::scenario_world(sc);
     if (sc.sonars.names.empty())
       throw unav::ConfigError(prm.scenario.file, "sonars.names", "[]",
@@ -79,6 +82,12 @@ SonarNode::SonarNode(const unav::NodeOptions& options) : Node("sonar", options, 
   } catch (const std::exception& e) {
     throw unav::ConfigError(e.what());  // world/sonar/water errors name the file and key
   }
+  std::vector<std::string> others;  // the other vehicles of the scenario, drawn (fleet_bodies)
+  if (scenario) {
+    const std::string& ns = get_namespace();
+    others = add_fleet_bodies(*scenario, prm.fleet, ns.substr(ns.rfind('/') + 1), &world);
+  }
+  lockstep_ = prm.lockstep.enabled;
   SonarOptions so;
   so.noise = prm.noise;
   so.seed = static_cast<std::uint64_t>(prm.seed);
@@ -107,6 +116,16 @@ SonarNode::SonarNode(const unav::NodeOptions& options) : Node("sonar", options, 
   odom_sub_ = create_subscription<nav_msgs::msg::Odometry>("ground_truth/odom", unav::QoS::reliable(),
                                                            [this](const nav_msgs::msg::Odometry& m) { on_odom(m); });
   if (prm.lockstep.enabled) acker_ = std::make_unique<unav::lockstep::Acker>(*this, prm.lockstep.name);
+  if (!others.empty())
+    fleet_ = std::make_unique<FleetPoses>(
+        *this, others, [this](const std::string& n, const Pose& X) { sonar_->set_object_pose(n, X); },
+        [this] {
+          if (!deferred_ || fleet_->behind(unav::nanoseconds(deferred_->second))) return;
+          const auto d = *deferred_;
+          deferred_.reset();
+          ping_state(d.first, d.second);
+        },
+        &rejections_);
   // Sonar mounts, latched, in marine_acoustic_msgs' frame (z forward, x up).
   tf_static_pub_ = create_publisher<tf2_msgs::msg::TFMessage>("/tf_static", unav::QoS::static_latched());
   tf2_msgs::msg::TFMessage mounts;
@@ -134,12 +153,24 @@ void SonarNode::on_odom(const nav_msgs::msg::Odometry& odom) {
   const double t = unav::seconds(odom.header());
   const double eps = 1e-6;  // stamps are integer nanoseconds
   const Pose X_WB = unav::from_msg(odom.pose().pose());
+  const bool due = std::any_of(ports_.begin(), ports_.end(), [&](const Ports& p) { return t + eps >= p.next_t; });
+  // Lockstep: the other vehicles as they are at this stamp (their states come in beside ours).
+  if (due && lockstep_ && fleet_ && fleet_->behind(unav::nanoseconds(odom.header()))) {
+    deferred_.emplace(X_WB, odom.header());  // pinged and acked once they are here
+    return;
+  }
+  ping_state(X_WB, odom.header());
+}
+
+void SonarNode::ping_state(const Pose& X_WB, const std_msgs::msg::Header& header) {
+  const double t = unav::seconds(header);
+  const double eps = 1e-6;  // stamps are integer nanoseconds
   for (auto& p : ports_) {
     if (t + eps < p.next_t) continue;
-    publish_ping(p, sonar_->ping(X_WB, p.name, t), odom.header());
+    publish_ping(p, sonar_->ping(X_WB, p.name, t), header);
     p.next_t = (std::floor((t + eps) / p.period) + 1.0) * p.period;  // next multiple: no drift
   }
-  if (acker_) acker_->ack(odom.header());
+  if (acker_) acker_->ack(header);
 }
 
 void SonarNode::publish_profile(Ports& p, const SonarPing& ping, double detection_db, const std_msgs::msg::Header& h) {

@@ -24,7 +24,9 @@
 #pragma once
 
 #include <memory>
+#include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "marine_acoustic_msgs/msg/projected_sonar_image.hpp"
@@ -34,6 +36,7 @@
 #include "sensor_msgs/msg/point_cloud2.hpp"
 #include "sensor_msgs/msg/point_field.hpp"
 #include "tf2_msgs/msg/tf_message.hpp"
+#include "fleet_bodies.hpp"
 #include "unav_common/config.hpp"
 #include "unav_renderer/sonar_renderer.hpp"
 #include "unav_runtime/lockstep_ack.hpp"
@@ -57,6 +60,7 @@ struct SonarNodeParams {
   int fan_width = 512;
   int waterfall_lines = 400;
   std::string body_frame = "base_link_frd";
+  FleetBodyParams fleet;  ///< the scenario's other vehicles, drawn
 
   template <class Archive>
   void Serialize(Archive* a) {
@@ -73,6 +77,7 @@ struct SonarNodeParams {
     a->Visit(Field("fan_width", &fan_width).Range(0, 4096).Unit("px").Doc("FLS fan image width; 0 = no fan image"));
     a->Visit(Field("waterfall_lines", &waterfall_lines).Range(0, 10000).Doc("side-scan waterfall height; 0 = none"));
     a->Visit(Field("body_frame", &body_frame).Doc("vehicle body frame (tf parent of the sonars)"));
+    fleet.Serialize(a);
   }
 };
 
@@ -81,6 +86,8 @@ class SonarNode : public unav::Node {
   explicit SonarNode(const unav::NodeOptions& options);
   ~SonarNode() override;
   std::uint64_t pings_published() const { return pings_; }
+  /// Other vehicles' states taken (fleet_bodies).
+  std::uint64_t fleet_states() const { return fleet_ ? fleet_->states() : 0; }
 
  private:
   struct Ports {
@@ -95,6 +102,8 @@ class SonarNode : public unav::Node {
     std::unique_ptr<Waterfall> waterfall;
   };
   void on_odom(const nav_msgs::msg::Odometry& odom);
+  /// The pings due at this state, published, then the state acked.
+  void ping_state(const scene::Pose& X_WB, const std_msgs::msg::Header& header);
   void publish_ping(Ports& p, const SonarPing& ping, const std_msgs::msg::Header& header);
   void publish_profile(Ports& p, const SonarPing& ping, double detection_db, const std_msgs::msg::Header& h);
 
@@ -106,6 +115,10 @@ class SonarNode : public unav::Node {
   std::unique_ptr<unav::lockstep::Acker> acker_;
   unav::RejectionCounter rejections_{logger()};  // ground_truth/odom with NaN/Inf or a non-rotation
   std::shared_ptr<unav::Publisher<tf2_msgs::msg::TFMessage>> tf_static_pub_;
+  std::unique_ptr<FleetPoses> fleet_;  // the other vehicles drawn
+  bool lockstep_ = false;
+  /// Lockstep: a state whose pings wait for the other vehicles' states of its stamp.
+  std::optional<std::pair<scene::Pose, std_msgs::msg::Header>> deferred_;
 };
 
 }  // namespace unav::renderer

@@ -155,6 +155,7 @@ struct SonarRenderer::Impl {
   SonarOptions options;
   std::vector<SonarState> sonars;
   std::vector<GpuMesh> meshes;
+  std::map<std::string, std::vector<unav::scene::MovableMesh>> movable;  // by object name
   gl::Program program;
   std::uint64_t sequence = 0;
   SonarTimings timings;
@@ -186,6 +187,7 @@ struct SonarRenderer::Impl {
       glBindVertexArray(0);
       meshes.push_back(g);
     }
+    movable = unav::scene::movable_meshes(w, geo);
     gl::check_gl("sonar geometry upload");
   }
 
@@ -417,6 +419,28 @@ void SonarRenderer::set_world(World world) {
   impl_->release_meshes();
   impl_->world = std::move(world);
   impl_->upload(impl_->world);
+}
+
+void SonarRenderer::set_object_pose(const std::string& name, const Pose& X_WO) {
+  const auto it = impl_->movable.find(name);
+  if (it == impl_->movable.end())
+    throw ConfigError("SonarRenderer::set_object_pose", "name", name,
+                      "no movable object of that name in world '" + impl_->world.name + "'");
+  if (!X_WO.matrix().allFinite())
+    throw ConfigError("SonarRenderer::set_object_pose", name, "non-finite pose", "the pose must be finite");
+  impl_->ctx->make_current();
+  for (const unav::scene::MovableMesh& part : it->second) {
+    unav::scene::MeshData m = part.local;
+    m.transform(X_WO);
+    const GpuMesh& g = impl_->meshes[part.mesh];
+    const std::vector<float>* attrs[2] = {&m.positions, &m.normals};
+    for (int a = 0; a < 2; ++a) {
+      glBindBuffer(GL_ARRAY_BUFFER, g.vbo[a]);
+      glBufferSubData(GL_ARRAY_BUFFER, 0, static_cast<GLsizeiptr>(attrs[a]->size() * sizeof(float)), attrs[a]->data());
+    }
+  }
+  glBindBuffer(GL_ARRAY_BUFFER, 0);
+  gl::check_gl("moving an object");
 }
 
 void SonarRenderer::set_next_sequence(std::uint64_t sequence) { impl_->sequence = sequence; }

@@ -103,25 +103,9 @@ UnderwaterRendererNode::UnderwaterRendererNode(const unav::NodeOptions& options)
       cams = std::move(picked);
     }
     if (!scenario_world && !water.empty()) world.water = load_water_spec(water);
-    if (scenario && prm.fleet_bodies) {
-      const scene::Scenario& sc = *scenario;
+    if (scenario) {
       const std::string& ns = get_namespace();
-      const std::string own = ns.substr(ns.rfind('/') + 1);
-      auto add_body = [&](const std::string& name, const scene::ScenarioVehicle& v) {
-        if (name == own) return;
-        Object body;
-        body.name = name;
-        body.shape = "box";
-        body.size_m = prm.fleet_body_size_m;
-        body.X_WO = pose_from_xyz_rpy(v.initial_position, v.initial_rpy_deg * M_PI / 180.0);
-        body.seg_class = SegClass::kVehicle;
-        body.material.albedo = prm.fleet_body_albedo;
-        body.movable = true;
-        world.objects.push_back(body);
-        others.push_back(name);
-      };
-      if (!sc.fleet.empty()) add_body(prm.primary_name, sc.vehicle);
-      for (const auto& f : sc.fleet) add_body(f.name, f.vehicle);
+      others = add_fleet_bodies(*scenario, prm.fleet, ns.substr(ns.rfind('/') + 1), &world);
     }
   } catch (const std::exception& e) {
     throw unav::ConfigError(e.what());  // world/camera/water errors name the file and key
@@ -136,12 +120,10 @@ UnderwaterRendererNode::UnderwaterRendererNode(const unav::NodeOptions& options)
   odom_sub_ = create_subscription<nav_msgs::msg::Odometry>("ground_truth/odom", unav::QoS::reliable(),
                                                            [this](const nav_msgs::msg::Odometry& m) { on_odom(m); });
   if (lockstep_) acker_ = std::make_unique<unav::lockstep::Acker>(*this, ack_name_);  // answers every state
-  for (std::size_t i = 0; i < others.size(); ++i) {
-    fleet_.push_back({others[i], INT64_MIN, nullptr});
-    fleet_.back().sub = create_subscription<nav_msgs::msg::Odometry>(
-        "/" + others[i] + "/ground_truth/odom", unav::QoS::reliable(),
-        [this, i](const nav_msgs::msg::Odometry& m) { on_fleet_odom(i, m); });
-  }
+  if (!others.empty())
+    fleet_ = std::make_unique<FleetPoses>(
+        *this, others, [this](const std::string& n, const Pose& X) { renderer_->set_object_pose(n, X); },
+        [this] { on_fleet_state(); }, &rejections_);
   // Free-running, frames finish between odometry messages: 2 ms polls publish them (and the next
   // odometry does too).
   if (!lockstep_) poll_timer_ = create_wall_timer(std::chrono::milliseconds(2), [this] { publish_rendered(false); });
@@ -230,10 +212,7 @@ void UnderwaterRendererNode::on_odom(const nav_msgs::msg::Odometry& odom) {
     velocity.angular = unav::from_msg(odom.twist().twist().angular());
     const Pose X_WB = unav::from_msg(odom.pose().pose());
     // Lockstep: the other vehicles as they are at this stamp (their states come in beside ours).
-    const bool behind = lockstep_ && std::any_of(fleet_.begin(), fleet_.end(), [&](const FleetBody& b) {
-                          return b.stamp_ns != INT64_MIN && b.stamp_ns < t_ns;
-                        });
-    if (behind) {
+    if (lockstep_ && fleet_ && fleet_->behind(t_ns)) {
       deferred_ = Deferred{X_WB, velocity, odom.header()};  // rendered and acked by on_fleet_odom()
       return;
     }
@@ -255,19 +234,8 @@ void UnderwaterRendererNode::render_state(const Pose& X_WB, const BodyVelocity& 
   if (acker_) acker_->ack(header);
 }
 
-void UnderwaterRendererNode::on_fleet_odom(std::size_t i, const nav_msgs::msg::Odometry& odom) {
-  FleetBody& b = fleet_[i];
-  if (const std::string why = unav::odometry_problem(odom); !why.empty()) {
-    rejections_.reject(b.sub->topic_name(), why);
-    return;
-  }
-  renderer_->set_object_pose(b.name, unav::from_msg(odom.pose().pose()));
-  b.stamp_ns = std::max(b.stamp_ns, unav::nanoseconds(odom.header()));
-  ++fleet_states_;
-  if (!deferred_) return;
-  const std::int64_t t_ns = unav::nanoseconds(deferred_->header);
-  for (const FleetBody& o : fleet_)
-    if (o.stamp_ns != INT64_MIN && o.stamp_ns < t_ns) return;  // still waiting for another
+void UnderwaterRendererNode::on_fleet_state() {
+  if (!deferred_ || fleet_->behind(unav::nanoseconds(deferred_->header))) return;  // (still) waiting for another
   const Deferred d = *deferred_;
   deferred_.reset();
   render_state(d.X_WB, d.velocity, d.header);

@@ -38,6 +38,7 @@
 #include "sensor_msgs/msg/image.hpp"
 #include "tf2_msgs/msg/tf_message.hpp"
 #include "unav_common/config.hpp"
+#include "fleet_bodies.hpp"
 #include "unav_renderer/renderer.hpp"
 #include "unav_renderer/renderer_pool.hpp"
 #include "unav_runtime/lockstep_ack.hpp"
@@ -65,10 +66,7 @@ struct UnderwaterRendererParams {
   int64_t seed = 1;
   std::string body_frame = "base_link_frd";
   int64_t render_workers = 2;
-  bool fleet_bodies = true;
-  std::string primary_name = "rov";
-  Eigen::Vector3d fleet_body_size_m{0.457, 0.575, 0.254};
-  Eigen::Vector3d fleet_body_albedo{0.12, 0.12, 0.14};
+  FleetBodyParams fleet;  ///< the scenario's other vehicles, drawn
 
   template <class Archive>
   void Serialize(Archive* a) {
@@ -90,16 +88,7 @@ struct UnderwaterRendererParams {
                  .Doc("renderers at once, one EGL context and thread each (RendererPool): a frame's cameras "
                       "render in parallel; free-running, successive frames too (lockstep: at most one per "
                       "camera)"));
-    a->Visit(Field("fleet_bodies", &fleet_bodies)
-                 .Doc("draw the scenario's other vehicles (its fleet, and the primary vehicle for a fleet vehicle's "
-                      "renderer) as boxes of fleet_body_size_m at their /<name>/ground_truth/odom poses (class vehicle)"));
-    a->Visit(Field("primary_name", &primary_name).Doc("namespace of the scenario's primary vehicle"));
-    a->Visit(Field("fleet_body_size_m", &fleet_body_size_m)
-                 .Above(0.0)
-                 .Max(100.0)
-                 .Unit("m")
-                 .Doc("length, width, height of a drawn vehicle (BlueROV2 Heavy's frame)"));
-    a->Visit(Field("fleet_body_albedo", &fleet_body_albedo).Range(0.0, 1.0).Doc("its colour (linear RGB)"));
+    fleet.Serialize(a);
   }
 };
 
@@ -114,7 +103,7 @@ class UnderwaterRendererNode : public unav::Node {
   /// render_workers / cameras (at least 1).
   std::size_t max_frames_in_flight() const { return max_in_flight_; }
   /// Other vehicles' states taken (fleet_bodies).
-  std::uint64_t fleet_states() const { return fleet_states_; }
+  std::uint64_t fleet_states() const { return fleet_ ? fleet_->states() : 0; }
   /// The most frame instants that were in flight at once so far.
   std::size_t peak_frames_in_flight() const { return peak_in_flight_; }
 
@@ -132,8 +121,8 @@ class UnderwaterRendererNode : public unav::Node {
     std::size_t published = 0;
   };
   void on_odom(const nav_msgs::msg::Odometry& odom);
-  /// Another vehicle's ground truth: its body moves there; a frame waiting for it goes out.
-  void on_fleet_odom(std::size_t i, const nav_msgs::msg::Odometry& odom);
+  /// After another vehicle's state: a frame that waited for it goes out.
+  void on_fleet_state();
   /// Renders the frame instant of this state (lockstep: published), then acks it.
   void render_state(const Pose& X_WB, const BodyVelocity& velocity, const std_msgs::msg::dds_::Header_& header);
   void submit(const Pose& X_WB, const BodyVelocity& velocity, const std_msgs::msg::dds_::Header_& header);
@@ -162,14 +151,7 @@ class UnderwaterRendererNode : public unav::Node {
   std::unique_ptr<unav::lockstep::Acker> acker_;
   unav::RejectionCounter rejections_{logger()};  // ground_truth/odom with NaN/Inf or a non-rotation
   std::shared_ptr<unav::Publisher<tf2_msgs::msg::TFMessage>> tf_static_pub_;
-  /// The other vehicles drawn (fleet_bodies): their odometry's latest stamp (INT64_MIN: none yet).
-  struct FleetBody {
-    std::string name;
-    std::int64_t stamp_ns = INT64_MIN;
-    std::shared_ptr<unav::Subscription<nav_msgs::msg::Odometry>> sub;
-  };
-  std::vector<FleetBody> fleet_;
-  std::uint64_t fleet_states_ = 0;
+  std::unique_ptr<FleetPoses> fleet_;  // the other vehicles drawn
   /// Lockstep: a frame instant waiting for another vehicle's state of the same stamp (the server
   /// publishes every vehicle's before its barrier; a vehicle not heard yet is drawn where it starts).
   struct Deferred {

@@ -395,3 +395,33 @@ TEST(Sonar, BadConfigIsAClearError) {
   m = fls(10, 100, 60.0, 10.0, 0.5, 5.0);
   EXPECT_THROW(SonarRenderer(flat_world(10.0), {m, m}, exact()), ConfigError);  // duplicate name
 }
+
+TEST(Sonar, MovedObjectEchoesAsIfPlacedThere) {
+  // Another vehicle (a movable box) moved into the fan gives the ping a world built with it there
+  // gives (noise off: every bin the same), and its echo and shadow leave with it when it moves out.
+  SonarModel m = fls(64, 200, 60.0, 20.0, 0.5, 15.0);
+  auto world_with = [](const Pose& at, bool movable) {
+    World w = flat_world(10.0);
+    Object body;
+    body.name = "rov2";
+    body.shape = "box";
+    body.size_m = {0.457, 0.575, 0.254};
+    body.X_WO = at;
+    body.seg_class = SegClass::kVehicle;
+    body.movable = movable;
+    w.objects.push_back(body);
+    return w;
+  };
+  const Pose away = pose_from_xyz_rpy({-30.0, 0.0, 9.0}, {0.0, 0.0, 0.0});
+  const Pose ahead = pose_from_xyz_rpy({5.0, 0.5, 9.0}, {0.0, 0.0, 0.4});
+  SonarRenderer sr(world_with(away, true), {m}, exact());
+  const SonarPing empty = sr.ping(body_at({0.0, 0.0, 8.5}), "fls");
+  sr.set_object_pose("rov2", ahead);
+  const SonarPing seen = sr.ping(body_at({0.0, 0.0, 8.5}), "fls");
+  SonarRenderer placed(world_with(ahead, false), {m}, exact());
+  EXPECT_EQ(seen.intensity, placed.ping(body_at({0.0, 0.0, 8.5}), "fls").intensity);
+  EXPECT_NE(seen.intensity, empty.intensity);
+  sr.set_object_pose("rov2", away);
+  EXPECT_EQ(sr.ping(body_at({0.0, 0.0, 8.5}), "fls").intensity, empty.intensity);
+  EXPECT_THROW(sr.set_object_pose("rov3", ahead), ConfigError);
+}

@@ -206,3 +206,60 @@ TEST(SonarNode, ProfilerPublishesAPointCloudAcrossTrack) {
   }
   EXPECT_NEAR(nearest, 2.9, 0.25);  // 3 m less the 0.1 m mount, +- the relief
 }
+
+TEST(SonarNode, RangesTheOtherVehiclesWhereTheyAre) {
+  // A scenario with a fleet vehicle (rov2): the primary's sonar (/rov) draws it as a box at its
+  // ground-truth pose. A profiler looking down from 7.1 m (mount 0.1 m under the body at 7.0 m)
+  // ranges the seabed at ~2.9 m; with rov2 centred 1.5 m under the body, its top face (0.127 m
+  // above its centre) is the nearest return: 8.5 - 0.127 - 7.1 = 1.273 m (bins of 4.6 cm).
+  const std::string sonars = ::testing::TempDir() + "node_fleet_profiler.yaml";
+  std::ofstream(sonars)
+      << "sonars:\n  - name: prof\n    type: profiling\n    beams: 48\n    bins: 256\n"
+         "    horizontal_aperture_deg: 90\n    vertical_aperture_deg: 3\n    min_range_m: 0.3\n"
+         "    max_range_m: 12\n    ping_rate_hz: 10\n    mount: {xyz_m: [0, 0, 0.1], rpy_deg: [0, -90, 0]}\n";
+  const std::string scenario = ::testing::TempDir() + "sonar_fleet_scenario.yaml";
+  std::ofstream(scenario) << "world: " << UNAV_REPO_ROOT << "/worlds/pipe_inspection/world.yaml\n"
+                          << "sonars: {config: " << sonars << ", names: [prof]}\n"
+                          << "fleet: [{name: rov2, initial_position: [40.0, 40.0, 9.0]}]\n";
+  unav::testing::NodeUnderTest<unav::renderer::SonarNode> fx(
+      "sonar", {"--ros-args", "-p", "scenario:=" + scenario, "-p", "lockstep:=true", "-p", "noise:=false"});
+  unav::renderer::SonarNode& node = *fx.node;
+  unav::Node& probe = fx.probe;
+  auto odom_pub = probe.create_publisher<nav_msgs::msg::Odometry>("/rov/ground_truth/odom", unav::QoS::reliable());
+  auto other_pub = probe.create_publisher<nav_msgs::msg::Odometry>("/rov2/ground_truth/odom", unav::QoS::reliable());
+  std::vector<sensor_msgs::msg::PointCloud2> clouds;
+  auto sub = probe.create_subscription<sensor_msgs::msg::PointCloud2>(
+      "/rov/sonar/prof/points", unav::QoS::reliable(),
+      [&](const sensor_msgs::msg::PointCloud2& m) { clouds.push_back(m); });
+  ASSERT_TRUE(fx.match({make_link(*odom_pub, node), make_link(*other_pub, node), make_link(node, *sub)}));
+  auto state = [](double t, double depth) {
+    nav_msgs::msg::Odometry o;
+    const unav::Time s{std::llround(t * 1e9)};
+    o.header().stamp().sec(s.sec());
+    o.header().stamp().nanosec(s.nanosec());
+    o.pose().pose().position().x(3.0);
+    o.pose().pose().position().y(5.0);
+    o.pose().pose().position().z(depth);
+    return o;
+  };
+  auto nearest = [](const sensor_msgs::msg::PointCloud2& c) {
+    double n = 1e9;
+    for (std::uint32_t i = 0; i < c.width(); ++i) {
+      float v[4];
+      std::memcpy(v, c.data().data() + (std::size_t{16} * i), sizeof(v));
+      n = std::min(n, std::hypot(static_cast<double>(v[1]), static_cast<double>(v[2])));
+    }
+    return n;
+  };
+  odom_pub->publish(state(1.0, 7.0));  // rov2 not heard yet: where the scenario starts it, far away
+  ASSERT_TRUE(fx.spin_until([&] { return clouds.size() == 1; }));
+  other_pub->publish(state(1.0, 8.5));  // then under the profiler
+  ASSERT_TRUE(fx.spin_until([&] { return node.fleet_states() == 1; }));
+  odom_pub->publish(state(1.1, 7.0));  // ours first: the ping waits for rov2's 1.1 s state
+  other_pub->publish(state(1.1, 8.5));
+  ASSERT_TRUE(fx.spin_until([&] { return clouds.size() == 2; }));
+  std::printf("profiler: nearest return %.3f m without rov2, %.3f m with it below\n", nearest(clouds[0]),
+              nearest(clouds[1]));
+  EXPECT_NEAR(nearest(clouds[0]), 2.9, 0.25);
+  EXPECT_NEAR(nearest(clouds[1]), 1.273, 0.05);
+}

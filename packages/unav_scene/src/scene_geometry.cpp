@@ -44,6 +44,17 @@ void MeshData::append(const MeshData& o) {
   for (auto i : o.indices) indices.push_back(base + i);
 }
 
+std::map<std::string, std::vector<MovableMesh>> movable_meshes(const World& world, const SceneGeometry& geo) {
+  std::map<std::string, std::vector<MovableMesh>> out;
+  for (const Object& o : world.objects) {
+    if (!o.movable) continue;
+    const std::string key = "object:" + o.name;  // build_scene_geometry's name of its meshes
+    for (std::size_t i = 0; i < geo.meshes.size(); ++i)
+      if (geo.meshes[i].name == key) out[o.name].push_back({i, geo.meshes[i].object_frame});
+  }
+  return out;
+}
+
 std::size_t SceneGeometry::triangle_count() const {
   std::size_t n = 0;
   for (const auto& m : meshes) n += m.mesh.triangle_count();
@@ -616,7 +627,7 @@ void write_obj(const MeshData& m, const std::string& path) {
 SceneGeometry build_scene_geometry(const World& w) {
   SceneGeometry g;
   if (w.seabed.enabled) {
-    g.meshes.push_back({"seabed", make_seabed_mesh(w.seabed), SegClass::kSeabed, w.seabed.material, false, {}, {}});
+    g.meshes.push_back({"seabed", make_seabed_mesh(w.seabed), SegClass::kSeabed, w.seabed.material, false, {}, {}, {}});
   }
   for (const auto& p : w.pipelines)
     g.meshes.push_back({"pipeline:" + p.name,
@@ -624,6 +635,7 @@ SceneGeometry build_scene_geometry(const World& w) {
                         SegClass::kPipeline,
                         p.material,
                         false,
+                        {},
                         {},
                         {}});
   // Rocks sharing a material are merged into one draw.
@@ -637,7 +649,7 @@ SceneGeometry build_scene_geometry(const World& w) {
     for (auto& gm : rock_groups)
       if (same_look(gm.material, r.material)) grp = &gm;
     if (!grp) {
-      rock_groups.push_back({"rocks", {}, SegClass::kRock, r.material, true, {}, {}});
+      rock_groups.push_back({"rocks", {}, SegClass::kRock, r.material, true, {}, {}, {}});
       grp = &rock_groups.back();
     }
     const auto base = static_cast<std::uint32_t>(grp->mesh.vertex_count());
@@ -657,7 +669,7 @@ SceneGeometry build_scene_geometry(const World& w) {
     far.hm_width = far.hm_height = 0;
     far.hm_values.clear();
     far.depth_m = w.seabed.depth_m + w.seabed.relief_amplitude_m + 0.2;
-    g.meshes.push_back({"seabed_far", make_seabed_mesh(far), SegClass::kSeabed, w.seabed.material, false, {}, {}});
+    g.meshes.push_back({"seabed_far", make_seabed_mesh(far), SegClass::kSeabed, w.seabed.material, false, {}, {}, {}});
   }
   for (const auto& o : w.objects) {
     MeshData m;
@@ -669,9 +681,15 @@ SceneGeometry build_scene_geometry(const World& w) {
         throw ConfigError(w.file + ": object '" + o.name + "': " + e.what());
       }
       for (MeshPart& p : parts) {  // parts with maps by their UVs, the rest triplanar
+        MeshData local;
+        if (o.movable) {
+          local = p.mesh;
+          local.transform(Pose::Identity(), o.scale);
+        }
         p.mesh.transform(o.X_WO, o.scale);
         const bool triplanar = !p.maps.any();
-        g.meshes.push_back({"object:" + o.name, std::move(p.mesh), o.seg_class, o.material, triplanar, p.maps, {}});
+        g.meshes.push_back(
+            {"object:" + o.name, std::move(p.mesh), o.seg_class, o.material, triplanar, p.maps, {}, std::move(local)});
       }
       continue;
     } else if (o.shape == "box") {
@@ -681,8 +699,14 @@ SceneGeometry build_scene_geometry(const World& w) {
     } else {
       m = make_plane_mesh(o.size_m.x(), o.size_m.y());
     }
+    MeshData local;
+    if (o.movable) {
+      local = m;
+      local.transform(Pose::Identity(), o.scale);
+    }
     m.transform(o.X_WO, o.scale);
-    g.meshes.push_back({"object:" + o.name, std::move(m), o.seg_class, o.material, o.shape != "plane", {}, {}});
+    g.meshes.push_back(
+        {"object:" + o.name, std::move(m), o.seg_class, o.material, o.shape != "plane", {}, {}, std::move(local)});
   }
   return g;
 }

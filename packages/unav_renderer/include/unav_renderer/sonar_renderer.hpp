@@ -80,6 +80,9 @@ class SonarRenderer {
   SonarPing ping(const unav::scene::Pose& X_WB, const std::string& name, double stamp_s = 0.0);
 
   void set_world(unav::scene::World world);  ///< new scene, same sonars and context
+  /// Moves the world's movable object `name` (Object::movable: another vehicle) to X_WO for the
+  /// pings from now on. ConfigError naming it when there is none of that name or X_WO is not finite.
+  void set_object_pose(const std::string& name, const unav::scene::Pose& X_WO);
   void set_next_sequence(std::uint64_t sequence);
   const unav::scene::SonarModel& sonar(const std::string& name) const;
   std::vector<std::string> sonar_names() const;

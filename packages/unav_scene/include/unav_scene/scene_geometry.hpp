@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cstdint>
+#include <map>
 #include <memory>
 #include <string>
 #include <vector>
@@ -72,6 +73,9 @@ struct SceneMesh {
   /// Parts drawn at levels of detail (rocks); empty: the mesh is drawn whole. When present,
   /// mesh.indices is their finest levels, in order.
   std::vector<LodPart> lod_parts;
+  /// A movable object's mesh in the object's frame (its scale applied), as `mesh` is before its
+  /// pose; empty for everything else.
+  MeshData object_frame;
 };
 
 /// A mesh file's triangles grouped by their maps: one part per material with maps of its own
@@ -93,6 +97,16 @@ struct SceneGeometry {
 /// Build every mesh of the world. Mesh files are loaded here; a missing or unreadable file
 /// throws ConfigError naming the file (and the world object).
 SceneGeometry build_scene_geometry(const World& world);
+
+/// A mesh of a movable object (Object::movable): its index in SceneGeometry::meshes and its
+/// vertices and normals in the object's frame (the object's pose taken out, its scale kept), for
+/// renderers that redraw it at another pose (MeshData::transform).
+struct MovableMesh {
+  std::size_t mesh = 0;
+  MeshData local;
+};
+/// The movable objects' meshes of `geo` (built from `world`), by object name.
+std::map<std::string, std::vector<MovableMesh>> movable_meshes(const World& world, const SceneGeometry& geo);
 
 /// Load all meshes of a file with assimp (OBJ, PLY, glTF/GLB, FBX, ...), merged, triangulated,
 /// with smooth normals. Throws ConfigError naming the file and assimp's reason.

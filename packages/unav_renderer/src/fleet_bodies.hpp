@@ -1,0 +1,72 @@
+// The other vehicles of a scenario as a vehicle's renderer or sonar draws them (node side): a
+// movable box each (class vehicle) in the world, moved to its ground-truth pose as it comes.
+#pragma once
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "nav_msgs/msg/odometry.hpp"
+#include "unav_common/config.hpp"
+#include "unav_runtime/runtime.hpp"
+#include "unav_runtime/validation.hpp"
+#include "unav_scene/scenario.hpp"
+#include "unav_scene/world.hpp"
+
+namespace unav::renderer {
+
+/// Parameters of a node that draws the other vehicles (embedded: `fleet.Serialize(a)`, the keys at
+/// the node's level).
+struct FleetBodyParams {
+  bool fleet_bodies = true;
+  std::string primary_name = "rov";
+  Eigen::Vector3d fleet_body_size_m{0.457, 0.575, 0.254};
+  Eigen::Vector3d fleet_body_albedo{0.12, 0.12, 0.14};
+
+  template <class Archive>
+  void Serialize(Archive* a) {
+    using unav::common::Field;
+    a->Visit(Field("fleet_bodies", &fleet_bodies)
+                 .Doc("draw the scenario's other vehicles (its fleet, and the primary vehicle for a fleet vehicle's "
+                      "node) as boxes of fleet_body_size_m at their /<name>/ground_truth/odom poses (class vehicle)"));
+    a->Visit(Field("primary_name", &primary_name).Doc("namespace of the scenario's primary vehicle"));
+    a->Visit(Field("fleet_body_size_m", &fleet_body_size_m)
+                 .Above(0.0)
+                 .Max(100.0)
+                 .Unit("m")
+                 .Doc("length, width, height of a drawn vehicle (BlueROV2 Heavy's frame)"));
+    a->Visit(Field("fleet_body_albedo", &fleet_body_albedo).Range(0.0, 1.0).Doc("its colour (linear RGB)"));
+  }
+};
+
+/// Adds to `world` a movable box (class vehicle) for every vehicle of `sc` but `own` (the last part
+/// of the node's namespace): the fleet's, and the primary's (named p.primary_name) when there is a
+/// fleet, each where the scenario starts it. Their names; none when p.fleet_bodies is off.
+std::vector<std::string> add_fleet_bodies(const scene::Scenario& sc, const FleetBodyParams& p, const std::string& own,
+                                          scene::World* world);
+
+/// The other vehicles' ground truth (/<name>/ground_truth/odom): each state moves its body
+/// (`move`), then `on_state` runs. behind(t): a vehicle heard before has no state at t yet (in
+/// lockstep the server publishes every vehicle's state before its barrier: a frame at t waits).
+class FleetPoses {
+ public:
+  FleetPoses(unav::Node& node, const std::vector<std::string>& names,
+             std::function<void(const std::string&, const scene::Pose&)> move, std::function<void()> on_state,
+             unav::RejectionCounter* rejections);
+  bool behind(std::int64_t t_ns) const;
+  std::uint64_t states() const { return states_; }
+
+ private:
+  struct Body {
+    std::string name;
+    std::int64_t stamp_ns = INT64_MIN;  // the latest state's (INT64_MIN: none yet)
+    std::shared_ptr<unav::Subscription<nav_msgs::msg::Odometry>> sub;
+  };
+  std::vector<Body> bodies_;
+  std::uint64_t states_ = 0;
+};
+
+}  // namespace unav::renderer
