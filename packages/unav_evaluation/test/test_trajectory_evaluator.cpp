@@ -31,15 +31,7 @@ struct EvaluatorRun : unav::testing::NodeUnderTest<unav::evaluation::TrajectoryE
   }
 };
 
-// Odometry stamped t [s] (whole nanoseconds) at `pose`.
-nav_msgs::msg::Odometry odom(double t, const geometry_msgs::msg::Pose& pose) {
-  nav_msgs::msg::Odometry m;
-  const unav::Time s{std::llround(t * 1e9)};
-  m.header().stamp().sec(s.sec());
-  m.header().stamp().nanosec(s.nanosec());
-  m.pose().pose(pose);
-  return m;
-}
+using unav::testing::odometry_at;
 }  // namespace
 
 TEST(TrajectoryEvaluator, WritesTableTumAndPlotOnShutdown) {
@@ -67,7 +59,7 @@ TEST(TrajectoryEvaluator, WritesTableTumAndPlotOnShutdown) {
     const double t = 0.1 * i, a = 0.05 * i;
     const Eigen::Vector3d p(5 * std::sin(a), 2 * std::cos(a), 8.0 + 0.1 * std::sin(3 * a));
     const Eigen::Quaterniond q(Eigen::AngleAxisd(a, Eigen::Vector3d::UnitZ()));
-    auto msg = [&](const Eigen::Vector3d& pos, const Eigen::Quaterniond& qq) { return odom(t, unav::to_msg(pos, qq)); };
+    auto msg = [&](const Eigen::Vector3d& pos, const Eigen::Quaterniond& qq) { return odometry_at(t, pos, qq); };
     gt_pub->publish(msg(p, q));
     est_pub->publish(msg(0.3 * (R * p) + Eigen::Vector3d(1, 2, 3), Eigen::Quaterniond(R) * q));  // Sim(3) copy
     spin(2ms, [] { return false; });
@@ -135,7 +127,9 @@ void RunCombined(const std::string& out, const std::string& run, int domain, boo
     links.push_back(make_link(*tf_pub, *node));
   }
   ASSERT_TRUE(unav::testing::wait_for_match({&node_ctx, &test_ctx}, links)) << unav::testing::describe(links);
-  auto pose_msg = [](double t, const Eigen::Isometry3d& X) { return odom(t, unav::to_msg(X)); };
+  auto pose_msg = [](double t, const Eigen::Isometry3d& X) {
+    return odometry_at(t, X.translation(), Eigen::Quaterniond(X.linear()));
+  };
   const Eigen::Isometry3d G(Eigen::AngleAxisd(0.7, Eigen::Vector3d::UnitX()));
   nav_msgs::msg::Path path;
   for (int i = 0; i < 100; ++i) {
@@ -240,7 +234,7 @@ TEST(TrajectoryEvaluator, TakesPoseStampedAndTfInputs) {
     const double t = 0.1 * i, a = 0.05 * i;
     const Eigen::Vector3d p(4 * std::sin(a), 3 * std::cos(a), 9.0 + 0.2 * std::sin(2 * a));
     const Eigen::Quaterniond q(Eigen::AngleAxisd(a, Eigen::Vector3d::UnitZ()));
-    const nav_msgs::msg::Odometry gt = odom(t, unav::to_msg(p, q));
+    const nav_msgs::msg::Odometry gt = odometry_at(t, p, q);
     const Eigen::Vector3d pe = 2.0 * (R * p) + Eigen::Vector3d(-1, 0.5, 2);
     const Eigen::Quaterniond qe = Eigen::Quaterniond(R) * q;
     geometry_msgs::msg::PoseStamped ps;

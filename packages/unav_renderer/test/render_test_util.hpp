@@ -74,6 +74,18 @@ inline Eigen::Vector2d seg_centroid(const Frame& f, int id, int* count) {
   return *count > 0 ? Eigen::Vector2d(sum / *count) : sum;
 }
 
+// A vehicle-sized box (BlueROV2 Heavy's frame, 0.457 x 0.575 x 0.254 m; class vehicle) at X_WO.
+inline Object vehicle_box(const std::string& name, const Pose& X_WO, bool movable) {
+  Object o;
+  o.name = name;
+  o.shape = "box";
+  o.size_m = {0.457, 0.575, 0.254};
+  o.X_WO = X_WO;
+  o.seg_class = SegClass::kVehicle;
+  o.movable = movable;
+  return o;
+}
+
 // A level body at p_W (world_ned).
 inline Pose body_at(const Eigen::Vector3d& p_W) { return pose_from_xyz_rpy(p_W, Eigen::Vector3d::Zero()); }
 

@@ -14,10 +14,7 @@
 #include "unav_renderer/renderer.hpp"
 
 using namespace unav::renderer;
-using unav::renderer::test::body_at;
-using unav::renderer::test::empty_world;
-using unav::renderer::test::exact_options;
-using unav::renderer::test::forward_camera;
+using namespace unav::renderer::test;  // NOLINT(google-build-using-namespace): the shared test scenes
 
 namespace {
 

@@ -11,28 +11,18 @@
 #include "unav_renderer/renderer_pool.hpp"
 
 using namespace unav::renderer;
-using unav::renderer::test::body_at;
-using unav::renderer::test::empty_world;
-using unav::renderer::test::floor_object;
-using unav::renderer::test::forward_camera;
+using namespace unav::renderer::test;  // NOLINT(google-build-using-namespace): the shared test scenes
 
 namespace {
 
-// Water over a floor at 8 m, lit by the sun (shadows on), and a 0.5 x 0.6 x 0.25 m vehicle body
-// (class vehicle) at `at`, movable or not.
+// Water over a floor at 8 m, lit by the sun (shadows on), and a vehicle body at `at`, movable or
+// not.
 World scene_with_body(const Pose& at, bool movable) {
   World w = empty_world();
   w.sun.direction_W = Eigen::Vector3d(0.3, 0.2, 1.0).normalized();  // oblique: the shadow beside the body
   w.objects.push_back(floor_object(8.0, 40.0));
-  Object body;
-  body.name = "rov2";
-  body.shape = "box";
-  body.size_m = {0.5, 0.6, 0.25};
-  body.X_WO = at;
-  body.seg_class = SegClass::kVehicle;
-  body.material.albedo = {0.8, 0.7, 0.2};
-  body.movable = movable;
-  w.objects.push_back(body);
+  w.objects.push_back(vehicle_box("rov2", at, movable));
+  w.objects.back().material.albedo = {0.8, 0.7, 0.2};
   return w;
 }
 

@@ -8,9 +8,11 @@
 #include "unav_runtime/testing.hpp"
 #include "unav_scene/camera.hpp"
 #include "unav_scene/world.hpp"
+#include "node_test_util.hpp"
 #include "underwater_renderer_node.hpp"
 
 using namespace std::chrono_literals;
+using unav::renderer::test::ScenarioNode;
 using unav::testing::make_link;
 
 namespace {
@@ -48,15 +50,7 @@ struct LockstepRenderer : unav::testing::NodeUnderTest<unav::renderer::Underwate
   }
   // 2 m above the 10 m deep seabed, over the pipe's first point (north 0, east 0 of the world)
   // unless told another north.
-  void send(double t, double north = 0.0) {
-    nav_msgs::msg::Odometry o;
-    const unav::Time s{std::llround(t * 1e9)};
-    o.header().stamp().sec(s.sec());
-    o.header().stamp().nanosec(s.nanosec());
-    o.pose().pose().position().x(north);
-    o.pose().pose().position().z(8.0);
-    odom_pub->publish(o);
-  }
+  void send(double t, double north = 0.0) { odom_pub->publish(unav::testing::odometry_at(t, {north, 0.0, 8.0})); }
 };
 
 }  // namespace
@@ -208,20 +202,13 @@ TEST(UnderwaterRendererNode, TakesItsPartOfAScenario) {
   std::ofstream(scenario) << "world: " << UNAV_REPO_ROOT << "/worlds/pipe_inspection/world.yaml\nwater: 3C\n"
                           << "cameras: {config: " << small_cameras() << ", names: [down], width: 40, height: 24}\n"
                           << "render: {noise: false, marine_snow: false}\n";
-  unav::testing::NodeUnderTest<unav::renderer::UnderwaterRendererNode> fx(
-      "underwater_renderer", {"--ros-args", "-p", "scenario:=" + scenario, "-p", "lockstep:=true"});
-  unav::renderer::UnderwaterRendererNode& node = *fx.node;
-  unav::Node& probe = fx.probe;
-  auto odom_pub = probe.create_publisher<nav_msgs::msg::Odometry>("/rov/ground_truth/odom", unav::QoS::reliable());
+  ScenarioNode<unav::renderer::UnderwaterRendererNode> fx("underwater_renderer", scenario);
   std::vector<sensor_msgs::msg::Image> images;
-  auto img_sub = probe.create_subscription<sensor_msgs::msg::Image>(
+  auto img_sub = fx.probe.create_subscription<sensor_msgs::msg::Image>(
       "/rov/camera/down/image_raw", unav::QoS::reliable(),
       [&images](const sensor_msgs::msg::Image& m) { images.push_back(m); });
-  const std::vector<unav::testing::Link> links = {make_link(*odom_pub, node), make_link(node, *img_sub)};
-  ASSERT_TRUE(fx.match(links));
-  nav_msgs::msg::Odometry o;
-  o.pose().pose().position().z(8.0);
-  odom_pub->publish(o);
+  ASSERT_TRUE(fx.match({make_link(*fx.odom_pub, *fx.node), make_link(*fx.node, *img_sub)}));
+  fx.odom_pub->publish(unav::testing::odometry_at(0.0, {0.0, 0.0, 8.0}));
   ASSERT_TRUE(fx.spin_until([&] { return !images.empty(); }));
   EXPECT_EQ(images[0].width(), 40u);
   EXPECT_EQ(images[0].height(), 24u);
@@ -238,43 +225,33 @@ TEST(UnderwaterRendererNode, DrawsTheOtherVehiclesWhereTheyAre) {
                           << "cameras: {config: " << small_cameras() << ", names: [down]}\n"
                           << "render: {noise: false, marine_snow: false}\n"
                           << "fleet: [{name: rov2, initial_position: [40.0, 40.0, 9.0]}]\n";
-  unav::testing::NodeUnderTest<unav::renderer::UnderwaterRendererNode> fx(
-      "underwater_renderer", {"--ros-args", "-p", "scenario:=" + scenario, "-p", "lockstep:=true"});
+  ScenarioNode<unav::renderer::UnderwaterRendererNode> fx("underwater_renderer", scenario);
   unav::renderer::UnderwaterRendererNode& node = *fx.node;
-  unav::Node& probe = fx.probe;
-  auto odom_pub = probe.create_publisher<nav_msgs::msg::Odometry>("/rov/ground_truth/odom", unav::QoS::reliable());
-  auto other_pub = probe.create_publisher<nav_msgs::msg::Odometry>("/rov2/ground_truth/odom", unav::QoS::reliable());
+  auto& odom_pub = fx.odom_pub;
+  auto& other_pub = fx.other_pub;
   std::vector<sensor_msgs::msg::Image> seg;
-  auto seg_sub = probe.create_subscription<sensor_msgs::msg::Image>(
+  auto seg_sub = fx.probe.create_subscription<sensor_msgs::msg::Image>(
       "/rov/camera/down/segmentation/image_raw", unav::QoS::reliable(),
       [&seg](const sensor_msgs::msg::Image& m) { seg.push_back(m); });
   const auto own_link = make_link(*odom_pub, node);
   ASSERT_TRUE(fx.match({own_link, make_link(*other_pub, node), make_link(node, *seg_sub)}));
-  auto state = [](double t, double north, double depth) {
-    nav_msgs::msg::Odometry o;
-    const unav::Time s{std::llround(t * 1e9)};
-    o.header().stamp().sec(s.sec());
-    o.header().stamp().nanosec(s.nanosec());
-    o.pose().pose().position().x(north);
-    o.pose().pose().position().z(depth);
-    return o;
-  };
+  using unav::testing::odometry_at;
   auto vehicle_pixels = [](const sensor_msgs::msg::Image& m) {
     int n = 0;
     for (auto v : m.data()) n += v == static_cast<std::uint8_t>(unav::scene::SegClass::kVehicle) ? 1 : 0;
     return n;
   };
   auto centre = [](const sensor_msgs::msg::Image& m) { return m.data()[(m.height() / 2) * m.step() + m.width() / 2]; };
-  other_pub->publish(state(0.0, 40.0, 9.0));  // rov2 out of view
+  other_pub->publish(odometry_at(0.0, {40.0, 0.0, 9.0}));  // rov2 out of view
   ASSERT_TRUE(fx.spin_until([&] { return node.fleet_states() == 1; }));
-  odom_pub->publish(state(0.0, 0.0, 8.0));
+  odom_pub->publish(odometry_at(0.0, {0.0, 0.0, 8.0}));
   ASSERT_TRUE(fx.spin_until([&] { return seg.size() == 1; }));
   EXPECT_EQ(vehicle_pixels(seg[0]), 0);
-  odom_pub->publish(state(0.1, 0.0, 8.0));  // ours first: the frame waits for rov2's 0.1 s state
+  odom_pub->publish(odometry_at(0.1, {0.0, 0.0, 8.0}));  // ours first: the frame waits for rov2's 0.1 s state
   ASSERT_TRUE(fx.spin_until([&] { return unav::testing::delivered(own_link); }));  // the node took it
   fx.spin_for(50ms);  // (and would have published by now: a frame of 80 x 48 takes a few ms)
   EXPECT_EQ(seg.size(), 1u) << "a frame went out before the other vehicle's state of its stamp";
-  other_pub->publish(state(0.1, 0.0, 9.0));  // 1 m under the camera
+  other_pub->publish(odometry_at(0.1, {0.0, 0.0, 9.0}));  // 1 m under the camera
   ASSERT_TRUE(fx.spin_until([&] { return seg.size() == 2; }));
   const int n = vehicle_pixels(seg[1]);
   std::printf("rov2 1 m under the down camera: %d vehicle pixels, centre class %d\n", n, centre(seg[1]));

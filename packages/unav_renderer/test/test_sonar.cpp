@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <numeric>
 
+#include "render_test_util.hpp"
 #include "unav_renderer/errors.hpp"
 #include "unav_renderer/sonar_renderer.hpp"
 #include "unav_scene/scene_geometry.hpp"
@@ -402,14 +403,7 @@ TEST(Sonar, MovedObjectEchoesAsIfPlacedThere) {
   SonarModel m = fls(64, 200, 60.0, 20.0, 0.5, 15.0);
   auto world_with = [](const Pose& at, bool movable) {
     World w = flat_world(10.0);
-    Object body;
-    body.name = "rov2";
-    body.shape = "box";
-    body.size_m = {0.457, 0.575, 0.254};
-    body.X_WO = at;
-    body.seg_class = SegClass::kVehicle;
-    body.movable = movable;
-    w.objects.push_back(body);
+    w.objects.push_back(unav::renderer::test::vehicle_box("rov2", at, movable));
     return w;
   };
   const Pose away = pose_from_xyz_rpy({-30.0, 0.0, 9.0}, {0.0, 0.0, 0.0});

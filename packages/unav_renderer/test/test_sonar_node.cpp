@@ -7,6 +7,7 @@
 #include <cstring>
 #include <fstream>
 
+#include "node_test_util.hpp"
 #include "sonar_node.hpp"
 #include "unav_runtime/conversions.hpp"
 #include "unav_runtime/testing.hpp"
@@ -65,14 +66,8 @@ TEST(SonarNode, PublishesStandardSonarMessagesAtTheirRatesAndAcks) {
                                                   make_link(node, *raw_sub),  make_link(node, *fan_sub),
                                                   make_link(node, *fall_sub), make_link(node, *ack_sub)};
   ASSERT_TRUE(fx.match(links));
-  auto send = [&](double t) {
-    nav_msgs::msg::Odometry o;
-    const unav::Time s{std::llround(t * 1e9)};
-    o.header().stamp().sec(s.sec());
-    o.header().stamp().nanosec(s.nanosec());
-    o.pose().pose().position().z(7.0);  // 3 m above the 10 m seabed, over the pipe's start
-    odom_pub->publish(o);
-  };
+  // 3 m above the 10 m seabed, over the pipe's start.
+  auto send = [&](double t) { odom_pub->publish(unav::testing::odometry_at(t, {0.0, 0.0, 7.0})); };
   // FLS at 10 Hz: pings at 1.0 and 1.1; side-scan at 20 Hz: 1.0, 1.05, 1.1.
   for (double t : {1.0, 1.05, 1.1}) send(t);
   ASSERT_TRUE(fx.spin_until([&] {
@@ -179,13 +174,7 @@ TEST(SonarNode, ProfilerPublishesAPointCloudAcrossTrack) {
       [&](const sensor_msgs::msg::PointCloud2& m) { clouds.push_back(m); });
   const std::vector<unav::testing::Link> links = {make_link(*odom_pub, node), make_link(node, *sub)};
   ASSERT_TRUE(fx.match(links));
-  nav_msgs::msg::Odometry o;
-  o.header().stamp().sec(1);
-  o.pose().pose().position().x(3.0);
-  o.pose().pose().position().y(5.0);
-  o.pose().pose().position().z(7.0);
-  o.pose().pose().orientation().w(1.0);
-  odom_pub->publish(o);
+  odom_pub->publish(unav::testing::odometry_at(1.0, {3.0, 5.0, 7.0}));
   ASSERT_TRUE(fx.spin_until([&] { return !clouds.empty(); }));
   const auto& c = clouds[0];
   EXPECT_EQ(c.header().frame_id(), "prof_link");
@@ -221,27 +210,16 @@ TEST(SonarNode, RangesTheOtherVehiclesWhereTheyAre) {
   std::ofstream(scenario) << "world: " << UNAV_REPO_ROOT << "/worlds/pipe_inspection/world.yaml\n"
                           << "sonars: {config: " << sonars << ", names: [prof]}\n"
                           << "fleet: [{name: rov2, initial_position: [40.0, 40.0, 9.0]}]\n";
-  unav::testing::NodeUnderTest<unav::renderer::SonarNode> fx(
-      "sonar", {"--ros-args", "-p", "scenario:=" + scenario, "-p", "lockstep:=true", "-p", "noise:=false"});
+  unav::renderer::test::ScenarioNode<unav::renderer::SonarNode> fx("sonar", scenario, {"noise:=false"});
   unav::renderer::SonarNode& node = *fx.node;
-  unav::Node& probe = fx.probe;
-  auto odom_pub = probe.create_publisher<nav_msgs::msg::Odometry>("/rov/ground_truth/odom", unav::QoS::reliable());
-  auto other_pub = probe.create_publisher<nav_msgs::msg::Odometry>("/rov2/ground_truth/odom", unav::QoS::reliable());
+  auto& odom_pub = fx.odom_pub;
+  auto& other_pub = fx.other_pub;
   std::vector<sensor_msgs::msg::PointCloud2> clouds;
-  auto sub = probe.create_subscription<sensor_msgs::msg::PointCloud2>(
+  auto sub = fx.probe.create_subscription<sensor_msgs::msg::PointCloud2>(
       "/rov/sonar/prof/points", unav::QoS::reliable(),
       [&](const sensor_msgs::msg::PointCloud2& m) { clouds.push_back(m); });
   ASSERT_TRUE(fx.match({make_link(*odom_pub, node), make_link(*other_pub, node), make_link(node, *sub)}));
-  auto state = [](double t, double depth) {
-    nav_msgs::msg::Odometry o;
-    const unav::Time s{std::llround(t * 1e9)};
-    o.header().stamp().sec(s.sec());
-    o.header().stamp().nanosec(s.nanosec());
-    o.pose().pose().position().x(3.0);
-    o.pose().pose().position().y(5.0);
-    o.pose().pose().position().z(depth);
-    return o;
-  };
+  auto state = [](double t, double depth) { return unav::testing::odometry_at(t, {3.0, 5.0, depth}); };
   auto nearest = [](const sensor_msgs::msg::PointCloud2& c) {
     double n = 1e9;
     for (std::uint32_t i = 0; i < c.width(); ++i) {

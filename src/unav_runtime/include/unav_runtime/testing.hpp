@@ -43,7 +43,9 @@
 #include <fastdds/dds/publisher/DataWriter.hpp>
 #include <fastdds/dds/subscriber/DataReader.hpp>
 
+#include "nav_msgs/msg/odometry.hpp"
 #include "unav_runtime/context.hpp"
+#include "unav_runtime/conversions.hpp"
 #include "unav_runtime/node.hpp"
 #include "unav_runtime/publisher.hpp"
 
@@ -137,6 +139,17 @@ inline const SubscriptionBase& subscription_of(const Node& node, const std::stri
   for (const SubscriptionBase* s : node.subscriptions())
     if (s->topic_name() == dds_topic) return *s;
   throw std::logic_error("node '" + node.name() + "' has no subscription on '" + dds_topic + "'");
+}
+
+/// Odometry stamped t [s] (whole nanoseconds) at p_W (world_ned), level unless told: a test's
+/// stand-in for the physics server's ground truth.
+inline nav_msgs::msg::Odometry odometry_at(double t, const Eigen::Vector3d& p_W,
+                                           const Eigen::Quaterniond& q = Eigen::Quaterniond::Identity()) {
+  nav_msgs::msg::Odometry o;
+  o.header(make_header(t, "world_ned"));
+  o.child_frame_id("base_link_frd");
+  o.pose().pose(to_msg(p_W, q));
+  return o;
 }
 
 inline Link make_link(const PublisherBase& pub, const SubscriptionBase& sub) { return {&pub, &sub}; }
