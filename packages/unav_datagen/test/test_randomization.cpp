@@ -193,6 +193,27 @@ TEST(RandomizationSpec, RenderSwitchesDefaultOnAndRandomize) {
   EXPECT_NEAR(on, 0.5 * n, 50.0);
 }
 
+TEST(RandomizationSpec, CameraPipelineKeysRandomize) {
+  // JPEG quality and white balance: off by default, drawn per sample when given a distribution
+  // (each value of a two-way choice in 400 draws: Binomial(400, 1/2), 5 sigma = 50).
+  EXPECT_EQ(RandomizationSpec::load(kSpec).sample(0).camera.jpeg_quality, 0);
+  EXPECT_EQ(RandomizationSpec::load(kSpec).sample(0).camera.white_balance, "off");
+  const auto r = patched({"camera.jpeg_quality={choice: [0, 90]}", "camera.white_balance={choice: [\"off\", auto]}"});
+  int jpeg = 0, awb = 0;
+  const int n = 400;
+  for (int k = 0; k < n; ++k) {
+    const DatagenSample s = r.sample(k);
+    EXPECT_TRUE(s.camera.jpeg_quality == 0 || s.camera.jpeg_quality == 90) << s.camera.jpeg_quality;
+    jpeg += s.camera.jpeg_quality == 90 ? 1 : 0;
+    awb += s.camera.white_balance == "auto" ? 1 : 0;
+  }
+  EXPECT_NEAR(jpeg, 0.5 * n, 50.0);
+  EXPECT_NEAR(awb, 0.5 * n, 50.0);
+  const std::string e = error_of("camera.jpeg_quality=101");
+  EXPECT_NE(e.find("camera.jpeg_quality"), std::string::npos) << e;
+  EXPECT_NE(error_of("camera.white_balance=daylight").find("camera.white_balance"), std::string::npos);
+}
+
 TEST(RandomizationSpec, DocumentationListsEveryKey) {
   const std::string doc = RandomizationSpec::documentation();
   for (const auto& f : unav::common::Describe(DatagenSample{})) {

@@ -273,6 +273,8 @@ SampleResult generate_sample(const unav::datagen::RandomizationSpec& spec, std::
   EpisodeSetup setup = load_episode_setup(sc);
   setup.cameras[0].noise_stddev = s.camera.noise_stddev * s.camera.gain;
   setup.cameras[0].exposure = s.camera.exposure * s.camera.gain;
+  setup.cameras[0].jpeg_quality = s.camera.jpeg_quality;
+  setup.cameras[0].white_balance.mode = s.camera.white_balance;
   // Behind a port, the intrinsics a dataset user needs are the water-side model.
   const unav::scene::CameraModel cam = setup.cameras[0].water_equivalent();
 

@@ -64,6 +64,8 @@ struct DatagenCamera {
   double noise_stddev = 0.0;
   double exposure = 1.0;
   double gain = 1.0;
+  int jpeg_quality = 0;
+  std::string white_balance = "off";
 
   template <class Archive>
   void Serialize(Archive* a) {
@@ -71,6 +73,10 @@ struct DatagenCamera {
     a->Visit(Field("noise_stddev", &noise_stddev).Range(0.0, 0.5).Doc("read noise (0..1 of full scale)"));
     a->Visit(Field("exposure", &exposure).Above(0.0).Max(20.0).Doc("exposure (linear)"));
     a->Visit(Field("gain", &gain).Above(0.0).Max(16.0).Doc("gain: scales exposure and noise"));
+    a->Visit(Field("jpeg_quality", &jpeg_quality).Range(0, 100).Doc("JPEG compression of the frames; 0 = none"));
+    a->Visit(Field("white_balance", &white_balance)
+                 .OneOf({"off", "auto"})
+                 .Doc("auto: balanced for the light at the camera's depth"));
   }
 };
 
