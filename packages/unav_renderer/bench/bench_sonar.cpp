@@ -8,6 +8,7 @@
 // sonar/<sonar>_accumulate_ms (sonar: fls_256x512, fls_512x1024, sidescan_1024).
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -120,6 +121,27 @@ int main(int argc, char** argv) {
     wf.add(sr.ping(X, models[2].name, 0.1 * i));
   }
   write_png_mono(wf.pixels(), wf.width(), wf.height(), gallery + "/sonar_sidescan_waterfall.png");
+  // The vehicle's profiler (config/sensors/bluerov2_sonars.yaml) 2 m over the pipe's first leg,
+  // 5 cm between pings: its detected points as a height map of the strip under the track (rows
+  // along track, north up; columns across, 2.5 cm each; grey = height above the 10 m seabed, from
+  // -0.2 m black to 0.6 m white; no return: black). The pipe is a ridge, rocks are knobs.
+  const SonarModel profiler = load_sonar(std::string(UNAV_REPO_ROOT) + "/config/sensors/bluerov2_sonars.yaml", "profiler");
+  SonarRenderer prof(world, {profiler});
+  const int rows = 200, cols = 240;
+  std::vector<std::uint8_t> height(static_cast<std::size_t>(rows) * cols, 0);
+  for (int i = 0; i < rows; ++i) {
+    const double north = 8.0 - 0.05 * i;  // the first row is the northernmost
+    const SonarPing p = prof.ping(pose_from_xyz_rpy({north, 0.0, 7.85}, {0.0, 0.0, 0.0}), "profiler", 0.1 * i);
+    for (const ProfilePoint& q : detect_profile(p, profiler.detection_db)) {
+      const Eigen::Vector3d p_W = p.X_WS * q.p_S;
+      const int c = static_cast<int>(std::floor((p_W.y() + 3.0) / 0.025));
+      if (c < 0 || c >= cols) continue;
+      const double h = world.seabed.depth_m - p_W.z();
+      height[static_cast<std::size_t>(i) * cols + static_cast<std::size_t>(c)] =
+          static_cast<std::uint8_t>(std::clamp((h + 0.2) / 0.8 * 255.0, 1.0, 255.0));
+    }
+  }
+  write_png_mono(height, cols, rows, gallery + "/sonar_profiler_heightmap.png");
   std::printf("gallery written to %s\n", gallery.c_str());
   return 0;
 }
