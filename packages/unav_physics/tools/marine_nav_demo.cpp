@@ -1,8 +1,9 @@
 // The marine navigation sensors on a flight, in process: the BlueROV2 Heavy of a scenario, on a
 // tether from the support vessel above the origin, pushed round a turning circle by a scripted
-// body wrench through a water current, its USBL interrogated from the vessel. Writes the ground
-// truth, every USBL fix and snapshots of the tether's shape as CSV, and prints the USBL's error
-// against the truth (scripts/plot_marine_nav.py draws them: docs/gallery/usbl_track.png,
+// body wrench through a water current, its USBL interrogated from the vessel, its four-beam DVL
+// ranging the seabed. Writes the ground truth, every USBL fix, every DVL beam's bottom point and
+// snapshots of the tether's shape as CSV, and prints the USBL's and the DVL's errors against the
+// truth (scripts/plot_marine_nav.py draws them: docs/gallery/usbl_track.png, dvl_footprints.png,
 // tether_shapes.png).
 //   unav_marine_nav_demo [--scenario FILE] [--out DIR] [--duration S] [--current M_PER_S]
 //                        [--tether-length M]
@@ -52,6 +53,7 @@ int main(int argc, char** argv) {
     sc.vehicle.set.push_back("tether.enabled=true");
     sc.vehicle.set.push_back("tether.length_m=" + std::to_string(tether_length));
     sc.vehicle.set.push_back("sensors.usbl.enabled=true");
+    sc.vehicle.set.push_back("sensors.dvl.enabled=true");
     up::VehicleParams vehicle = up::scenario_vehicle(sc);
     const unav::scene::World world = unav::scene::scenario_world(sc);
     up::apply_world_acoustics(world, &vehicle.sensors);
@@ -65,8 +67,12 @@ int main(int argc, char** argv) {
 
     fs::create_directories(out);
     std::ofstream truth(fs::path(out) / "truth.csv"), usbl(fs::path(out) / "usbl.csv"),
-        tether(fs::path(out) / "tether.csv");
+        tether(fs::path(out) / "tether.csv"), dvl(fs::path(out) / "dvl.csv");
     truth << "t,x,y,z,tether_force_n\n";
+    dvl << "t,beam,valid,x,y,z\n";  // each beam's bottom point (world NED) from its measured range
+    std::uint64_t dvl_seq = 0;
+    int dvl_readings = 0, dvl_valid = 0;
+    double dvl_se = 0.0;
     usbl << "t,ping_t,valid,outlier,range,x,y,z,truth_x,truth_y,truth_z\n";
     tether << "t,node,x,y,z\n";
     std::uint64_t seq = 0;
@@ -85,6 +91,22 @@ int main(int argc, char** argv) {
           const auto& n = sim.tether()->nodes()[i];
           tether << t << ',' << i << ',' << n.x() << ',' << n.y() << ',' << n.z() << '\n';
         }
+      const auto& d = sim.sensors().dvl;
+      if (d.seq != dvl_seq) {
+        dvl_seq = d.seq;
+        ++dvl_readings;
+        if (d.valid) {
+          ++dvl_valid;
+          dvl_se += (d.velocity_B - x.v_WB_B).squaredNorm();
+        }
+        for (int i = 0; i < 4; ++i) {
+          const Eigen::Vector3d hit =
+              x.p_WB_W + x.q_WB * (d.beam_range_m[static_cast<std::size_t>(i)] *
+                                   up::dvl_beam_B(i, vehicle.sensors.dvl.beam_angle_deg));
+          dvl << d.stamp << ',' << i << ',' << d.beam_valid[static_cast<std::size_t>(i)] << ',' << hit.x() << ','
+              << hit.y() << ',' << hit.z() << '\n';
+        }
+      }
       const auto& f = sim.sensors().usbl;
       if (f.seq != seq) {
         seq = f.seq;
@@ -102,9 +124,11 @@ int main(int argc, char** argv) {
     }
     std::printf(
         "unav_marine_nav_demo: %.0f s, %d USBL fixes (%d without a reply), fix error RMS %.3f m horizontal, "
-        "%.3f m 3-D; tether %.1f m, pull %.1f N at the end\n  outputs: %s/{truth,usbl,tether}.csv\n",
+        "%.3f m 3-D; DVL %d readings, %d with bottom lock, velocity error RMS %.4f m/s; tether %.1f m, pull %.1f N "
+        "at the end\n  outputs: %s/{truth,usbl,dvl,tether}.csv\n",
         duration, fixes, timeouts, fixes ? std::sqrt(se_h / fixes) : 0.0, fixes ? std::sqrt(se_3d / fixes) : 0.0,
-        sim.tether()->length(), sim.tether_force_W().norm(), out.c_str());
+        dvl_readings, dvl_valid, dvl_valid ? std::sqrt(dvl_se / dvl_valid) : 0.0, sim.tether()->length(),
+        sim.tether_force_W().norm(), out.c_str());
   } catch (const unav::ConfigError& e) {
     std::cerr << "unav_marine_nav_demo: " << e.what() << "\n";
     return 2;
