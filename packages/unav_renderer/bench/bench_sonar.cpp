@@ -99,39 +99,43 @@ int main(int argc, char** argv) {
   }
   if (gallery.empty()) return 0;
 
-  // Gallery: the same pose over the pipe, clear (Jerlov I) and turbid (coastal 9C) water.
+  // Gallery, with the vehicle's own sonars (config/sensors/bluerov2_sonars.yaml: their codings and
+  // gains as the demo publishes them): the FLS over the pipe in clear (Jerlov I) and turbid (coastal
+  // 9C) water beside the front camera, a side-scan waterfall, the profiler's height map.
   std::filesystem::create_directories(gallery);
+  const std::string sonars_file = std::string(UNAV_REPO_ROOT) + "/config/sensors/bluerov2_sonars.yaml";
+  const SonarModel vfls = load_sonar(sonars_file, "fls"), vss = load_sonar(sonars_file, "sidescan"),
+                   profiler = load_sonar(sonars_file, "profiler");
+  SonarRenderer vehicle(world, {vfls, vss, profiler});
   const Pose X_WB = pose_from_xyz_rpy({-3.0, 0.0, 7.6}, {0.0, 0.0, 0.0});
   std::vector<CameraModel> cams = default_cameras();
   for (const char* water : {"I", "9C"}) {
     World w = world;
     w.water = jerlov_preset(water);
-    sr.set_world(w);
-    const SonarPing p = sr.ping(X_WB, models[0].name);
+    vehicle.set_world(w);
+    const SonarPing p = vehicle.ping(X_WB, "fls");
     const FanImage fan = fan_image(p, 640);
     write_png_mono(fan.pixels, fan.width, fan.height, gallery + "/sonar_fls_" + water + ".png");
     Renderer cam(w, cams);
     write_png_rgb(cam.render(X_WB, "front"), gallery + "/sonar_front_camera_" + water + ".png");
   }
-  sr.set_world(world);
-  Waterfall wf(models[2].bins, 300);
+  vehicle.set_world(world);
+  Waterfall wf(vss.bins, 300);
   for (int i = 0; i < 300; ++i) {
     // Along the pipe, 7 m to port of its first leg: the pipe and its shadow fall to starboard.
     const Pose X = pose_from_xyz_rpy({-4.0 + 0.08 * i, -7.0, 7.0}, {0.0, 0.0, 0.0});
-    wf.add(sr.ping(X, models[2].name, 0.1 * i));
+    wf.add(vehicle.ping(X, "sidescan", 0.1 * i));
   }
   write_png_mono(wf.pixels(), wf.width(), wf.height(), gallery + "/sonar_sidescan_waterfall.png");
-  // The vehicle's profiler (config/sensors/bluerov2_sonars.yaml) 2 m over the pipe's first leg,
-  // 5 cm between pings: its detected points as a height map of the strip under the track (rows
-  // along track, north up; columns across, 2.5 cm each; grey = height above the 10 m seabed, from
-  // -0.2 m black to 0.6 m white; no return: black). The pipe is a ridge, rocks are knobs.
-  const SonarModel profiler = load_sonar(std::string(UNAV_REPO_ROOT) + "/config/sensors/bluerov2_sonars.yaml", "profiler");
-  SonarRenderer prof(world, {profiler});
+  // The profiler 2 m over the pipe's first leg, 5 cm between pings: its detected points as a height
+  // map of the strip under the track (rows along track, north up; columns across, 2.5 cm each;
+  // grey = height above the 10 m seabed, from -0.2 m black to 0.6 m white; no return: black). The
+  // pipe is a ridge, rocks are knobs.
   const int rows = 200, cols = 240;
   std::vector<std::uint8_t> height(static_cast<std::size_t>(rows) * cols, 0);
   for (int i = 0; i < rows; ++i) {
     const double north = 8.0 - 0.05 * i;  // the first row is the northernmost
-    const SonarPing p = prof.ping(pose_from_xyz_rpy({north, 0.0, 7.85}, {0.0, 0.0, 0.0}), "profiler", 0.1 * i);
+    const SonarPing p = vehicle.ping(pose_from_xyz_rpy({north, 0.0, 7.85}, {0.0, 0.0, 0.0}), "profiler", 0.1 * i);
     for (const ProfilePoint& q : detect_profile(p, profiler.detection_db)) {
       const Eigen::Vector3d p_W = p.X_WS * q.p_S;
       const int c = static_cast<int>(std::floor((p_W.y() + 3.0) / 0.025));
