@@ -4,6 +4,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <sstream>
 
 #include <yaml-cpp/yaml.h>
@@ -136,6 +137,111 @@ std::vector<SequenceImage> ListImages(const std::string& dir, double fps) {
   }
   if (out.empty()) throw InputError(dir + ": no images (.png/.jpg or rgb.txt)");
   return out;
+}
+
+namespace {
+
+// The numbers of a line split at commas or whitespace; false when one is not a number.
+bool LineNumbers(const std::string& line, std::vector<double>* out) {
+  std::string text = line;
+  std::replace(text.begin(), text.end(), ',', ' ');
+  std::istringstream is(text);
+  out->clear();
+  std::string tok;
+  while (is >> tok) {
+    try {
+      std::size_t used = 0;
+      out->push_back(std::stod(tok, &used));
+      if (used != tok.size()) return false;
+    } catch (const std::exception&) {
+      if (tok == "nan" || tok == "-nan") {
+        out->push_back(std::nan(""));
+        continue;
+      }
+      return false;
+    }
+  }
+  return true;
+}
+
+// Calls row(numbers, where) for every data line of a log (blank lines and '#' comments skipped);
+// a line that does not parse, has fewer than `min_fields` numbers, or whose first number (the
+// stamp) is not after the last one's is an InputError naming file:line.
+template <class Row>
+void ReadLog(const std::string& path, std::size_t min_fields, Row row) {
+  std::ifstream f(path);
+  if (!f) throw InputError(path + ": cannot be read");
+  std::string line;
+  std::vector<double> v;
+  double last = -std::numeric_limits<double>::infinity();
+  for (int n = 1; std::getline(f, line); ++n) {
+    if (line.empty() || line[0] == '#' || line.find_first_not_of(" \t\r") == std::string::npos) continue;
+    const std::string where = path + ":" + std::to_string(n);
+    if (!LineNumbers(line, &v) || v.size() < min_fields)
+      throw InputError(where + ": expected " + std::to_string(min_fields) + " numbers, got '" + line + "'");
+    if (!std::isfinite(v[0]) || v[0] <= last) throw InputError(where + ": the stamp must increase (" + line + ")");
+    last = v[0];
+    row(v, where);
+  }
+}
+
+}  // namespace
+
+std::vector<ImuSample> ReadImuSamples(const std::string& path) {
+  std::vector<ImuSample> out;
+  std::ifstream probe(path);
+  std::string first;
+  while (std::getline(probe, first) && (first.empty() || first[0] == '#')) {
+  }
+  const double divisor = first.find(',') != std::string::npos ? 1e9 : 1.0;  // EuRoC: ns
+  ReadLog(path, 7, [&](const std::vector<double>& v, const std::string& where) {
+    for (std::size_t i = 1; i < 7; ++i)
+      if (!std::isfinite(v[i])) throw InputError(where + ": not finite");
+    out.push_back({v[0] / divisor, Eigen::Vector3d(v[1], v[2], v[3]), Eigen::Vector3d(v[4], v[5], v[6])});
+  });
+  return out;
+}
+
+std::vector<DvlSample> ReadDvlSamples(const std::string& path) {
+  std::vector<DvlSample> out;
+  ReadLog(path, 5, [&](const std::vector<double>& v, const std::string& where) {
+    DvlSample d;
+    d.stamp = v[0];
+    d.valid = v[1] > 0.5;
+    if (d.valid) {
+      d.velocity = Eigen::Vector3d(v[2], v[3], v[4]);
+      if (!d.velocity.allFinite()) throw InputError(where + ": a valid reading's velocity must be finite");
+    }
+    out.push_back(d);
+  });
+  return out;
+}
+
+std::optional<Eigen::Isometry3d> ReadCameraMount(const std::string& manifest_path) {
+  YAML::Node y;
+  try {
+    y = YAML::LoadFile(manifest_path);  // JSON is YAML
+  } catch (const YAML::BadFile&) {
+    throw InputError(manifest_path + ": cannot be read");
+  } catch (const YAML::Exception& e) {
+    throw InputError(manifest_path + ": not valid JSON: " + e.what());
+  }
+  const YAML::Node cam = y["camera"];
+  if (!cam || !cam["mount_xyz_m"] || !cam["mount_quaternion_xyzw"]) return std::nullopt;
+  if (cam["mount_known"] && !cam["mount_known"].as<bool>(false)) return std::nullopt;
+  const YAML::Node p = cam["mount_xyz_m"], q = cam["mount_quaternion_xyzw"];
+  if (!p.IsSequence() || p.size() != 3 || !q.IsSequence() || q.size() != 4)
+    throw InputError(manifest_path + ": camera.mount_xyz_m needs 3 numbers and camera.mount_quaternion_xyzw 4");
+  Eigen::Vector3d t;
+  Eigen::Vector4d xyzw;
+  for (int i = 0; i < 3; ++i) t[i] = Number(p[i], manifest_path, "camera.mount_xyz_m");
+  for (int i = 0; i < 4; ++i) xyzw[i] = Number(q[i], manifest_path, "camera.mount_quaternion_xyzw");
+  if (std::abs(xyzw.norm() - 1.0) > 1e-6)
+    throw InputError(manifest_path + ": camera.mount_quaternion_xyzw must be a unit quaternion");
+  Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
+  X.linear() = Eigen::Quaterniond(xyzw[3], xyzw[0], xyzw[1], xyzw[2]).toRotationMatrix();
+  X.translation() = t;
+  return X;
 }
 
 }  // namespace unav::localization

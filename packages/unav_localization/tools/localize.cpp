@@ -2,6 +2,12 @@
 //
 //   unav_localize --images DIR --camera FILE [--method orb_slam|klt_mono|klt_rgbd]
 //                 [--vocabulary FILE] [--output FILE] [--groundtruth FILE] [--max-frames N]
+//                 [--imu FILE] [--dvl FILE] [--camera-mount "x y z qx qy qz qw"]
+//
+// orb_slam with --imu (our imu.txt or EuRoC's imu0/data.csv) and/or --dvl (our nav/dvl.csv): the
+// monocular-inertial and DVL-aided modes of the orb_slam node, so the trajectory is metric; they
+// need the camera's mount on the body (--camera-mount, or DIR/manifest.json as unav datagen and
+// the dataset recorder write it), and report APE after SE(3) alignment too.
 //
 // DIR: a TUM RGB-D dataset folder (rgb.txt; depth.txt for klt_rgbd), as our dataset_recorder
 // writes it, or a folder of images. Writes the camera trajectory (optical frame, TUM format) and,
@@ -9,11 +15,13 @@
 // alignment (SE(3) for klt_rgbd, which has metric scale). Exit codes: 0 ok, 2 bad input.
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <map>
 #include <memory>
+#include <optional>
 #include <sstream>
 
 #include <CLI/CLI.hpp>
@@ -64,6 +72,7 @@ int main(int argc, char** argv) {
   bool quiet = false, verbose = false, no_loops = false;
   double clahe = 3.0;
   int features = 1000;
+  std::string imu_path, dvl_path, mount_text;
   app.add_option("--images", images, "image folder (TUM RGB-D dataset folder or .png/.jpg files)")->required();
   app.add_option("--camera", camera_path, "camera YAML (dataset camera.yaml or ROS camera_info YAML)")->required();
   app.add_option("--method", method, "orb_slam | klt_mono | klt_rgbd")
@@ -85,6 +94,10 @@ int main(int argc, char** argv) {
                  "orb_slam: CLAHE clip limit before feature extraction, on low-contrast frames (grey std < 30) only "
                  "(default 3; 0 = off)")
       ->check(CLI::Range(0.0, 40.0));
+  app.add_option("--imu", imu_path, "orb_slam: IMU log (imu.txt: t wx wy wz ax ay az; or EuRoC imu0/data.csv)");
+  app.add_option("--dvl", dvl_path, "orb_slam: DVL log (nav/dvl.csv: t,valid,vx,vy,vz,... in the body frame)");
+  app.add_option("--camera-mount", mount_text,
+                 "the camera's optical frame in the body frame, \"x y z qx qy qz qw\" (default: DIR/manifest.json)");
   CLI11_PARSE(app, argc, argv);
   if (output.empty()) output = method + "_trajectory.txt";
 
@@ -92,6 +105,9 @@ int main(int argc, char** argv) {
     const ul::CameraFile cam = ul::LoadCameraFile(camera_path);
     const auto seq = ul::ListImages(images, fps);
     std::unique_ptr<ul::MonoSlam> slam;
+    std::vector<ul::ImuSample> imu;  // aiding logs (orb_slam --imu / --dvl)
+    std::vector<ul::DvlSample> dvl;
+    std::size_t next_imu = 0, next_dvl = 0;
     std::unique_ptr<ul::KltVo> klt;
     std::map<double, std::string> depths;
     double depth_scale = 1.0;
@@ -114,6 +130,34 @@ int main(int argc, char** argv) {
       o.orb.features = features;
       o.clahe_clip = clahe;
       slam = std::make_unique<ul::MonoSlam>(cam.camera, cam.distortion, o, voc);
+      if (!imu_path.empty() || !dvl_path.empty()) {
+        std::optional<Eigen::Isometry3d> X_BC;
+        if (!mount_text.empty()) {
+          std::istringstream is(mount_text);
+          double v[7];
+          for (double& x : v)
+            if (!(is >> x) || !std::isfinite(x))
+              throw ul::InputError("--camera-mount '" + mount_text + "': expected 7 finite numbers x y z qx qy qz qw");
+          const Eigen::Quaterniond q(v[6], v[3], v[4], v[5]);
+          if (std::abs(q.norm() - 1.0) > 1e-6) throw ul::InputError("--camera-mount: the quaternion must be unit");
+          X_BC = Eigen::Isometry3d::Identity();
+          X_BC->linear() = q.toRotationMatrix();
+          X_BC->translation() = Eigen::Vector3d(v[0], v[1], v[2]);
+        } else if (std::filesystem::exists(images + "/manifest.json")) {
+          X_BC = ul::ReadCameraMount(images + "/manifest.json");
+        }
+        if (!X_BC)
+          throw ul::InputError("--imu/--dvl need the camera's mount on the body: --camera-mount, or " + images +
+                               "/manifest.json with camera.mount_xyz_m and camera.mount_quaternion_xyzw");
+        if (!imu_path.empty()) {
+          imu = ul::ReadImuSamples(imu_path);
+          slam->EnableInertial(*X_BC, ul::ImuNoise{});
+        }
+        if (!dvl_path.empty()) {
+          dvl = ul::ReadDvlSamples(dvl_path);
+          slam->EnableDvl(*X_BC);  // the DVL reports in the body frame
+        }
+      }
     } else {
       ul::KltVoOptions o;
       o.mode = method == "klt_mono" ? ul::KltVoOptions::Mode::kMonocular : ul::KltVoOptions::Mode::kRgbd;
@@ -137,6 +181,11 @@ int main(int argc, char** argv) {
       ++n;
       const auto t0 = std::chrono::steady_clock::now();
       if (slam) {
+        // The aiding samples up to this image (MonoSlam uses those stamped before it).
+        for (; next_imu < imu.size() && imu[next_imu].stamp <= im.stamp; ++next_imu)
+          slam->AddImu(imu[next_imu].stamp, imu[next_imu].gyro, imu[next_imu].accel);
+        for (; next_dvl < dvl.size() && dvl[next_dvl].stamp <= im.stamp; ++next_dvl)
+          slam->AddDvl(dvl[next_dvl].stamp, dvl[next_dvl].velocity, dvl[next_dvl].valid);
         const auto s = slam->Track(gray, im.stamp);
         track_ms.push_back(s.tracking_ms);
         total_ms.push_back(s.tracking_ms + s.mapping_ms);
@@ -204,6 +253,13 @@ int main(int argc, char** argv) {
           "APE (%s-aligned, %zu poses, scale %.4f): rmse %.4f m, mean %.4f m, max %.4f m; rotation rmse %.4f rad\n",
           align == ue::Alignment::kSE3 ? "SE(3)" : "Sim(3)", r.poses, r.scale, r.ape_m.rmse, r.ape_m.mean, r.ape_m.max,
           r.ape_rad.rmse);
+      if (slam && (!imu.empty() || !dvl.empty()) && !slam->metric()) {
+        std::printf("not metric: the aiding sensors did not scale the map (no SE(3) figure)\n");
+      } else if (slam && (!imu.empty() || !dvl.empty())) {  // metric: no scale fitted
+        const auto m = ue::evaluate(gt, est, "sequence", method, ue::Alignment::kSE3);
+        std::printf("APE (SE(3)-aligned, %zu poses, metric as estimated): rmse %.4f m, mean %.4f m, max %.4f m\n",
+                    m.poses, m.ape_m.rmse, m.ape_m.mean, m.ape_m.max);
+      }
       std::printf("RPE (1 frame): rmse %.4f m, rotation rmse %.5f rad; ground-truth path %.2f m\n", r.rpe_m.rmse,
                   r.rpe_rad.rmse, gt.path_length());
     }
