@@ -40,7 +40,19 @@ CameraFile LoadCameraFile(const std::string& path) {
   if (!y.IsMap()) throw InputError(path + ": expected a map of camera keys");
   CameraFile c;
   auto& k = c.camera;
-  if (y["camera_matrix"]) {  // ROS camera_info YAML
+  if (y["intrinsics"] && y["resolution"]) {  // EuRoC's cam0/sensor.yaml
+    const YAML::Node in = y["intrinsics"], res = y["resolution"];
+    if (!in.IsSequence() || in.size() != 4) throw InputError(path + ": key 'intrinsics' must hold fu, fv, cu, cv");
+    if (!res.IsSequence() || res.size() != 2) throw InputError(path + ": key 'resolution' must hold width, height");
+    k.width = static_cast<int>(Number(res[0], path, "resolution[0]"));
+    k.height = static_cast<int>(Number(res[1], path, "resolution[1]"));
+    k.fx = Number(in[0], path, "intrinsics[0]");
+    k.fy = Number(in[1], path, "intrinsics[1]");
+    k.cx = Number(in[2], path, "intrinsics[2]");
+    k.cy = Number(in[3], path, "intrinsics[3]");
+    if (const YAML::Node dist = y["distortion_coefficients"])  // radial-tangential k1 k2 p1 p2
+      for (size_t i = 0; i < dist.size(); ++i) c.distortion.push_back(Number(dist[i], path, "distortion_coefficients"));
+  } else if (y["camera_matrix"]) {  // ROS camera_info YAML
     k.width = static_cast<int>(Number(y["image_width"], path, "image_width"));
     k.height = static_cast<int>(Number(y["image_height"], path, "image_height"));
     const YAML::Node d = y["camera_matrix"]["data"];
@@ -81,7 +93,11 @@ CameraFile LoadCameraFile(const std::string& path) {
 std::vector<SequenceImage> ListImages(const std::string& dir, double fps) {
   if (!fs::is_directory(dir)) throw InputError(dir + ": not a folder");
   std::vector<SequenceImage> out;
-  const fs::path list = fs::path(dir) / "rgb.txt";
+  // A TUM list (rgb.txt: "stamp path") or a EuRoC camera folder (data.csv: "stamp_ns,filename" of
+  // data/; stamps in ns, read as seconds).
+  const bool euroc = !fs::exists(fs::path(dir) / "rgb.txt") && fs::exists(fs::path(dir) / "data.csv") &&
+                     fs::is_directory(fs::path(dir) / "data");
+  const fs::path list = fs::path(dir) / (euroc ? "data.csv" : "rgb.txt");
   if (fs::exists(list)) {
     std::ifstream f(list);
     std::string line;
@@ -89,6 +105,7 @@ std::vector<SequenceImage> ListImages(const std::string& dir, double fps) {
     while (std::getline(f, line)) {
       ++n;
       if (line.empty() || line[0] == '#') continue;
+      if (euroc) std::replace(line.begin(), line.end(), ',', ' ');
       std::istringstream is(line);
       double stamp;
       std::string rel, extra;
@@ -97,6 +114,10 @@ std::vector<SequenceImage> ListImages(const std::string& dir, double fps) {
                          "'");
       if (!std::isfinite(stamp))
         throw InputError(list.string() + ":" + std::to_string(n) + ": timestamp must be finite");
+      if (euroc) {
+        stamp *= 1e-9;
+        rel = "data/" + rel;
+      }
       if (!out.empty() && stamp <= out.back().stamp)
         throw InputError(list.string() + ":" + std::to_string(n) + ": timestamp " + std::to_string(stamp) +
                          " is not after the previous one");
@@ -123,6 +144,15 @@ std::vector<SequenceImage> ListImages(const std::string& dir, double fps) {
       }
     }
     if (numeric) {
+      // Integer names of 16+ digits are nanoseconds (EuRoC's cam0/data/1403636579763555584.png):
+      // seconds, on the clock of the IMU log ReadImuSamples reads beside them.
+      bool ns = true;
+      for (const auto& p : files) {
+        const std::string stem = p.stem().string();
+        ns = ns && stem.size() >= 16 && stem.find_first_not_of("0123456789") == std::string::npos;
+      }
+      if (ns)
+        for (size_t i = 0; i < files.size(); ++i) stamps[i] = std::stod(files[i].stem().string()) * 1e-9;
       std::vector<size_t> order(files.size());
       for (size_t i = 0; i < order.size(); ++i) order[i] = i;
       std::sort(order.begin(), order.end(), [&](size_t a, size_t b) { return stamps[a] < stamps[b]; });
@@ -225,6 +255,20 @@ std::optional<Eigen::Isometry3d> ReadCameraMount(const std::string& manifest_pat
     throw InputError(manifest_path + ": cannot be read");
   } catch (const YAML::Exception& e) {
     throw InputError(manifest_path + ": not valid JSON: " + e.what());
+  }
+  if (const YAML::Node T = y["T_BS"]) {  // EuRoC's cam0/sensor.yaml: the sensor in the body frame
+    const YAML::Node d = T["data"];
+    if (!d || !d.IsSequence() || d.size() != 16) throw InputError(manifest_path + ": T_BS.data must hold 16 numbers");
+    Eigen::Matrix4d M;
+    for (int r = 0; r < 4; ++r)
+      for (int c = 0; c < 4; ++c) M(r, c) = Number(d[static_cast<std::size_t>(4 * r + c)], manifest_path, "T_BS.data");
+    const Eigen::Matrix3d R = M.topLeftCorner<3, 3>();
+    if (!(R.transpose() * R).isIdentity(1e-6) || R.determinant() < 0.0 || !M.row(3).isApprox(Eigen::RowVector4d(0, 0, 0, 1)))
+      throw InputError(manifest_path + ": T_BS must be a rigid transform");
+    Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
+    X.linear() = Eigen::Quaterniond(R).normalized().toRotationMatrix();
+    X.translation() = M.topRightCorner<3, 1>();
+    return X;
   }
   const YAML::Node cam = y["camera"];
   if (!cam || !cam["mount_xyz_m"] || !cam["mount_quaternion_xyzw"]) return std::nullopt;

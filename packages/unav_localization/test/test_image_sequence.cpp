@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <string>
 
@@ -61,6 +62,17 @@ TEST(AidingLogs, ImuSamplesOfOurLogAndOfEuroc) {
   EXPECT_NE(e3.find("nan_imu.txt:1"), std::string::npos) << e3;
   EXPECT_NE(error_of([] { ul::ReadImuSamples(::testing::TempDir() + "no_such_imu.txt"); }).find("cannot be read"),
             std::string::npos);
+}
+
+TEST(AidingLogs, EurocImagesAreStampedInSecondsLikeItsImu) {
+  // mav0/cam0/data/<ns>.png: seconds, on the clock of ReadImuSamples' EuRoC stamps.
+  const std::string dir = ::testing::TempDir() + "euroc_cam0";
+  std::filesystem::create_directories(dir);
+  for (const char* n : {"1403636579763555584", "1403636579813555456"}) std::ofstream(dir + "/" + n + ".png") << "x";
+  const auto seq = ul::ListImages(dir);
+  ASSERT_EQ(seq.size(), 2u);
+  EXPECT_NEAR(seq[0].stamp, 1403636579.763555584, 1e-6);
+  EXPECT_NEAR(seq[1].stamp - seq[0].stamp, 0.05, 1e-6);  // 20 Hz
 }
 
 TEST(AidingLogs, DvlReadingsKeepTheirLock) {

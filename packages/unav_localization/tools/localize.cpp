@@ -62,6 +62,34 @@ std::map<double, std::string> ReadDepthList(const std::string& dir) {
   return out;
 }
 
+// The camera's ground-truth trajectory: a TUM file (camera poses), or EuRoC's
+// state_groundtruth_estimate0/data.csv (body poses "t_ns, p x y z, q w x y z") composed with the
+// camera's mount (`mount`, else the camera file's T_BS).
+ue::Trajectory ReadGroundTruth(const std::string& path, const std::string& camera_path,
+                               const std::optional<Eigen::Isometry3d>& mount) {
+  if (path.size() < 4 || path.substr(path.size() - 4) != ".csv") return ue::read_tum(path);
+  const std::optional<Eigen::Isometry3d> X_BC = mount ? mount : ul::ReadCameraMount(camera_path);
+  if (!X_BC) throw ul::InputError(path + ": EuRoC body poses need the camera's mount (T_BS of the --camera file)");
+  ue::Trajectory out;
+  std::ifstream f(path);
+  if (!f) throw ul::InputError(path + ": cannot be read");
+  std::string line;
+  for (int n = 1; std::getline(f, line); ++n) {
+    if (line.empty() || line[0] == '#') continue;
+    std::replace(line.begin(), line.end(), ',', ' ');
+    std::istringstream is(line);
+    double v[8];
+    for (double& x : v)
+      if (!(is >> x) || !std::isfinite(x))
+        throw ul::InputError(path + ":" + std::to_string(n) + ": expected t_ns, x, y, z, qw, qx, qy, qz");
+    Eigen::Isometry3d X_WB = Eigen::Isometry3d::Identity();
+    X_WB.linear() = Eigen::Quaterniond(v[4], v[5], v[6], v[7]).normalized().toRotationMatrix();
+    X_WB.translation() = Eigen::Vector3d(v[1], v[2], v[3]);
+    out.push_back(v[0] * 1e-9, X_WB * *X_BC);
+  }
+  return out;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -108,6 +136,7 @@ int main(int argc, char** argv) {
     std::vector<ul::ImuSample> imu;  // aiding logs (orb_slam --imu / --dvl)
     std::vector<ul::DvlSample> dvl;
     std::size_t next_imu = 0, next_dvl = 0;
+    std::optional<Eigen::Isometry3d> mount;  // the camera on the body, when aiding
     std::unique_ptr<ul::KltVo> klt;
     std::map<double, std::string> depths;
     double depth_scale = 1.0;
@@ -132,7 +161,9 @@ int main(int argc, char** argv) {
       slam = std::make_unique<ul::MonoSlam>(cam.camera, cam.distortion, o, voc);
       if (!imu_path.empty() || !dvl_path.empty()) {
         std::optional<Eigen::Isometry3d> X_BC;
-        if (!mount_text.empty()) {
+        if (!mount_text.empty() && std::filesystem::is_regular_file(mount_text)) {
+          X_BC = ul::ReadCameraMount(mount_text);  // a manifest.json or a EuRoC sensor.yaml
+        } else if (!mount_text.empty()) {
           std::istringstream is(mount_text);
           double v[7];
           for (double& x : v)
@@ -145,10 +176,14 @@ int main(int argc, char** argv) {
           X_BC->translation() = Eigen::Vector3d(v[0], v[1], v[2]);
         } else if (std::filesystem::exists(images + "/manifest.json")) {
           X_BC = ul::ReadCameraMount(images + "/manifest.json");
+        } else {
+          X_BC = ul::ReadCameraMount(camera_path);  // a EuRoC sensor.yaml's T_BS
         }
         if (!X_BC)
-          throw ul::InputError("--imu/--dvl need the camera's mount on the body: --camera-mount, or " + images +
-                               "/manifest.json with camera.mount_xyz_m and camera.mount_quaternion_xyzw");
+          throw ul::InputError("--imu/--dvl need the camera's mount on the body: --camera-mount, " + images +
+                               "/manifest.json with camera.mount_xyz_m and camera.mount_quaternion_xyzw, or a "
+                               "EuRoC sensor.yaml with T_BS as --camera");
+        mount = *X_BC;
         if (!imu_path.empty()) {
           imu = ul::ReadImuSamples(imu_path);
           slam->EnableInertial(*X_BC, ul::ImuNoise{});
@@ -245,8 +280,10 @@ int main(int argc, char** argv) {
     std::printf("trajectory: %s\n", output.c_str());
     if (groundtruth.empty() && std::filesystem::exists(images + "/groundtruth.txt"))
       groundtruth = images + "/groundtruth.txt";
+    const std::string euroc_gt = images + "/../state_groundtruth_estimate0/data.csv";  // images = mav0/cam0
+    if (groundtruth.empty() && std::filesystem::exists(euroc_gt)) groundtruth = euroc_gt;
     if (!groundtruth.empty()) {
-      const ue::Trajectory gt = ue::read_tum(groundtruth);
+      const ue::Trajectory gt = ReadGroundTruth(groundtruth, camera_path, mount);
       const auto align = method == "klt_rgbd" ? ue::Alignment::kSE3 : ue::Alignment::kSim3;
       const auto r = ue::evaluate(gt, est, "sequence", method, align);
       std::printf(

@@ -312,7 +312,18 @@ SampleResult generate_sample(const unav::datagen::RandomizationSpec& spec, std::
     sonar = std::make_unique<SonarOutput>(partial.string(), s.sonars_config, sonar_name, world, seed,
                                           ep.renderer().shared_context());
   NavOutput nav(partial, ep.simulator());
-  const std::function<void()> record_nav = [&nav, &ep] { nav.after_step(ep.simulator()); };
+  // The IMU log: the vehicle's IMU (its rate, noise and bias: sensors.imu) when it has one, else the
+  // true angular rate and specific force at the control period.
+  const bool imu_sensor = setup.plant.sensors.imu.enabled;
+  std::uint64_t imu_seq = 0;
+  const std::function<void()> record_nav = [&nav, &ep, &writer, &imu_seq, imu_sensor] {
+    nav.after_step(ep.simulator());
+    const physics::ImuReading& imu = ep.simulator().sensors().imu;
+    if (imu_sensor && imu.valid && imu.seq != imu_seq) {
+      imu_seq = imu.seq;
+      writer->write_imu(imu.stamp, imu.angular_rate_B, imu.specific_force_B);
+    }
+  };
   double next_ping_t = 0.0;
   auto body_pose = [&ep] {
     Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
@@ -348,7 +359,7 @@ SampleResult generate_sample(const unav::datagen::RandomizationSpec& spec, std::
       const auto nu_dot = ep.simulator().acceleration();
       // Specific force in body axes: d/dt v (inertial) minus gravity, FRD.
       const Eigen::Vector3d f_B = nu_dot.head<3>() + x.w_WB_B.cross(x.v_WB_B) - x.q_WB.conjugate() * g_W;
-      writer->write_imu(t, x.w_WB_B, f_B);
+      if (!imu_sensor) writer->write_imu(t, x.w_WB_B, f_B);
       if (sonar && t + 0.5 * control_period >= next_ping_t) {
         sonar->ping(body_pose(), t);
         next_ping_t += sonar->period();

@@ -24,8 +24,9 @@ struct CameraFile {
   double depth_scale = 0.0;        ///< depth PNG units per metre (`depth_scale`; 0: not given)
 };
 
-/// Reads a camera YAML: our dataset format (width, height, fx, fy, cx, cy, distortion: [...]) or
-/// a ROS camera_info YAML (image_width, image_height, camera_matrix.data, distortion_coefficients.data).
+/// Reads a camera YAML: our dataset format (width, height, fx, fy, cx, cy, distortion: [...]), a
+/// ROS camera_info YAML (image_width, image_height, camera_matrix.data, distortion_coefficients.data)
+/// or a EuRoC cam0/sensor.yaml (resolution, intrinsics: fu fv cu cv, distortion_coefficients).
 /// Throws InputError naming the file and key for missing keys, NaN/Inf, non-positive sizes.
 CameraFile LoadCameraFile(const std::string& path);
 
@@ -36,7 +37,8 @@ struct SequenceImage {
 
 /// The images of a folder, in time order: a TUM RGB-D dataset folder (rgb.txt: "stamp path"
 /// lines) or a folder of .png/.jpg files, stamped by their file name when it is a number
-/// (e.g. 12.300000.png) and else by their order at `fps`. Throws InputError for a missing or
+/// (e.g. 12.300000.png; integer names of 16+ digits are nanoseconds, as EuRoC's
+/// mav0/cam0/data/ has them) and else by their order at `fps`. Throws InputError for a missing or
 /// empty folder, a malformed rgb.txt line (file:line) or non-increasing stamps.
 std::vector<SequenceImage> ListImages(const std::string& dir, double fps = 10.0);
 
@@ -63,9 +65,9 @@ struct DvlSample {
 std::vector<DvlSample> ReadDvlSamples(const std::string& path);
 
 /// The camera's mount in the body frame (the optical frame's pose, metric) from a dataset's
-/// manifest.json (camera.mount_xyz_m, camera.mount_quaternion_xyzw); nullopt when the manifest
-/// says it is not known or has none. Throws InputError naming the file for an unreadable file or
-/// a malformed mount.
+/// manifest.json (camera.mount_xyz_m, camera.mount_quaternion_xyzw) or a EuRoC cam0/sensor.yaml
+/// (T_BS: the camera in the IMU's body frame); nullopt when the file says it is not known or has
+/// none. Throws InputError naming the file for an unreadable file or a malformed mount.
 std::optional<Eigen::Isometry3d> ReadCameraMount(const std::string& manifest_path);
 
 }  // namespace unav::localization
