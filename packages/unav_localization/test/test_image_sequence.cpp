@@ -109,3 +109,37 @@ TEST(AidingLogs, CameraMountFromADatasetManifest) {
   EXPECT_NE(e.find("bad.json"), std::string::npos) << e;
   EXPECT_NE(e.find("camera.mount_xyz_m"), std::string::npos) << e;
 }
+
+TEST(AidingLogs, EurocCameraFolderSensorFileAndMount) {
+  // mav0/cam0: data.csv lists the images of data/ by ns stamp; sensor.yaml gives the pinhole and
+  // T_BS (the camera in the IMU's body frame), row-major.
+  const std::string cam0 = ::testing::TempDir() + "euroc_mav0/cam0";
+  std::filesystem::create_directories(cam0 + "/data");
+  std::ofstream(cam0 + "/data.csv") << "#timestamp [ns],filename\n0,0.png\n50000000,50000000.png\n";
+  for (const char* n : {"0.png", "50000000.png"}) std::ofstream(cam0 + "/data/" + n) << "x";
+  const auto seq = ul::ListImages(cam0);
+  ASSERT_EQ(seq.size(), 2u);
+  EXPECT_DOUBLE_EQ(seq[1].stamp, 0.05);
+  EXPECT_EQ(std::filesystem::path(seq[1].path).filename(), "50000000.png");
+  const std::string sensor = write("sensor.yaml",
+                                   "sensor_type: camera\n"
+                                   "T_BS:\n  cols: 4\n  rows: 4\n"
+                                   "  data: [0, -1, 0, 0.1,\n          1, 0, 0, 0,\n          0, 0, 1, 0.12,\n"
+                                   "          0, 0, 0, 1]\n"
+                                   "resolution: [752, 480]\nintrinsics: [458.654, 457.296, 367.215, 248.375]\n"
+                                   "distortion_coefficients: [-0.28340811, 0.07395907, 0.00019359, 1.76187114e-05]\n");
+  const ul::CameraFile c = ul::LoadCameraFile(sensor);
+  EXPECT_EQ(c.camera.width, 752);
+  EXPECT_DOUBLE_EQ(c.camera.fy, 457.296);
+  EXPECT_DOUBLE_EQ(c.camera.cx, 367.215);
+  ASSERT_EQ(c.distortion.size(), 4u);
+  const auto X = ul::ReadCameraMount(sensor);
+  ASSERT_TRUE(X.has_value());
+  EXPECT_TRUE(X->translation().isApprox(Eigen::Vector3d(0.1, 0.0, 0.12)));
+  EXPECT_TRUE(X->linear().isApprox(Eigen::AngleAxisd(M_PI / 2, Eigen::Vector3d::UnitZ()).toRotationMatrix(), 1e-12));
+  const std::string e = error_of([] {
+    ul::ReadCameraMount(write("shear.yaml", "T_BS: {data: [2, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1]}\n"));
+  });
+  EXPECT_NE(e.find("shear.yaml"), std::string::npos) << e;
+  EXPECT_NE(e.find("rigid"), std::string::npos) << e;
+}
