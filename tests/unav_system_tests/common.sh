@@ -13,6 +13,17 @@ set +u; source "$ws/install/setup.bash"; set -u
 source "$(dirname "${BASH_SOURCE[0]}")/test_domain.sh"
 py="${UNAV_VENV:-$ws/.venv}/bin/python"
 
+# shipped_spec OUT [SED_EXPRESSION...]: the shipped datagen spec (config/datagen/pipe_survey.yaml)
+# with its files resolved in this workspace and the expressions applied, written to OUT.
+shipped_spec() {
+  local out=$1 e
+  shift
+  local args=(-e "s|^base_world: .*|base_world: $ws/worlds/pipe_inspection/world.yaml|"
+              -e "s|^cameras_config: .*|cameras_config: $ws/config/sensors/bluerov2_cameras.yaml|")
+  for e in "$@"; do args+=(-e "$e"); done
+  sed "${args[@]}" "$ws/config/datagen/pipe_survey.yaml" >"$out"
+}
+
 # start_foxglove_bridge LOG: `unav foxglove` in the background on a random port, its output in LOG;
 # sets bridge_pid, url (ws://127.0.0.1:PORT) and client (Foxglove's own libraries:
 # src/unav_bag/test/foxglove/foxglove_client.mjs). Returns 1 (with the reason) when it did not start.

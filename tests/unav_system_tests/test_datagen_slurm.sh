@@ -63,11 +63,8 @@ for _ in $(seq 1 60); do sinfo -h -o %t 2>/dev/null | grep -q idle && break; sle
 sinfo -h -o %t | grep -q idle || fail "the single-node cluster did not come up: $(sinfo 2>&1)"
 
 spec="$d/spec.yaml"
-sed -e "s|^base_world: .*|base_world: $ws/worlds/pipe_inspection/world.yaml|" \
-    -e "s|^cameras_config: .*|cameras_config: $ws/config/sensors/bluerov2_cameras.yaml|" \
-    -e "s|  frames: .*|  frames: 5|" -e "s|  width: .*|  width: 160|" -e "s|  height: .*|  height: 120|" \
-    -e "s|  cpus_per_task: .*|  cpus_per_task: 1|" -e "s|  mem: .*|  mem: 1G|" \
-    "$ws/config/datagen/pipe_survey.yaml" >"$spec"
+shipped_spec "$spec" "s|  frames: .*|  frames: 5|" "s|  width: .*|  width: 160|" "s|  height: .*|  height: 120|" \
+  "s|  cpus_per_task: .*|  cpus_per_task: 1|" "s|  mem: .*|  mem: 1G|"
 printf '  array_size: 2\n' >>"$spec"
 timeout 300 unav datagen "$spec" -n 3 --out "$d/out" --backend slurm --wait >"$d/submit.log" 2>&1 \
   || { cat "$d/submit.log"; fail "slurm sweep failed"; }

@@ -10,10 +10,7 @@ trap 'kill -INT ${pid:-} 2>/dev/null || true; rm -rf "$out"' EXIT
 fail() { echo "FAIL: $*"; exit 1; }
 spec="$out/spec.yaml"
 # The shipped spec, small: 6 frames of 160x120 per sample.
-sed -e "s|^base_world: .*|base_world: $ws/worlds/pipe_inspection/world.yaml|" \
-    -e "s|^cameras_config: .*|cameras_config: $ws/config/sensors/bluerov2_cameras.yaml|" \
-    -e "s|  frames: .*|  frames: 6|" -e "s|  width: .*|  width: 160|" -e "s|  height: .*|  height: 120|" \
-    "$ws/config/datagen/pipe_survey.yaml" >"$spec"
+shipped_spec "$spec" "s|  frames: .*|  frames: 6|" "s|  width: .*|  width: 160|" "s|  height: .*|  height: 120|"
 
 # Bad input: exit 2, the message names file, key, value and rule; nothing is written.
 sed 's|    turbidity: .*|    turbidity: {uniform: [1.6, 0.7]}|' "$spec" >"$out/bad.yaml"

@@ -11,12 +11,9 @@ out=$(mktemp -d)
 trap 'rm -rf "$out"' EXIT
 fail() { echo "FAIL: $*"; exit 1; }
 spec="$out/spec.yaml"
-sed -e "s|^base_world: .*|base_world: $ws/worlds/pipe_inspection/world.yaml|" \
-    -e "s|^cameras_config: .*|cameras_config: $ws/config/sensors/bluerov2_cameras.yaml|" \
-    -e "s|  frames: .*|  frames: 150|" -e "s|    preset: {choice: .*|    preset: IB|" \
-    -e "s|  kind: {choice: .*|  kind: follow_pipe|" -e "s|  altitude_m: {uniform: .*|  altitude_m: 1.5|" \
-    -e "s|  lateral_offset_m: .*|  lateral_offset_m: 0.0|" \
-    "$ws/config/datagen/pipe_survey.yaml" >"$spec"
+shipped_spec "$spec" "s|  frames: .*|  frames: 150|" "s|    preset: {choice: .*|    preset: IB|" \
+  "s|  kind: {choice: .*|  kind: follow_pipe|" "s|  altitude_m: {uniform: .*|  altitude_m: 1.5|" \
+  "s|  lateral_offset_m: .*|  lateral_offset_m: 0.0|"
 unav datagen "$spec" -n 1 --out "$out/d" >"$out/datagen.log" 2>&1 || { tail "$out/datagen.log"; fail "datagen"; }
 s="$out/d/sample_000000"
 

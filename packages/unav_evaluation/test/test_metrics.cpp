@@ -1,4 +1,5 @@
 #include <gtest/gtest.h>
+#include "unav_common/thrown.hpp"
 
 #include <cmath>
 #include <filesystem>
@@ -38,15 +39,6 @@ std::string write_temp(const std::string& name, const std::string& text) {
   std::string p = ::testing::TempDir() + name;
   std::ofstream(p) << text;
   return p;
-}
-
-std::string error_of(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const TrajectoryError& e) {
-    return e.what();
-  }
-  return "";
 }
 
 }  // namespace
@@ -160,21 +152,27 @@ TEST(Tum, RoundTripAndAssociation) {
 }
 
 TEST(Tum, BadFilesGiveLineNumberedErrors) {
-  EXPECT_NE(error_of([&] {
+  EXPECT_NE(unav::common::thrown_message<TrajectoryError>([&] {
               read_tum(write_temp("cols.tum", "# x\n1 0 0 0 0 0 0 1\n2 0 0 0 0 0 1\n"));
             }).find("cols.tum:3: expected 8 columns"),
             std::string::npos);
-  EXPECT_NE(
-      error_of([&] { read_tum(write_temp("time.tum", "2 0 0 0 0 0 0 1\n1 0 0 0 0 0 0 1\n")); }).find("time.tum:2"),
-      std::string::npos);
-  EXPECT_NE(error_of([&] { read_tum(write_temp("nan.tum", "1 nan 0 0 0 0 0 1\n")); }).find("nan.tum:1"),
+  EXPECT_NE(unav::common::thrown_message<TrajectoryError>([&] {
+              read_tum(write_temp("time.tum", "2 0 0 0 0 0 0 1\n1 0 0 0 0 0 0 1\n"));
+            }).find("time.tum:2"),
             std::string::npos);
-  EXPECT_NE(error_of([&] { read_tum(write_temp("quat.tum", "1 0 0 0 0 0 0 2\n")); }).find("quaternion"),
+  EXPECT_NE(unav::common::thrown_message<TrajectoryError>([&] {
+              read_tum(write_temp("nan.tum", "1 nan 0 0 0 0 0 1\n"));
+            }).find("nan.tum:1"),
+            std::string::npos);
+  EXPECT_NE(unav::common::thrown_message<TrajectoryError>([&] {
+              read_tum(write_temp("quat.tum", "1 0 0 0 0 0 0 2\n"));
+            }).find("quaternion"),
             std::string::npos);
   Trajectory a, b;
   a.push_back(0, Eigen::Isometry3d::Identity());
   b.push_back(50, Eigen::Isometry3d::Identity());
-  EXPECT_NE(error_of([&] { associate(a, b); }).find("do not overlap"), std::string::npos);
+  EXPECT_NE(unav::common::thrown_message<TrajectoryError>([&] { associate(a, b); }).find("do not overlap"),
+            std::string::npos);
 }
 
 TEST(Tum, RepeatedStampsAreKeptAndAssociatedAsEvoDoes) {
@@ -196,9 +194,11 @@ TEST(Tum, RepeatedStampsAreKeptAndAssociatedAsEvoDoes) {
   EXPECT_DOUBLE_EQ(ref_a.poses[1].translation().x(), 1.0);  // 1.1, not 1.2
   EXPECT_DOUBLE_EQ(ref_a.poses[2].translation().x(), 2.0);
   // A stamp that goes back is an error naming the timestamp column and its value (not qw's).
-  const std::string e = error_of([&] { read_tum(write_temp("back.tum", "2.5 0 0 0 0 0 0 1\n1.25 0 0 0 0 0 0 1\n")); });
+  const std::string e = unav::common::thrown_message<TrajectoryError>(
+      [&] { read_tum(write_temp("back.tum", "2.5 0 0 0 0 0 0 1\n1.25 0 0 0 0 0 0 1\n")); });
   EXPECT_NE(e.find("back.tum:2: column 1 (timestamp): 1.25 is before the previous stamp 2.5"), std::string::npos) << e;
-  const std::string c = error_of([&] { read_tum(write_temp("col.tum", "1 0 0 x 0 0 0 1\n")); });
+  const std::string c =
+      unav::common::thrown_message<TrajectoryError>([&] { read_tum(write_temp("col.tum", "1 0 0 x 0 0 0 1\n")); });
   EXPECT_NE(c.find("col.tum:1: column 4 (tz): 'x' is not a number"), std::string::npos) << c;
 }
 
@@ -225,10 +225,16 @@ TEST(Kitti, ReadsPosesPairsByIndexAndChecksRotations) {
   Trajectory shorter = k;
   shorter.stamps.pop_back();
   shorter.poses.pop_back();
-  EXPECT_NE(error_of([&] { pair_by_index(k, shorter); }).find("same number of poses"), std::string::npos);
-  EXPECT_NE(error_of([&] { read_kitti(write_temp("r.kitti", "2 0 0 0 0 1 0 0 0 0 1 0\n")); }).find("not a rotation"),
+  EXPECT_NE(
+      unav::common::thrown_message<TrajectoryError>([&] { pair_by_index(k, shorter); }).find("same number of poses"),
+      std::string::npos);
+  EXPECT_NE(unav::common::thrown_message<TrajectoryError>([&] {
+              read_kitti(write_temp("r.kitti", "2 0 0 0 0 1 0 0 0 0 1 0\n"));
+            }).find("not a rotation"),
             std::string::npos);
-  EXPECT_NE(error_of([&] { read_kitti(write_temp("n.kitti", "1 0 0 0 0 1 0 0 0 0 1\n")); }).find("expected 12 columns"),
+  EXPECT_NE(unav::common::thrown_message<TrajectoryError>([&] {
+              read_kitti(write_temp("n.kitti", "1 0 0 0 0 1 0 0 0 0 1\n"));
+            }).find("expected 12 columns"),
             std::string::npos);
 }
 
@@ -246,7 +252,9 @@ TEST(Euroc, ReadsNanosecondsAndWxyzQuaternionsIgnoringExtraColumns) {
   const Eigen::Quaterniond q(t.poses[0].linear());
   EXPECT_NEAR(std::abs(q.w()), 0.534108 / Eigen::Vector4d(0.534108, -0.153029, -0.827383, -0.082152).norm(), 1e-6);
   EXPECT_NEAR(t.poses[0].translation().x(), 4.688319, 1e-12);
-  EXPECT_NE(error_of([&] { read_euroc_csv(write_temp("e.csv", "1,2,3\n")); }).find("at least 8 columns"),
+  EXPECT_NE(unav::common::thrown_message<TrajectoryError>([&] {
+              read_euroc_csv(write_temp("e.csv", "1,2,3\n"));
+            }).find("at least 8 columns"),
             std::string::npos);
   EXPECT_THROW(trajectory_format_from_string("bag2"), TrajectoryError);
 }

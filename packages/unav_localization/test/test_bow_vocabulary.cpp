@@ -11,6 +11,7 @@
 #include <gtest/gtest.h>
 #include <opencv2/features2d.hpp>
 #include <opencv2/imgproc.hpp>
+#include "unav_common/thrown.hpp"
 
 namespace ul = unav::localization;
 namespace fs = std::filesystem;
@@ -89,16 +90,6 @@ std::string ReadAll(const fs::path& p) {
 void WriteAll(const fs::path& p, const std::string& s) {
   std::ofstream f(p, std::ios::binary | std::ios::trunc);
   f.write(s.data(), static_cast<std::streamsize>(s.size()));
-}
-
-template <class F>
-std::string ThrownMessage(F f) {
-  try {
-    f();
-  } catch (const std::runtime_error& e) {
-    return e.what();
-  }
-  return "<nothing thrown>";
 }
 
 /// A small vocabulary on random descriptors, shared by tests that only need some vocabulary.
@@ -393,13 +384,13 @@ TEST(BowVocabulary, LoadRejectsBadFiles) {
   const std::string bytes = ReadAll(good);
 
   const fs::path missing = dir.path / "missing.bin";
-  std::string m = ThrownMessage([&] { ul::BowVocabulary::Load(missing.string()); });
+  std::string m = unav::common::thrown_message<std::runtime_error>([&] { ul::BowVocabulary::Load(missing.string()); });
   EXPECT_NE(m.find(missing.string()), std::string::npos) << m;
 
   const fs::path truncated = dir.path / "truncated.bin";
   for (size_t keep : {size_t{0}, size_t{5}, size_t{20}, bytes.size() / 2, bytes.size() - 1}) {
     WriteAll(truncated, bytes.substr(0, keep));
-    m = ThrownMessage([&] { ul::BowVocabulary::Load(truncated.string()); });
+    m = unav::common::thrown_message<std::runtime_error>([&] { ul::BowVocabulary::Load(truncated.string()); });
     EXPECT_NE(m.find(truncated.string()), std::string::npos) << m;
     EXPECT_NE(m.find("truncated"), std::string::npos) << "keep " << keep << ": " << m;
   }
@@ -408,7 +399,7 @@ TEST(BowVocabulary, LoadRejectsBadFiles) {
   std::string bad = bytes;
   bad[0] = 'X';
   WriteAll(magic, bad);
-  m = ThrownMessage([&] { ul::BowVocabulary::Load(magic.string()); });
+  m = unav::common::thrown_message<std::runtime_error>([&] { ul::BowVocabulary::Load(magic.string()); });
   EXPECT_NE(m.find(magic.string()), std::string::npos) << m;
   EXPECT_NE(m.find("magic"), std::string::npos) << m;
 
@@ -416,14 +407,14 @@ TEST(BowVocabulary, LoadRejectsBadFiles) {
   bad = bytes;
   bad[8] = 9;
   WriteAll(version, bad);
-  m = ThrownMessage([&] { ul::BowVocabulary::Load(version.string()); });
+  m = unav::common::thrown_message<std::runtime_error>([&] { ul::BowVocabulary::Load(version.string()); });
   EXPECT_NE(m.find("version 9"), std::string::npos) << m;
 
   const fs::path corrupt = dir.path / "corrupt.bin";
   bad = bytes;
   bad[bytes.size() / 2] ^= 0x10;
   WriteAll(corrupt, bad);
-  m = ThrownMessage([&] { ul::BowVocabulary::Load(corrupt.string()); });
+  m = unav::common::thrown_message<std::runtime_error>([&] { ul::BowVocabulary::Load(corrupt.string()); });
   EXPECT_NE(m.find(corrupt.string()), std::string::npos) << m;
   EXPECT_NE(m.find("checksum"), std::string::npos) << m;
 
@@ -445,19 +436,21 @@ TEST(BowVocabulary, LoadRejectsBadFiles) {
     bad = bytes;
     for (int i = 0; i < 4; ++i) bad[28 + 4 * field + i] = field == 2 ? '\xff' : '\0';
     WriteAll(inconsistent, with_checksum(bad));
-    m = ThrownMessage([&] { ul::BowVocabulary::Load(inconsistent.string()); });
+    m = unav::common::thrown_message<std::runtime_error>([&] { ul::BowVocabulary::Load(inconsistent.string()); });
     EXPECT_NE(m.find(inconsistent.string()), std::string::npos) << m;
     EXPECT_NE(m.find("inconsistent"), std::string::npos) << m;
   }
 
   const fs::path longer = dir.path / "longer.bin";
   WriteAll(longer, bytes + "x");
-  m = ThrownMessage([&] { ul::BowVocabulary::Load(longer.string()); });
+  m = unav::common::thrown_message<std::runtime_error>([&] { ul::BowVocabulary::Load(longer.string()); });
   EXPECT_NE(m.find("unexpected bytes"), std::string::npos) << m;
 
-  m = ThrownMessage([&] { ul::BowVocabulary().Save((dir.path / "empty.bin").string()); });
+  m = unav::common::thrown_message<std::runtime_error>(
+      [&] { ul::BowVocabulary().Save((dir.path / "empty.bin").string()); });
   EXPECT_NE(m.find("empty.bin"), std::string::npos) << m;
-  m = ThrownMessage([&] { voc.Save((dir.path / "no_such_dir" / "v.bin").string()); });
+  m = unav::common::thrown_message<std::runtime_error>(
+      [&] { voc.Save((dir.path / "no_such_dir" / "v.bin").string()); });
   EXPECT_NE(m.find("no_such_dir"), std::string::npos) << m;
 }
 

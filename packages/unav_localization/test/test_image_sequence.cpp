@@ -7,6 +7,7 @@
 #include <fstream>
 #include <string>
 
+#include "unav_common/thrown.hpp"
 #include "unav_localization/image_sequence.hpp"
 
 namespace ul = unav::localization;
@@ -17,17 +18,6 @@ std::string write(const std::string& name, const std::string& text) {
   const std::string p = ::testing::TempDir() + name;
   std::ofstream(p) << text;
   return p;
-}
-
-// The InputError's message of f(), or "" when it does not throw.
-template <class F>
-std::string error_of(F f) {
-  try {
-    f();
-  } catch (const ul::InputError& e) {
-    return e.what();
-  }
-  return "";
 }
 
 }  // namespace
@@ -52,15 +42,19 @@ TEST(AidingLogs, ImuSamplesOfOurLogAndOfEuroc) {
   EXPECT_NEAR(euroc[1].stamp - euroc[0].stamp, 0.005, 1e-6);  // 200 Hz
   EXPECT_NEAR(euroc[0].accel.x(), 8.1476, 1e-12);
   // Bad lines: named by file and line.
-  const std::string e1 = error_of([] { ul::ReadImuSamples(write("bad_imu.txt", "0.1 0 0 0 0 0\n")); });
+  const std::string e1 =
+      unav::common::thrown_message<ul::InputError>([] { ul::ReadImuSamples(write("bad_imu.txt", "0.1 0 0 0 0 0\n")); });
   EXPECT_NE(e1.find("bad_imu.txt:1"), std::string::npos) << e1;
-  const std::string e2 =
-      error_of([] { ul::ReadImuSamples(write("back_imu.txt", "0.2 0 0 0 0 0 -9.8\n0.1 0 0 0 0 0 -9.8\n")); });
+  const std::string e2 = unav::common::thrown_message<ul::InputError>(
+      [] { ul::ReadImuSamples(write("back_imu.txt", "0.2 0 0 0 0 0 -9.8\n0.1 0 0 0 0 0 -9.8\n")); });
   EXPECT_NE(e2.find("back_imu.txt:2"), std::string::npos) << e2;
   EXPECT_NE(e2.find("increase"), std::string::npos) << e2;
-  const std::string e3 = error_of([] { ul::ReadImuSamples(write("nan_imu.txt", "0.1 0 nan 0 0 0 -9.8\n")); });
+  const std::string e3 = unav::common::thrown_message<ul::InputError>(
+      [] { ul::ReadImuSamples(write("nan_imu.txt", "0.1 0 nan 0 0 0 -9.8\n")); });
   EXPECT_NE(e3.find("nan_imu.txt:1"), std::string::npos) << e3;
-  EXPECT_NE(error_of([] { ul::ReadImuSamples(::testing::TempDir() + "no_such_imu.txt"); }).find("cannot be read"),
+  EXPECT_NE(unav::common::thrown_message<ul::InputError>([] {
+              ul::ReadImuSamples(::testing::TempDir() + "no_such_imu.txt");
+            }).find("cannot be read"),
             std::string::npos);
 }
 
@@ -87,15 +81,15 @@ TEST(AidingLogs, DvlReadingsKeepTheirLock) {
   EXPECT_FALSE(d[1].valid);
   EXPECT_EQ(d[1].velocity, Eigen::Vector3d::Zero());
   EXPECT_TRUE(d[2].valid);
-  const std::string e = error_of([] { ul::ReadDvlSamples(write("bad_dvl.csv", "0,1,nan,0,0,1.5\n")); });
+  const std::string e = unav::common::thrown_message<ul::InputError>(
+      [] { ul::ReadDvlSamples(write("bad_dvl.csv", "0,1,nan,0,0,1.5\n")); });
   EXPECT_NE(e.find("bad_dvl.csv:1"), std::string::npos) << e;
 }
 
 TEST(AidingLogs, CameraMountFromADatasetManifest) {
   // The down camera of the default vehicle: 0.1 m ahead, 0.12 m below the body origin, looking down.
-  const auto X = ul::ReadCameraMount(
-      write("manifest.json",
-            R"({"camera": {"mount_known": true, "mount_xyz_m": [0.1, 0.0, 0.12],
+  const auto X = ul::ReadCameraMount(write("manifest.json",
+                                           R"({"camera": {"mount_known": true, "mount_xyz_m": [0.1, 0.0, 0.12],
                 "mount_quaternion_xyzw": [0.0, 0.0, 0.7071067811865476, 0.7071067811865476]}})"));
   ASSERT_TRUE(X.has_value());
   EXPECT_TRUE(X->translation().isApprox(Eigen::Vector3d(0.1, 0.0, 0.12)));
@@ -104,8 +98,10 @@ TEST(AidingLogs, CameraMountFromADatasetManifest) {
       "mount_xyz_m": [0, 0, 0], "mount_quaternion_xyzw": [0, 0, 0, 1]}})"))
                    .has_value());
   EXPECT_FALSE(ul::ReadCameraMount(write("none.json", R"({"format": "tum"})")).has_value());
-  const std::string e = error_of(
-      [] { ul::ReadCameraMount(write("bad.json", R"({"camera": {"mount_xyz_m": [0, 0], "mount_quaternion_xyzw": [0, 0, 0, 1]}})")); });
+  const std::string e = unav::common::thrown_message<ul::InputError>([] {
+    ul::ReadCameraMount(
+        write("bad.json", R"({"camera": {"mount_xyz_m": [0, 0], "mount_quaternion_xyzw": [0, 0, 0, 1]}})"));
+  });
   EXPECT_NE(e.find("bad.json"), std::string::npos) << e;
   EXPECT_NE(e.find("camera.mount_xyz_m"), std::string::npos) << e;
 }
@@ -137,7 +133,7 @@ TEST(AidingLogs, EurocCameraFolderSensorFileAndMount) {
   ASSERT_TRUE(X.has_value());
   EXPECT_TRUE(X->translation().isApprox(Eigen::Vector3d(0.1, 0.0, 0.12)));
   EXPECT_TRUE(X->linear().isApprox(Eigen::AngleAxisd(M_PI / 2, Eigen::Vector3d::UnitZ()).toRotationMatrix(), 1e-12));
-  const std::string e = error_of([] {
+  const std::string e = unav::common::thrown_message<ul::InputError>([] {
     ul::ReadCameraMount(write("shear.yaml", "T_BS: {data: [2, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1]}\n"));
   });
   EXPECT_NE(e.find("shear.yaml"), std::string::npos) << e;

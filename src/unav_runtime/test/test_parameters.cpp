@@ -1,4 +1,5 @@
 #include <gtest/gtest.h>
+#include "unav_common/thrown.hpp"
 
 #include <cmath>
 #include <cstdio>
@@ -25,15 +26,6 @@ RosArgs args_with(const std::vector<std::string>& files, const std::vector<Param
   return a;
 }
 
-std::string error_of(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const ConfigError& e) {
-    return e.what();
-  }
-  return "";
-}
-
 }  // namespace
 
 TEST(Parameters, FileMatchingAndPrecedence) {
@@ -54,14 +46,17 @@ TEST(Parameters, FileMatchingAndPrecedence) {
 }
 
 TEST(Parameters, BadFilesNameTheFile) {
-  const std::string missing = error_of([] { ParameterOverrides(args_with({"/nonexistent/p.yaml"}), "/", "n"); });
+  const std::string missing = unav::common::thrown_message<ConfigError>(
+      [] { ParameterOverrides(args_with({"/nonexistent/p.yaml"}), "/", "n"); });
   EXPECT_NE(missing.find("/nonexistent/p.yaml"), std::string::npos) << missing;
   const auto bad = write_temp("bad.yaml", "talker:\n  ros__parameters:\n    rate: [1, 2\n");
-  const std::string malformed = error_of([&] { ParameterOverrides(args_with({bad}), "/", "talker"); });
+  const std::string malformed =
+      unav::common::thrown_message<ConfigError>([&] { ParameterOverrides(args_with({bad}), "/", "talker"); });
   EXPECT_NE(malformed.find("bad.yaml"), std::string::npos) << malformed;
   EXPECT_NE(malformed.find("line"), std::string::npos) << malformed;
   const auto layout = write_temp("layout.yaml", "talker:\n  rate: 1\n");
-  const std::string wrong_layout = error_of([&] { ParameterOverrides(args_with({layout}), "/", "talker"); });
+  const std::string wrong_layout =
+      unav::common::thrown_message<ConfigError>([&] { ParameterOverrides(args_with({layout}), "/", "talker"); });
   EXPECT_NE(wrong_layout.find("ros__parameters"), std::string::npos) << wrong_layout;
 }
 
@@ -69,12 +64,14 @@ TEST(Parameters, BadFilesNameTheFile) {
 // YAML::TypedBadConversion; now a ParameterError naming the file, the place and the line.
 TEST(Parameters, NonScalarKeysNameTheFileAndLine) {
   const auto top = write_temp("complex_top.yaml", "? [a, b]\n: {ros__parameters: {rate: 1}}\n");
-  const std::string e1 = error_of([&] { ParameterOverrides(args_with({top}), "/", "talker"); });
+  const std::string e1 =
+      unav::common::thrown_message<ConfigError>([&] { ParameterOverrides(args_with({top}), "/", "talker"); });
   EXPECT_NE(e1.find("complex_top.yaml"), std::string::npos) << e1;
   EXPECT_NE(e1.find("at the top level at line 1 is a list"), std::string::npos) << e1;
   const auto inner =
       write_temp("complex_inner.yaml", "talker:\n  ros__parameters:\n    gains:\n      ? {x: 1}\n      : 2\n");
-  const std::string e2 = error_of([&] { ParameterOverrides(args_with({inner}), "/", "talker"); });
+  const std::string e2 =
+      unav::common::thrown_message<ConfigError>([&] { ParameterOverrides(args_with({inner}), "/", "talker"); });
   EXPECT_NE(e2.find("complex_inner.yaml"), std::string::npos) << e2;
   EXPECT_NE(e2.find("under 'gains' at line 4 is a map"), std::string::npos) << e2;
 }

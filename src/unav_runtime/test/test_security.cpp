@@ -2,6 +2,7 @@
 // real Fast DDS with its built-in plugins, what it must deny: a participant without keys can
 // neither read a secured topic nor drive the vehicle, and an enclave is held to its permissions.
 #include <gtest/gtest.h>
+#include "unav_common/thrown.hpp"
 
 #include <unistd.h>
 
@@ -62,16 +63,6 @@ ContextOptions unsecured() {
   return o;
 }
 
-template <class F>
-std::string error_of(F&& f) {
-  try {
-    f();
-  } catch (const std::exception& e) {
-    return e.what();
-  }
-  return "";
-}
-
 }  // namespace
 
 TEST(Keystore, HasTheSros2LayoutAndVerifiableSignatures) {
@@ -103,8 +94,9 @@ TEST(Keystore, HasTheSros2LayoutAndVerifiableSignatures) {
   p7s.replace(at, 16, "<topic>X</topic>");
   const fs::path forged = fs::path(::testing::TempDir()) / "forged.p7s";
   std::ofstream(forged) << p7s;
-  EXPECT_NE(error_of([&] { sec::verify_signed(keystore(), forged.string()); }).find("does not verify"),
-            std::string::npos);
+  EXPECT_NE(
+      unav::common::thrown_message([&] { sec::verify_signed(keystore(), forged.string()); }).find("does not verify"),
+      std::string::npos);
   // An identity from another keystore is not accepted by this one's CA.
   const std::string other = ::testing::TempDir() + "unav_other_keystore_" + std::to_string(::getpid());
   fs::remove_all(other);
@@ -113,14 +105,16 @@ TEST(Keystore, HasTheSros2LayoutAndVerifiableSignatures) {
   fs::copy_file(fs::path(other) / "enclaves/rov/trusted/cert.pem", fs::path(other) / "foreign.pem");
   fs::copy_file(fs::path(keystore()) / "public/ca.cert.pem", fs::path(other) / "public/ca.cert.pem",
                 fs::copy_options::overwrite_existing);
-  EXPECT_NE(error_of([&] { sec::verify_identity(other, "/rov/trusted"); }).find("not issued by"), std::string::npos);
+  EXPECT_NE(unav::common::thrown_message([&] { sec::verify_identity(other, "/rov/trusted"); }).find("not issued by"),
+            std::string::npos);
 }
 
 TEST(Keystore, RejectsBadInputNamingIt) {
-  EXPECT_NE(error_of([] { sec::create_keystore(keystore()); }).find("already exists"), std::string::npos);
-  const std::string bad = error_of([] { sec::create_enclave(keystore(), "rov/no_slash"); });
+  EXPECT_NE(unav::common::thrown_message([] { sec::create_keystore(keystore()); }).find("already exists"),
+            std::string::npos);
+  const std::string bad = unav::common::thrown_message([] { sec::create_enclave(keystore(), "rov/no_slash"); });
   EXPECT_NE(bad.find("enclave 'rov/no_slash'"), std::string::npos) << bad;
-  const std::string none = error_of([] { sec::create_enclave("/nonexistent/ks", "/a"); });
+  const std::string none = unav::common::thrown_message([] { sec::create_enclave("/nonexistent/ks", "/a"); });
   EXPECT_NE(none.find("create_keystore /nonexistent/ks"), std::string::npos) << none;
 }
 
@@ -152,12 +146,14 @@ TEST(Keystore, Sros2PolicyResolvesTopicsAndServices) {
   EXPECT_LT(xml.find("<deny_rule>"), xml.find("<allow_rule>"));  // first match wins: deny first
   EXPECT_NE(xml.find("<default>DENY</default>"), std::string::npos);
 
-  EXPECT_NE(error_of([&] { sec::load_policy(path, "/rov/other"); }).find("no <enclave path=\"/rov/other\">"),
+  EXPECT_NE(unav::common::thrown_message([&] {
+              sec::load_policy(path, "/rov/other");
+            }).find("no <enclave path=\"/rov/other\">"),
             std::string::npos);
   std::ofstream(path) << "<policy><enclaves><enclave path=\"/a\"><profiles><profile ns=\"/\" node=\"n\">\n"
                          "<topics publish=\"MAYBE\"><topic>x</topic></topics></profile></profiles></enclave>"
                          "</enclaves></policy>";
-  const std::string msg = error_of([&] { sec::load_policy(path, "/a"); });
+  const std::string msg = unav::common::thrown_message([&] { sec::load_policy(path, "/a"); });
   EXPECT_NE(msg.find("policy.xml:2: <topics> publish=\"MAYBE\": expected ALLOW or DENY"), std::string::npos) << msg;
 }
 
@@ -186,7 +182,7 @@ TEST(Keystore, EnvironmentSwitchesFollowRos2) {
   EXPECT_FALSE(sec::participant_properties(env, "", &warning));
   EXPECT_NE(warning.find("WITHOUT security"), std::string::npos) << warning;
   env.enforce = true;
-  const std::string msg = error_of([&] { sec::participant_properties(env, ""); });
+  const std::string msg = unav::common::thrown_message([&] { sec::participant_properties(env, ""); });
   EXPECT_NE(msg.find("Enforce"), std::string::npos) << msg;
   EXPECT_NE(msg.find("unav security create_enclave " + keystore() + " /rov/unknown"), std::string::npos) << msg;
 }
@@ -265,16 +261,16 @@ TEST(SecureDds, EnclaveIsHeldToItsPermissions) {
   Context ctx(secured("/rov/teleop"));
   Node teleop("teleop", {&ctx}, "rov");
   EXPECT_NO_THROW(teleop.create_publisher<unav_msgs::msg::ThrusterCommand>("thrusters/command", QoS::reliable()));
-  const std::string read_error = error_of([&] {
+  const std::string read_error = unav::common::thrown_message([&] {
     teleop.create_subscription<nav_msgs::msg::Odometry>("ground_truth/odom", QoS::reliable(),
                                                         [](const nav_msgs::msg::Odometry&) {});
   });
   EXPECT_NE(read_error.find("reader on 'rt/rov/ground_truth/odom'"), std::string::npos) << read_error;
   EXPECT_NE(read_error.find("enclave '/rov/teleop'"), std::string::npos) << read_error;
-  const std::string write_error =
-      error_of([&] { teleop.create_publisher<nav_msgs::msg::Odometry>("ground_truth/odom", QoS::reliable()); });
+  const std::string write_error = unav::common::thrown_message(
+      [&] { teleop.create_publisher<nav_msgs::msg::Odometry>("ground_truth/odom", QoS::reliable()); });
   EXPECT_NE(write_error.find("writer on 'rt/rov/ground_truth/odom'"), std::string::npos) << write_error;
-  EXPECT_EQ(error_of([&] {
+  EXPECT_EQ(unav::common::thrown_message([&] {
               teleop.create_subscription<unav_msgs::msg::ThrusterCommand>(
                   "thrusters/command", QoS::reliable(), [](const unav_msgs::msg::ThrusterCommand&) {});
             }).empty(),
@@ -283,6 +279,6 @@ TEST(SecureDds, EnclaveIsHeldToItsPermissions) {
 
 TEST(SecureDds, EnforceWithoutKeysRefusesToStart) {
   ContextOptions o = secured("/rov/nobody");
-  const std::string msg = error_of([&] { Context ctx(o); });
+  const std::string msg = unav::common::thrown_message([&] { Context ctx(o); });
   EXPECT_NE(msg.find("create_enclave"), std::string::npos) << msg;
 }
