@@ -8,6 +8,7 @@
 
 #include "unav_common/errors.hpp"
 #include "unav_datagen/dataset_writer.hpp"
+#include "unav_scene/noise.hpp"
 #include "unav_scene/scenario.hpp"
 
 namespace fs = std::filesystem;
@@ -131,7 +132,16 @@ std::vector<PathPoint> plan_trajectory(const DatagenSample& s, const unav::scene
         poly.emplace_back(lo.x() + (hi.x() - lo.x()) * rng.Uniform01(), lo.y() + (hi.y() - lo.y()) * rng.Uniform01());
     }
   }
-  // Resample every step_m along the polyline; heading along the path.
+  // Resample every step_m along the polyline; heading along the path, off it by the pilot's wander:
+  // smooth noise of the arc length (value noise, one lattice value every wander_length_m, mapped
+  // to [-1, 1)), its own seed per component.
+  const auto seed32 = static_cast<std::uint32_t>(
+      unav::common::KeySeed(static_cast<std::uint64_t>(s.seed), "trajectory.wander") & 0xFFFFFFFFu);
+  auto wander = [&](double arc, std::uint32_t component) {
+    return 2.0 * unav::scene::noise::fbm2(arc / s.trajectory.wander_length_m, 0.5, seed32 + 7919U * component, 1) -
+           1.0;
+  };
+  const double yaw_wander = s.trajectory.heading_wander_deg * M_PI / 180.0;
   std::vector<PathPoint> out;
   double next = 0.0, travelled = 0.0;  // arc length of the next point, of the segment start
   for (size_t i = 0; i + 1 < poly.size(); ++i) {
@@ -142,8 +152,12 @@ std::vector<PathPoint> plan_trajectory(const DatagenSample& s, const unav::scene
     for (; next <= travelled + L; next += step_m) {
       const Eigen::Vector2d p = a + (b - a) * ((next - travelled) / L);
       PathPoint pp;
-      pp.yaw = yaw;
-      pp.p_W = Eigen::Vector3d(p.x(), p.y(), world.seabed.depth_at(p.x(), p.y()) - alt);
+      pp.yaw = yaw + (yaw_wander > 0.0 ? yaw_wander * wander(next, 0) : 0.0);
+      // Never closer to the seabed than 0.3 m (the DVL's and the contact's margin).
+      const double dz = s.trajectory.altitude_wander_m > 0.0
+                            ? std::min(s.trajectory.altitude_wander_m * wander(next, 1), alt - 0.3)
+                            : 0.0;
+      pp.p_W = Eigen::Vector3d(p.x(), p.y(), world.seabed.depth_at(p.x(), p.y()) - alt - dz);
       out.push_back(pp);
     }
     travelled += L;

@@ -155,10 +155,12 @@ TEST(SampleWorld, FollowsTheDrawAndCarriesTheCurrentAndThePath) {
   EXPECT_TRUE(unav::datagen::write_sample_current(patched({"current.speed_mps=0"}).sample(3), dir).empty());
   fs::remove_all(dir);
 
-  // The path: every point at the sample's altitude above the seabed, 0.1 m apart.
+  // The path: every point at the sample's altitude above the seabed (no altitude wander here: the
+  // wander has its own test), 0.1 m apart.
   for (const char* kind : {"follow_pipe", "lawnmower", "random_waypoints"}) {
     DatagenSample k = s;
     k.trajectory.kind = kind;
+    k.trajectory.altitude_wander_m = 0.0;
     const auto path = unav::datagen::plan_trajectory(k, w, 0.1);
     ASSERT_GT(path.size(), 10u) << kind;
     for (size_t i = 0; i < path.size(); ++i) {
@@ -212,6 +214,44 @@ TEST(RandomizationSpec, CameraPipelineKeysRandomize) {
   const std::string e = error_of("camera.jpeg_quality=101");
   EXPECT_NE(e.find("camera.jpeg_quality"), std::string::npos) << e;
   EXPECT_NE(error_of("camera.white_balance=daylight").find("camera.white_balance"), std::string::npos);
+}
+
+TEST(SampleWorld, PilotWanderTurnsAndLiftsThePathSmoothly) {
+  // follow_pipe with a heading wander of 20 deg and an altitude wander of 0.4 m over 4 m: the
+  // path's points stay where they were across track, their yaw leaves the pipe's heading by at most
+  // 20 deg (and by > 4 deg on average: it does wander), changes by < 1 deg per 5 cm point (smooth
+  // over 4 m), and their height above the seabed stays within 1.5 +- 0.4 m; without wander the
+  // path is the pipe's, heading and altitude exact.
+  const auto plain = patched({"trajectory.kind=follow_pipe", "trajectory.altitude_m=1.5",
+                              "trajectory.lateral_offset_m=0.0", "trajectory.heading_wander_deg=0",
+                              "trajectory.altitude_wander_m=0"});
+  const auto wander = patched({"trajectory.kind=follow_pipe", "trajectory.altitude_m=1.5",
+                               "trajectory.lateral_offset_m=0.0", "trajectory.heading_wander_deg=20",
+                               "trajectory.altitude_wander_m=0.4", "trajectory.wander_length_m=4"});
+  const DatagenSample s0 = plain.sample(2), s1 = wander.sample(2);
+  const unav::scene::World w = world_of(s0);
+  const auto a = unav::datagen::plan_trajectory(s0, w, 0.05), b = unav::datagen::plan_trajectory(s1, w, 0.05);
+  ASSERT_EQ(a.size(), b.size());
+  double mean_off = 0.0, worst_step = 0.0, lo = 1e9, hi = -1e9;
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    EXPECT_NEAR(a[i].p_W.head<2>().x(), b[i].p_W.head<2>().x(), 1e-9);
+    const double off = std::remainder(b[i].yaw - a[i].yaw, 2.0 * M_PI);
+    EXPECT_LE(std::abs(off), 20.0 * M_PI / 180.0 + 1e-9);
+    mean_off += std::abs(off) / static_cast<double>(a.size());
+    if (i > 0 && a[i].yaw == a[i - 1].yaw)
+      worst_step = std::max(worst_step, std::abs(std::remainder(b[i].yaw - b[i - 1].yaw, 2.0 * M_PI)));
+    const double alt = w.seabed.depth_at(b[i].p_W.x(), b[i].p_W.y()) - b[i].p_W.z();
+    lo = std::min(lo, alt);
+    hi = std::max(hi, alt);
+    EXPECT_NEAR(w.seabed.depth_at(a[i].p_W.x(), a[i].p_W.y()) - a[i].p_W.z(), 1.5, 1e-9);
+  }
+  std::printf("wander: mean heading offset %.1f deg, largest step %.2f deg, altitude %.2f..%.2f m\n",
+              mean_off * 180.0 / M_PI, worst_step * 180.0 / M_PI, lo, hi);
+  EXPECT_GT(mean_off, 4.0 * M_PI / 180.0);
+  EXPECT_LT(worst_step, 1.0 * M_PI / 180.0);
+  EXPECT_GE(lo, 1.1 - 1e-9);
+  EXPECT_LE(hi, 1.9 + 1e-9);
+  EXPECT_GT(hi - lo, 0.2);
 }
 
 TEST(RandomizationSpec, DocumentationListsEveryKey) {

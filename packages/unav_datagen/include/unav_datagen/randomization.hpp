@@ -87,6 +87,9 @@ struct DatagenTrajectory {
   double lateral_offset_m = 0.0;
   double lane_spacing_m = 3.0;
   int waypoints = 6;
+  double heading_wander_deg = 0.0;
+  double altitude_wander_m = 0.0;
+  double wander_length_m = 4.0;
 
   template <class Archive>
   void Serialize(Archive* a) {
@@ -97,6 +100,19 @@ struct DatagenTrajectory {
     a->Visit(Field("lateral_offset_m", &lateral_offset_m).Range(-10.0, 10.0).Unit("m").Doc("follow_pipe: + = right"));
     a->Visit(Field("lane_spacing_m", &lane_spacing_m).Range(0.5, 50.0).Unit("m").Doc("lawnmower lanes"));
     a->Visit(Field("waypoints", &waypoints).Range(2, 100).Doc("random_waypoints: how many"));
+    a->Visit(Field("heading_wander_deg", &heading_wander_deg)
+                 .Range(0.0, 90.0)
+                 .Unit("deg")
+                 .Doc("a pilot's heading corrections: smooth random yaw off the path, up to this much"));
+    a->Visit(Field("altitude_wander_m", &altitude_wander_m)
+                 .Range(0.0, 5.0)
+                 .Unit("m")
+                 .Doc("smooth random altitude changes, up to this much either way"));
+    a->Visit(Field("wander_length_m", &wander_length_m)
+                 .Above(0.0)
+                 .Max(100.0)
+                 .Unit("m")
+                 .Doc("path length over which the wander changes (its correlation length)"));
   }
 };
 
