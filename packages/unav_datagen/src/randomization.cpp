@@ -138,8 +138,7 @@ std::vector<PathPoint> plan_trajectory(const DatagenSample& s, const unav::scene
   const auto seed32 = static_cast<std::uint32_t>(
       unav::common::KeySeed(static_cast<std::uint64_t>(s.seed), "trajectory.wander") & 0xFFFFFFFFu);
   auto wander = [&](double arc, std::uint32_t component) {
-    return 2.0 * unav::scene::noise::fbm2(arc / s.trajectory.wander_length_m, 0.5, seed32 + 7919U * component, 1) -
-           1.0;
+    return 2.0 * unav::scene::noise::fbm2(arc / s.trajectory.wander_length_m, 0.5, seed32 + 7919U * component, 1) - 1.0;
   };
   const double yaw_wander = s.trajectory.heading_wander_deg * M_PI / 180.0;
   std::vector<PathPoint> out;

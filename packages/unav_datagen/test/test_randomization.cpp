@@ -222,12 +222,12 @@ TEST(SampleWorld, PilotWanderTurnsAndLiftsThePathSmoothly) {
   // 20 deg (and by > 4 deg on average: it does wander), changes by < 1 deg per 5 cm point (smooth
   // over 4 m), and their height above the seabed stays within 1.5 +- 0.4 m; without wander the
   // path is the pipe's, heading and altitude exact.
-  const auto plain = patched({"trajectory.kind=follow_pipe", "trajectory.altitude_m=1.5",
-                              "trajectory.lateral_offset_m=0.0", "trajectory.heading_wander_deg=0",
-                              "trajectory.altitude_wander_m=0"});
-  const auto wander = patched({"trajectory.kind=follow_pipe", "trajectory.altitude_m=1.5",
-                               "trajectory.lateral_offset_m=0.0", "trajectory.heading_wander_deg=20",
-                               "trajectory.altitude_wander_m=0.4", "trajectory.wander_length_m=4"});
+  const auto plain =
+      patched({"trajectory.kind=follow_pipe", "trajectory.altitude_m=1.5", "trajectory.lateral_offset_m=0.0",
+               "trajectory.heading_wander_deg=0", "trajectory.altitude_wander_m=0"});
+  const auto wander =
+      patched({"trajectory.kind=follow_pipe", "trajectory.altitude_m=1.5", "trajectory.lateral_offset_m=0.0",
+               "trajectory.heading_wander_deg=20", "trajectory.altitude_wander_m=0.4", "trajectory.wander_length_m=4"});
   const DatagenSample s0 = plain.sample(2), s1 = wander.sample(2);
   const unav::scene::World w = world_of(s0);
   const auto a = unav::datagen::plan_trajectory(s0, w, 0.05), b = unav::datagen::plan_trajectory(s1, w, 0.05);

@@ -263,7 +263,8 @@ std::optional<Eigen::Isometry3d> ReadCameraMount(const std::string& manifest_pat
     for (int r = 0; r < 4; ++r)
       for (int c = 0; c < 4; ++c) M(r, c) = Number(d[static_cast<std::size_t>(4 * r + c)], manifest_path, "T_BS.data");
     const Eigen::Matrix3d R = M.topLeftCorner<3, 3>();
-    if (!(R.transpose() * R).isIdentity(1e-6) || R.determinant() < 0.0 || !M.row(3).isApprox(Eigen::RowVector4d(0, 0, 0, 1)))
+    if (!(R.transpose() * R).isIdentity(1e-6) || R.determinant() < 0.0 ||
+        !M.row(3).isApprox(Eigen::RowVector4d(0, 0, 0, 1)))
       throw InputError(manifest_path + ": T_BS must be a rigid transform");
     Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
     X.linear() = Eigen::Quaterniond(R).normalized().toRotationMatrix();

@@ -15,7 +15,7 @@ namespace ul = unav::localization;
 namespace {
 
 std::string write(const std::string& name, const std::string& text) {
-  const std::string p = ::testing::TempDir() + name;
+  std::string p = ::testing::TempDir() + name;
   std::ofstream(p) << text;
   return p;
 }

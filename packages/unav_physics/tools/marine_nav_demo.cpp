@@ -100,9 +100,8 @@ int main(int argc, char** argv) {
           dvl_se += (d.velocity_B - x.v_WB_B).squaredNorm();
         }
         for (int i = 0; i < 4; ++i) {
-          const Eigen::Vector3d hit =
-              x.p_WB_W + x.q_WB * (d.beam_range_m[static_cast<std::size_t>(i)] *
-                                   up::dvl_beam_B(i, vehicle.sensors.dvl.beam_angle_deg));
+          const Eigen::Vector3d hit = x.p_WB_W + x.q_WB * (d.beam_range_m[static_cast<std::size_t>(i)] *
+                                                           up::dvl_beam_B(i, vehicle.sensors.dvl.beam_angle_deg));
           dvl << d.stamp << ',' << i << ',' << d.beam_valid[static_cast<std::size_t>(i)] << ',' << hit.x() << ','
               << hit.y() << ',' << hit.z() << '\n';
         }

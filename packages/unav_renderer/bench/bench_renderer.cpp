@@ -12,8 +12,8 @@
 // lens distortion, shot and read noise, vignetting): what the pipe-inspection demo renders;
 // front_lens is it with the camera pipeline's lens on (depth of field of an 8 mm f/1.4 lens focused
 // at 0.5 m: a 2-4 px blur disc over the seabed, so every pixel of geometry gathers its 16 taps;
-// lateral colour 0.002; auto white balance), front_jpeg with JPEG quality 90. --callgrind: render `frames` frames of each
-// camera with callgrind's instrumentation on (after warm-up) and nothing else; run it as
+// lateral colour 0.002; auto white balance), front_jpeg with JPEG quality 90. --callgrind: render `frames` frames of
+// each camera with callgrind's instrumentation on (after warm-up) and nothing else; run it as
 //   valgrind --tool=callgrind --instr-atstart=no bench_unav_renderer 4 --callgrind --camera w640x480
 // and divide "Collected" by the frames: instructions per frame compare two builds without this
 // VM's timing noise (texture and memory stalls are not counted: check the direction with fps).

@@ -31,8 +31,8 @@ std::vector<std::string> add_fleet_bodies(const scene::Scenario& sc, const Fleet
 }
 
 FleetPoses::FleetPoses(unav::Node& node, const std::vector<std::string>& names,
-                       std::function<void(const std::string&, const scene::Pose&)> move,
-                       std::function<void()> on_state, unav::RejectionCounter* rejections) {
+                       const std::function<void(const std::string&, const scene::Pose&)>& move,
+                       const std::function<void()>& on_state, unav::RejectionCounter* rejections) {
   bodies_.reserve(names.size());  // the callbacks hold their element's index
   for (std::size_t i = 0; i < names.size(); ++i) {
     bodies_.push_back({names[i], INT64_MIN, nullptr});

@@ -54,8 +54,8 @@ std::vector<std::string> add_fleet_bodies(const scene::Scenario& sc, const Fleet
 class FleetPoses {
  public:
   FleetPoses(unav::Node& node, const std::vector<std::string>& names,
-             std::function<void(const std::string&, const scene::Pose&)> move, std::function<void()> on_state,
-             unav::RejectionCounter* rejections);
+             const std::function<void(const std::string&, const scene::Pose&)>& move,
+             const std::function<void()>& on_state, unav::RejectionCounter* rejections);
   bool behind(std::int64_t t_ns) const;
   std::uint64_t states() const { return states_; }
 

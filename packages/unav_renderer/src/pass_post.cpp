@@ -86,8 +86,9 @@ void Renderer::Impl::blur_levels(const Targets& t) {
 // The post program with these features compiled in (compiled on first use).
 // pixels: 0 every pixel, 1 those with geometry, 2 the water (see PIXELS in kPostFS).
 Program& Renderer::Impl::post_program(const PostFeatures& features, int pixels) {
-  static constexpr std::array<const char*, kPostFeatures> kNames = {
-      "REMAP", "FWD", "INSCATTER", "VIGNETTING", "SHOT", "READ_NOISE", "SNELL", "MOTION", "RADIANCE", "DEFOCUS", "CHROMA"};
+  static constexpr std::array<const char*, kPostFeatures> kNames = {"REMAP",    "FWD",        "INSCATTER", "VIGNETTING",
+                                                                    "SHOT",     "READ_NOISE", "SNELL",     "MOTION",
+                                                                    "RADIANCE", "DEFOCUS",    "CHROMA"};
   unsigned key = 0;
   for (std::size_t i = 0; i < features.size(); ++i) key |= (features[i] ? 1u : 0u) << i;
   key |= static_cast<unsigned>(pixels) << features.size();
@@ -143,8 +144,8 @@ void Renderer::Impl::post_pass(const Targets& t, const FrameSetup& f, const Came
   if (remap) {  // each output pixel resamples the radiance through the distortion map, + the sensor
     glBindFramebuffer(GL_FRAMEBUFFER, t.post_fbo);
     glViewport(0, 0, t.out_width, t.out_height);
-    const PostFeatures sensor{true,  false, false, vignetting, shot, read_noise, false, false,
-                              false, false, c.lens.lateral_chromatic != 0.0};
+    const PostFeatures sensor{
+        true, false, false, vignetting, shot, read_noise, false, false, false, false, c.lens.lateral_chromatic != 0.0};
     post_draw(post_program(sensor), t, t.lin_tex, f, c, seq, march_max_m, false, false, v_C, w_C);
   }
 }

@@ -270,8 +270,8 @@ void Renderer::set_object_pose(const std::string& name, const Pose& X_WO) {
     std::string names;
     for (const auto& [n, parts] : I.movable) names += (names.empty() ? "" : ", ") + n;
     throw ConfigError("Renderer::set_object_pose", "name", name,
-                      "no movable object of that name in world '" + I.world.name + "' (movable: " +
-                          (names.empty() ? "none" : names) + ")");
+                      "no movable object of that name in world '" + I.world.name +
+                          "' (movable: " + (names.empty() ? "none" : names) + ")");
   }
   if (!X_WO.matrix().allFinite())
     throw ConfigError("Renderer::set_object_pose", name, "non-finite pose", "the pose must be finite");

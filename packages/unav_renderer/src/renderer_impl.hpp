@@ -48,7 +48,7 @@ inline double process_cpu_ms() {
 struct Chunk {
   GLsizei first = 0, count = 0;  // in indices
   Eigen::Vector3f lo = Eigen::Vector3f::Zero(), hi = Eigen::Vector3f::Zero();
-  bool sun_free = false;  ///< terrain that nothing can shadow from the sun (mark_sun_free())
+  bool sun_free = false;         ///< terrain that nothing can shadow from the sun (mark_sun_free())
   bool sun_free_static = false;  ///< the same for the scene without its movable objects
   /// Terrain wholly under another terrain mesh (index; -1 none): the far seabed under the patch,
   /// which nobody standing over the patch can see (build_caster_boxes()).
@@ -241,7 +241,7 @@ struct Slot {
   bool timed = false;
   std::size_t capacity_px = 0;
   GLsync fence = nullptr;
-  Frame meta;  // everything but the pixels
+  Frame meta;            // everything but the pixels
   int jpeg_quality = 0;  // the camera's: compressed after the readback when > 0
 };
 
@@ -446,7 +446,7 @@ struct Renderer::Impl {
     MeshData world;  ///< at the pose set last (caster boxes)
   };
   std::map<std::string, std::vector<MovablePart>> movable;
-  std::vector<bool> mesh_movable;  ///< by mesh
+  std::vector<bool> mesh_movable;            ///< by mesh
   std::array<Eigen::Vector3f, 3> sun_frame;  ///< across the sunlight (u, v) and along it (s): mark_sun_free()
   float sun_pad = 0.0f;                      ///< the casters' growth for the sun map's PCF
   /// A box's extent along the sun frame's axes, and its shallowest and deepest z.

@@ -29,6 +29,7 @@
 #include <utility>
 #include <vector>
 
+#include "fleet_bodies.hpp"
 #include "marine_acoustic_msgs/msg/projected_sonar_image.hpp"
 #include "marine_acoustic_msgs/msg/raw_sonar_image.hpp"
 #include "nav_msgs/msg/odometry.hpp"
@@ -36,7 +37,6 @@
 #include "sensor_msgs/msg/point_cloud2.hpp"
 #include "sensor_msgs/msg/point_field.hpp"
 #include "tf2_msgs/msg/tf_message.hpp"
-#include "fleet_bodies.hpp"
 #include "unav_common/config.hpp"
 #include "unav_renderer/sonar_renderer.hpp"
 #include "unav_runtime/lockstep_ack.hpp"

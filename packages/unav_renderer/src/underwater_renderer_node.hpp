@@ -33,12 +33,12 @@
 #include <string>
 #include <vector>
 
+#include "fleet_bodies.hpp"
 #include "nav_msgs/msg/odometry.hpp"
 #include "sensor_msgs/msg/camera_info.hpp"
 #include "sensor_msgs/msg/image.hpp"
 #include "tf2_msgs/msg/tf_message.hpp"
 #include "unav_common/config.hpp"
-#include "fleet_bodies.hpp"
 #include "unav_renderer/renderer.hpp"
 #include "unav_renderer/renderer_pool.hpp"
 #include "unav_runtime/lockstep_ack.hpp"

@@ -46,8 +46,8 @@ double mean(const std::vector<double>& v) {
 int edge_width_10_90(const std::vector<double>& g, int w, int row, int from, double lo, double hi) {
   int a = -1, b = -1;
   for (int u = from; u >= 0; --u) {
-    const double x = (g[static_cast<std::size_t>(row) * static_cast<std::size_t>(w) + static_cast<std::size_t>(u)] -
-                      lo) / (hi - lo);
+    const double x =
+        (g[static_cast<std::size_t>(row) * static_cast<std::size_t>(w) + static_cast<std::size_t>(u)] - lo) / (hi - lo);
     if (b < 0 && x >= 0.1) b = u;
     if (a < 0 && x >= 0.9) a = u;
   }
@@ -137,9 +137,10 @@ TEST(CameraPipeline, DefocusBlursByTheCircleOfConfusionAndKeepsTheLight) {
   lens.focus_distance_m = 0.3;
   const double d = lens.blur_diameter_px(3.95, 300.0), expected = disc_edge_width_10_90(d);
   const int w_sharp = edge_width_10_90(gs, 240, row, 120, lo, hi), w_blur = edge_width_10_90(gb, 240, row, 120, lo, hi);
-  std::printf("defocus: blur disc %.2f px, edge 10-90 %% %d px sharp, %d px blurred (uniform disc %.2f px); "
-              "in focus worst %.0f levels; mean %.2f -> %.2f\n",
-              d, w_sharp, w_blur, expected, focused_worst, mean(gs), mean(gb));
+  std::printf(
+      "defocus: blur disc %.2f px, edge 10-90 %% %d px sharp, %d px blurred (uniform disc %.2f px); "
+      "in focus worst %.0f levels; mean %.2f -> %.2f\n",
+      d, w_sharp, w_blur, expected, focused_worst, mean(gs), mean(gb));
   EXPECT_LE(focused_worst, 1.0);
   EXPECT_LE(w_sharp, 2);
   EXPECT_NEAR(w_blur, expected, 0.3 * expected);
@@ -169,7 +170,8 @@ TEST(CameraPipeline, LateralColourMagnifiesRedAndShrinksBlue) {
     double s = 0.0, su = 0.0;
     for (int y = 0; y < f.height; ++y)
       for (int u = 0; u < f.width; ++u) {
-        const double x = v[static_cast<std::size_t>(y) * static_cast<std::size_t>(f.width) + static_cast<std::size_t>(u)];
+        const double x =
+            v[static_cast<std::size_t>(y) * static_cast<std::size_t>(f.width) + static_cast<std::size_t>(u)];
         s += x;
         su += x * u;
       }

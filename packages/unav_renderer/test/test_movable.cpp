@@ -60,8 +60,8 @@ TEST(MovableObjects, MovedObjectRendersAsIfThePlacedThere) {
   Renderer placed(scene_with_body(moved, false), {cam}, options());
   const Frame expected = placed.render(eye(), "cam");
   const int px = count_class(after, SegClass::kVehicle);
-  std::printf("vehicle pixels: %d before the move, %d after (placed there: %d)\n", count_class(before, SegClass::kVehicle),
-              px, count_class(expected, SegClass::kVehicle));
+  std::printf("vehicle pixels: %d before the move, %d after (placed there: %d)\n",
+              count_class(before, SegClass::kVehicle), px, count_class(expected, SegClass::kVehicle));
   EXPECT_GT(px, 100);  // in view, as a vehicle
   EXPECT_NE(before.seg, after.seg);
   EXPECT_EQ(after.seg, expected.seg);

@@ -4,11 +4,11 @@
 #include <cmath>
 #include <fstream>
 
+#include "node_test_util.hpp"
 #include "unav_runtime/conversions.hpp"
 #include "unav_runtime/testing.hpp"
 #include "unav_scene/camera.hpp"
 #include "unav_scene/world.hpp"
-#include "node_test_util.hpp"
 #include "underwater_renderer_node.hpp"
 
 using namespace std::chrono_literals;

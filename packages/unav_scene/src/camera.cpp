@@ -119,8 +119,7 @@ Eigen::Vector3d CameraWhiteBalance::gains_for(const Eigen::Vector3d& E_d) const 
   if (mode == "manual") return gains;
   if (mode != "auto") return Eigen::Vector3d::Ones();
   Eigen::Vector3d g;
-  for (int i = 0; i < 3; ++i)
-    g[i] = std::clamp(E_d[1] / std::max(E_d[i], 1e-30), 1.0 / max_gain, max_gain);
+  for (int i = 0; i < 3; ++i) g[i] = std::clamp(E_d[1] / std::max(E_d[i], 1e-30), 1.0 / max_gain, max_gain);
   g[1] = 1.0;
   return g;
 }
@@ -144,7 +143,8 @@ void CameraModel::validate(const std::string& where) const {
   if (!(lens.f_number >= 0.0 && lens.f_number <= 64.0)) throw ConfigError(pre + "lens.f_number must be in [0, 64]");
   if (lens.defocus() && !(lens.focal_length_mm > 0.0 && lens.focus_distance_m > 1e-3 * lens.focal_length_mm))
     throw ConfigError(pre + "lens: need focal_length_mm > 0 and focus_distance_m beyond the focal length");
-  if (!(std::abs(lens.lateral_chromatic) <= 0.05)) throw ConfigError(pre + "lens.lateral_chromatic must be in [-0.05, 0.05]");
+  if (!(std::abs(lens.lateral_chromatic) <= 0.05))
+    throw ConfigError(pre + "lens.lateral_chromatic must be in [-0.05, 0.05]");
   if (white_balance.mode != "off" && white_balance.mode != "manual" && white_balance.mode != "auto")
     throw ConfigError(pre + "white_balance.mode must be one of off, manual, auto (got '" + white_balance.mode + "')");
   if (!(white_balance.gains.minCoeff() > 0.0 && white_balance.gains.maxCoeff() <= 64.0))
