@@ -29,7 +29,7 @@
 #include <utility>
 #include <vector>
 
-#include "fleet_bodies.hpp"
+#include "fleet_bodies_node.hpp"
 #include "marine_acoustic_msgs/msg/projected_sonar_image.hpp"
 #include "marine_acoustic_msgs/msg/raw_sonar_image.hpp"
 #include "nav_msgs/msg/odometry.hpp"

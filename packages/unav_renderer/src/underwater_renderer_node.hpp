@@ -33,7 +33,7 @@
 #include <string>
 #include <vector>
 
-#include "fleet_bodies.hpp"
+#include "fleet_bodies_node.hpp"
 #include "nav_msgs/msg/odometry.hpp"
 #include "sensor_msgs/msg/camera_info.hpp"
 #include "sensor_msgs/msg/image.hpp"

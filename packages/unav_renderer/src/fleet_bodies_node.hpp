@@ -1,4 +1,4 @@
-// The other vehicles of a scenario as a vehicle's renderer or sonar draws them (node side): a
+// Node side (DDS): the other vehicles of a scenario as a vehicle's renderer or sonar draws them, a
 // movable box each (class vehicle) in the world, moved to its ground-truth pose as it comes.
 #pragma once
 

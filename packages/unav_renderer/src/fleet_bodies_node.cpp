@@ -1,4 +1,4 @@
-#include "fleet_bodies.hpp"
+#include "fleet_bodies_node.hpp"
 
 #include <algorithm>
 #include <cmath>
