@@ -7,6 +7,7 @@
 #include <fstream>
 #include <string>
 
+#include "unav_common/temp_dir.hpp"
 #include "unav_common/thrown.hpp"
 #include "unav_localization/image_sequence.hpp"
 
@@ -14,10 +15,10 @@ namespace ul = unav::localization;
 
 namespace {
 
+// The test's files, in one folder removed at exit.
 std::string write(const std::string& name, const std::string& text) {
-  std::string p = ::testing::TempDir() + name;
-  std::ofstream(p) << text;
-  return p;
+  static const unav::common::TempDir dir("unav_aiding_logs");
+  return dir.write(name, text);
 }
 
 }  // namespace
