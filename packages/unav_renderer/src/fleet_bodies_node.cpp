@@ -32,13 +32,13 @@ std::vector<std::string> add_fleet_bodies(const scene::Scenario& sc, const Fleet
 
 FleetPoses::FleetPoses(unav::Node& node, const std::vector<std::string>& names,
                        const std::function<void(const std::string&, const scene::Pose&)>& move,
-                       const std::function<void()>& on_state, unav::RejectionCounter* rejections) {
+                       unav::RejectionCounter* rejections) {
   bodies_.reserve(names.size());  // the callbacks hold their element's index
   for (std::size_t i = 0; i < names.size(); ++i) {
     bodies_.push_back({names[i], INT64_MIN, nullptr});
     bodies_.back().sub = node.create_subscription<nav_msgs::msg::Odometry>(
         "/" + names[i] + "/ground_truth/odom", unav::QoS::reliable(),
-        [this, i, move, on_state, rejections](const nav_msgs::msg::Odometry& odom) {
+        [this, i, move, rejections](const nav_msgs::msg::Odometry& odom) {
           Body& b = bodies_[i];
           if (const std::string why = unav::odometry_problem(odom); !why.empty()) {
             rejections->reject(b.sub->topic_name(), why);
@@ -47,9 +47,19 @@ FleetPoses::FleetPoses(unav::Node& node, const std::vector<std::string>& names,
           move(b.name, unav::from_msg(odom.pose().pose()));
           b.stamp_ns = std::max(b.stamp_ns, unav::nanoseconds(odom.header()));
           ++states_;
-          on_state();
+          if (waiting_ && !behind(waiting_ns_)) std::exchange(waiting_, nullptr)();
         });
   }
+}
+
+void FleetPoses::when_current(std::int64_t t_ns, std::function<void()> job) {
+  if (!behind(t_ns)) {
+    waiting_ = nullptr;
+    job();
+    return;
+  }
+  waiting_ns_ = t_ns;
+  waiting_ = std::move(job);
 }
 
 bool FleetPoses::behind(std::int64_t t_ns) const {

@@ -49,14 +49,17 @@ std::vector<std::string> add_fleet_bodies(const scene::Scenario& sc, const Fleet
                                           scene::World* world);
 
 /// The other vehicles' ground truth (/<name>/ground_truth/odom): each state moves its body
-/// (`move`), then `on_state` runs. behind(t): a vehicle heard before has no state at t yet (in
-/// lockstep the server publishes every vehicle's state before its barrier: a frame at t waits).
+/// (`move`). when_current(t, job): in lockstep a frame (ping) at t waits for every vehicle heard
+/// before to have its state at t (the server publishes every vehicle's state before its barrier; a
+/// vehicle not heard yet is drawn where it starts).
 class FleetPoses {
  public:
   FleetPoses(unav::Node& node, const std::vector<std::string>& names,
              const std::function<void(const std::string&, const scene::Pose&)>& move,
-             const std::function<void()>& on_state, unav::RejectionCounter* rejections);
-  bool behind(std::int64_t t_ns) const;
+             unav::RejectionCounter* rejections);
+  /// Runs `job` now when no vehicle heard before is behind t_ns, else once the last one's state at
+  /// t_ns has moved its body (a job still waiting is replaced: the same state, repeated).
+  void when_current(std::int64_t t_ns, std::function<void()> job);
   std::uint64_t states() const { return states_; }
 
  private:
@@ -65,8 +68,11 @@ class FleetPoses {
     std::int64_t stamp_ns = INT64_MIN;  // the latest state's (INT64_MIN: none yet)
     std::shared_ptr<unav::Subscription<nav_msgs::msg::Odometry>> sub;
   };
+  bool behind(std::int64_t t_ns) const;
   std::vector<Body> bodies_;
   std::uint64_t states_ = 0;
+  std::int64_t waiting_ns_ = 0;
+  std::function<void()> waiting_;  // the job when_current() holds back
 };
 
 }  // namespace unav::renderer

@@ -118,14 +118,7 @@ SonarNode::SonarNode(const unav::NodeOptions& options) : Node("sonar", options, 
   if (prm.lockstep.enabled) acker_ = std::make_unique<unav::lockstep::Acker>(*this, prm.lockstep.name);
   if (!others.empty())
     fleet_ = std::make_unique<FleetPoses>(
-        *this, others, [this](const std::string& n, const Pose& X) { sonar_->set_object_pose(n, X); },
-        [this] {
-          if (!deferred_ || fleet_->behind(unav::nanoseconds(deferred_->second))) return;
-          const auto d = *deferred_;
-          deferred_.reset();
-          ping_state(d.first, d.second);
-        },
-        &rejections_);
+        *this, others, [this](const std::string& n, const Pose& X) { sonar_->set_object_pose(n, X); }, &rejections_);
   // Sonar mounts, latched, in marine_acoustic_msgs' frame (z forward, x up).
   tf_static_pub_ = create_publisher<tf2_msgs::msg::TFMessage>("/tf_static", unav::QoS::static_latched());
   tf2_msgs::msg::TFMessage mounts;
@@ -155,8 +148,9 @@ void SonarNode::on_odom(const nav_msgs::msg::Odometry& odom) {
   const Pose X_WB = unav::from_msg(odom.pose().pose());
   const bool due = std::any_of(ports_.begin(), ports_.end(), [&](const Ports& p) { return t + eps >= p.next_t; });
   // Lockstep: the other vehicles as they are at this stamp (their states come in beside ours).
-  if (due && lockstep_ && fleet_ && fleet_->behind(unav::nanoseconds(odom.header()))) {
-    deferred_.emplace(X_WB, odom.header());  // pinged and acked once they are here
+  if (due && lockstep_ && fleet_) {
+    fleet_->when_current(unav::nanoseconds(odom.header()),
+                         [this, X_WB, h = odom.header()] { ping_state(X_WB, h); });  // pinged and acked then
     return;
   }
   ping_state(X_WB, odom.header());

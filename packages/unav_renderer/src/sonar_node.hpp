@@ -117,8 +117,6 @@ class SonarNode : public unav::Node {
   std::shared_ptr<unav::Publisher<tf2_msgs::msg::TFMessage>> tf_static_pub_;
   std::unique_ptr<FleetPoses> fleet_;  // the other vehicles drawn
   bool lockstep_ = false;
-  /// Lockstep: a state whose pings wait for the other vehicles' states of its stamp.
-  std::optional<std::pair<scene::Pose, std_msgs::msg::Header>> deferred_;
 };
 
 }  // namespace unav::renderer

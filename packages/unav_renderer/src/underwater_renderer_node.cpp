@@ -122,8 +122,7 @@ UnderwaterRendererNode::UnderwaterRendererNode(const unav::NodeOptions& options)
   if (lockstep_) acker_ = std::make_unique<unav::lockstep::Acker>(*this, ack_name_);  // answers every state
   if (!others.empty())
     fleet_ = std::make_unique<FleetPoses>(
-        *this, others, [this](const std::string& n, const Pose& X) { renderer_->set_object_pose(n, X); },
-        [this] { on_fleet_state(); }, &rejections_);
+        *this, others, [this](const std::string& n, const Pose& X) { renderer_->set_object_pose(n, X); }, &rejections_);
   // Free-running, frames finish between odometry messages: 2 ms polls publish them (and the next
   // odometry does too).
   if (!lockstep_) poll_timer_ = create_wall_timer(std::chrono::milliseconds(2), [this] { publish_rendered(false); });
@@ -212,8 +211,8 @@ void UnderwaterRendererNode::on_odom(const nav_msgs::msg::Odometry& odom) {
     velocity.angular = unav::from_msg(odom.twist().twist().angular());
     const Pose X_WB = unav::from_msg(odom.pose().pose());
     // Lockstep: the other vehicles as they are at this stamp (their states come in beside ours).
-    if (lockstep_ && fleet_ && fleet_->behind(t_ns)) {
-      deferred_ = Deferred{X_WB, velocity, odom.header()};  // rendered and acked by on_fleet_odom()
+    if (lockstep_ && fleet_) {
+      fleet_->when_current(t_ns, [this, X_WB, velocity, h = odom.header()] { render_state(X_WB, velocity, h); });
       return;
     }
     render_state(X_WB, velocity, odom.header());
@@ -232,13 +231,6 @@ void UnderwaterRendererNode::render_state(const Pose& X_WB, const BodyVelocity& 
   // Next frame instant: the next multiple of the period after t (no drift, no bursts).
   next_frame_t_ = (std::floor((t + eps) / period_) + 1.0) * period_;
   if (acker_) acker_->ack(header);
-}
-
-void UnderwaterRendererNode::on_fleet_state() {
-  if (!deferred_ || fleet_->behind(unav::nanoseconds(deferred_->header))) return;  // (still) waiting for another
-  const Deferred d = *deferred_;
-  deferred_.reset();
-  render_state(d.X_WB, d.velocity, d.header);
 }
 
 void UnderwaterRendererNode::submit(const Pose& X_WB, const BodyVelocity& velocity,

@@ -121,8 +121,6 @@ class UnderwaterRendererNode : public unav::Node {
     std::size_t published = 0;
   };
   void on_odom(const nav_msgs::msg::Odometry& odom);
-  /// After another vehicle's state: a frame that waited for it goes out.
-  void on_fleet_state();
   /// Renders the frame instant of this state (lockstep: published), then acks it.
   void render_state(const Pose& X_WB, const BodyVelocity& velocity, const std_msgs::msg::dds_::Header_& header);
   void submit(const Pose& X_WB, const BodyVelocity& velocity, const std_msgs::msg::dds_::Header_& header);
@@ -152,14 +150,6 @@ class UnderwaterRendererNode : public unav::Node {
   unav::RejectionCounter rejections_{logger()};  // ground_truth/odom with NaN/Inf or a non-rotation
   std::shared_ptr<unav::Publisher<tf2_msgs::msg::TFMessage>> tf_static_pub_;
   std::unique_ptr<FleetPoses> fleet_;  // the other vehicles drawn
-  /// Lockstep: a frame instant waiting for another vehicle's state of the same stamp (the server
-  /// publishes every vehicle's before its barrier; a vehicle not heard yet is drawn where it starts).
-  struct Deferred {
-    Pose X_WB;
-    BodyVelocity velocity;
-    std_msgs::msg::dds_::Header_ header;
-  };
-  std::optional<Deferred> deferred_;
 };
 
 }  // namespace unav::renderer
