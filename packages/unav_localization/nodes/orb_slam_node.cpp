@@ -56,6 +56,7 @@ struct OrbSlamNodeParams {
   std::string vocabulary;  ///< default: the installed config/vocabulary/orb_vocabulary.bin
   int features = 1000;
   bool loop_closing = true;
+  bool merge_maps = true;
   double clahe_clip = 3.0;
   unav::lockstep::ParticipantParams lockstep{"orb_slam"};
   double image_period = 0.1;
@@ -78,6 +79,8 @@ struct OrbSlamNodeParams {
                  .Doc("bag-of-words vocabulary (unav_train_vocabulary); empty: no loop closing or relocalisation"));
     a->Visit(Field("features", &features).Range(100, 10000).Doc("ORB features per 640x480 of image"));
     a->Visit(Field("loop_closing", &loop_closing).Doc("detect and close loops"));
+    a->Visit(Field("merge_maps", &merge_maps)
+                 .Doc("keep maps lost for good and merge them when their place is seen again (atlas)"));
     a->Visit(Field("clahe_clip", &clahe_clip)
                  .Range(0.0, 40.0)
                  .Doc("CLAHE clip limit before feature extraction (low-contrast frames only), 0 = off"));
@@ -116,6 +119,7 @@ class OrbSlamNode : public unav::Node {
     const std::string& voc_path = prm.vocabulary;
     options_.orb.features = prm.features;
     options_.loop_closing = prm.loop_closing;
+    options_.merge_maps = prm.merge_maps;
     options_.clahe_clip = prm.clahe_clip;
     options_.dvl_factors = prm.dvl_factors;
     path_max_poses_ = static_cast<std::size_t>(prm.path_max_poses);
@@ -180,9 +184,9 @@ class OrbSlamNode : public unav::Node {
       const auto st = slam_->stats();
       logger()->info(
           "{} frames ({} tracked, {} lost), {} keyframes, {} points, {} loops, {} relocalisations, {} "
-          "re-initialisations",
+          "re-initialisations, {} maps merged",
           st.frames, st.tracked_frames, st.lost_frames, st.keyframes, st.points, st.loops, st.relocalizations,
-          st.reinitializations);
+          st.reinitializations, st.merges);
       if (dvl_on_)
         logger()->info(
             "DVL-aided: {} map(s) scaled to metres, {} refinement(s), {} scaling(s) refused, {} displacement factors, "

@@ -68,6 +68,8 @@ bool MonoSlamOptions::IsValid(std::string* msg) const {
   if (global_ba_iterations < 1)
     return fail("global_ba_iterations must be >= 1, got " + std::to_string(global_ba_iterations));
   if (relocalize_frames < 0) return fail("relocalize_frames must be >= 0, got " + std::to_string(relocalize_frames));
+  if (atlas_max_maps < 0 || atlas_max_maps > 100)
+    return fail("atlas_max_maps must be in [0, 100], got " + std::to_string(atlas_max_maps));
   if (!(reloc_gate_speed_factor >= 0 && std::isfinite(reloc_gate_speed_factor)))
     return fail("reloc_gate_speed_factor must be >= 0 (0: no gate), got " + std::to_string(reloc_gate_speed_factor));
   if (!(reloc_gate_min_radius >= 0 && std::isfinite(reloc_gate_min_radius)))
@@ -117,6 +119,7 @@ auto MonoSlam::Impl::ResetForReinitialization() -> void {
     // The next map continues from the last good pose at the last map's depth scale.
     // (No mapping runs while lost, so that keyframe's depth is as it was at the last good frame.)
     const double median_depth_global = G.s * map->MedianDepth(last_good_ref_kf);
+    StoreCurrentMap();  // in the atlas, when worth keeping (it may be recognised and merged later)
     G = Sim3(median_depth_global, last_good_T_wc_global.linear(), last_good_T_wc_global.translation());
     ++map_number;
     ++stats.reinitializations;
@@ -243,7 +246,16 @@ auto MonoSlam::Impl::Track(const cv::Mat& gray, double stamp) -> SlamFrameSummar
     s.keyframe = true;
     loop_log.clear();
     s.loop_closed = LoopClosing(ref_kf);
-    if (!loop_log.empty()) s.message = (s.loop_closed ? "loop closed: " : "loop candidates: ") + loop_log;
+    if (!s.loop_closed) {
+      const Eigen::Isometry3d T_cr = cur.T_cw * map->kf(ref_kf).T_cw.inverse();
+      s.maps_merged = MergeMaps(ref_kf);
+      if (s.maps_merged) {
+        cur.T_cw = T_cr * map->kf(ref_kf).T_cw;  // the weld's bundle adjustment moved the keyframe
+        has_velocity = false;
+      }
+    }
+    if (!loop_log.empty())
+      s.message = (s.loop_closed ? "loop closed: " : s.maps_merged ? "maps merged: " : "loop candidates: ") + loop_log;
     if (s.loop_closed) {
       // The current frame moves with its keyframe.
       cur.T_cw = map->kf(ref_kf).T_cw;
@@ -357,9 +369,10 @@ std::vector<MonoSlam::StampedPose> MonoSlam::Trajectory() const {
 std::vector<MonoSlam::StampedPose> MonoSlam::Trajectory(std::size_t last) const {
   if (last == 0) return Trajectory();
   const Impl& m = *impl_;
-  // Earlier maps' frames precede the current map's (each map starts where the last was lost).
+  // The earlier maps' frames and the current map's are each in time order, but may interleave
+  // (a merged map brings its frames into the current one): the last `last` of each, merged.
   const std::size_t current = m.initialized ? std::min(last, m.traj.size()) : 0;
-  const std::size_t earlier = std::min(last - current, m.frozen.size());
+  const std::size_t earlier = std::min(last, m.frozen.size());
   std::vector<StampedPose> out(m.frozen.end() - static_cast<std::ptrdiff_t>(earlier), m.frozen.end());
   if (current > 0) {
     const auto t = m.CurrentTrajectory(m.traj.size() - current);
@@ -367,6 +380,7 @@ std::vector<MonoSlam::StampedPose> MonoSlam::Trajectory(std::size_t last) const 
   }
   std::stable_sort(out.begin(), out.end(),
                    [](const StampedPose& a, const StampedPose& b) { return a.stamp < b.stamp; });
+  if (out.size() > last) out.erase(out.begin(), out.end() - static_cast<std::ptrdiff_t>(last));
   return out;
 }
 

@@ -280,13 +280,47 @@ struct MonoSlam::Impl {
     std::vector<std::pair<int, int>> matches;  ///< current feature -> loop map point
   };
 
+  /// Groups of keyframes that stayed candidates over consecutive keyframes (loop or merge).
+  using CandidateGroups = std::vector<std::pair<std::set<int>, int>>;
+
+  /// Keyframes of `other` (searched in `other_db`, not in `exclude`) that look like keyframe kid
+  /// of the current map at least as much as its weakest covisible neighbour (x
+  /// loop_min_score_ratio), and whose covisible group was a candidate for loop_consistency
+  /// keyframes in a row (`groups`: the previous keyframe's, replaced).
+  std::vector<int> ConsistentCandidates(int kid, const Map& other, const BowDatabase& other_db,
+                                        const std::set<int>& exclude, CandidateGroups* groups) const;
+
   std::vector<int> DetectLoopCandidates(int kid);
 
-  bool ComputeSim3(int kid, int cand, LoopCandidate* lc);
+  /// The Sim(3) from keyframe `cand` of `other` (the current map for a loop, an earlier map for
+  /// a merge) to keyframe kid of the current map, verified by RANSAC, optimisation and a guided
+  /// search of cand's neighbourhood; for a loop also the plausibility of its correction.
+  bool ComputeSim3(int kid, const Map& other, int cand, LoopCandidate* lc);
 
   void CorrectLoop(int kid, const LoopCandidate& lc);
 
   bool LoopClosing(int kid);
+
+  // ----------------------------------------------------------------- atlas (mono_slam_atlas.cpp)
+  /// A map whose tracking was lost for good, kept for merging.
+  struct StoredMap {
+    std::unique_ptr<Map> map;
+    BowDatabase db;
+    Sim3 G;  ///< its world -> global frame
+    int number = 0;
+    bool metric = false;
+    std::vector<TrajEntry> traj;
+    CandidateGroups groups;  ///< merge candidates of the current map's last keyframe
+  };
+  std::deque<StoredMap> atlas;
+
+  /// Keeps the current map in the atlas (at reset, when it is worth keeping).
+  void StoreCurrentMap();
+  /// After keyframe kid: looks for its place in the stored maps and merges the first found.
+  bool MergeMaps(int kid);
+  /// Moves stored map `old` into the current map, placed by A (old world -> current world),
+  /// and welds it at kid with lc's matches (their point ids are old's).
+  void AbsorbMap(StoredMap&& old, const Sim3& A, int kid, const LoopCandidate& lc);
 
   // ----------------------------------------------------------------- bookkeeping
   Eigen::Isometry3d ToGlobal(const Eigen::Isometry3d& T_wc) const;

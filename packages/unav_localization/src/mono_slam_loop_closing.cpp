@@ -5,23 +5,25 @@ namespace unav::localization {
 
 using namespace slam_internal;  // NOLINT(google-build-using-namespace): the SLAM's own constants
 
-auto MonoSlam::Impl::DetectLoopCandidates(int kid) -> std::vector<int> {
-  KeyFrame& kf = map->kf(kid);
+auto MonoSlam::Impl::ConsistentCandidates(int kid, const Map& other, const BowDatabase& other_db,
+                                          const std::set<int>& exclude, CandidateGroups* groups) const
+    -> std::vector<int> {
+  const KeyFrame& kf = map->kf(kid);
   std::vector<int> out;
-  if (!voc || kf.f.bow.empty()) return out;
+  if (!voc || kf.f.bow.empty() || kf.covisibility.empty()) {
+    groups->clear();
+    return out;
+  }
   double min_score = 1.0;
   for (const auto& [n, w] : kf.covisibility)
     min_score = std::min(min_score, BowVocabulary::Score(kf.f.bow, map->kf(n).f.bow));
-  std::set<int> exclude{kid};
-  for (const auto& [n, w] : kf.covisibility) exclude.insert(n);
-  for (int k = std::max(0, kid - opt.loop_min_keyframe_gap); k < kid; ++k) exclude.insert(k);
-  const auto hits = db.Query(kf.f.bow, min_score * opt.loop_min_score_ratio, exclude, 20);
-  std::vector<std::pair<std::set<int>, int>> groups;
+  const auto hits = other_db.Query(kf.f.bow, min_score * opt.loop_min_score_ratio, exclude, 20);
+  CandidateGroups next;
   for (const auto& [c, score] : hits) {
     std::set<int> group{c};
-    for (const auto& [n, w] : map->kf(c).covisibility) group.insert(n);
+    for (const auto& [n, w] : other.kf(c).covisibility) group.insert(n);
     int count = 0;
-    for (const auto& [prev, pc] : consistent_groups) {
+    for (const auto& [prev, pc] : *groups) {
       bool shares = false;
       for (int g : group)
         if (prev.count(g)) {
@@ -30,27 +32,36 @@ auto MonoSlam::Impl::DetectLoopCandidates(int kid) -> std::vector<int> {
         }
       if (shares) count = std::max(count, pc + 1);
     }
-    groups.emplace_back(group, count);
+    next.emplace_back(group, count);
     if (count >= opt.loop_consistency) out.push_back(c);
   }
-  consistent_groups = std::move(groups);
+  *groups = std::move(next);
   return out;
 }
 
-auto MonoSlam::Impl::ComputeSim3(int kid, int cand, LoopCandidate* lc) -> bool {
+auto MonoSlam::Impl::DetectLoopCandidates(int kid) -> std::vector<int> {
+  std::set<int> exclude{kid};
+  for (const auto& [n, w] : map->kf(kid).covisibility) exclude.insert(n);
+  for (int k = std::max(0, kid - opt.loop_min_keyframe_gap); k < kid; ++k) exclude.insert(k);
+  return ConsistentCandidates(kid, *map, db, exclude, &consistent_groups);
+}
+
+auto MonoSlam::Impl::ComputeSim3(int kid, const Map& other, int cand, LoopCandidate* lc) -> bool {
+  const bool same_map = &other == map.get();
   const KeyFrame& c = map->kf(kid);
-  const KeyFrame& m = map->kf(cand);
-  const auto has_point = [&](const KeyFrame& k) {
-    return
-        [&](int i) { return k.points[static_cast<size_t>(i)] >= 0 && !map->mp(k.points[static_cast<size_t>(i)]).bad; };
+  const KeyFrame& m = other.kf(cand);
+  const auto has_point = [](const Map& in, const KeyFrame& k) {
+    return [&in, &k](int i) {
+      return k.points[static_cast<size_t>(i)] >= 0 && !in.mp(k.points[static_cast<size_t>(i)]).bad;
+    };
   };
-  const auto matches = MatchByAppearance(c.f, has_point(c), m.f, has_point(m), kThLow, 0.75);
+  const auto matches = MatchByAppearance(c.f, has_point(*map, c), m.f, has_point(other, m), kThLow, 0.75);
   if (matches.size() < 20) return false;
   std::vector<Sim3Match> sm;
   for (const auto& [i, j] : matches) {
     Sim3Match s;
     s.X1_c1 = c.T_cw * map->mp(c.points[static_cast<size_t>(i)]).X_w;
-    s.X2_c2 = m.T_cw * map->mp(m.points[static_cast<size_t>(j)]).X_w;
+    s.X2_c2 = m.T_cw * other.mp(m.points[static_cast<size_t>(j)]).X_w;
     s.uv1 = c.f.un[static_cast<size_t>(i)];
     s.uv2 = m.f.un[static_cast<size_t>(j)];
     s.inv_sigma2_1 = InvSigma2(c.f, i);
@@ -98,15 +109,15 @@ auto MonoSlam::Impl::ComputeSim3(int kid, int cand, LoopCandidate* lc) -> bool {
   const Sim3 S_cw = best * Sim3(m.T_cw);
   const Eigen::Isometry3d T_cw_loop = S_cw.ToIsometryUnscaled();
   std::set<int> pts;
-  std::vector<int> group = map->kf(cand).BestCovisible(10);
+  std::vector<int> group = m.BestCovisible(10);
   group.push_back(cand);
   for (int g : group)
-    for (int p : map->kf(g).points)
-      if (p >= 0 && !map->mp(p).bad) pts.insert(p);
+    for (int p : other.kf(g).points)
+      if (p >= 0 && !other.mp(p).bad) pts.insert(p);
   lc->matches.clear();
   std::vector<int> taken(c.f.size(), -1);
   for (int pid : pts) {
-    const MapPoint& p = map->mp(pid);
+    const MapPoint& p = other.mp(pid);
     // The loop side's points seen from the current keyframe placed by the Sim(3) (in the loop
     // side's units, like the points' distance ranges).
     const Eigen::Vector3d pc = T_cw_loop * p.X_w;
@@ -130,6 +141,16 @@ auto MonoSlam::Impl::ComputeSim3(int kid, int cand, LoopCandidate* lc) -> bool {
     lc->matches.emplace_back(bi, pid);
   }
   if (static_cast<int>(lc->matches.size()) < opt.loop_min_inliers) return false;
+  if (!same_map) {
+    // Two maps: nothing relates their frames before this, so no correction can be judged.
+    char text[160];
+    std::snprintf(text, sizeof(text), "keyframe %d <-> earlier map's %d: scale %.3f, %zu matches", kid, cand, best.s,
+                  lc->matches.size());
+    loop_log += (loop_log.empty() ? "" : "; ") + std::string(text);
+    lc->kf = cand;
+    lc->S_cm = best;
+    return true;
+  }
   // Plausibility: the correction against the path flown between the loop ends.
   double path = 0;
   int prev = -1;
@@ -249,7 +270,7 @@ auto MonoSlam::Impl::LoopClosing(int kid) -> bool {
   if (kid > opt.loop_min_keyframe_gap) {
     for (int cand : DetectLoopCandidates(kid)) {
       LoopCandidate lc;
-      if (ComputeSim3(kid, cand, &lc)) {
+      if (ComputeSim3(kid, *map, cand, &lc)) {
         CorrectLoop(kid, lc);
         consistent_groups.clear();
         closed = true;

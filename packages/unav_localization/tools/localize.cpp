@@ -97,7 +97,7 @@ int main(int argc, char** argv) {
   std::string images, camera_path, method = "orb_slam", vocabulary, output, groundtruth;
   int max_frames = 0;
   double fps = 10.0;
-  bool quiet = false, verbose = false, no_loops = false;
+  bool quiet = false, verbose = false, no_loops = false, no_merge = false;
   double clahe = 3.0;
   int features = 1000;
   std::string imu_path, dvl_path, mount_text;
@@ -116,6 +116,7 @@ int main(int argc, char** argv) {
   app.add_flag("--verbose", verbose,
                "orb_slam: a line for every frame (features, inliers, keyframe), not only for events");
   app.add_flag("--no-loop-closing", no_loops, "orb_slam: do not detect loops");
+  app.add_flag("--no-map-merging", no_merge, "orb_slam: do not keep lost maps to merge them later (atlas)");
   app.add_option("--features", features, "orb_slam: ORB features per 640x480 of image (more on a larger image)")
       ->check(CLI::Range(100, 10000));
   app.add_option("--clahe", clahe,
@@ -156,6 +157,7 @@ int main(int argc, char** argv) {
       if (!voc) std::fprintf(stderr, "unav_localize: no vocabulary: loop closing and relocalisation are off\n");
       ul::MonoSlamOptions o;
       o.loop_closing = !no_loops;
+      o.merge_maps = !no_merge;
       o.orb.features = features;
       o.clahe_clip = clahe;
       slam = std::make_unique<ul::MonoSlam>(cam.camera, cam.distortion, o, voc);
@@ -274,8 +276,10 @@ int main(int argc, char** argv) {
         mean_total, Percentile(total_ms, 0.99), 1000.0 / std::max(mean_total, 1e-9));
     if (slam) {
       const auto st = slam->stats();
-      std::printf("orb_slam: %d keyframes, %d points, %d loops closed, %d relocalisations, %d re-initialisations\n",
-                  st.keyframes, st.points, st.loops, st.relocalizations, st.reinitializations);
+      std::printf(
+          "orb_slam: %d keyframes, %d points, %d loops closed, %d relocalisations, %d re-initialisations, %d maps "
+          "merged (%d map(s) in the output)\n",
+          st.keyframes, st.points, st.loops, st.relocalizations, st.reinitializations, st.merges, st.maps - st.merges);
     }
     std::printf("trajectory: %s\n", output.c_str());
     if (groundtruth.empty() && std::filesystem::exists(images + "/groundtruth.txt"))

@@ -57,6 +57,16 @@ struct MonoSlamOptions {
   bool global_ba_after_loop = true;
   int global_ba_iterations = 15;
   int relocalize_frames = 10;  ///< frames of relocalisation attempts before re-initialising
+  /// Atlas (ORB-SLAM3's multi-map): a map whose tracking was lost for good is kept (at most
+  /// atlas_max_maps of them, the oldest dropped; maps of 5 keyframes or fewer are not kept) and
+  /// each new keyframe looks for its place in them by bag of words (loop_consistency keyframes
+  /// agreeing, Sim(3) verified with loop_min_inliers matches). Once found the old map is merged
+  /// into the current one: its keyframes and points move into the current map's frame, the
+  /// matched points are fused, a global bundle adjustment (global_ba_after_loop) welds them, and
+  /// the trajectory since the loss is expressed in the old map's frame, so the output is one
+  /// trajectory. Needs the vocabulary. Maps merge only when both are metric or both are not.
+  bool merge_maps = true;
+  int atlas_max_maps = 10;
   /// Relocalisation plausibility gate. Video is continuous: a relocalised camera lies within
   /// reloc_gate_speed_factor x (the fastest of the last 20 frame-to-frame motions) x (frames
   /// since the last tracked one), plus reloc_gate_min_radius x the map's median depth, of the
@@ -112,6 +122,7 @@ struct SlamFrameSummary {
   bool keyframe = false;
   bool loop_closed = false;
   bool reinitialized = false;
+  bool maps_merged = false;  ///< an earlier map was recognised and merged into the current one
   double tracking_ms = 0.0;  ///< features + tracking
   double mapping_ms = 0.0;   ///< keyframe insertion, local BA, loop closing (0 without keyframe)
   Eigen::Isometry3d T_wc = Eigen::Isometry3d::Identity();  ///< current camera pose (tracked or predicted)
@@ -121,6 +132,7 @@ struct SlamFrameSummary {
 struct SlamStats {
   int frames = 0, tracked_frames = 0, lost_frames = 0, keyframes = 0, points = 0;
   int loops = 0, relocalizations = 0, reinitializations = 0, maps = 1;
+  int merges = 0;                     ///< earlier maps merged into the current one (maps - merges: maps left apart)
   int relocalizations_rejected = 0;   ///< by the plausibility gate
   int inertial_inits = 0;             ///< maps scaled to metres by the IMU
   int inertial_refinements = 0;       ///< scales refined over a longer span (2 a map at most)
