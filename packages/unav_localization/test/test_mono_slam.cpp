@@ -9,6 +9,7 @@
 #include <memory>
 #include <random>
 #include <set>
+#include <string>
 
 #include <opencv2/imgproc.hpp>
 
@@ -256,6 +257,14 @@ TEST(MonoSlam, BadInputIsRejected) {
   ul::MonoSlamOptions bad;
   bad.keyframe_tracked_ratio = 1.5;
   EXPECT_THROW(ul::MonoSlam(cam, {}, bad, nullptr), std::invalid_argument);
+  ul::MonoSlamOptions bad_atlas;
+  bad_atlas.atlas_max_maps = -1;
+  try {
+    ul::MonoSlam(cam, {}, bad_atlas, nullptr);
+    ADD_FAILURE() << "a negative atlas size was accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("atlas_max_maps must be in [0, 100], got -1"), std::string::npos) << e.what();
+  }
   ul::PinholeCamera zero;
   EXPECT_THROW(ul::MonoSlam(zero, {}, {}, nullptr), std::invalid_argument);
   ul::MonoSlam slam(cam, {}, {}, nullptr);
@@ -556,6 +565,11 @@ TEST(MonoSlam, AtlasMergesTheLostMapIntoTheNewOne) {
   // Bound: the unbroken square's (0.5 % of the path; the loop closes over the merged map).
   EXPECT_LT(ape, 0.005 * path);
   EXPECT_LT(ape, 0.5 * ape_apart);  // kept apart, the second map's scale is a guess
+  // The merged map's frames interleave with nothing else: the bounded trajectory (the node's
+  // path) is still the whole one's tail.
+  const auto tail = slam->Trajectory(30);
+  ASSERT_EQ(tail.size(), 30u);
+  for (size_t i = 0; i < tail.size(); ++i) EXPECT_EQ(tail[i].stamp, traj[traj.size() - tail.size() + i].stamp);
 }
 
 TEST(MonoSlam, InitialisesAndTracksOnThe320x180DemoCamera) {
