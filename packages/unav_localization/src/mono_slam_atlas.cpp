@@ -105,29 +105,15 @@ auto MonoSlam::Impl::AbsorbMap(StoredMap&& old, const Sim3& A, int kid, const Lo
   // Weld: the current keyframe's matches become the old map's points, and the old place's
   // points are fused into the current keyframe's neighbourhood.
   KeyFrame& c = map->kf(kid);
-  for (const auto& [i, old_pid] : lc.matches) {
-    const int pid = old_pid + pt_off;
-    if (map->mp(pid).bad) continue;
-    const int q = c.points[static_cast<size_t>(i)];
-    if (q >= 0 && !map->mp(q).bad)
-      map->Replace(q, pid);
-    else if (!map->mp(pid).obs.count(kid))
-      map->AddObservation(pid, kid, i);
-  }
   const int cand = lc.kf + kf_off;
-  std::vector<int> old_side = map->kf(cand).BestCovisible(10);
-  old_side.push_back(cand);
-  std::vector<int> old_points;
-  {
-    std::set<int> seen;
-    for (int g : old_side)
-      for (int p : map->kf(g).points)
-        if (p >= 0 && !map->mp(p).bad && seen.insert(p).second) old_points.push_back(p);
-  }
+  std::vector<std::pair<int, int>> matches = lc.matches;
+  for (auto& m : matches) m.second += pt_off;
   std::vector<int> connected{kid};
   for (const auto& [k, w] : c.covisibility) connected.push_back(k);
-  for (int k : connected) Fuse(k, old_points);
+  WeldLoopPoints(kid, cand, matches, connected);
   for (int k : connected) map->UpdateConnections(k);
+  std::vector<int> old_side = map->kf(cand).BestCovisible(10);
+  old_side.push_back(cand);
   for (int k : old_side) map->UpdateConnections(k);
   c.loop_edges.insert(cand);
   map->kf(cand).loop_edges.insert(kid);

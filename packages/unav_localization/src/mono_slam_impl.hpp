@@ -299,6 +299,11 @@ struct MonoSlam::Impl {
 
   void CorrectLoop(int kid, const LoopCandidate& lc);
 
+  /// The matches (kid's feature -> a point of the loop side) become kid's points, and the loop
+  /// keyframe's neighbourhood's points are fused into the `connected` keyframes.
+  void WeldLoopPoints(int kid, int loop_kf, const std::vector<std::pair<int, int>>& matches,
+                      const std::vector<int>& connected);
+
   bool LoopClosing(int kid);
 
   // ----------------------------------------------------------------- atlas (mono_slam_atlas.cpp)

@@ -204,25 +204,7 @@ auto MonoSlam::Impl::CorrectLoop(int kid, const LoopCandidate& lc) -> void {
     }
   for (int k : connected) map->kf(k).T_cw = S_corr[static_cast<size_t>(k)].ToIsometryUnscaled();
   for (int p : moved) map->UpdatePoint(p, scales);
-  // The current keyframe's matches become the loop's points.
-  for (const auto& [i, pid] : lc.matches) {
-    if (map->mp(pid).bad) continue;
-    const int q = c.points[static_cast<size_t>(i)];
-    if (q >= 0 && !map->mp(q).bad)
-      map->Replace(q, pid);
-    else if (!map->mp(pid).obs.count(kid))
-      map->AddObservation(pid, kid, i);
-  }
-  std::vector<int> loop_points;
-  {
-    std::set<int> s;
-    std::vector<int> group = map->kf(lc.kf).BestCovisible(10);
-    group.push_back(lc.kf);
-    for (int g : group)
-      for (int p : map->kf(g).points)
-        if (p >= 0 && !map->mp(p).bad && s.insert(p).second) loop_points.push_back(p);
-  }
-  for (int k : connected) Fuse(k, loop_points);
+  WeldLoopPoints(kid, lc.kf, lc.matches, connected);
   std::vector<PoseGraphEdge> edges;
   std::set<std::pair<int, int>> have;
   auto add_edge = [&](int i, int j, const Sim3& Si, const Sim3& Sj) {
@@ -262,6 +244,27 @@ auto MonoSlam::Impl::CorrectLoop(int kid, const LoopCandidate& lc) -> void {
   if (opt.global_ba_after_loop)
     GlobalBundleAdjustment(map.get(), cam, sigma2, opt.global_ba_iterations, AidingFactors(0));
   ++stats.loops;
+}
+
+auto MonoSlam::Impl::WeldLoopPoints(int kid, int loop_kf, const std::vector<std::pair<int, int>>& matches,
+                                    const std::vector<int>& connected) -> void {
+  KeyFrame& c = map->kf(kid);
+  for (const auto& [i, pid] : matches) {
+    if (map->mp(pid).bad) continue;
+    const int q = c.points[static_cast<size_t>(i)];
+    if (q >= 0 && !map->mp(q).bad)
+      map->Replace(q, pid);
+    else if (!map->mp(pid).obs.count(kid))
+      map->AddObservation(pid, kid, i);
+  }
+  std::vector<int> loop_points;
+  std::set<int> seen;
+  std::vector<int> group = map->kf(loop_kf).BestCovisible(10);
+  group.push_back(loop_kf);
+  for (int g : group)
+    for (int p : map->kf(g).points)
+      if (p >= 0 && !map->mp(p).bad && seen.insert(p).second) loop_points.push_back(p);
+  for (int k : connected) Fuse(k, loop_points);
 }
 
 auto MonoSlam::Impl::LoopClosing(int kid) -> bool {
