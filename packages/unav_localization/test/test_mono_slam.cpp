@@ -260,7 +260,7 @@ TEST(MonoSlam, BadInputIsRejected) {
   ul::MonoSlamOptions bad_atlas;
   bad_atlas.atlas_max_maps = -1;
   try {
-    ul::MonoSlam(cam, {}, bad_atlas, nullptr);
+    const ul::MonoSlam refused(cam, {}, bad_atlas, nullptr);
     ADD_FAILURE() << "a negative atlas size was accepted";
   } catch (const std::invalid_argument& e) {
     EXPECT_NE(std::string(e.what()).find("atlas_max_maps must be in [0, 100], got -1"), std::string::npos) << e.what();

@@ -59,11 +59,11 @@ struct MonoSlamOptions {
   int relocalize_frames = 10;  ///< frames of relocalisation attempts before re-initialising
   /// Atlas (ORB-SLAM3's multi-map): a map whose tracking was lost for good is kept (maps of 5
   /// keyframes or fewer are not) and each new keyframe looks for its place in them by bag of
-  /// words (loop_consistency keyframes agreeing, Sim(3) verified with loop_min_inliers matches). Once found the old map is merged
-  /// into the current one: its keyframes and points move into the current map's frame, the
-  /// matched points are fused, a global bundle adjustment (global_ba_after_loop) welds them, and
-  /// the trajectory since the loss is expressed in the old map's frame, so the output is one
-  /// trajectory. Needs the vocabulary. Maps merge only when both are metric or both are not.
+  /// words (loop_consistency keyframes agreeing, Sim(3) verified with loop_min_inliers matches). Once found the old map
+  /// is merged into the current one: its keyframes and points move into the current map's frame, the matched points are
+  /// fused, a global bundle adjustment (global_ba_after_loop) welds them, and the trajectory since the loss is
+  /// expressed in the old map's frame, so the output is one trajectory. Needs the vocabulary. Maps merge only when both
+  /// are metric or both are not.
   bool merge_maps = true;   ///< off: a lost map is dropped (its trajectory is kept)
   int atlas_max_maps = 10;  ///< maps kept for merging at most (the oldest dropped)
   /// Relocalisation plausibility gate. Video is continuous: a relocalised camera lies within
