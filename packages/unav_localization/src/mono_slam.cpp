@@ -130,6 +130,8 @@ auto MonoSlam::Impl::ResetForReinitialization() -> void {
   map_sets_global_scale = false;
   inertial_rejection_said = false;
   dvl_rejection_said = false;
+  vi_ready = false;
+  vi.velocities.clear();
   db = BowDatabase();
   traj.clear();
   initialized = false;

@@ -182,11 +182,21 @@ struct MonoSlam::Impl {
   /// Gyroscope rotation factors between consecutive keyframes (the last `count` good ones; all
   /// when 0) where the IMU covers them (options.gyro_factors, inertial on); scale-free.
   std::vector<RelativeRotationFactor> GyroFactors(std::size_t count) const;
-  /// Both, for a bundle adjustment over the last `count` keyframes; counted in stats.
+  /// Visual-inertial bundle adjustment (options.inertial_ba): once the IMU scaled the current
+  /// map, each keyframe's velocity, the window's biases and gravity in the map's world.
+  bool vi_ready = false;
+  InertialStates vi;
+  /// Inertial factors between consecutive keyframes (the last `count` good ones; all when 0)
+  /// where the IMU covers them; a keyframe without a velocity yet gets the IMU's prediction from
+  /// its predecessor's state.
+  std::vector<InertialFactor> InertialFactors(std::size_t count);
+  /// All of them, for a bundle adjustment over the last `count` keyframes; counted in stats.
   BundleFactors AidingFactors(std::size_t count) {
-    BundleFactors f{DvlFactors(count), GyroFactors(count)};
+    BundleFactors f{DvlFactors(count), GyroFactors(count), InertialFactors(count), nullptr};
+    if (!f.inertial.empty()) f.states = &vi;
     stats.dvl_factors += static_cast<long>(f.displacements.size());
     stats.gyro_factors += static_cast<long>(f.rotations.size());
+    stats.inertial_factors += static_cast<long>(f.inertial.size());
     return f;
   }
 

@@ -103,6 +103,22 @@ auto MonoSlam::Impl::TryInertialInit() -> std::string {
   }
   ++(metric_stage == 0 ? stats.inertial_inits : stats.inertial_refinements);
   ApplyMetricScale(r.scale);
+  // The visual-inertial states start from the initialisation's (velocities are metric already).
+  vi.g_w = r.gravity_w;
+  vi.bias = vi.bias_prior = r.bias;
+  const InertialInitOptions init_options;
+  vi.gyro_bias_prior_sigma = init_options.gyro_bias_prior_std;
+  vi.accel_bias_prior_sigma = init_options.accel_bias_prior_std;
+  vi.velocities.clear();
+  for (std::size_t k = 0; k < kfs.size() && k < r.velocities.size(); ++k) vi.velocities[kfs[k]->id] = r.velocities[k];
+  vi_ready = true;
+  if (opt.inertial_ba) {
+    // ORB-SLAM3's VIBA 1 and 2: the whole map with its inertial factors, so that the scale, the
+    // gravity and the velocities agree with every keyframe, not only the local window's.
+    GlobalBundleAdjustment(map.get(), cam, sigma2, opt.global_ba_iterations, AidingFactors(0));
+    cur.T_cw = map->kf(ref_kf).T_cw;  // the frame just made a keyframe moves with it
+    has_velocity = false;
+  }
   stats.inertial_scale = r.scale;
   const Eigen::Vector3d z_cam = kfs.front()->T_cw.linear().transpose().col(2);
   stats.inertial_gravity_deg = std::acos(std::clamp(r.gravity_w.normalized().dot(z_cam), -1.0, 1.0)) * 180.0 / M_PI;
@@ -115,9 +131,30 @@ auto MonoSlam::Impl::TryInertialInit() -> std::string {
   return buf;
 }
 
+auto MonoSlam::Impl::InertialFactors(std::size_t count) -> std::vector<InertialFactor> {
+  std::vector<InertialFactor> out;
+  if (!inertial || !vi_ready || !opt.inertial_ba || imu.empty()) return out;
+  const std::vector<const KeyFrame*> kfs = RecentKeyFrames(imu.front().t - kCoverSlackS, count);
+  const Eigen::Isometry3d T_cb = T_bc.inverse();
+  for (std::size_t k = 1; k < kfs.size(); ++k) {
+    const int i = kfs[k - 1]->id, j = kfs[k]->id;
+    const ImuPreintegration pre = PreintegrateImu(kfs[k - 1]->stamp, kfs[k]->stamp);
+    if (pre.dt() <= 0.0) continue;  // not covered (yet)
+    if (!vi.velocities.count(j)) {
+      const auto vel_i = vi.velocities.find(i);
+      if (vel_i == vi.velocities.end()) continue;
+      const Eigen::Isometry3d T_wb = kfs[k - 1]->T_cw.inverse() * T_cb;
+      vi.velocities[j] = pre.Predict({T_wb.linear(), T_wb.translation(), vel_i->second}, vi.bias, vi.g_w).v_W;
+    }
+    out.push_back({i, j, pre, T_cb});
+  }
+  return out;
+}
+
 auto MonoSlam::Impl::GyroFactors(std::size_t count) const -> std::vector<RelativeRotationFactor> {
   std::vector<RelativeRotationFactor> out;
-  if (!inertial || !opt.gyro_factors || imu.empty()) return out;
+  // The visual-inertial factors hold the rotation too.
+  if (!inertial || !opt.gyro_factors || imu.empty() || (vi_ready && opt.inertial_ba)) return out;
   const std::vector<const KeyFrame*> kfs = RecentKeyFrames(imu.front().t - kCoverSlackS, count);
   const Eigen::Matrix3d R_cb = T_bc.linear().transpose();
   for (std::size_t k = 1; k < kfs.size(); ++k) {

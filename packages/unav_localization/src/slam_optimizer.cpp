@@ -198,6 +198,43 @@ struct RelativeRotationError {
   double a[3][3], b[3][3];
 };
 
+// The inertial edge's residual, whitened: L^T r with L L^T the information (the inverse of the
+// preintegration's covariance). Differentiated numerically (central): the preintegration's
+// residual is written for doubles, on the manifold.
+struct InertialError {
+  InertialError(const InertialFactor& f, const Eigen::Vector3d& g) : factor(f), g_w(g) {
+    Matrix9d cov = f.pre.covariance();
+    cov.diagonal().array() += 1e-12;  // a floor: samples of an ideal IMU have none
+    sqrt_info = Eigen::LLT<Matrix9d>(cov.inverse()).matrixL().transpose();
+  }
+  NavState State(const double* pose, const double* v) const {
+    const Eigen::Isometry3d T_wb = FromParams(pose).inverse() * factor.T_cb;
+    return {T_wb.linear(), T_wb.translation(), Eigen::Vector3d(v[0], v[1], v[2])};
+  }
+  bool operator()(const double* pose_i, const double* pose_j, const double* v_i, const double* v_j, const double* bias,
+                  double* r) const {
+    ImuBias b;
+    b.gyro = Eigen::Vector3d(bias[0], bias[1], bias[2]);
+    b.accel = Eigen::Vector3d(bias[3], bias[4], bias[5]);
+    Eigen::Map<Vector9d> out(r);
+    out = sqrt_info * factor.pre.Residual(State(pose_i, v_i), State(pose_j, v_j), b, g_w);
+    return true;
+  }
+  InertialFactor factor;
+  Eigen::Vector3d g_w;
+  Matrix9d sqrt_info;
+};
+
+// The window's bias against its prior.
+struct BiasPriorError {
+  template <typename T>
+  bool operator()(const T* bias, T* r) const {
+    for (int k = 0; k < 6; ++k) r[k] = (bias[k] - T(prior[k])) / T(sigma[k]);
+    return true;
+  }
+  double prior[6], sigma[6];
+};
+
 BundleAdjustmentSummary RunBundleAdjustment(Map* map, const PinholeCamera& cam, const std::vector<double>& level_sigma2,
                                             const std::vector<int>& local_kfs, const std::vector<int>& fixed_kfs,
                                             const std::vector<int>& pts, int iterations, const BundleFactors& factors) {
@@ -220,6 +257,16 @@ BundleAdjustmentSummary RunBundleAdjustment(Map* map, const PinholeCamera& cam, 
     for (const auto& [k, i] : map->mp(p).obs)
       if (poses.count(k)) all.push_back({k, p, i});
   std::vector<bool> outlier(all.size(), false);
+  // The inertial states, as parameter blocks (written back below).
+  std::map<int, std::array<double, 3>> velocities;
+  std::array<double, 6> bias{};
+  if (factors.states != nullptr) {
+    for (const auto& [k, v] : factors.states->velocities) velocities[k] = {v.x(), v.y(), v.z()};
+    for (int k = 0; k < 3; ++k) {
+      bias[static_cast<size_t>(k)] = factors.states->bias.gyro[k];
+      bias[static_cast<size_t>(3 + k)] = factors.states->bias.accel[k];
+    }
+  }
   auto chi2_of = [&](const Obs& o) {
     const KeyFrame& kf = map->kf(o.kf);
     const auto& kp = kf.f.keypoints[static_cast<size_t>(o.feature)];
@@ -256,6 +303,26 @@ BundleAdjustmentSummary RunBundleAdjustment(Map* map, const PinholeCamera& cam, 
         problem.AddResidualBlock(
             new ceres::AutoDiffCostFunction<RelativeRotationError, 3, 6, 6>(new RelativeRotationError(f)),
             new ceres::HuberLoss(kDisplacementHuber), pi, pj);
+    if (factors.states != nullptr && !factors.inertial.empty()) {
+      InertialStates& st = *factors.states;
+      for (const auto& f : factors.inertial) {
+        const auto [pi, pj] = blocks(f.kf_i, f.kf_j);
+        if (pi == nullptr || !velocities.count(f.kf_i) || !velocities.count(f.kf_j)) continue;
+        problem.AddResidualBlock(new ceres::NumericDiffCostFunction<InertialError, ceres::CENTRAL, 9, 6, 6, 3, 3, 6>(
+                                     new InertialError(f, st.g_w)),
+                                 nullptr, pi, pj, velocities[f.kf_i].data(), velocities[f.kf_j].data(), bias.data());
+      }
+      if (problem.HasParameterBlock(bias.data())) {
+        auto* prior = new BiasPriorError;
+        for (int k = 0; k < 3; ++k) {
+          prior->prior[k] = st.bias_prior.gyro[k];
+          prior->prior[3 + k] = st.bias_prior.accel[k];
+          prior->sigma[k] = st.gyro_bias_prior_sigma;
+          prior->sigma[3 + k] = st.accel_bias_prior_sigma;
+        }
+        problem.AddResidualBlock(new ceres::AutoDiffCostFunction<BiasPriorError, 6, 6>(prior), nullptr, bias.data());
+      }
+    }
     for (auto& [k, p] : poses)
       if (problem.HasParameterBlock(p.data()) && fixed.count(k)) problem.SetParameterBlockConstant(p.data());
     s.residuals = problem.NumResidualBlocks();
@@ -266,6 +333,12 @@ BundleAdjustmentSummary RunBundleAdjustment(Map* map, const PinholeCamera& cam, 
   }
   // Write back; drop outlier observations.
   for (int k : local_kfs) map->kf(k).T_cw = FromParams(poses[k].data());
+  if (factors.states != nullptr) {
+    for (auto& [k, v] : factors.states->velocities)
+      v = Eigen::Vector3d(velocities[k][0], velocities[k][1], velocities[k][2]);
+    factors.states->bias.gyro = Eigen::Vector3d(bias[0], bias[1], bias[2]);
+    factors.states->bias.accel = Eigen::Vector3d(bias[3], bias[4], bias[5]);
+  }
   for (int p : pts) map->mp(p).X_w = Eigen::Vector3d(X[p][0], X[p][1], X[p][2]);
   for (size_t n = 0; n < all.size(); ++n)
     if (outlier[n] && !map->mp(all[n].point).bad) {

@@ -106,6 +106,11 @@ struct MonoSlamOptions {
   /// its standard deviation: the preintegration's + gyro_factor_sigma_rad + gyro_bias_sigma x the
   /// interval (an unknown bias).
   bool gyro_factors = true;
+  /// With an IMU, once a map is scaled by it: a visual-inertial bundle adjustment (ORB-SLAM3's):
+  /// the preintegrated IMU between consecutive keyframes (Forster's residual, its covariance) is a
+  /// factor on their poses, their velocities and the IMU biases, which keeps the scale observed
+  /// and the gravity direction, instead of the rotation factors alone.
+  bool inertial_ba = true;
   double gyro_factor_sigma_rad = 0.002;
   double gyro_bias_sigma = 0.001;  ///< rad/s
   bool IsValid(std::string* msg) const;
@@ -146,6 +151,7 @@ struct SlamStats {
   int dvl_samples_rejected = 0;       ///< non-finite or out of time order
   long dvl_factors = 0;               ///< displacement factors handed to bundle adjustments
   long gyro_factors = 0;              ///< gyroscope rotation factors handed to bundle adjustments
+  long inertial_factors = 0;          ///< preintegrated IMU factors (visual-inertial BA)
   /// The output is in metres: a map was scaled by the IMU or the DVL (later maps continue in its
   /// units). Before that, poses are in the first map's units (median depth 1).
   bool metric = false;

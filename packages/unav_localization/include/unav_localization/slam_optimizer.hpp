@@ -5,8 +5,10 @@
 // exceeds the 95% gate (2 dof: 5.991) are marked outliers between rounds, as in ORB-SLAM.
 #pragma once
 
+#include <map>
 #include <vector>
 
+#include "unav_localization/imu_preintegration.hpp"
 #include "unav_localization/sim3.hpp"
 #include "unav_localization/slam_map.hpp"
 
@@ -50,10 +52,33 @@ struct RelativeRotationFactor {
   double sigma = 1.0;
 };
 
+/// The IMU between two keyframes of a metric map (ORB-SLAM3's inertial edge): Forster's 9-D
+/// residual of the preintegrated deltas against both keyframes' body poses (T_wb = T_cw^-1 T_cb)
+/// and velocities, with the IMU biases, whitened by the preintegration's covariance. A factor on
+/// poses, velocities and biases of InertialStates.
+struct InertialFactor {
+  int kf_i = -1, kf_j = -1;
+  ImuPreintegration pre;
+  Eigen::Isometry3d T_cb = Eigen::Isometry3d::Identity();  ///< the body (IMU) in the camera frame
+};
+
+/// The states the inertial factors add, read and written back by the adjustment: each
+/// keyframe's body velocity [m/s, map world axes] and one bias for the window, held near its prior.
+struct InertialStates {
+  std::map<int, Eigen::Vector3d> velocities;
+  ImuBias bias;
+  ImuBias bias_prior;
+  double gyro_bias_prior_sigma = 0.01;            ///< [rad/s]
+  double accel_bias_prior_sigma = 0.1;            ///< [m/s^2]
+  Eigen::Vector3d g_w = Eigen::Vector3d::Zero();  ///< gravity in the map's world [m/s^2]
+};
+
 /// What other sensors add to a bundle adjustment (only where both keyframes take part).
 struct BundleFactors {
   std::vector<BodyDisplacementFactor> displacements;
   std::vector<RelativeRotationFactor> rotations;
+  std::vector<InertialFactor> inertial;  ///< used with `states` only
+  InertialStates* states = nullptr;      ///< every inertial factor's keyframes have a velocity here
 };
 
 /// Local BA around keyframe `kf_id`: it and its covisible keyframes (up to max_local) are
