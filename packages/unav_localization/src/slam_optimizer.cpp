@@ -262,9 +262,9 @@ BundleAdjustmentSummary RunBundleAdjustment(Map* map, const PinholeCamera& cam, 
   std::array<double, 6> bias{};
   if (factors.states != nullptr) {
     for (const auto& [k, v] : factors.states->velocities) velocities[k] = {v.x(), v.y(), v.z()};
-    for (int k = 0; k < 3; ++k) {
-      bias[static_cast<size_t>(k)] = factors.states->bias.gyro[k];
-      bias[static_cast<size_t>(3 + k)] = factors.states->bias.accel[k];
+    for (size_t k = 0; k < 3; ++k) {
+      bias[k] = factors.states->bias.gyro[static_cast<Eigen::Index>(k)];
+      bias[3 + k] = factors.states->bias.accel[static_cast<Eigen::Index>(k)];
     }
   }
   auto chi2_of = [&](const Obs& o) {
