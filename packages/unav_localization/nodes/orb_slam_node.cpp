@@ -57,6 +57,7 @@ struct OrbSlamNodeParams {
   int features = 1000;
   bool loop_closing = true;
   bool merge_maps = true;
+  bool inertial_ba = true;
   double clahe_clip = 3.0;
   unav::lockstep::ParticipantParams lockstep{"orb_slam"};
   double image_period = 0.1;
@@ -92,6 +93,8 @@ struct OrbSlamNodeParams {
                  .Min(0.0)
                  .Doc("poses in each published path, the latest (corrected); 0 = the whole trajectory"));
     a->Visit(Field("imu", &imu).Doc("monocular-inertial mode: the imu topic scales each map to metres"));
+    a->Visit(Field("inertial_ba", &inertial_ba)
+                 .Doc("with imu: visual-inertial bundle adjustment once a map is scaled (velocities, biases)"));
     a->Visit(Field("dvl", &dvl).Doc("DVL-aided mode: the dvl topic scales each map to metres and holds its scale"));
     a->Visit(Field("dvl_factors", &dvl_factors)
                  .Doc("DVL-aided: the DVL's displacements between keyframes constrain the bundle adjustments"));
@@ -120,6 +123,7 @@ class OrbSlamNode : public unav::Node {
     options_.orb.features = prm.features;
     options_.loop_closing = prm.loop_closing;
     options_.merge_maps = prm.merge_maps;
+    options_.inertial_ba = prm.inertial_ba;
     options_.clahe_clip = prm.clahe_clip;
     options_.dvl_factors = prm.dvl_factors;
     path_max_poses_ = static_cast<std::size_t>(prm.path_max_poses);

@@ -97,7 +97,7 @@ int main(int argc, char** argv) {
   std::string images, camera_path, method = "orb_slam", vocabulary, output, groundtruth;
   int max_frames = 0;
   double fps = 10.0;
-  bool quiet = false, verbose = false, no_loops = false, no_merge = false;
+  bool quiet = false, verbose = false, no_loops = false, no_merge = false, no_vi_ba = false;
   double clahe = 3.0;
   int features = 1000;
   std::string imu_path, dvl_path, mount_text;
@@ -117,6 +117,8 @@ int main(int argc, char** argv) {
                "orb_slam: a line for every frame (features, inliers, keyframe), not only for events");
   app.add_flag("--no-loop-closing", no_loops, "orb_slam: do not detect loops");
   app.add_flag("--no-map-merging", no_merge, "orb_slam: do not keep lost maps to merge them later (atlas)");
+  app.add_flag("--no-inertial-ba", no_vi_ba,
+               "orb_slam with --imu: scale by the inertial initialisation only, no visual-inertial bundle adjustment");
   app.add_option("--features", features, "orb_slam: ORB features per 640x480 of image (more on a larger image)")
       ->check(CLI::Range(100, 10000));
   app.add_option("--clahe", clahe,
@@ -158,6 +160,7 @@ int main(int argc, char** argv) {
       ul::MonoSlamOptions o;
       o.loop_closing = !no_loops;
       o.merge_maps = !no_merge;
+      o.inertial_ba = !no_vi_ba;
       o.orb.features = features;
       o.clahe_clip = clahe;
       slam = std::make_unique<ul::MonoSlam>(cam.camera, cam.distortion, o, voc);
