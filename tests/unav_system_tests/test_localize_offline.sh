@@ -22,17 +22,24 @@ unav localize --images "$s" --camera "$s/camera.yaml" --quiet --output "$out/mon
 grep -q "APE (Sim(3)-aligned" "$out/mono.log" || fail "monocular: no APE line: $(cat "$out/mono.log")"
 ! grep -q "SE(3)-aligned" "$out/mono.log" || fail "monocular: an SE(3) figure for an unscaled map"
 
-for aid in dvl dvl_imu; do
-  case $aid in dvl) args=(--dvl "$s/nav/dvl.csv") ;; dvl_imu) args=(--dvl "$s/nav/dvl.csv" --imu "$s/imu.txt") ;; esac
+for aid in dvl dvl_imu imu; do
+  case $aid in
+    dvl) args=(--dvl "$s/nav/dvl.csv") ;;
+    dvl_imu) args=(--dvl "$s/nav/dvl.csv" --imu "$s/imu.txt") ;;
+    imu) args=(--imu "$s/imu.txt") ;;  # the visual-inertial bundle adjustment holds the scale
+  esac
+  # Scale bounds: 3 % with the DVL (seen 0.7-1.1 %); the IMU alone, 15 s of a gentle flight, 5 %
+  # (seen 2.9 %; 40 s samples: 0.2-0.9 %).
+  tol=0.03; [ "$aid" = imu ] && tol=0.05
   unav localize --images "$s" --camera "$s/camera.yaml" --quiet "${args[@]}" --output "$out/$aid.txt" \
     >"$out/$aid.log" 2>&1 || { cat "$out/$aid.log"; fail "$aid-aided run"; }
   echo "--- $aid"; grep -E "APE" "$out/$aid.log"
-  python3 - "$out/$aid.log" <<'PY' || fail "$aid-aided figures: $(cat "$out/$aid.log")"
+  python3 - "$out/$aid.log" "$tol" <<'PY' || fail "$aid-aided figures: $(cat "$out/$aid.log")"
 import re, sys
 text = open(sys.argv[1]).read()
 scale = float(re.search(r"APE \(Sim\(3\)-aligned, (\d+) poses, scale ([0-9.]+)\)", text).group(2))
 se3 = float(re.search(r"APE \(SE\(3\)-aligned, \d+ poses, metric as estimated\): rmse ([0-9.]+) m", text).group(1))
-assert abs(scale - 1.0) < 0.03, scale
+assert abs(scale - 1.0) < float(sys.argv[2]), scale
 assert se3 < 0.10, se3
 PY
 done
