@@ -199,9 +199,10 @@ class OrbSlamNode : public unav::Node {
       if (inertial_on_)
         logger()->info(
             "inertial: {} map(s) scaled to metres by the IMU, {} refinement(s), {} initialisation(s) refused, {} "
-            "gyroscope rotation factors, {} IMU samples rejected",
-            st.inertial_inits, st.inertial_refinements, st.inertial_rejections, st.gyro_factors,
-            st.imu_samples_rejected);
+            "gyroscope rotation factors, {} inertial factors, {} frames tracked from the IMU's prediction ({} "
+            "predictions missed), {} IMU samples rejected",
+            st.inertial_inits, st.inertial_refinements, st.inertial_rejections, st.gyro_factors, st.inertial_factors,
+            st.imu_predicted_frames, st.motion_model_misses, st.imu_samples_rejected);
     }
   }
 

@@ -195,7 +195,11 @@ auto MonoSlam::Impl::Track(const cv::Mat& gray, double stamp) -> SlamFrameSummar
   }
   bool ok = false;
   if (last_tracked) {
-    if (has_velocity) ok = TrackWithMotionModel();
+    const std::optional<Eigen::Isometry3d> imu_pose = ImuPredictedPose(cur.stamp);
+    if (has_velocity || imu_pose) {
+      ok = TrackWithMotionModel(imu_pose);
+      if (!ok) ++stats.motion_model_misses;
+    }
     if (!ok) {
       std::fill(cur.points.begin(), cur.points.end(), -1);
       ok = TrackReferenceKeyFrame();

@@ -190,6 +190,9 @@ struct MonoSlam::Impl {
   /// where the IMU covers them; a keyframe without a velocity yet gets the IMU's prediction from
   /// its predecessor's state.
   std::vector<InertialFactor> InertialFactors(std::size_t count);
+  /// With the visual-inertial states: the camera pose (T_cw) at `stamp` predicted by the IMU from
+  /// the newest keyframe with a velocity (ORB-SLAM3's tracking prediction); nullopt otherwise.
+  std::optional<Eigen::Isometry3d> ImuPredictedPose(double stamp) const;
   /// All of them, for a bundle adjustment over the last `count` keyframes; counted in stats.
   BundleFactors AidingFactors(std::size_t count) {
     BundleFactors f{DvlFactors(count), GyroFactors(count), InertialFactors(count), nullptr};
@@ -255,7 +258,9 @@ struct MonoSlam::Impl {
 
   int Optimize(Frame* f);
 
-  bool TrackWithMotionModel();
+  /// Projects the last frame's points from a predicted pose: the IMU's when given, else the
+  /// constant-velocity model's.
+  bool TrackWithMotionModel(const std::optional<Eigen::Isometry3d>& predicted);
 
   bool TrackReferenceKeyFrame();
 

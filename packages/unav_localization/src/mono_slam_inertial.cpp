@@ -151,6 +151,40 @@ auto MonoSlam::Impl::InertialFactors(std::size_t count) -> std::vector<InertialF
   return out;
 }
 
+auto MonoSlam::Impl::ImuPredictedPose(double stamp) const -> std::optional<Eigen::Isometry3d> {
+  if (!inertial || !vi_ready || !opt.inertial_ba || !opt.imu_prediction || imu.empty()) return std::nullopt;
+  const KeyFrame* from = nullptr;
+  for (const auto& [id, v] : vi.velocities) {
+    const KeyFrame& k = map->kf(id);
+    if (!k.bad && k.stamp < stamp && (from == nullptr || k.stamp > from->stamp)) from = &k;
+  }
+  if (from == nullptr) return std::nullopt;
+  const Eigen::Isometry3d T_wb = from->T_cw.inverse() * T_bc.inverse();
+  const NavState at_kf{T_wb.linear(), T_wb.translation(), vi.velocities.at(from->id)};
+  const auto predict = [&](double t) -> std::optional<Eigen::Isometry3d> {
+    if (t <= from->stamp) return T_wb;
+    const ImuPreintegration pre = PreintegrateImu(from->stamp, t);
+    if (pre.dt() <= 0.0) return std::nullopt;
+    const NavState s = pre.Predict(at_kf, vi.bias, vi.g_w);
+    Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+    T.linear() = s.R_WB;
+    T.translation() = s.p_W;
+    return T;
+  };
+  const std::optional<Eigen::Isometry3d> now = predict(stamp);
+  if (!now) return std::nullopt;
+  // Anchored at the last tracked frame when there is one: its visual pose and the IMU's motion
+  // since (the difference of two predictions from the same keyframe state), so the prediction's
+  // error is that of the last frame interval, not of every interval since the keyframe.
+  if (last_tracked && last.stamp < stamp && last.stamp >= from->stamp) {
+    if (const std::optional<Eigen::Isometry3d> then = predict(last.stamp)) {
+      const Eigen::Isometry3d T_wb_last = last.T_cw.inverse() * T_bc.inverse();
+      return (T_wb_last * then->inverse() * *now * T_bc).inverse();
+    }
+  }
+  return (*now * T_bc).inverse();
+}
+
 auto MonoSlam::Impl::GyroFactors(std::size_t count) const -> std::vector<RelativeRotationFactor> {
   std::vector<RelativeRotationFactor> out;
   // The visual-inertial factors hold the rotation too.

@@ -80,8 +80,13 @@ auto MonoSlam::Impl::Optimize(Frame* f) -> int {
   return inliers;
 }
 
-auto MonoSlam::Impl::TrackWithMotionModel() -> bool {
-  cur.T_cw = velocity * last.T_cw;
+auto MonoSlam::Impl::TrackWithMotionModel(const std::optional<Eigen::Isometry3d>& predicted) -> bool {
+  if (predicted) {
+    cur.T_cw = *predicted;
+    ++stats.imu_predicted_frames;
+  } else {
+    cur.T_cw = velocity * last.T_cw;
+  }
   std::vector<int> pts;
   for (size_t i = 0; i < last.points.size(); ++i)
     if (last.points[i] >= 0 && !last.outlier[i]) pts.push_back(last.points[i]);

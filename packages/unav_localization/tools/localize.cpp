@@ -97,7 +97,7 @@ int main(int argc, char** argv) {
   std::string images, camera_path, method = "orb_slam", vocabulary, output, groundtruth;
   int max_frames = 0;
   double fps = 10.0;
-  bool quiet = false, verbose = false, no_loops = false, no_merge = false, no_vi_ba = false;
+  bool quiet = false, verbose = false, no_loops = false, no_merge = false, no_vi_ba = false, no_imu_pred = false;
   double clahe = 3.0;
   int features = 1000;
   std::string imu_path, dvl_path, mount_text;
@@ -117,6 +117,8 @@ int main(int argc, char** argv) {
                "orb_slam: a line for every frame (features, inliers, keyframe), not only for events");
   app.add_flag("--no-loop-closing", no_loops, "orb_slam: do not detect loops");
   app.add_flag("--no-map-merging", no_merge, "orb_slam: do not keep lost maps to merge them later (atlas)");
+  app.add_flag("--no-imu-prediction", no_imu_pred,
+               "orb_slam with --imu: predict each frame's pose by constant velocity, not by the IMU");
   app.add_flag("--no-inertial-ba", no_vi_ba,
                "orb_slam with --imu: scale by the inertial initialisation only, no visual-inertial bundle adjustment");
   app.add_option("--features", features, "orb_slam: ORB features per 640x480 of image (more on a larger image)")
@@ -161,6 +163,7 @@ int main(int argc, char** argv) {
       o.loop_closing = !no_loops;
       o.merge_maps = !no_merge;
       o.inertial_ba = !no_vi_ba;
+      o.imu_prediction = !no_imu_pred;
       o.orb.features = features;
       o.clahe_clip = clahe;
       slam = std::make_unique<ul::MonoSlam>(cam.camera, cam.distortion, o, voc);
@@ -283,6 +286,12 @@ int main(int argc, char** argv) {
           "orb_slam: %d keyframes, %d points, %d loops closed, %d relocalisations, %d re-initialisations, %d maps "
           "merged (%d map(s) in the output)\n",
           st.keyframes, st.points, st.loops, st.relocalizations, st.reinitializations, st.merges, st.maps - st.merges);
+      if (!imu_path.empty())
+        std::printf(
+            "orb_slam inertial: %d initialisation(s), %d refinement(s), %ld inertial factors, %d frames tracked from "
+            "the IMU's prediction, %d predicted poses missed (constant-velocity or IMU)\n",
+            st.inertial_inits, st.inertial_refinements, st.inertial_factors, st.imu_predicted_frames,
+            st.motion_model_misses);
     }
     std::printf("trajectory: %s\n", output.c_str());
     if (groundtruth.empty() && std::filesystem::exists(images + "/groundtruth.txt"))

@@ -111,6 +111,10 @@ struct MonoSlamOptions {
   /// factor on their poses, their velocities and the IMU biases, which keeps the scale observed
   /// and the gravity direction, instead of the rotation factors alone.
   bool inertial_ba = true;
+  /// With the visual-inertial states: each frame's pose is first predicted by the IMU from the
+  /// newest keyframe's state (instead of the constant-velocity model), which holds through a gap
+  /// in the images or a sudden manoeuvre.
+  bool imu_prediction = true;
   double gyro_factor_sigma_rad = 0.002;
   double gyro_bias_sigma = 0.001;  ///< rad/s
   bool IsValid(std::string* msg) const;
@@ -152,6 +156,8 @@ struct SlamStats {
   long dvl_factors = 0;               ///< displacement factors handed to bundle adjustments
   long gyro_factors = 0;              ///< gyroscope rotation factors handed to bundle adjustments
   long inertial_factors = 0;          ///< preintegrated IMU factors (visual-inertial BA)
+  int imu_predicted_frames = 0;       ///< frames tracked from the IMU's predicted pose
+  int motion_model_misses = 0;        ///< frames the predicted pose did not track (matched again by appearance)
   /// The output is in metres: a map was scaled by the IMU or the DVL (later maps continue in its
   /// units). Before that, poses are in the first map's units (median depth 1).
   bool metric = false;
