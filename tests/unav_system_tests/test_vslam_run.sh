@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # One short run of the visual-localisation benchmark (launch_scripts/vslam_run.launch.yaml):
 # physics (lockstep, waiting for the renderer and the ORB SLAM) + controller + renderer (down
-# camera 640 x 480) + orb_slam + orb_slam_aided (DVL + IMU) + klt_vo (monocular) + evaluator, 15 s of simulated time along the
+# camera 640 x 480) + orb_slam + orb_slam_aided (DVL + IMU) + orb_slam_vi (IMU) + klt_vo (monocular) + evaluator, 15 s
+# of simulated time along the
 # linear pipeline. The run must end by itself and leave the Table II files, with the SLAM's
 # Sim(3)-aligned APE under 5 cm (seen: ~5 mm) and the KLT VO's under 15 cm.
 source "$(dirname "$0")/common.sh"
@@ -30,6 +31,12 @@ print("orb_slam_aided APE %.4f m (%d poses), Sim(3) scale %.4f" % (aided["ape_m"
 assert aided["poses"] >= 120, aided["poses"]
 assert aided["ape_m"]["rmse"] < 0.05
 assert abs(aided["scale"] - 1.0) < 0.05, aided["scale"]
+# The SLAM with the IMU alone (visual-inertial): metric too (seen: scale 0.986, APE 3 mm).
+vi = rows["orb_slam_vi"]
+print("orb_slam_vi APE %.4f m (%d poses), Sim(3) scale %.4f" % (vi["ape_m"]["rmse"], vi["poses"], vi["scale"]))
+assert vi["poses"] >= 120, vi["poses"]
+assert vi["ape_m"]["rmse"] < 0.05
+assert abs(vi["scale"] - 1.0) < 0.05, vi["scale"]
 assert klt["poses"] >= 100
 assert klt["ape_m"]["rmse"] < 0.15
 PY
