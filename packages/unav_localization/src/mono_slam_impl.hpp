@@ -18,6 +18,7 @@
 #include <random>
 #include <set>
 #include <stdexcept>
+#include "unav_localization/inertial_init.hpp"
 #include "unav_localization/sim3.hpp"
 #include "unav_localization/slam_optimizer.hpp"
 #include "unav_localization/two_view.hpp"
@@ -190,6 +191,8 @@ struct MonoSlam::Impl {
   /// where the IMU covers them; a keyframe without a velocity yet gets the IMU's prediction from
   /// its predecessor's state.
   std::vector<InertialFactor> InertialFactors(std::size_t count);
+  /// The visual-inertial states from an inertial-only initialisation over kfs.
+  void StartInertialStates(const std::vector<const KeyFrame*>& kfs, const InertialInitResult& r);
   /// With the visual-inertial states: the camera pose (T_cw) at `stamp` predicted by the IMU from
   /// the newest keyframe with a velocity (ORB-SLAM3's tracking prediction); nullopt otherwise.
   std::optional<Eigen::Isometry3d> ImuPredictedPose(double stamp) const;

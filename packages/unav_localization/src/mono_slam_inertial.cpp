@@ -53,6 +53,7 @@ auto MonoSlam::Impl::ScaleMap(double s) -> void {
   last.T_cw.translation() *= s;
   velocity.translation() *= s;
   for (double& d : recent_steps) d *= s;
+  for (auto& [k, v] : vi.velocities) v *= s;  // (the map's units per second)
 }
 
 auto MonoSlam::Impl::RecentKeyFrames(double not_before, std::size_t count) const -> std::vector<const KeyFrame*> {
@@ -103,15 +104,7 @@ auto MonoSlam::Impl::TryInertialInit() -> std::string {
   }
   ++(metric_stage == 0 ? stats.inertial_inits : stats.inertial_refinements);
   ApplyMetricScale(r.scale);
-  // The visual-inertial states start from the initialisation's (velocities are metric already).
-  vi.g_w = r.gravity_w;
-  vi.bias = vi.bias_prior = r.bias;
-  const InertialInitOptions init_options;
-  vi.gyro_bias_prior_sigma = init_options.gyro_bias_prior_std;
-  vi.accel_bias_prior_sigma = init_options.accel_bias_prior_std;
-  vi.velocities.clear();
-  for (std::size_t k = 0; k < kfs.size() && k < r.velocities.size(); ++k) vi.velocities[kfs[k]->id] = r.velocities[k];
-  vi_ready = true;
+  StartInertialStates(kfs, r);
   if (opt.inertial_ba) {
     // ORB-SLAM3's VIBA 1 and 2: the whole map with its inertial factors, so that the scale, the
     // gravity and the velocities agree with every keyframe, not only the local window's.
@@ -129,6 +122,18 @@ auto MonoSlam::Impl::TryInertialInit() -> std::string {
                 metric_stage == 1 ? "initialisation" : "refinement", kfs.size(), kfs.back()->stamp - kfs.front()->stamp,
                 r.scale, stats.inertial_gravity_deg, r.bias.gyro.x(), r.bias.gyro.y(), r.bias.gyro.z());
   return buf;
+}
+
+auto MonoSlam::Impl::StartInertialStates(const std::vector<const KeyFrame*>& kfs, const InertialInitResult& r) -> void {
+  // The visual-inertial states start from the initialisation's (velocities are metric already).
+  vi.g_w = r.gravity_w;
+  vi.bias = vi.bias_prior = r.bias;
+  const InertialInitOptions init_options;
+  vi.gyro_bias_prior_sigma = init_options.gyro_bias_prior_std;
+  vi.accel_bias_prior_sigma = init_options.accel_bias_prior_std;
+  vi.velocities.clear();
+  for (std::size_t k = 0; k < kfs.size() && k < r.velocities.size(); ++k) vi.velocities[kfs[k]->id] = r.velocities[k];
+  vi_ready = true;
 }
 
 auto MonoSlam::Impl::InertialFactors(std::size_t count) -> std::vector<InertialFactor> {
