@@ -93,13 +93,13 @@ struct OrbSlamNodeParams {
                  .Min(0.0)
                  .Doc("poses in each published path, the latest (corrected); 0 = the whole trajectory"));
     a->Visit(Field("imu", &imu).Doc("monocular-inertial mode: the imu topic scales each map to metres"));
-    a->Visit(Field("inertial_ba", &inertial_ba)
-                 .Doc("with imu: visual-inertial bundle adjustment once a map is scaled (velocities, biases)"));
     a->Visit(Field("dvl", &dvl).Doc("DVL-aided mode: the dvl topic scales each map to metres and holds its scale"));
     a->Visit(Field("dvl_factors", &dvl_factors)
                  .Doc("DVL-aided: the DVL's displacements between keyframes constrain the bundle adjustments"));
     a->Visit(Field("body_frame", &body_frame)
                  .Doc("the IMU's and the DVL's frame, parent of the camera mount on /tf_static"));
+    a->Visit(Field("inertial_ba", &inertial_ba)
+                 .Doc("with imu: visual-inertial bundle adjustment once a map is scaled (velocities, biases)"));
     a->Visit(Field("imu_gyro_noise_density", &imu_gyro_noise_density)
                  .Range(1e-7, 1.0)
                  .Unit("rad/s/sqrt(Hz)")

@@ -8,6 +8,18 @@
 
 namespace unav::renderer {
 
+scene::World load_sensor_world(const SensorSceneParams& p, const std::optional<scene::Scenario>& scenario,
+                               const std::string& node_namespace, std::vector<std::string>* others) {
+  if (!scenario) {
+    scene::World world = scene::load_world(p.world);
+    if (!p.water.empty()) world.water = scene::load_water_spec(p.water);
+    return world;
+  }
+  scene::World world = scene::scenario_world(*scenario);
+  *others = add_fleet_bodies(*scenario, p.fleet, node_namespace.substr(node_namespace.rfind('/') + 1), &world);
+  return world;
+}
+
 std::vector<std::string> add_fleet_bodies(const scene::Scenario& sc, const FleetBodyParams& p, const std::string& own,
                                           scene::World* world) {
   std::vector<std::string> names;

@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -41,6 +42,35 @@ struct FleetBodyParams {
     a->Visit(Field("fleet_body_albedo", &fleet_body_albedo).Range(0.0, 1.0).Doc("its colour (linear RGB)"));
   }
 };
+
+/// Where a sensor node (renderer, sonar) is: the scenario, or a world file with a water override,
+/// the vehicle's body frame and the other vehicles drawn (embedded: `scene.Serialize(a)`, the keys
+/// at the node's level).
+struct SensorSceneParams {
+  /// its world and water replace world and water (the node takes its sensors from it too)
+  unav::scene::ScenarioParam scenario;
+  std::string world;  ///< default: the installed worlds/pipe_inspection/world.yaml
+  std::string water;
+  std::string body_frame = "base_link_frd";
+  FleetBodyParams fleet;  ///< the scenario's other vehicles, drawn
+
+  template <class Archive>
+  void Serialize(Archive* a) {
+    scenario.Serialize(a);
+    a->Visit(unav::common::Field("world", &world).Doc("world.yaml path"));
+    a->Visit(unav::common::Field("water", &water)
+                 .Doc("Jerlov preset (I, II, 3C, ...) or water YAML path (optics, temperature, salinity); empty = "
+                      "the world's"));
+    a->Visit(unav::common::Field("body_frame", &body_frame).Doc("vehicle body frame (tf parent of the sensors)"));
+    fleet.Serialize(a);
+  }
+};
+
+/// The world a sensor node draws: the scenario's (when given) or p.world with p.water; with the
+/// scenario's other vehicles as movable bodies (their names in *others; the node's own is the
+/// last part of node_namespace). Throws what the loaders throw (file and key named).
+scene::World load_sensor_world(const SensorSceneParams& p, const std::optional<scene::Scenario>& scenario,
+                               const std::string& node_namespace, std::vector<std::string>* others);
 
 /// Adds to `world` a movable box (class vehicle) for every vehicle of `sc` but `own` (the last part
 /// of the node's namespace): the fleet's, and the primary's (named p.primary_name) when there is a

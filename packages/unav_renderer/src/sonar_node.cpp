@@ -47,45 +47,37 @@ void fill_mono8(sensor_msgs::msg::Image& m, int w, int h, const std::vector<std:
 
 SonarNode::SonarNode(const unav::NodeOptions& options) : Node("sonar", options, "rov") {
   SonarNodeParams prm;
-  prm.world = unav::common::resource_or_empty("worlds/pipe_inspection/world.yaml");
+  prm.scene.world = unav::common::resource_or_empty("worlds/pipe_inspection/world.yaml");
   prm.sonars_config = unav::common::resource_or_empty("config/sensors/bluerov2_sonars.yaml");
   declare_params(&prm);
-  std::optional<World> scenario_world;
   std::optional<unav::scene::Scenario> scenario;
-  if (prm.scenario.given()) {  // the sonar's part of the scenario
-    scenario = prm.scenario.load();
+  if (prm.scene.scenario.given()) {  // the sonar's part of the scenario
+    scenario = prm.scene.scenario.load();
     const unav::scene::Scenario& sc = *scenario;
-    scenario_world = unav::scene::scenario_world(sc);
     if (sc.sonars.names.empty())
-      throw unav::ConfigError(prm.scenario.file, "sonars.names", "[]",
+      throw unav::ConfigError(prm.scene.scenario.file, "sonars.names", "[]",
                               "the sonar node needs at least one sonar of the scenario's sonars.config");
-    prm.world = sc.world;
-    prm.water = sc.water;
+    prm.scene.world = sc.world;
     prm.sonars_config = sc.sonars.config;
     prm.sonars = sc.sonars.names;
   }
-  if (prm.world.empty() || prm.sonars_config.empty())
+  if (prm.scene.world.empty() || prm.sonars_config.empty())
     throw unav::ParameterError("node '" + name() +
                                "': 'world' and 'sonars_config' are required (unav_resources is not installed, so "
                                "there is no default)");
   fan_width_ = prm.fan_width;
   World world;
   std::vector<SonarModel> models;
+  std::vector<std::string> others;  // the other vehicles of the scenario, drawn (fleet_bodies)
   try {
-    world = scenario_world ? std::move(*scenario_world) : unav::scene::load_world(prm.world);
+    world = load_sensor_world(prm.scene, scenario, get_namespace(), &others);
     if (prm.sonars.empty()) {
       models = unav::scene::load_sonars(prm.sonars_config);
     } else {
       for (const auto& n : prm.sonars) models.push_back(unav::scene::load_sonar(prm.sonars_config, n));
     }
-    if (!scenario_world && !prm.water.empty()) world.water = unav::scene::load_water_spec(prm.water);
   } catch (const std::exception& e) {
     throw unav::ConfigError(e.what());  // world/sonar/water errors name the file and key
-  }
-  std::vector<std::string> others;  // the other vehicles of the scenario, drawn (fleet_bodies)
-  if (scenario) {
-    const std::string& ns = get_namespace();
-    others = add_fleet_bodies(*scenario, prm.fleet, ns.substr(ns.rfind('/') + 1), &world);
   }
   lockstep_ = prm.lockstep.enabled;
   SonarOptions so;
@@ -124,14 +116,14 @@ SonarNode::SonarNode(const unav::NodeOptions& options) : Node("sonar", options, 
   tf2_msgs::msg::TFMessage mounts;
   for (const auto& m : models)
     mounts.transforms().push_back(
-        unav::to_transform_stamped(m.frame_acoustic(), 0.0, prm.body_frame, m.name + "_link"));
+        unav::to_transform_stamped(m.frame_acoustic(), 0.0, prm.scene.body_frame, m.name + "_link"));
   tf_static_pub_->publish(mounts);
   std::string list;
   for (const auto& m : models)
     list += (list.empty() ? "" : ", ") + m.name + (m.side_scan() ? " (side-scan " : " (FLS ") +
             std::to_string(m.channels()) + "x" + std::to_string(m.bins) + ", " +
             std::to_string(m.ping_rate_hz).substr(0, 4) + " Hz)";
-  logger()->info("world '{}', sonars {} on {}{}", prm.world, list,
+  logger()->info("world '{}', sonars {} on {}{}", prm.scene.world, list,
                  sonar_->context().gl_renderer() + " (EGL " + sonar_->context().platform() + ")",
                  prm.lockstep.enabled ? ", lockstep" : "");
 }

@@ -48,36 +48,28 @@ namespace unav::renderer {
 
 /// The sonar node's parameters (params file or `-p name:=value`; `--help` lists them).
 struct SonarNodeParams {
-  /// its world, water and sonars (config, names) replace world, water, sonars_config and sonars
-  unav::scene::ScenarioParam scenario;
-  std::string world;          ///< default: the installed worlds/pipe_inspection/world.yaml
+  /// scenario, world, water, body_frame, fleet: the scenario's world, water and sonars (config,
+  /// names) replace world, water, sonars_config and sonars
+  SensorSceneParams scene;
   std::string sonars_config;  ///< default: the installed config/sensors/bluerov2_sonars.yaml
-  std::string water;
   std::vector<std::string> sonars;
   unav::lockstep::ParticipantParams lockstep{"sonar"};
-  bool noise = true;
-  int64_t seed = 1;
-  int fan_width = 512;
-  int waterfall_lines = 400;
-  std::string body_frame = "base_link_frd";
-  FleetBodyParams fleet;  ///< the scenario's other vehicles, drawn
+  bool noise = true;          ///< speckle and background noise
+  int64_t seed = 1;           ///< noise seed
+  int fan_width = 512;        ///< FLS fan image width [px]; 0 = none
+  int waterfall_lines = 400;  ///< side-scan waterfall height; 0 = none
 
   template <class Archive>
   void Serialize(Archive* a) {
     using unav::common::Field;
-    scenario.Serialize(a);
-    a->Visit(Field("world", &world).Doc("world.yaml path"));
+    scene.Serialize(a);
     a->Visit(Field("sonars_config", &sonars_config).Doc("sonar YAML path"));
-    a->Visit(
-        Field("water", &water).Doc("Jerlov preset or water YAML path (temperature, salinity); empty = the world's"));
     a->Visit(Field("sonars", &sonars).Doc("sonars of sonars_config to ping; [] = all"));
     lockstep.Serialize(a);
     a->Visit(Field("noise", &noise).Doc("speckle and background noise"));
     a->Visit(Field("seed", &seed).Min(0.0).Doc("noise seed"));
     a->Visit(Field("fan_width", &fan_width).Range(0, 4096).Unit("px").Doc("FLS fan image width; 0 = no fan image"));
     a->Visit(Field("waterfall_lines", &waterfall_lines).Range(0, 10000).Doc("side-scan waterfall height; 0 = none"));
-    a->Visit(Field("body_frame", &body_frame).Doc("vehicle body frame (tf parent of the sonars)"));
-    fleet.Serialize(a);
   }
 };
 

@@ -50,29 +50,25 @@ unav::QoS image_qos(sensor_msgs::msg::Image proto, const std::string& frame_id) 
 UnderwaterRendererNode::UnderwaterRendererNode(const unav::NodeOptions& options)
     : Node("underwater_renderer", options, "rov") {
   UnderwaterRendererParams prm;
-  prm.world = unav::common::resource_or_empty("worlds/pipe_inspection/world.yaml");
+  prm.scene.world = unav::common::resource_or_empty("worlds/pipe_inspection/world.yaml");
   prm.cameras_config = unav::common::resource_or_empty("config/sensors/bluerov2_cameras.yaml");
   declare_params(&prm);
   std::vector<CameraModel> scenario_cams;
-  std::optional<World> scenario_world;  // built the one way every run path builds it
   auto noise_seed = static_cast<std::uint64_t>(prm.seed);
   std::optional<scene::Scenario> scenario;
-  if (prm.scenario.given()) {  // the renderer's part of the scenario, as the in-process Episode takes it
-    scenario = prm.scenario.load();
+  if (prm.scene.scenario.given()) {  // the renderer's part of the scenario, as the in-process Episode takes it
+    scenario = prm.scene.scenario.load();
     const scene::Scenario& sc = *scenario;
-    prm.world = sc.world;
-    prm.water = sc.water;
+    prm.scene.world = sc.world;
     prm.cameras_config = sc.cameras.config;
     prm.cameras = sc.cameras.names;
     prm.render = sc.render;
     prm.rate = sc.cameras.rate_hz;
     noise_seed = unav::common::MixSeed(static_cast<std::uint64_t>(sc.seed));  // as Episode::reset(sc.seed)
     scenario_cams = scene::scenario_cameras(sc);
-    scenario_world = scene::scenario_world(sc);
   }
-  const std::string& world_path = prm.world;
+  const std::string& world_path = prm.scene.world;
   const std::string& cameras_path = prm.cameras_config;
-  const std::string& water = prm.water;
   const std::vector<std::string>& only = prm.cameras;
   const double rate = prm.rate;
   lockstep_ = prm.lockstep.enabled;
@@ -92,7 +88,7 @@ UnderwaterRendererNode::UnderwaterRendererNode(const unav::NodeOptions& options)
   std::vector<CameraModel> cams;
   std::vector<std::string> others;  // the other vehicles of the scenario, drawn (fleet_bodies)
   try {
-    world = scenario_world ? std::move(*scenario_world) : load_world(world_path);
+    world = load_sensor_world(prm.scene, scenario, get_namespace(), &others);  // built as every run path builds it
     cams = load_cameras(cameras_path);
     if (!scenario_cams.empty()) {
       cams = std::move(scenario_cams);
@@ -101,11 +97,6 @@ UnderwaterRendererNode::UnderwaterRendererNode(const unav::NodeOptions& options)
       picked.reserve(only.size());
       for (const auto& n : only) picked.push_back(load_camera(cameras_path, n));  // error lists the file's cameras
       cams = std::move(picked);
-    }
-    if (!scenario_world && !water.empty()) world.water = load_water_spec(water);
-    if (scenario) {
-      const std::string& ns = get_namespace();
-      others = add_fleet_bodies(*scenario, prm.fleet, ns.substr(ns.rfind('/') + 1), &world);
     }
   } catch (const std::exception& e) {
     throw unav::ConfigError(e.what());  // world/camera/water errors name the file and key
@@ -162,7 +153,7 @@ UnderwaterRendererNode::UnderwaterRendererNode(const unav::NodeOptions& options)
   }
   // Camera mounts, published once and latched by their owner: ROS 2 tools (RViz, Foxglove, tf2)
   // and our estimators and evaluator look them up instead of reading the camera YAML.
-  const std::string& body_frame = prm.body_frame;
+  const std::string& body_frame = prm.scene.body_frame;
   tf_static_pub_ = create_publisher<tf2_msgs::msg::TFMessage>("/tf_static", unav::QoS::static_latched());
   tf2_msgs::msg::TFMessage mounts;
   for (const auto& c : cams)

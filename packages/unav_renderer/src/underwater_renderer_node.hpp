@@ -50,13 +50,12 @@ namespace unav::renderer {
 
 /// The underwater_renderer's parameters (params file or `-p name:=value`; `--help` lists them).
 struct UnderwaterRendererParams {
-  /// its world, water, cameras (config, names, size, rate), render switches and seed replace world,
-  /// water, cameras_config, cameras, rate, render and seed (the noise seed is then MixSeed(scenario
-  /// seed), as the in-process Episode's)
-  unav::scene::ScenarioParam scenario;
-  std::string world;           ///< default: the installed worlds/pipe_inspection/world.yaml
+  /// scenario, world, water, body_frame, fleet: the scenario's world, water, cameras (config,
+  /// names, size, rate), render switches and seed replace world, water, cameras_config, cameras,
+  /// rate, render and seed (the noise seed is then MixSeed(scenario seed), as the in-process
+  /// Episode's)
+  SensorSceneParams scene;
   std::string cameras_config;  ///< default: the installed config/sensors/bluerov2_cameras.yaml
-  std::string water;
   std::vector<std::string> cameras;
   double rate = 10.0;
   unav::lockstep::ParticipantParams lockstep{"renderer"};
@@ -64,17 +63,13 @@ struct UnderwaterRendererParams {
   bool publish_segmentation = true;
   scene::RenderSettings render;
   int64_t seed = 1;
-  std::string body_frame = "base_link_frd";
   int64_t render_workers = 2;
-  FleetBodyParams fleet;  ///< the scenario's other vehicles, drawn
 
   template <class Archive>
   void Serialize(Archive* a) {
     using unav::common::Field;
-    scenario.Serialize(a);
-    a->Visit(Field("world", &world).Doc("world.yaml path"));
+    scene.Serialize(a);
     a->Visit(Field("cameras_config", &cameras_config).Doc("camera YAML path"));
-    a->Visit(Field("water", &water).Doc("Jerlov preset (I, II, 3C, ...) or water YAML path; empty = the world's"));
     a->Visit(Field("cameras", &cameras).Doc("cameras of cameras_config to render; [] = all"));
     a->Visit(Field("rate", &rate).Range(0.01, 1000.0).Unit("Hz").Doc("frame rate per camera"));
     lockstep.Serialize(a);
@@ -82,13 +77,11 @@ struct UnderwaterRendererParams {
     a->Visit(Field("publish_segmentation", &publish_segmentation).Doc("publish segmentation images"));
     a->Visit(Field("render", &render).Doc("realism switches (render.noise, render.shadows, ...)"));
     a->Visit(Field("seed", &seed).Min(0.0).Doc("noise seed"));
-    a->Visit(Field("body_frame", &body_frame).Doc("vehicle body frame (tf parent of the cameras)"));
     a->Visit(Field("render_workers", &render_workers)
                  .Range(1, 8)
                  .Doc("renderers at once, one EGL context and thread each (RendererPool): a frame's cameras "
                       "render in parallel; free-running, successive frames too (lockstep: at most one per "
                       "camera)"));
-    fleet.Serialize(a);
   }
 };
 
