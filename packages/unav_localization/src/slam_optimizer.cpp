@@ -261,7 +261,11 @@ BundleAdjustmentSummary RunBundleAdjustment(Map* map, const PinholeCamera& cam, 
   std::map<int, std::array<double, 3>> velocities;
   std::array<double, 6> bias{};
   if (factors.states != nullptr) {
-    for (const auto& [k, v] : factors.states->velocities) velocities[k] = {v.x(), v.y(), v.z()};
+    // The velocities of the factors' keyframes only (the states keep every keyframe's).
+    for (const auto& f : factors.inertial)
+      for (const int k : {f.kf_i, f.kf_j})
+        if (const auto v = factors.states->velocities.find(k); v != factors.states->velocities.end())
+          velocities[k] = {v->second.x(), v->second.y(), v->second.z()};
     for (size_t k = 0; k < 3; ++k) {
       bias[k] = factors.states->bias.gyro[static_cast<Eigen::Index>(k)];
       bias[3 + k] = factors.states->bias.accel[static_cast<Eigen::Index>(k)];
@@ -334,8 +338,7 @@ BundleAdjustmentSummary RunBundleAdjustment(Map* map, const PinholeCamera& cam, 
   // Write back; drop outlier observations.
   for (int k : local_kfs) map->kf(k).T_cw = FromParams(poses[k].data());
   if (factors.states != nullptr) {
-    for (auto& [k, v] : factors.states->velocities)
-      v = Eigen::Vector3d(velocities[k][0], velocities[k][1], velocities[k][2]);
+    for (const auto& [k, v] : velocities) factors.states->velocities[k] = Eigen::Vector3d(v[0], v[1], v[2]);
     factors.states->bias.gyro = Eigen::Vector3d(bias[0], bias[1], bias[2]);
     factors.states->bias.accel = Eigen::Vector3d(bias[3], bias[4], bias[5]);
   }
