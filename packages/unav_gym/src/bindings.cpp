@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "unav_common/crash_report.hpp"
 #include "unav_common/errors.hpp"
 #include "unav_common/resources.hpp"
 #include "unav_sim/pipe_following_env.hpp"
@@ -69,6 +70,9 @@ std::array<double, 2> action_of(py::handle a) {
 
 PYBIND11_MODULE(_core, m) {
   m.doc() = "UNav-Sim pipe-following environment core (C++); use unav_gym's Gymnasium classes.";
+  // A crash in the core (renderer, dynamics threads) prints its native stack before Python's
+  // faulthandler prints the Python one.
+  unav::common::InstallCrashReport("unav_gym");
   // pybind11 wants void(*)(std::exception_ptr): by value.
   py::register_exception_translator([](std::exception_ptr p) {  // NOLINT(performance-unnecessary-value-param)
     try {

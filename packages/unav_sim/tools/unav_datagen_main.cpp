@@ -25,6 +25,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "unav_common/crash_report.hpp"
 #include "unav_common/errors.hpp"
 #include "unav_datagen/dataset_writer.hpp"
 #include "unav_datagen/randomization.hpp"
@@ -334,6 +335,7 @@ void contact_sheet(const RandomizationSpec& spec, const Options& o) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  unav::common::InstallCrashReport("unav datagen");
   CLI::App app{"unav datagen: randomized synthetic datasets (in process), locally or on a Slurm cluster",
                "unav datagen"};
   Options o;

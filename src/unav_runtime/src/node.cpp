@@ -4,6 +4,7 @@
 #include <iostream>
 #include <sstream>
 
+#include "unav_common/crash_report.hpp"
 #include "unav_runtime/names.hpp"
 
 namespace unav {
@@ -119,6 +120,7 @@ std::vector<const SubscriptionBase*> Node::subscriptions() const {
 int run_node_impl(int argc, char** argv, const std::function<std::unique_ptr<Node>(const NodeOptions&)>& make) {
   std::string exe = argc > 0 ? argv[0] : "node";
   exe = exe.substr(exe.find_last_of('/') + 1);
+  common::InstallCrashReport(exe.c_str());
   if (wants_help(argc, argv)) {
     // Construct the node on a private, local-only domain (nothing reaches a running system)
     // and print every parameter it declares: name, type, default, range, unit, description.
