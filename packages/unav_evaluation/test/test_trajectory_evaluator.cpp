@@ -21,14 +21,25 @@ using unav::testing::make_link;
 namespace {
 // A trajectory_evaluator with `params` (name:=value each) and a probe node, each on a participant
 // of its own (the node test pattern, unav::testing::NodeUnderTest).
+// The probe publishes the ground truth (gt) from the start; spin() lets both sides work 2 ms.
 struct EvaluatorRun : unav::testing::NodeUnderTest<unav::evaluation::TrajectoryEvaluator> {
   EvaluatorRun(const std::vector<std::string>& params, const unav::ContextOptions& o)
-      : NodeUnderTest("trajectory_evaluator", ros_params(params), o) {}
+      : NodeUnderTest("trajectory_evaluator", ros_params(params), o),
+        gt(publisher<nav_msgs::msg::Odometry>("/rov/ground_truth/odom")) {}
+  template <class T>
+  std::shared_ptr<unav::Publisher<T>> publisher(const std::string& topic) {
+    return probe.create_publisher<T>(topic, unav::QoS::reliable(100));
+  }
+  void spin() { spin_for(2ms); }
+  bool delivered(const std::vector<unav::testing::Link>& links) {
+    return unav::testing::wait_for_delivery({&node_ctx, &test_ctx}, links);
+  }
   static std::vector<std::string> ros_params(const std::vector<std::string>& params) {
     std::vector<std::string> a{"--ros-args"};
     for (const auto& p : params) a.insert(a.end(), {"-p", p});
     return a;
   }
+  std::shared_ptr<unav::Publisher<nav_msgs::msg::Odometry>> gt;
 };
 
 using unav::testing::odometry_at;
@@ -40,20 +51,13 @@ TEST(TrajectoryEvaluator, WritesTableTumAndPlotOnShutdown) {
   std::filesystem::remove_all(out);
   const std::string p_out = "output_dir:=" + out;
   EvaluatorRun harness({p_out, "estimates:=[mono]", "trajectory_name:=linear"}, o);
-  unav::Context& node_ctx = harness.node_ctx;
-  unav::Context& test_ctx = harness.test_ctx;
-  unav::Node& probe = harness.probe;
   auto& node = harness.node;
-  auto gt_pub = probe.create_publisher<nav_msgs::msg::Odometry>("/rov/ground_truth/odom", unav::QoS::reliable(100));
-  auto est_pub =
-      probe.create_publisher<nav_msgs::msg::Odometry>("/rov/localization/mono/odom", unav::QoS::reliable(100));
-  auto spin = [&](std::chrono::milliseconds d, const std::function<bool()>& done) {
-    return unav::testing::spin_until({&node_ctx, &test_ctx}, done, d);
-  };
+  auto& gt_pub = harness.gt;
+  auto est_pub = harness.publisher<nav_msgs::msg::Odometry>("/rov/localization/mono/odom");
   // Both sides matched before the first pose; every pose delivered and taken before the node
   // writes its outputs (see unav_runtime/testing.hpp).
   const std::vector<unav::testing::Link> links = {make_link(*gt_pub, *node), make_link(*est_pub, *node)};
-  ASSERT_TRUE(unav::testing::wait_for_match({&node_ctx, &test_ctx}, links)) << unav::testing::describe(links);
+  ASSERT_TRUE(harness.match(links));
   const Eigen::AngleAxisd R(0.4, Eigen::Vector3d::UnitZ());
   for (int i = 0; i < 100; ++i) {
     const double t = 0.1 * i, a = 0.05 * i;
@@ -62,9 +66,9 @@ TEST(TrajectoryEvaluator, WritesTableTumAndPlotOnShutdown) {
     auto msg = [&](const Eigen::Vector3d& pos, const Eigen::Quaterniond& qq) { return odometry_at(t, pos, qq); };
     gt_pub->publish(msg(p, q));
     est_pub->publish(msg(0.3 * (R * p) + Eigen::Vector3d(1, 2, 3), Eigen::Quaterniond(R) * q));  // Sim(3) copy
-    spin(2ms, [] { return false; });
+    harness.spin();
   }
-  ASSERT_TRUE(unav::testing::wait_for_delivery({&node_ctx, &test_ctx}, links));
+  ASSERT_TRUE(harness.delivered(links));
   node.reset();  // shutdown: writes everything
   for (const char* f : {"ground_truth.tum", "mono.tum", "results.md", "results.csv", "results.json", "top_view.png"})
     EXPECT_TRUE(std::filesystem::exists(out + "/" + f)) << f;
@@ -105,17 +109,11 @@ void RunCombined(const std::string& out, const std::string& run, int domain, boo
   std::vector<std::string> params{p_out, "estimates:=[mono]", p_run, "combine:=true", "camera:=down"};
   if (!mount_on_tf) params.push_back(p_cams);
   EvaluatorRun harness(params, o);
-  unav::Context& node_ctx = harness.node_ctx;
-  unav::Context& test_ctx = harness.test_ctx;
   unav::Node& probe = harness.probe;
   auto& node = harness.node;
-  auto gt_pub = probe.create_publisher<nav_msgs::msg::Odometry>("/rov/ground_truth/odom", unav::QoS::reliable(100));
-  auto est_pub =
-      probe.create_publisher<nav_msgs::msg::Odometry>("/rov/localization/mono/odom", unav::QoS::reliable(100));
+  auto& gt_pub = harness.gt;
+  auto est_pub = harness.publisher<nav_msgs::msg::Odometry>("/rov/localization/mono/odom");
   auto path_pub = probe.create_publisher<nav_msgs::msg::Path>("/rov/localization/mono/path", unav::QoS::reliable(2));
-  auto spin = [&](std::chrono::milliseconds d, const std::function<bool()>& done) {
-    return unav::testing::spin_until({&node_ctx, &test_ctx}, done, d);
-  };
   std::vector<unav::testing::Link> links = {make_link(*gt_pub, *node), make_link(*est_pub, *node),
                                             make_link(*path_pub, *node)};
   std::shared_ptr<unav::Publisher<tf2_msgs::msg::TFMessage>> tf_pub;
@@ -126,7 +124,7 @@ void RunCombined(const std::string& out, const std::string& run, int domain, boo
     tf_pub->publish(mounts);  // before matching: latched, the evaluator gets it when it matches
     links.push_back(make_link(*tf_pub, *node));
   }
-  ASSERT_TRUE(unav::testing::wait_for_match({&node_ctx, &test_ctx}, links)) << unav::testing::describe(links);
+  ASSERT_TRUE(harness.match(links));
   auto pose_msg = [](double t, const Eigen::Isometry3d& X) {
     return odometry_at(t, X.translation(), Eigen::Quaterniond(X.linear()));
   };
@@ -155,9 +153,9 @@ void RunCombined(const std::string& out, const std::string& run, int domain, boo
       est_pub->publish(pose_msg(t, X_C));
     }
     if (i == 79) path_pub->publish(path);
-    spin(2ms, [] { return false; });
+    harness.spin();
   }
-  ASSERT_TRUE(unav::testing::wait_for_delivery({&node_ctx, &test_ctx}, links));
+  ASSERT_TRUE(harness.delivered(links));
   node.reset();
 }
 
@@ -197,16 +195,12 @@ TEST(TrajectoryEvaluator, TakesPoseStampedAndTfInputs) {
   const std::string p_out = "output_dir:=" + out;
   // One estimate aligned otherwise (estimate_alignments): SE(3) leaves its scale of 2 in the error.
   EvaluatorRun harness({p_out, kInputs, "estimate_alignments:=[ext_tf=se3]"}, o);
-  unav::Context& node_ctx = harness.node_ctx;
-  unav::Context& test_ctx = harness.test_ctx;
-  unav::Node& probe = harness.probe;
   auto& node = harness.node;
-  auto gt_pub = probe.create_publisher<nav_msgs::msg::Odometry>("/rov/ground_truth/odom", unav::QoS::reliable(100));
-  auto pose_pub = probe.create_publisher<geometry_msgs::msg::PoseStamped>("/ext/camera_pose", unav::QoS::reliable(100));
-  auto tf_pub = probe.create_publisher<tf2_msgs::msg::TFMessage>("/tf", unav::QoS::reliable(100));
-  auto sensor_pub =
-      probe.create_publisher<geometry_msgs::msg::PoseStamped>("/ext/sensor_pose", unav::QoS::reliable(100));
-  auto static_pub = probe.create_publisher<tf2_msgs::msg::TFMessage>("/tf_static", unav::QoS::static_latched());
+  auto& gt_pub = harness.gt;
+  auto pose_pub = harness.publisher<geometry_msgs::msg::PoseStamped>("/ext/camera_pose");
+  auto tf_pub = harness.publisher<tf2_msgs::msg::TFMessage>("/tf");
+  auto sensor_pub = harness.publisher<geometry_msgs::msg::PoseStamped>("/ext/sensor_pose");
+  auto static_pub = harness.probe.create_publisher<tf2_msgs::msg::TFMessage>("/tf_static", unav::QoS::static_latched());
   // The frame mapping: the third estimator reports `sensor`, 0.5 m ahead of the body and turned
   // 90 deg about its x axis, as /tf_static says.
   Eigen::Isometry3d X_BS = Eigen::Isometry3d::Identity();
@@ -228,7 +222,7 @@ TEST(TrajectoryEvaluator, TakesPoseStampedAndTfInputs) {
   const std::vector<unav::testing::Link> links = {make_link(*gt_pub, *node), make_link(*pose_pub, *node),
                                                   make_link(*tf_pub, *node), make_link(*sensor_pub, *node),
                                                   make_link(*static_pub, *node)};
-  ASSERT_TRUE(unav::testing::wait_for_match({&node_ctx, &test_ctx}, links)) << unav::testing::describe(links);
+  ASSERT_TRUE(harness.match(links));
   const Eigen::AngleAxisd R(-0.7, Eigen::Vector3d::UnitZ());
   for (int i = 0; i < 80; ++i) {
     const double t = 0.1 * i, a = 0.05 * i;
@@ -264,10 +258,9 @@ TEST(TrajectoryEvaluator, TakesPoseStampedAndTfInputs) {
     sp.header() = ps.header();
     sp.pose(unav::to_msg(ps_s, qs_s));
     sensor_pub->publish(sp);
-    unav::testing::spin_until(
-        {&node_ctx, &test_ctx}, [] { return false; }, 2ms);
+    harness.spin();
   }
-  ASSERT_TRUE(unav::testing::wait_for_delivery({&node_ctx, &test_ctx}, links));
+  ASSERT_TRUE(harness.delivered(links));
   node.reset();
   nlohmann::json j;
   std::ifstream(out + "/results.json") >> j;
@@ -292,32 +285,34 @@ TEST(TrajectoryEvaluator, TakesPoseStampedAndTfInputs) {
   EXPECT_TRUE(std::filesystem::exists(out + "/ext_tf.tum"));
 }
 
-TEST(TrajectoryEvaluator, RejectsMalformedInputs) {
-  const unav::ContextOptions o = unav::testing::test_context_options();
-  for (const char* bad :
-       {"inputs:=[nokind]", "inputs:=[a=radar:/x]", "inputs:=[a=tf:onlyparent]", "inputs:=[a=pose:/x@]"}) {
-    const char* argv[] = {"trajectory_evaluator", "--ros-args", "-p", bad};
-    unav::Context ctx(4, argv, o);
+namespace {
+// Each of `bad` (after `given`) makes the node's construction fail with an error naming `key`.
+void ExpectRefused(const std::vector<std::string>& given, const std::vector<std::string>& bad, const std::string& key) {
+  for (const std::string& b : bad) {
+    std::vector<std::string> args = EvaluatorRun::ros_params(given);
+    args.insert(args.begin(), "trajectory_evaluator");
+    args.insert(args.end(), {"-p", b});
+    std::vector<const char*> argv;
+    for (const auto& a : args) argv.push_back(a.c_str());
+    unav::Context ctx(static_cast<int>(argv.size()), argv.data(), unav::testing::test_context_options());
     try {
       unav::evaluation::TrajectoryEvaluator node(unav::NodeOptions{&ctx});
-      ADD_FAILURE() << bad << " accepted";
+      ADD_FAILURE() << b << " accepted";
     } catch (const unav::ParameterError& e) {
-      EXPECT_NE(std::string(e.what()).find("parameter 'inputs'"), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find("parameter '" + key + "'"), std::string::npos) << e.what();
     }
   }
 }
+}  // namespace
+
+TEST(TrajectoryEvaluator, RejectsMalformedInputs) {
+  ExpectRefused({}, {"inputs:=[nokind]", "inputs:=[a=radar:/x]", "inputs:=[a=tf:onlyparent]", "inputs:=[a=pose:/x@]"},
+                "inputs");
+}
 
 TEST(TrajectoryEvaluator, RejectsBadEstimateAlignments) {
-  const unav::ContextOptions o = unav::testing::test_context_options();
-  for (const char* bad : {"estimate_alignments:=[ghost=se3]", "estimate_alignments:=[orb_slam=warp]",
-                          "estimate_alignments:=[orb_slam]"}) {
-    const char* argv[] = {"trajectory_evaluator", "--ros-args", "-p", "estimates:=[orb_slam]", "-p", bad};
-    unav::Context ctx(6, argv, o);
-    try {
-      unav::evaluation::TrajectoryEvaluator node(unav::NodeOptions{&ctx});
-      ADD_FAILURE() << bad << " accepted";
-    } catch (const unav::ParameterError& e) {
-      EXPECT_NE(std::string(e.what()).find("parameter 'estimate_alignments'"), std::string::npos) << e.what();
-    }
-  }
+  ExpectRefused(
+      {"estimates:=[orb_slam]"},
+      {"estimate_alignments:=[ghost=se3]", "estimate_alignments:=[orb_slam=warp]", "estimate_alignments:=[orb_slam]"},
+      "estimate_alignments");
 }
