@@ -13,13 +13,13 @@
 #include <vector>
 
 #include <Eigen/Core>
+#include <opencv2/core.hpp>
 
 #include "nav_msgs/msg/odometry.hpp"
 #include "nav_msgs/msg/path.hpp"
 #include "sensor_msgs/msg/camera_info.hpp"
 #include "sensor_msgs/msg/image.hpp"
 #include "unav_msgs/msg/lockstep_ack.hpp"
-#include "unav_renderer/renderer.hpp"
 #include "unav_runtime/runtime.hpp"
 #include "unav_runtime/testing.hpp"
 
@@ -67,31 +67,32 @@ struct EstimatorProbe {
     return l;
   }
 
-  /// A rendered frame at time t with the pinhole K (no distortion).
-  void publish(const unav::renderer::Frame& f, const unav::Time& t, const Eigen::Matrix3d& K) {
+  /// A frame (RGB, CV_8UC3; its depth CV_32FC1 [m] when the probe publishes depth) at time t with
+  /// the pinhole K (no distortion).
+  void publish(const cv::Mat& rgb, const cv::Mat& depth, const unav::Time& t, const Eigen::Matrix3d& K) {
     sensor_msgs::msg::CameraInfo info;
     info.header().stamp().sec(t.sec());
     info.header().stamp().nanosec(t.nanosec());
-    info.width(static_cast<uint32_t>(f.width));
-    info.height(static_cast<uint32_t>(f.height));
+    info.width(static_cast<uint32_t>(rgb.cols));
+    info.height(static_cast<uint32_t>(rgb.rows));
     for (int i = 0; i < 9; ++i) info.k()[static_cast<size_t>(i)] = K(i / 3, i % 3);
     info.distortion_model("plumb_bob");
     info.d({0, 0, 0, 0, 0});
     info_pub->publish(info);
     last_img = sensor_msgs::msg::Image();
     last_img.header().stamp() = info.header().stamp();
-    last_img.width(static_cast<uint32_t>(f.width));
-    last_img.height(static_cast<uint32_t>(f.height));
+    last_img.width(static_cast<uint32_t>(rgb.cols));
+    last_img.height(static_cast<uint32_t>(rgb.rows));
     last_img.encoding("rgb8");
-    last_img.step(static_cast<uint32_t>(3 * f.width));
-    last_img.data(f.rgb);
+    last_img.step(static_cast<uint32_t>(3 * rgb.cols));
+    last_img.data().assign(rgb.data, rgb.data + rgb.total() * rgb.elemSize());
     img_pub->publish(last_img);
     if (depth_pub) {
       last_depth = last_img;
       last_depth.encoding("32FC1");
-      last_depth.step(static_cast<uint32_t>(4 * f.width));
-      last_depth.data().resize(f.depth.size() * sizeof(float));
-      std::memcpy(last_depth.data().data(), f.depth.data(), last_depth.data().size());
+      last_depth.step(static_cast<uint32_t>(4 * depth.cols));
+      last_depth.data().resize(depth.total() * sizeof(float));
+      std::memcpy(last_depth.data().data(), depth.data, last_depth.data().size());
       depth_pub->publish(last_depth);
     }
   }

@@ -1,5 +1,6 @@
-// KLT VO (RGB-D and monocular) on sequences rendered by our renderer (llvmpipe) with known motion:
-// the down camera 2 m above the textured sand of the pipe-inspection world.
+// KLT VO (RGB-D and monocular) on a sequence rendered by our renderer with known motion (KltPath
+// in slam_flights.hpp, rendered by the fixture render_slam_sequences): the down camera 2 m above
+// the textured sand of the pipe-inspection world.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -12,10 +13,8 @@
 
 #include <opencv2/imgproc.hpp>
 
+#include "slam_sequences.hpp"
 #include "unav_localization/klt_vo.hpp"
-#include "unav_renderer/renderer.hpp"
-#include "unav_scene/camera.hpp"
-#include "unav_scene/world.hpp"
 
 using unav::localization::KltVo;
 using unav::localization::KltVoOptions;
@@ -34,40 +33,21 @@ struct Sequence {
   double median_depth0_m = 0.0;  ///< median of frame 0's depth image
 };
 
+// 320 x 180, 90 deg, no noise, snow, lamps (their pool moves with the camera: a moving
+// brightness pattern) or forward scatter. Caustics stay on: a light pattern drifting over the
+// seabed, which biases the corners it makes (their tracks follow the light); most of the RGB-D
+// test's remaining error comes from it (seen 0.044 m at the end with caustics, 0.018 m without).
 const Sequence& rendered_sequence() {
   static const Sequence seq = [] {
-    unav::scene::World world =
-        unav::scene::load_world(std::string(UNAV_REPO_ROOT) + "/worlds/pipe_inspection/world.yaml");
-    unav::scene::CameraModel cam = unav::scene::CameraModel::from_hfov("down", 320, 180, 90.0 * M_PI / 180.0);
-    unav::renderer::RenderOptions ro;
-    ro.noise = false;
-    ro.marine_snow = false;  // particles move independently of the scene
-    ro.lamps = false;        // the lamp pool moves with the camera: a moving brightness pattern
-    ro.forward_scatter = false;
-    // Caustics stay on: a light pattern drifting over the seabed, which biases the corners it
-    // makes (their tracks follow the light); most of the RGB-D test's remaining error comes from
-    // it (seen 0.044 m at the end with caustics, 0.018 m without).
-    unav::renderer::Renderer renderer(world, {cam}, ro);
+    auto r = unav::localization::testing::load_sequence("klt");
     Sequence s;
-    s.K = cam.K();
-    Eigen::Isometry3d X_WC0 = Eigen::Isometry3d::Identity();
-    for (int k = 0; k < 70; ++k) {
-      Eigen::Isometry3d X_WB = Eigen::Isometry3d::Identity();
-      X_WB.translation() = Eigen::Vector3d(-2.0 + 0.05 * k, 1.5, 7.8 + 0.005 * k);
-      X_WB.linear() = Eigen::AngleAxisd(0.005 * k, Eigen::Vector3d::UnitZ()).toRotationMatrix();
-      const unav::renderer::Frame f = renderer.render(X_WB, "down", 0.1 * k);
-      cv::Mat rgb(f.height, f.width, CV_8UC3, const_cast<uint8_t*>(f.rgb.data())), gray;
-      cv::cvtColor(rgb, gray, cv::COLOR_RGB2GRAY);
-      if (k == 0) {
-        X_WC0 = f.X_WC;
-        std::vector<float> z(f.depth.begin(), f.depth.end());
-        std::nth_element(z.begin(), z.begin() + static_cast<std::ptrdiff_t>(z.size() / 2), z.end());
-        s.median_depth0_m = z[z.size() / 2];
-      }
-      s.gray.push_back(gray);
-      s.depth.push_back(cv::Mat(f.height, f.width, CV_32FC1, const_cast<float*>(f.depth.data())).clone());
-      s.T_C0C.push_back(X_WC0.inverse() * f.X_WC);
-    }
+    s.K = r.K;
+    s.gray = std::move(r.images);
+    s.depth = std::move(r.depth);
+    for (const auto& X_WC : r.X_WC) s.T_C0C.push_back(r.X_WC.front().inverse() * X_WC);
+    std::vector<float> z(s.depth.front().begin<float>(), s.depth.front().end<float>());
+    std::nth_element(z.begin(), z.begin() + static_cast<std::ptrdiff_t>(z.size() / 2), z.end());
+    s.median_depth0_m = z[z.size() / 2];
     return s;
   }();
   return seq;

@@ -10,11 +10,10 @@
 #include <Eigen/Geometry>
 
 #include "estimator_node_probe.hpp"
-#include "unav_renderer/renderer.hpp"
+#include "slam_sequences.hpp"
 #include "unav_runtime/runtime.hpp"
 #include "unav_runtime/testing.hpp"
 #include "unav_scene/camera.hpp"
-#include "unav_scene/world.hpp"
 
 #define UNAV_KLT_VO_NO_MAIN
 #include "../nodes/klt_vo_node.cpp"  // NOLINT(bugprone-suspicious-include): the node under test
@@ -25,10 +24,8 @@ TEST(KltVoNode, TracksRenderedRgbdOverDdsKeepsABoundedPathAndAcksLockstep) {
   const std::string root = UNAV_REPO_ROOT;
   const std::string cameras = root + "/config/sensors/bluerov2_down_vslam.yaml";
   const auto cams = unav::scene::load_cameras(cameras);
-  const auto world = unav::scene::load_world(root + "/worlds/pipe_inspection/world.yaml");
-  unav::renderer::RenderOptions ro;
-  ro.marine_snow = false;
-  unav::renderer::Renderer renderer(world, cams, ro);
+  // The down camera of that config along KltNodePath (slam_flights.hpp), rendered by the fixture.
+  const auto seq = unav::localization::testing::load_sequence("klt_node");
 
   unav::testing::NodeUnderTest<unav::localization::KltVoNode> fx(
       "klt_vo", {"--ros-args", "-p", "cameras_config:=" + cameras, "-p", "lockstep:=true", "-p", "path_max_poses:=8"});
@@ -38,13 +35,12 @@ TEST(KltVoNode, TracksRenderedRgbdOverDdsKeepsABoundedPathAndAcksLockstep) {
 
   const int n = 40;
   std::map<int64_t, Eigen::Vector3d> truth;  // body position in world_ned
+  ASSERT_EQ(seq.size(), static_cast<size_t>(n));
   for (int k = 0; k < n; ++k) {
-    Eigen::Isometry3d X_WB = Eigen::Isometry3d::Identity();
-    X_WB.translation() = Eigen::Vector3d(-1.0 + 0.05 * k, 0.15 * std::sin(0.1 * k), 8.35);
-    const unav::renderer::Frame f = renderer.render(X_WB, "down", 0.1 * k);
+    const auto i = static_cast<size_t>(k);
     const unav::Time t{static_cast<int64_t>(k) * 100000000};
-    truth[t.ns] = X_WB.translation();
-    io.publish(f, t, cams[0].K());
+    truth[t.ns] = seq.X_WB[i].translation();
+    io.publish(seq.images[i], seq.depth[i], t, cams[0].K());
     // Lockstep: the node acks t + image_period - 1 ms once it has processed the frame.
     ASSERT_TRUE(spin(20s, [&] { return io.acks.count(k) > 0; })) << "no ack for frame " << k;
     EXPECT_EQ(io.acks[k], t.ns + 99000000);

@@ -1,6 +1,7 @@
 // Monocular ORB SLAM: geometry pieces (Sim(3) estimation, pose graph) on analytic cases, then
-// the whole system on sequences rendered by our renderer (llvmpipe) with known motion: the down
-// camera over the pipe-inspection seabed, a straight run and a closed square loop.
+// the whole system on sequences rendered by our renderer with known motion (slam_flights.hpp,
+// rendered by the fixture render_slam_sequences): the down camera over the pipe-inspection
+// seabed, a straight run and a closed square loop.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -13,23 +14,19 @@
 
 #include <opencv2/imgproc.hpp>
 
+#include "slam_flights.hpp"
+#include "slam_sequences.hpp"
 #include "unav_localization/mono_slam.hpp"
 #include "unav_localization/orb_extractor.hpp"
 #include "unav_localization/sim3.hpp"
 #include "unav_localization/slam_optimizer.hpp"
-#include "unav_renderer/renderer.hpp"
-#include "unav_scene/camera.hpp"
-#include "unav_scene/world.hpp"
 
 namespace ul = unav::localization;
 
 namespace {
 
-Eigen::Matrix3d Rot(double roll, double pitch, double yaw) {
-  return (Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()) * Eigen::AngleAxisd(pitch, Eigen::Vector3d::UnitY()) *
-          Eigen::AngleAxisd(roll, Eigen::Vector3d::UnitX()))
-      .toRotationMatrix();
-}
+using unav::localization::testing::Rot;
+using unav::localization::testing::WeaveFlight;
 
 // Sim(3)-aligned (SE(3) with fix_scale) position RMSE of est against gt (same length, paired by
 // index).
@@ -48,6 +45,15 @@ double AlignedRmse(const std::vector<Eigen::Vector3d>& gt, const std::vector<Eig
   return std::sqrt(se / static_cast<double>(est.size()));
 }
 
+// A rendered sequence (the fixture's file `name`): images gray, frame k at t = 0.1 k, X_WC the
+// camera's true poses. The images these tests were written against: Lambertian, flat, clean. With
+// the renderer's materials (relief shaded under the vehicle's moving lamps, highlights, sediment)
+// every test here passes on the rendered images as they are (2026-11-27), but the forward camera
+// at 1.5 m/s (pitch 35) tracks only 30-60 local-map inliers a frame (mean 46; 65 without
+// materials) against the 30 it needs: with 2 % of the pixels moved by one grey level it lost
+// track on 7 of 8 seeds, re-initialised (no vocabulary here) and ended 0.1-0.7 m APE. Without
+// materials: 0 lost on 10 seeds. A harder image the SLAM does not handle yet (its map is thin
+// under fast forward motion), not what these geometry tests are about.
 struct RenderedRun {
   std::vector<cv::Mat> gray;
   std::vector<double> stamps;
@@ -55,39 +61,9 @@ struct RenderedRun {
   Eigen::Matrix3d K;
 };
 
-// Renders a camera (640 x 480 unless told, 90 deg; mounted looking down the body z axis unless
-// X_BC says otherwise) along body poses X_WB.
-RenderedRun Render(const std::vector<Eigen::Isometry3d>& X_WB, int width = 640, int height = 480, double noise = 0.0,
-                   const Eigen::Isometry3d& X_BC = Eigen::Isometry3d::Identity()) {
-  unav::scene::World world =
-      unav::scene::load_world(std::string(UNAV_REPO_ROOT) + "/worlds/pipe_inspection/world.yaml");
-  unav::scene::CameraModel cam = unav::scene::CameraModel::from_hfov("down", width, height, 90.0 * M_PI / 180.0);
-  cam.noise_stddev = noise;
-  cam.X_BC = X_BC;
-  unav::renderer::RenderOptions ro;
-  ro.noise = noise > 0.0;
-  ro.marine_snow = false;  // particles move on their own: not part of the static scene
-  // The images these tests were written against: Lambertian, flat, clean. With the renderer's
-  // materials (relief shaded under the vehicle's moving lamps, highlights, sediment) every test
-  // here passes on the rendered images as they are (2026-11-27), but the forward camera at
-  // 1.5 m/s (pitch 35) tracks only 30-60 local-map inliers a frame (mean 46; 65 without
-  // materials) against the 30 it needs: with 2 % of the pixels moved by one grey level it lost
-  // track on 7 of 8 seeds, re-initialised (no vocabulary here) and ended 0.1-0.7 m APE. Without
-  // materials: 0 lost on 10 seeds. A harder image the SLAM does not handle yet (its map is thin
-  // under fast forward motion), not what these geometry tests are about.
-  ro.materials = false;
-  unav::renderer::Renderer renderer(world, {cam}, ro);
-  RenderedRun run;
-  run.K = cam.K();
-  for (size_t k = 0; k < X_WB.size(); ++k) {
-    const unav::renderer::Frame f = renderer.render(X_WB[k], "down", 0.1 * static_cast<double>(k));
-    cv::Mat rgb(f.height, f.width, CV_8UC3, const_cast<uint8_t*>(f.rgb.data())), gray;
-    cv::cvtColor(rgb, gray, cv::COLOR_RGB2GRAY);
-    run.gray.push_back(gray);
-    run.stamps.push_back(0.1 * static_cast<double>(k));
-    run.X_WC.push_back(f.X_WC);
-  }
-  return run;
+RenderedRun Load(const std::string& name) {
+  auto s = unav::localization::testing::load_sequence(name);
+  return RenderedRun{std::move(s.images), std::move(s.stamps), std::move(s.X_WC), s.K};
 }
 
 // Feeds every frame; returns the first frame tracked (-1: never) and how many frames were lost.
@@ -275,21 +251,10 @@ TEST(MonoSlam, BadInputIsRejected) {
   EXPECT_EQ(slam.Track(cv::Mat(480, 640, CV_8UC1, cv::Scalar(90)), 0.0).state, ul::SlamState::kInitializing);
 }
 
-// 100 frames: 6 m north at 6 cm per frame 1.5 m above the pipe, swaying 0.3 m east and
-// yawing +-0.1 rad, as the pipe-following controller flies it. Rendered once for all tests.
-std::vector<Eigen::Isometry3d> StraightPath() {
-  std::vector<Eigen::Isometry3d> X_WB;
-  for (int k = 0; k < 100; ++k) {
-    Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
-    X.translation() = Eigen::Vector3d(-1.0 + 0.06 * k, 0.3 * std::sin(0.05 * k), 8.35);
-    X.linear() = Rot(0, 0, 0.1 * std::sin(0.04 * k));
-    X_WB.push_back(X);
-  }
-  return X_WB;
-}
-
+// StraightPath (slam_flights.hpp): 6 m north 1.5 m above the pipe, swaying and yawing, as the
+// pipe-following controller flies it. Loaded once for all tests.
 const RenderedRun& StraightRun() {
-  static const RenderedRun run = Render(StraightPath());
+  static const RenderedRun run = Load("straight");
   return run;
 }
 
@@ -338,20 +303,9 @@ TEST(MonoSlam, ForwardLookingCameraInitialisesWithinFifteenFramesAndHolds) {
   struct Case {
     double pitch_deg, step_m;
   };
+  // ForwardPath(step_m) seen through ForwardMount(pitch_deg) (slam_flights.hpp).
   for (const Case c : {Case{15, 0.06}, Case{25, 0.10}, Case{35, 0.15}}) {
-    std::vector<Eigen::Isometry3d> X_WB;
-    for (int k = 0; k < 60; ++k) {
-      Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
-      X.translation() = Eigen::Vector3d(-4.0 + c.step_m * k, 0.6 + 0.2 * std::sin(0.05 * k), 8.5);
-      X.linear() = Rot(0, 0, 0.05 * std::sin(0.07 * k));
-      X_WB.push_back(X);
-    }
-    // Optical frame (x right, y down, z ahead) in the body (x ahead, y right, z down), pitched down.
-    Eigen::Isometry3d X_BC = Eigen::Isometry3d::Identity();
-    Eigen::Matrix3d ahead;
-    ahead << 0, 0, 1, 1, 0, 0, 0, 1, 0;
-    X_BC.linear() = Rot(0, -c.pitch_deg * M_PI / 180.0, 0) * ahead;
-    const RenderedRun run = Render(X_WB, 640, 480, 0.0, X_BC);
+    const RenderedRun run = Load("forward_" + std::to_string(static_cast<int>(c.pitch_deg)));
     ul::MonoSlam slam(Pinhole(run.K), {}, {}, nullptr);
     const auto [first_tracked, lost] = TrackAll(slam, run);
     size_t n = 0;
@@ -485,24 +439,10 @@ TEST(MonoSlam, ReinitialisesWhenItCannotRelocalise) {
     }
 }
 
-// 3.6 m x 3.6 m square at constant heading (north, east, south, west) and 1.2 m on past the
-// start, 6 cm per frame: the camera sees its first images again after 14.4 m. Rendered once.
+// SquarePath (slam_flights.hpp): a 3.6 m square at constant heading and 1.2 m on past the start;
+// the camera sees its first images again after 14.4 m. Loaded once.
 const RenderedRun& SquareRun() {
-  static const RenderedRun run = [] {
-    std::vector<Eigen::Isometry3d> X_WB;
-    const std::vector<Eigen::Vector2d> dirs{{1, 0}, {0, 1}, {-1, 0}, {0, -1}, {1, 0}};
-    Eigen::Vector2d p(2.0, -1.8);
-    for (size_t leg = 0; leg < dirs.size(); ++leg) {
-      const int steps = leg + 1 < dirs.size() ? 60 : 20;
-      for (int k = 0; k < steps; ++k) {
-        Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
-        X.translation() = Eigen::Vector3d(p.x(), p.y(), 8.35);
-        X_WB.push_back(X);
-        p += 0.06 * dirs[leg];
-      }
-    }
-    return Render(X_WB);
-  }();
+  static const RenderedRun run = Load("square");
   return run;
 }
 
@@ -576,7 +516,7 @@ TEST(MonoSlam, InitialisesAndTracksOnThe320x180DemoCamera) {
   // The demo's down camera: 320 x 180, 90 deg, with its read noise (0.008). Feature-count
   // thresholds scale with the image (a 640x480 tuning needed 60 two-view matches; ~35 exist
   // here) and CLAHE evens out the lamp-lit, low-contrast seabed.
-  const RenderedRun run = Render(StraightPath(), 320, 180, 0.008);
+  const RenderedRun run = Load("straight_320x180_noise");
   ul::MonoSlamOptions o;
   o.clahe_clip = 3.0;
   ul::MonoSlam slam(Pinhole(run.K, 320, 180), {}, o, nullptr);
@@ -594,32 +534,12 @@ TEST(MonoSlam, InitialisesAndTracksOnThe320x180DemoCamera) {
   EXPECT_LT(ape, 0.02 * path);
 }
 
-// A weaving flight, continuous in time (frame k at t = 0.1 k): 0.5 m/s north, swaying 0.3 m and
-// heaving 0.15 m with ~0.3 m/s^2 of acceleration (what an inertial initialisation needs to see
-// scale), yawing +-0.15 rad; its ideal IMU in closed form.
-struct WeaveFlight {
-  static Eigen::Vector3d P(double t) { return {-1.0 + 0.5 * t, 0.3 * std::sin(t), 8.35 + 0.15 * std::sin(1.3 * t)}; }
-  static Eigen::Vector3d A(double t) { return {0.0, -0.3 * std::sin(t), -0.15 * 1.69 * std::sin(1.3 * t)}; }
-  static double Yaw(double t) { return 0.15 * std::sin(0.6 * t); }
-  static Eigen::Vector3d V(double t) { return {0.5, 0.3 * std::cos(t), 0.15 * 1.3 * std::cos(1.3 * t)}; }
-  static double YawRate(double t) { return 0.09 * std::cos(0.6 * t); }
-  static Eigen::Isometry3d X_WB(double t) {
-    Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
-    X.translation() = P(t);
-    X.linear() = Rot(0, 0, Yaw(t));
-    return X;
-  }
-  // Its 10 s (100 frames) from the down camera at the body origin, rendered once for the tests.
-  static const RenderedRun& Run() {
-    static const RenderedRun run = [] {
-      std::vector<Eigen::Isometry3d> X;
-      X.reserve(100);
-      for (int k = 0; k < 100; ++k) X.push_back(X_WB(0.1 * k));
-      return Render(X);
-    }();
-    return run;
-  }
-};
+// WeaveFlight (slam_flights.hpp): 10 s weaving north with the accelerations an inertial
+// initialisation needs, its IMU in closed form; its 100 frames loaded once.
+const RenderedRun& WeaveRun() {
+  static const RenderedRun run = Load("weave");
+  return run;
+}
 
 namespace {
 // Sim(3) scale and SE(3) APE (no scale fitted) of a run's trajectory against the truth.
@@ -639,7 +559,7 @@ TEST(MonoSlam, InertialModeGivesAMetricTrajectory) {
   // 0.005 rad/s gyro bias): once its keyframes span 2 s the map is scaled to metres, so the
   // trajectory's best Sim(3) alignment to the truth has scale ~1 (without the IMU: the first
   // map's median depth is 1 unit, here ~1.5 m).
-  const RenderedRun& run = WeaveFlight::Run();
+  const RenderedRun& run = WeaveRun();
   const Eigen::Vector3d g(0.0, 0.0, 9.81), gyro_bias(0.0, 0.0, 0.005);
   auto fly = [&](bool with_imu, double* scale, double* se3_ape, bool inertial_ba = true) {
     ul::MonoSlamOptions o;
@@ -695,7 +615,7 @@ TEST(MonoSlam, ImuPredictionTracksThroughAGapInTheImages) {
   // The weave with the camera's frames 50-57 lost (0.8 s: 0.4 m of travel and a sway reversal)
   // while the IMU runs on. The constant-velocity model predicts one frame of motion across the
   // gap; the IMU predicts the pose where the vehicle is.
-  const RenderedRun& run = WeaveFlight::Run();
+  const RenderedRun& run = WeaveRun();
   const Eigen::Vector3d g(0.0, 0.0, 9.81);
   auto fly = [&](bool imu_prediction, int* tracked_after_gap) {
     ul::MonoSlamOptions o;
@@ -740,7 +660,7 @@ TEST(MonoSlam, DvlAidedModeGivesAMetricTrajectoryThatKeepsItsScale) {
   // (its velocity: the body's plus the yaw rate's lever-arm term, 1 cm/s noise per axis): the
   // DVL's displacement between keyframes scales the map to metres after 2 s (no gravity, no
   // accelerations needed) and, as factors of the bundle adjustments, holds the scale from then on.
-  const RenderedRun& run = WeaveFlight::Run();
+  const RenderedRun& run = WeaveRun();
   const Eigen::Vector3d r_d(-0.25, 0.0, 0.1);  // the DVL's origin in the body (= camera) frame
   Eigen::Isometry3d T_dc = Eigen::Isometry3d::Identity();
   T_dc.translation() = -r_d;  // the camera in the DVL frame (same axes)

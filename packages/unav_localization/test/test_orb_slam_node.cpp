@@ -9,12 +9,11 @@
 #include <Eigen/Geometry>
 
 #include "estimator_node_probe.hpp"
+#include "slam_sequences.hpp"
 #include "unav_localization/sim3.hpp"
-#include "unav_renderer/renderer.hpp"
 #include "unav_runtime/runtime.hpp"
 #include "unav_runtime/testing.hpp"
 #include "unav_scene/camera.hpp"
-#include "unav_scene/world.hpp"
 
 #define UNAV_ORB_SLAM_NO_MAIN
 #include "../nodes/orb_slam_node.cpp"  // NOLINT(bugprone-suspicious-include): the node under test
@@ -24,10 +23,8 @@ using namespace std::chrono_literals;
 TEST(OrbSlamNode, TracksRenderedImagesOverDdsAndAcksLockstep) {
   const std::string root = UNAV_REPO_ROOT;
   const auto cams = unav::scene::load_cameras(root + "/config/sensors/bluerov2_down_vslam.yaml");
-  const auto world = unav::scene::load_world(root + "/worlds/pipe_inspection/world.yaml");
-  unav::renderer::RenderOptions ro;
-  ro.marine_snow = false;
-  unav::renderer::Renderer renderer(world, cams, ro);
+  // The down camera of that config along OrbNodePath (slam_flights.hpp), rendered by the fixture.
+  const auto seq = unav::localization::testing::load_sequence("orb_node");
 
   unav::testing::NodeUnderTest<unav::localization::OrbSlamNode> fx(
       "orb_slam",
@@ -39,14 +36,12 @@ TEST(OrbSlamNode, TracksRenderedImagesOverDdsAndAcksLockstep) {
 
   const int n = 50;
   std::map<int64_t, Eigen::Vector3d> truth;
+  ASSERT_EQ(seq.size(), static_cast<size_t>(n));
   for (int k = 0; k < n; ++k) {
-    Eigen::Isometry3d X_WB = Eigen::Isometry3d::Identity();
-    X_WB.translation() = Eigen::Vector3d(-1.0 + 0.06 * k, 0.2 * std::sin(0.1 * k), 8.35);
-    X_WB.linear() = Eigen::AngleAxisd(0.05 * std::sin(0.08 * k), Eigen::Vector3d::UnitZ()).toRotationMatrix();
-    const unav::renderer::Frame f = renderer.render(X_WB, "down", 0.1 * k);
+    const auto i = static_cast<size_t>(k);
     const unav::Time t{static_cast<int64_t>(k) * 100000000};
-    truth[t.ns] = f.X_WC.translation();
-    io.publish(f, t, cams[0].K());
+    truth[t.ns] = seq.X_WC[i].translation();
+    io.publish(seq.images[i], cv::Mat(), t, cams[0].K());
     // Lockstep: the node acks t + image_period - 1 ms once it has processed the image.
     ASSERT_TRUE(spin(20s, [&] { return io.acks.count(k) > 0; })) << "no ack for image " << k;
     EXPECT_EQ(io.acks[k], t.ns + 99000000);

@@ -98,12 +98,14 @@ function(unav_add_node lib)
   endforeach()
 endfunction()
 
-# unav_add_gtest(NAME SOURCES... LIBS ... [TIMEOUT s] [ENV ...] [REPO]): a GoogleTest executable
-# registered with CTest. Each test case becomes its own CTest test (gtest_discover_tests), with a
-# timeout. REPO: the test reads the repository's data: UNAV_REPO_ROOT is defined (a string) and
-# the repository is a resource root (UNAV_RESOURCE_PATH), so a scenario's files resolve.
+# unav_add_gtest(NAME SOURCES... LIBS ... [TIMEOUT s] [ENV ...] [FIXTURES ...] [REPO]): a GoogleTest
+# executable registered with CTest. Each test case becomes its own CTest test
+# (gtest_discover_tests), with a timeout. REPO: the test reads the repository's data:
+# UNAV_REPO_ROOT is defined (a string) and the repository is a resource root (UNAV_RESOURCE_PATH),
+# so a scenario's files resolve. FIXTURES: CTest fixtures every case requires (FIXTURES_REQUIRED:
+# ctest runs their setup tests first).
 function(unav_add_gtest name)
-  cmake_parse_arguments(ARG "REPO" "TIMEOUT" "SOURCES;LIBS;ENV" ${ARGN})
+  cmake_parse_arguments(ARG "REPO" "TIMEOUT" "SOURCES;LIBS;ENV;FIXTURES" ${ARGN})
   if(NOT ARG_TIMEOUT)
     set(ARG_TIMEOUT 120)
   endif()
@@ -113,9 +115,20 @@ function(unav_add_gtest name)
     target_compile_definitions(${name} PRIVATE UNAV_REPO_ROOT="${UNAV_REPO_ROOT}")
     list(APPEND ARG_ENV "UNAV_RESOURCE_PATH=${UNAV_REPO_ROOT}")
   endif()
-  gtest_discover_tests(${name}
-    DISCOVERY_TIMEOUT 60
-    PROPERTIES TIMEOUT ${ARG_TIMEOUT} ENVIRONMENT "${ARG_ENV}")
+  set(_fixtures)
+  if(ARG_FIXTURES)
+    set(_fixtures FIXTURES_REQUIRED "${ARG_FIXTURES}")
+  endif()
+  # An empty ENVIRONMENT would take the next property's name as its value.
+  if(ARG_ENV)
+    gtest_discover_tests(${name}
+      DISCOVERY_TIMEOUT 60
+      PROPERTIES TIMEOUT ${ARG_TIMEOUT} ENVIRONMENT "${ARG_ENV}" ${_fixtures})
+  else()
+    gtest_discover_tests(${name}
+      DISCOVERY_TIMEOUT 60
+      PROPERTIES TIMEOUT ${ARG_TIMEOUT} ${_fixtures})
+  endif()
 endfunction()
 
 # unav_add_pytest(NAME FILE [TIMEOUT s] [ENV ...]): a pytest file run by the project's venv, with
