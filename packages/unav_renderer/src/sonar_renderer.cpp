@@ -318,7 +318,9 @@ void SonarRenderer::Impl::accumulate(const SonarState& st, const Pose& X_WB, Son
         if (overlap > 0.0) beam[static_cast<std::size_t>(b) * static_cast<std::size_t>(C)] += per_bin * overlap;
       }
     }
-  // Noise and display coding.
+  // Side lobes of the fan's receive pattern, then noise and display coding.
+  if (m.sidelobes && !m.side_scan())
+    add_sidelobes(B, C, sidelobe_kernel(C, m.sidelobe_db, m.sidelobe_falloff_db_per_octave), &acc);
   out->channels = C;
   out->bins = B;
   out->intensity.resize(acc.size());

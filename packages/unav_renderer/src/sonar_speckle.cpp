@@ -2,7 +2,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
 #include <utility>
+
+#include <opencv2/core.hpp>
 
 namespace unav::renderer {
 
@@ -139,6 +142,43 @@ void speckle_field(int bins, int channels, const SpeckleParams& p, unav::common:
   for (int y = 0; y < bins; ++y)
     for (int x = 0; x < channels; ++x)
       (*out)[static_cast<std::size_t>(y) * channels + x] *= texture[static_cast<std::size_t>(y / tb) * nc + x / tc];
+}
+
+std::vector<double> sidelobe_kernel(int channels, double sidelobe_db, double falloff_db_per_octave) {
+  std::vector<double> k(static_cast<std::size_t>(std::max(channels, 1)), 0.0);
+  const double first = 1.5, level = std::pow(10.0, sidelobe_db / 10.0);
+  const double exponent = falloff_db_per_octave / (10.0 * std::log10(2.0));
+  for (std::size_t d = 1; d < k.size(); ++d)
+    if (static_cast<double>(d) >= first) k[d] = level * std::pow(first / static_cast<double>(d), exponent);
+  return k;
+}
+
+void add_sidelobes(int bins, int channels, const std::vector<double>& kernel, std::vector<double>* field) {
+  if (field->size() != static_cast<std::size_t>(bins) * static_cast<std::size_t>(channels) ||
+      kernel.size() < static_cast<std::size_t>(channels))
+    throw std::invalid_argument("add_sidelobes: field or kernel of the wrong size");
+  if (channels < 2 || bins < 1) return;
+  // Linear convolution of each row with the symmetric kernel: circular over n >= 2 channels - 1.
+  const int n = cv::getOptimalDFTSize(2 * channels - 1);
+  cv::Mat k_row = cv::Mat::zeros(1, n, CV_64F);
+  for (int d = 1; d < channels; ++d) {
+    k_row.at<double>(0, d) = kernel[static_cast<std::size_t>(d)];
+    k_row.at<double>(0, n - d) = kernel[static_cast<std::size_t>(d)];
+  }
+  cv::Mat rows = cv::Mat::zeros(bins, n, CV_64F);
+  for (int b = 0; b < bins; ++b)
+    std::copy_n(field->data() + static_cast<std::size_t>(b) * channels, channels, rows.ptr<double>(b));
+  cv::Mat k_spec, spec, leak;
+  cv::dft(k_row, k_spec, cv::DFT_ROWS);
+  cv::dft(rows, spec, cv::DFT_ROWS);
+  cv::mulSpectrums(spec, cv::repeat(k_spec, bins, 1), spec, cv::DFT_ROWS);
+  cv::idft(spec, leak, cv::DFT_ROWS | cv::DFT_SCALE | cv::DFT_REAL_OUTPUT);
+  for (int b = 0; b < bins; ++b) {
+    const double* l = leak.ptr<double>(b);
+    double* f = field->data() + static_cast<std::size_t>(b) * channels;
+    // The DFT's rounding leaves ~1e-16 of the row's largest value where nothing leaks: not negative.
+    for (int c = 0; c < channels; ++c) f[c] += std::max(l[c], 0.0);
+  }
 }
 
 DisplayCoding::DisplayCoding(const std::string& coding, double gain_db, double dynamic_range_db, double gamma)

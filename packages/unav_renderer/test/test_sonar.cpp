@@ -9,6 +9,7 @@
 #include "render_test_util.hpp"
 #include "unav_renderer/errors.hpp"
 #include "unav_renderer/sonar_renderer.hpp"
+#include "unav_renderer/sonar_speckle.hpp"
 #include "unav_scene/scene_geometry.hpp"
 
 using namespace unav::renderer;
@@ -418,4 +419,41 @@ TEST(Sonar, MovedObjectEchoesAsIfPlacedThere) {
   sr.set_object_pose("rov2", away);
   EXPECT_EQ(sr.ping(body_at({0.0, 0.0, 8.5}), "fls").intensity, empty.intensity);
   EXPECT_THROW(sr.set_object_pose("rov3", ahead), ConfigError);
+}
+
+// Side lobes in a ping: a wall 6 m ahead fills the middle beams; with the side lobes on, the beams
+// that see only water at that range hear it (the arc across the fan), exactly the envelope applied
+// to the ping without them (noise off: intensity = echo), and the wall's own beams change by less
+// than the leakage's share. Off by default: every other test here is the ping without them.
+TEST(Sonar, SidelobesDrawTheArcOfAStrongEchoAcrossTheFan) {
+  SonarModel m = fls(128, 200, 120.0, 10.0, 0.5, 10.0);
+  World w = flat_world(0.0);
+  w.objects.push_back(wall({6.0, 0.0, 0.0}, 0.0, 1.0));
+  SonarRenderer off(w, {m}, exact());
+  const SonarPing p0 = off.ping(Pose::Identity(), "fls");
+  m.sidelobes = true;
+  m.sidelobe_db = -25.0;
+  SonarRenderer on(w, {m}, exact());
+  const SonarPing p1 = on.ping(Pose::Identity(), "fls");
+  ASSERT_EQ(p0.intensity.size(), p1.intensity.size());
+  std::vector<double> want(p0.intensity.begin(), p0.intensity.end());
+  unav::renderer::add_sidelobes(m.bins, m.beams, unav::renderer::sidelobe_kernel(m.beams, -25.0, 6.0), &want);
+  // Float samples (1e-6 relative); the DFT leaves ~1e-16 of a row's peak where nothing leaks.
+  const double peak = *std::max_element(want.begin(), want.end());
+  int lit_before = 0, lit_after = 0;
+  for (std::size_t i = 0; i < want.size(); ++i) {
+    EXPECT_NEAR(p1.intensity[i], want[i], 1e-6 * want[i] + 1e-12 * peak) << i;
+    lit_before += p0.intensity[i] > 0.0f ? 1 : 0;
+    lit_after += p1.intensity[i] > 0.0f ? 1 : 0;
+  }
+  // The wall's range row in the edge beam (60 deg off, the wall spans +-5 deg): water before.
+  int row = 0;
+  for (int b = 0; b < m.bins; ++b)
+    if (p0.at(b, 64) > p0.at(row, 64)) row = b;
+  std::printf("sidelobes: %d lit cells -> %d; edge beam at the wall's range %.3g -> %.3g (wall beam %.3g)\n",
+              lit_before, lit_after, p0.at(row, 0), p1.at(row, 0), p0.at(row, 64));
+  EXPECT_EQ(p0.at(row, 0), 0.0f);
+  EXPECT_GT(p1.at(row, 0), 0.0f);
+  EXPECT_LT(p1.at(row, 0), 1e-3 * p0.at(row, 64));  // far down the envelope (-25 dB at 1.5 beams)
+  EXPECT_GT(lit_after, lit_before);
 }

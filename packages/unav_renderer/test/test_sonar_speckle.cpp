@@ -4,8 +4,12 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
 #include <numeric>
+#include <stdexcept>
 #include <vector>
 
 using unav::renderer::DisplayCoding;
@@ -123,4 +127,55 @@ TEST(SonarSpeckle, DisplayCodingsLevelsAndSaturation) {
   EXPECT_EQ(gamma(4.0), 255);                              // above full scale: saturated
   const DisplayCoding gained("gamma", 6.0206, 60.0, 0.5);  // x4 in intensity: 0.25 becomes full scale
   EXPECT_EQ(gained(0.25), 255);
+}
+
+// The side-lobe envelope: nothing inside the first side lobe (1.5 beams), its level there, then
+// the configured fall per octave (to rounding).
+TEST(SonarSidelobes, KernelIsTheEnvelopeOfTheConfiguredLevelAndFall) {
+  const auto k = unav::renderer::sidelobe_kernel(64, -20.0, 6.0);
+  ASSERT_EQ(k.size(), 64u);
+  EXPECT_EQ(k[0], 0.0);  // the main lobe: the beam's own cell
+  EXPECT_EQ(k[1], 0.0);  // inside the first side lobe
+  EXPECT_NEAR(10.0 * std::log10(k[2]), -20.0 + 6.0 * std::log2(1.5 / 2.0), 1e-9);
+  for (int d : {3, 5, 12, 31}) EXPECT_NEAR(10.0 * std::log10(k[d] / k[2 * d]), 6.0, 1e-9) << d;
+  const auto hann = unav::renderer::sidelobe_kernel(64, -31.5, 18.0);
+  EXPECT_NEAR(10.0 * std::log10(hann[4] / hann[8]), 18.0, 1e-9);
+}
+
+// One strong cell: its range row gains k(|d|) times its intensity in every other beam (both
+// sides, up to the fan's edges), no other row changes, the cell itself keeps its value; two
+// cells leak the sum of what each leaks alone (linear).
+TEST(SonarSidelobes, APointEchoLeaksTheKernelAcrossItsRangeRowOnly) {
+  const int bins = 40, channels = 256;
+  const auto k = unav::renderer::sidelobe_kernel(channels, -13.3, 6.0);
+  auto point = [&](int b, int c, double v) {
+    std::vector<double> f(static_cast<std::size_t>(bins) * channels, 0.0);
+    f[static_cast<std::size_t>(b) * channels + c] = v;
+    return f;
+  };
+  std::vector<double> f = point(17, 40, 2.0);
+  unav::renderer::add_sidelobes(bins, channels, k, &f);
+  double worst = 0.0;
+  for (int b = 0; b < bins; ++b)
+    for (int c = 0; c < channels; ++c) {
+      const double got = f[static_cast<std::size_t>(b) * channels + c];
+      const double want = b != 17 ? 0.0 : (c == 40 ? 2.0 : 2.0 * k[static_cast<std::size_t>(std::abs(c - 40))]);
+      if (b != 17) {
+        EXPECT_EQ(got, 0.0) << b << " " << c;  // a row of zeros transforms to zeros exactly
+      } else {
+        // DFT rounding: ~1e-16 of the row's largest value (2), far below the smallest leak (~1e-4).
+        EXPECT_NEAR(got, want, 1e-12) << c;
+        worst = std::max(worst, std::abs(got - want));
+      }
+    }
+  std::printf("point echo: worst difference from the kernel %.2e (leak at 2 beams %.3e, at 215 beams %.3e)\n", worst,
+              2.0 * k[2], 2.0 * k[215]);
+  std::vector<double> a = point(5, 3, 1.0), b = point(5, 200, 0.5), ab(a.size());
+  for (std::size_t i = 0; i < a.size(); ++i) ab[i] = a[i] + b[i];
+  unav::renderer::add_sidelobes(bins, channels, k, &a);
+  unav::renderer::add_sidelobes(bins, channels, k, &b);
+  unav::renderer::add_sidelobes(bins, channels, k, &ab);
+  for (std::size_t i = 0; i < ab.size(); ++i) EXPECT_NEAR(ab[i], a[i] + b[i], 1e-12) << i;
+  std::vector<double> wrong(10);
+  EXPECT_THROW(unav::renderer::add_sidelobes(bins, channels, k, &wrong), std::invalid_argument);
 }

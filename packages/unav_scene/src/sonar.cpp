@@ -46,6 +46,8 @@ struct SonarSpec {
   bool tvg = true;
   double tvg_db_per_decade = 30.0;
   double gain_db = 0.0, dynamic_range_db = 60.0, speckle = 1.0, noise_floor_db = -45.0;
+  bool sidelobes = false;
+  double sidelobe_db = -30.0, sidelobe_falloff_db_per_octave = 6.0;
   double speckle_shape = 4.0, speckle_grain_beams = 1.7, speckle_grain_bins = 1.5;
   std::string display = "db";
   double display_gamma = 0.5;
@@ -91,6 +93,16 @@ struct SonarSpec {
                  .Range(0.0, 64.0)
                  .Doc("speckle grain along range (the pulse length) [bins]"));
     a->Visit(Field("noise_floor_db", &noise_floor_db).Range(-200.0, 0.0).Unit("dB").Doc("background re full scale"));
+    a->Visit(
+        Field("sidelobes", &sidelobes).Doc("FLS/profiling: beams hear the others' echoes through their side lobes"));
+    a->Visit(Field("sidelobe_db", &sidelobe_db)
+                 .Range(-200.0, -3.0)
+                 .Unit("dB")
+                 .Doc("first side lobe re the main lobe (uniform shading -13.3, Hann -31.5)"));
+    a->Visit(Field("sidelobe_falloff_db_per_octave", &sidelobe_falloff_db_per_octave)
+                 .Range(0.0, 60.0)
+                 .Unit("dB")
+                 .Doc("the side-lobe envelope's fall per doubling of the angle (uniform 6, Hann 18)"));
     a->Visit(Field("vertical_samples", &vertical_samples).Range(0, 4096).Doc("render rows; 0 = auto"));
     a->Visit(Field("beam_oversample", &beam_oversample).Range(1, 16).Doc("render columns per beam"));
     a->Visit(Field("data_type", &data_type).OneOf({"uint8", "float32"}).Doc("message samples"));
@@ -140,6 +152,9 @@ SonarSpec spec_of(const SonarModel& m) {
   s.display = m.display;
   s.display_gamma = m.display_gamma;
   s.noise_floor_db = m.noise_floor_db;
+  s.sidelobes = m.sidelobes;
+  s.sidelobe_db = m.sidelobe_db;
+  s.sidelobe_falloff_db_per_octave = m.sidelobe_falloff_db_per_octave;
   s.vertical_samples = m.vertical_samples;
   s.beam_oversample = m.beam_oversample;
   s.data_type = m.data_type;
@@ -175,6 +190,9 @@ SonarModel model_of(const SonarSpec& s) {
   m.display = s.display;
   m.display_gamma = s.display_gamma;
   m.noise_floor_db = s.noise_floor_db;
+  m.sidelobes = s.sidelobes;
+  m.sidelobe_db = s.sidelobe_db;
+  m.sidelobe_falloff_db_per_octave = s.sidelobe_falloff_db_per_octave;
   m.vertical_samples = s.vertical_samples;
   m.beam_oversample = s.beam_oversample;
   m.data_type = s.data_type;
@@ -256,6 +274,10 @@ void SonarModel::check(const std::string& file, const std::string& key) const {
   if (!(speckle >= 0.0 && speckle <= 1.0)) fail("speckle", num(speckle), "must be in [0, 1]");
   if (!std::isfinite(gain_db)) fail("gain_db", num(gain_db), "must be finite");
   if (!(noise_floor_db <= 0.0)) fail("noise_floor_db", num(noise_floor_db), "must be <= 0 dB re full scale");
+  if (!(sidelobe_db >= -200.0 && sidelobe_db <= -3.0))
+    fail("sidelobe_db", num(sidelobe_db), "must be in [-200, -3] dB re the main lobe");
+  if (!(sidelobe_falloff_db_per_octave >= 0.0 && sidelobe_falloff_db_per_octave <= 60.0))
+    fail("sidelobe_falloff_db_per_octave", num(sidelobe_falloff_db_per_octave), "must be in [0, 60] dB");
   if (beam_oversample < 1) fail("beam_oversample", std::to_string(beam_oversample), "must be >= 1");
   if (vertical_samples < 0) fail("vertical_samples", std::to_string(vertical_samples), "must be >= 0");
   if (data_type != "uint8" && data_type != "float32") fail("data_type", data_type, "must be uint8 or float32");

@@ -13,6 +13,13 @@
 // infinity; shape = 0 here means no texture: Rayleigh). The white field is drawn from a table of
 // 4096 exact complex Gaussians by random index (12 bits of the seeded stream a sample).
 //
+// Side lobes. A fan's beams are formed from one receive array: beam c also hears, at every
+// range, what beam c' sees, weighted by its power pattern d = c' - c beams off its axis. The main
+// lobe is the beam's own cell; outside it the side lobes' envelope is
+//   k(d) = 10^(sidelobe_db / 10) (1.5 / |d|)^(falloff_db_per_octave / (10 log10 2)),  |d| >= 1.5,
+// 0 for 0 < |d| < 1.5 (a line array's first side lobe sits ~1.5 beam widths off the axis). Added
+// to the linear intensity before speckle and noise (the leaked echo speckles like any other).
+//
 // Display. An 8-bit sample from a linear intensity v (full scale: v = 10^(-gain_db / 10)):
 //   db:    255 (1 + 10 log10(v / full) / dynamic_range_db), clamped to [0, 255]
 //   gamma: 255 (v / full)^(gamma / 2) (amplitude to the power gamma), clamped; v > full saturates.
@@ -39,6 +46,14 @@ void speckle_field(int bins, int channels, const SpeckleParams& p, unav::common:
 /// The Gaussian kernel (normalised to unit sum of squares) whose intensity autocorrelation has a
 /// FWHM of `grain` cells: a single 1 for grain <= 1.
 std::vector<double> speckle_kernel(double grain);
+
+/// k(d) for d = 0 .. channels - 1 (k(0) = 0: the main lobe is the cell itself).
+std::vector<double> sidelobe_kernel(int channels, double sidelobe_db, double falloff_db_per_octave);
+
+/// field (bins x channels, row = bin) += its side-lobe leakage: each cell gains sum over the other
+/// beams c' of its row of k(|c - c'|) field[c'] (row by row through the DFT: O(channels log
+/// channels) a row).
+void add_sidelobes(int bins, int channels, const std::vector<double>& kernel, std::vector<double>* field);
 
 /// The coding is chosen and its constants computed once: operator() runs for every sample of a ping.
 class DisplayCoding {

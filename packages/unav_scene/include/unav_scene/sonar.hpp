@@ -53,11 +53,19 @@ struct SonarModel {
   double speckle_grain_beams = 1.7;  ///< across beams [beams]
   double speckle_grain_bins = 1.5;   ///< along range [bins]
   double noise_floor_db = -45.0;     ///< additive background, Rayleigh amplitude, mean level re full scale
-  int vertical_samples = 0;          ///< render rows across the vertical aperture; 0 = auto
-  int beam_oversample = 2;           ///< render columns per beam
-  std::string data_type = "uint8";   ///< message samples: uint8 (display-coded) or float32 (linear)
-  std::string display = "db";        ///< 8-bit coding: db (gain, dynamic range) or gamma (amplitude^gamma)
-  double display_gamma = 0.5;        ///< gamma coding's exponent on the amplitude
+  /// Side lobes of the receive beam pattern (FLS and profiling fans): every beam also hears, at
+  /// each range, the other beams' echoes weighted by the pattern's side-lobe envelope
+  /// 10^(sidelobe_db / 10) (1.5 / |d|)^(sidelobe_falloff_db_per_octave / 3.01) at d beams off its
+  /// axis (|d| >= 1.5 beams, a line array's first side lobe): the arcs a strong return draws across
+  /// the fan at its range. Uniform shading: -13.3 dB, 6 dB/octave; Hann: -31.5 dB, 18 dB/octave.
+  bool sidelobes = false;
+  double sidelobe_db = -30.0;                   ///< the first side lobe re the main lobe (power, one way)
+  double sidelobe_falloff_db_per_octave = 6.0;  ///< the envelope's fall with angle
+  int vertical_samples = 0;                     ///< render rows across the vertical aperture; 0 = auto
+  int beam_oversample = 2;                      ///< render columns per beam
+  std::string data_type = "uint8";              ///< message samples: uint8 (display-coded) or float32 (linear)
+  std::string display = "db";                   ///< 8-bit coding: db (gain, dynamic range) or gamma (amplitude^gamma)
+  double display_gamma = 0.5;                   ///< gamma coding's exponent on the amplitude
 
   double detection_db = 10.0;  ///< profiling: a beam's peak this far above its median is a return
   bool side_scan() const { return type == Type::kSideScan; }
