@@ -5,7 +5,8 @@
 // sonar does not care), the front camera's view in both, and a side-scan waterfall along the pipe.
 //   bench_unav_sonar [pings=30] [--gallery DIR] [world.yaml]
 // Machine-readable: BENCH sonar/<sonar>_pings_per_s, sonar/<sonar>_raster_ms,
-// sonar/<sonar>_accumulate_ms (sonar: fls_256x512, fls_512x1024, sidescan_1024).
+// sonar/<sonar>_accumulate_ms (sonar: fls_256x512, fls_256x512_sidelobes, fls_512x1024,
+// sidescan_1024).
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -73,7 +74,10 @@ int main(int argc, char** argv) {
   }
   if (world_path.empty()) world_path = std::string(UNAV_REPO_ROOT) + "/worlds/pipe_inspection/world.yaml";
   World world = load_world(world_path);
-  const std::vector<SonarModel> models = {fls(256, 512), fls(512, 1024), side_scan(1024)};
+  SonarModel lobes = fls(256, 512);  // the same fan with its side lobes (-30 dB, 6 dB/octave)
+  lobes.name += "_sidelobes";
+  lobes.sidelobes = true;
+  const std::vector<SonarModel> models = {fls(256, 512), lobes, fls(512, 1024), side_scan(1024)};
   SonarRenderer sr(world, models);
   std::printf("sonar benchmark: %s, %s (EGL %s), %d pings each\n", world_path.c_str(),
               sr.context().gl_renderer().c_str(), sr.context().platform().c_str(), pings);
