@@ -158,10 +158,16 @@ auto MonoSlam::Impl::InertialFactors(std::size_t count) -> std::vector<InertialF
 
 auto MonoSlam::Impl::ImuPredictedPose(double stamp) const -> std::optional<Eigen::Isometry3d> {
   if (!inertial || !vi_ready || !opt.inertial_ba || !opt.imu_prediction || imu.empty()) return std::nullopt;
+  // The newest keyframe before `stamp` with a velocity: keyframes are made in time order, so
+  // their ids grow with their stamps and the search from the newest ends at the first one (it
+  // scanned every keyframe of the run per frame before).
   const KeyFrame* from = nullptr;
-  for (const auto& [id, v] : vi.velocities) {
-    const KeyFrame& k = map->kf(id);
-    if (!k.bad && k.stamp < stamp && (from == nullptr || k.stamp > from->stamp)) from = &k;
+  for (auto it = vi.velocities.rbegin(); it != vi.velocities.rend(); ++it) {
+    const KeyFrame& k = map->kf(it->first);
+    if (!k.bad && k.stamp < stamp) {
+      from = &k;
+      break;
+    }
   }
   if (from == nullptr) return std::nullopt;
   const Eigen::Isometry3d T_wb = from->T_cw.inverse() * T_bc.inverse();
