@@ -293,6 +293,7 @@ void ExpectRefused(const std::vector<std::string>& given, const std::vector<std:
     args.insert(args.begin(), "trajectory_evaluator");
     args.insert(args.end(), {"-p", b});
     std::vector<const char*> argv;
+    argv.reserve(args.size());
     for (const auto& a : args) argv.push_back(a.c_str());
     unav::Context ctx(static_cast<int>(argv.size()), argv.data(), unav::testing::test_context_options());
     try {

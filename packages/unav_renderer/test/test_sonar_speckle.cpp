@@ -137,7 +137,7 @@ TEST(SonarSidelobes, KernelIsTheEnvelopeOfTheConfiguredLevelAndFall) {
   EXPECT_EQ(k[0], 0.0);  // the main lobe: the beam's own cell
   EXPECT_EQ(k[1], 0.0);  // inside the first side lobe
   EXPECT_NEAR(10.0 * std::log10(k[2]), -20.0 + 6.0 * std::log2(1.5 / 2.0), 1e-9);
-  for (int d : {3, 5, 12, 31}) EXPECT_NEAR(10.0 * std::log10(k[d] / k[2 * d]), 6.0, 1e-9) << d;
+  for (std::size_t d : {3u, 5u, 12u, 31u}) EXPECT_NEAR(10.0 * std::log10(k[d] / k[2 * d]), 6.0, 1e-9) << d;
   const auto hann = unav::renderer::sidelobe_kernel(64, -31.5, 18.0);
   EXPECT_NEAR(10.0 * std::log10(hann[4] / hann[8]), 18.0, 1e-9);
 }
