@@ -110,8 +110,8 @@ int main(int argc, char** argv) {
     write("square", Mono(ut::SquarePath()));
     write("weave", Mono(ut::WeaveFlight::Path()));
     write("klt", Klt());
-    write("orb_node", Node(ut::OrbNodePath(), Keep::kRgb));
-    write("klt_node", Node(ut::KltNodePath(), Keep::kRgbDepth));
+    write("orb_node", Node(ut::NodePath(50, 0.06, 0.2, 0.05), Keep::kRgb));
+    write("klt_node", Node(ut::NodePath(40, 0.05, 0.15, 0.0), Keep::kRgbDepth));
   } catch (const std::exception& e) {
     std::fprintf(stderr, "render_slam_sequences: %s\n", e.what());
     return 1;

@@ -105,24 +105,15 @@ inline std::vector<Eigen::Isometry3d> KltPath() {
   return X_WB;
 }
 
-// The orb_slam node test's 50 frames over the pipe: 6 cm a frame, swaying 0.2 m, yawing.
-inline std::vector<Eigen::Isometry3d> OrbNodePath() {
+// The node tests' flights over the pipe, 1.5 m up: `frames` frames `step_m` apart northwards,
+// swaying sway_m sin(0.1 k) and yawing yaw_rad sin(0.08 k). orb_slam: 50, 0.06, 0.2, 0.05;
+// klt_vo: 40, 0.05, 0.15, 0.
+inline std::vector<Eigen::Isometry3d> NodePath(int frames, double step_m, double sway_m, double yaw_rad) {
   std::vector<Eigen::Isometry3d> X_WB;
-  for (int k = 0; k < 50; ++k) {
+  for (int k = 0; k < frames; ++k) {
     Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
-    X.translation() = Eigen::Vector3d(-1.0 + 0.06 * k, 0.2 * std::sin(0.1 * k), 8.35);
-    X.linear() = Eigen::AngleAxisd(0.05 * std::sin(0.08 * k), Eigen::Vector3d::UnitZ()).toRotationMatrix();
-    X_WB.push_back(X);
-  }
-  return X_WB;
-}
-
-// The klt_vo node test's 40 frames: 5 cm a frame, swaying 0.15 m, no rotation.
-inline std::vector<Eigen::Isometry3d> KltNodePath() {
-  std::vector<Eigen::Isometry3d> X_WB;
-  for (int k = 0; k < 40; ++k) {
-    Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
-    X.translation() = Eigen::Vector3d(-1.0 + 0.05 * k, 0.15 * std::sin(0.1 * k), 8.35);
+    X.translation() = Eigen::Vector3d(-1.0 + step_m * k, sway_m * std::sin(0.1 * k), 8.35);
+    X.linear() = Eigen::AngleAxisd(yaw_rad * std::sin(0.08 * k), Eigen::Vector3d::UnitZ()).toRotationMatrix();
     X_WB.push_back(X);
   }
   return X_WB;

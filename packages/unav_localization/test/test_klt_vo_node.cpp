@@ -24,7 +24,7 @@ TEST(KltVoNode, TracksRenderedRgbdOverDdsKeepsABoundedPathAndAcksLockstep) {
   const std::string root = UNAV_REPO_ROOT;
   const std::string cameras = root + "/config/sensors/bluerov2_down_vslam.yaml";
   const auto cams = unav::scene::load_cameras(cameras);
-  // The down camera of that config along KltNodePath (slam_flights.hpp), rendered by the fixture.
+  // The down camera of that config along NodePath(40, 0.05, 0.15, 0) (slam_flights.hpp), rendered by the fixture.
   const auto seq = unav::localization::testing::load_sequence("klt_node");
 
   unav::testing::NodeUnderTest<unav::localization::KltVoNode> fx(

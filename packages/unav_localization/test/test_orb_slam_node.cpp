@@ -23,7 +23,7 @@ using namespace std::chrono_literals;
 TEST(OrbSlamNode, TracksRenderedImagesOverDdsAndAcksLockstep) {
   const std::string root = UNAV_REPO_ROOT;
   const auto cams = unav::scene::load_cameras(root + "/config/sensors/bluerov2_down_vslam.yaml");
-  // The down camera of that config along OrbNodePath (slam_flights.hpp), rendered by the fixture.
+  // The down camera of that config along NodePath(50, 0.06, 0.2, 0.05) (slam_flights.hpp), rendered by the fixture.
   const auto seq = unav::localization::testing::load_sequence("orb_node");
 
   unav::testing::NodeUnderTest<unav::localization::OrbSlamNode> fx(
