@@ -105,8 +105,9 @@ int main(int argc, char** argv) {
     };
     write("straight", Mono(ut::StraightPath()));
     write("straight_320x180_noise", Mono(ut::StraightPath(), 320, 180, 0.008));
-    for (const auto& [pitch, step] : {std::pair{15, 0.06}, std::pair{25, 0.10}, std::pair{35, 0.15}})
-      write("forward_" + std::to_string(pitch), Mono(ut::ForwardPath(step), 640, 480, 0.0, ut::ForwardMount(pitch)));
+    for (const ut::ForwardCase& c : ut::kForwardCases)
+      write("forward_" + std::to_string(c.pitch_deg),
+            Mono(ut::ForwardPath(c.step_m), 640, 480, 0.0, ut::ForwardMount(c.pitch_deg)));
     write("square", Mono(ut::SquarePath()));
     write("weave", Mono(ut::WeaveFlight::Path()));
     write("klt", Klt());

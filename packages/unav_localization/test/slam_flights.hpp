@@ -42,6 +42,14 @@ inline std::vector<Eigen::Isometry3d> ForwardPath(double step_m) {
   return X_WB;
 }
 
+// The forward-looking camera's three flights: pitched down 15, 25, 35 deg at 0.6, 1.0, 1.5 m/s
+// (sequences forward_15, forward_25, forward_35).
+struct ForwardCase {
+  int pitch_deg;
+  double step_m;
+};
+inline constexpr ForwardCase kForwardCases[] = {{15, 0.06}, {25, 0.10}, {35, 0.15}};
+
 // Optical frame (x right, y down, z ahead) in the body (x ahead, y right, z down), pitched down.
 inline Eigen::Isometry3d ForwardMount(double pitch_deg) {
   Eigen::Isometry3d X_BC = Eigen::Isometry3d::Identity();

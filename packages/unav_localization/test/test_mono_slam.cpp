@@ -300,12 +300,9 @@ TEST(MonoSlam, StraightRunOverTheSeabedWithKnownMotion) {
 // while turning: it was taken, and the trajectory turned 120 deg over 6 s). Three speeds and
 // pitches: 0.6, 1.0 and 1.5 m/s at 10 Hz.
 TEST(MonoSlam, ForwardLookingCameraInitialisesWithinFifteenFramesAndHolds) {
-  struct Case {
-    double pitch_deg, step_m;
-  };
   // ForwardPath(step_m) seen through ForwardMount(pitch_deg) (slam_flights.hpp).
-  for (const Case c : {Case{15, 0.06}, Case{25, 0.10}, Case{35, 0.15}}) {
-    const RenderedRun run = Load("forward_" + std::to_string(static_cast<int>(c.pitch_deg)));
+  for (const auto& c : unav::localization::testing::kForwardCases) {
+    const RenderedRun run = Load("forward_" + std::to_string(c.pitch_deg));
     ul::MonoSlam slam(Pinhole(run.K), {}, {}, nullptr);
     const auto [first_tracked, lost] = TrackAll(slam, run);
     size_t n = 0;
@@ -314,7 +311,7 @@ TEST(MonoSlam, ForwardLookingCameraInitialisesWithinFifteenFramesAndHolds) {
     std::printf(
         "forward camera, pitch %.0f deg, %.2f m/frame: initialised at frame %d, %zu poses, %d lost; APE %.4f m "
         "over %.2f m (%.2f%%)\n",
-        c.pitch_deg, c.step_m, first_tracked, n, lost, ape, path, 100 * ape / path);
+        static_cast<double>(c.pitch_deg), c.step_m, first_tracked, n, lost, ape, path, 100 * ape / path);
     EXPECT_GE(first_tracked, 1);
     EXPECT_LE(first_tracked, 15);  // seen: 1..4
     EXPECT_EQ(lost, 0);
