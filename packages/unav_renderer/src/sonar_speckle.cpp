@@ -171,7 +171,10 @@ void add_sidelobes(int bins, int channels, const std::vector<double>& kernel, st
   cv::Mat k_spec, spec, leak;
   cv::dft(k_row, k_spec, cv::DFT_ROWS);
   cv::dft(rows, spec, cv::DFT_ROWS);
-  cv::mulSpectrums(spec, cv::repeat(k_spec, bins, 1), spec, cv::DFT_ROWS);
+  for (int b = 0; b < bins; ++b) {  // every row by the one kernel spectrum (in place)
+    cv::Mat row = spec.row(b);
+    cv::mulSpectrums(row, k_spec, row, cv::DFT_ROWS);
+  }
   cv::idft(spec, leak, cv::DFT_ROWS | cv::DFT_SCALE | cv::DFT_REAL_OUTPUT);
   for (int b = 0; b < bins; ++b) {
     const double* l = leak.ptr<double>(b);
