@@ -22,7 +22,11 @@ namespace {
 
 const std::string kRoot = UNAV_REPO_ROOT;
 
-unav::scene::World PipeWorld() { return unav::scene::load_world(kRoot + "/worlds/pipe_inspection/world.yaml"); }
+// Read once for every sequence.
+const unav::scene::World& PipeWorld() {
+  static const unav::scene::World world = unav::scene::load_world(kRoot + "/worlds/pipe_inspection/world.yaml");
+  return world;
+}
 
 enum class Keep { kGray, kGrayDepth, kRgb, kRgbDepth };
 
